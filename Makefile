@@ -1,0 +1,44 @@
+# armlab: every target creates .venv and installs requirements.txt + the package on first use.
+PY      := .venv/bin/python
+STAMP   := .venv/.installed
+NBVAL   := --nbval --nbval-sanitize-with tests/nbval_sanitize.cfg --nbval-cell-timeout=600
+
+.PHONY: demo test lint unit notebooks lab bench browser clean
+
+$(STAMP): requirements.txt pyproject.toml
+	test -x $(PY) || python3 -m venv .venv
+	$(PY) -m pip install --quiet --upgrade pip
+	$(PY) -m pip install --quiet -r requirements.txt
+	$(PY) -m pip install --quiet --no-deps -e .
+	touch $(STAMP)
+
+## make demo: the main job, headless, on the simulator
+demo: $(STAMP)
+	MPLBACKEND=Agg $(PY) -m armlab demo
+
+## make test: lint + unit tests + every notebook under nbval (installs headless Chromium for the browser checks)
+test: $(STAMP) browser lint
+	MPLBACKEND=Agg $(PY) -m pytest -q tests notebooks $(NBVAL)
+
+lint: $(STAMP)
+	$(PY) -m ruff check armlab tests benchmarks notebooks
+
+unit: $(STAMP)
+	MPLBACKEND=Agg $(PY) -m pytest -q tests
+
+notebooks: $(STAMP)
+	MPLBACKEND=Agg $(PY) -m pytest -q notebooks $(NBVAL)
+
+browser:
+	bash tools/ensure-chromium
+
+## make lab: JupyterLab on notebooks/
+lab: $(STAMP)
+	$(PY) -m jupyter lab --notebook-dir=notebooks --allow-root --no-browser
+
+## make bench: speed and accuracy tables
+bench: $(STAMP)
+	MPLBACKEND=Agg $(PY) benchmarks/run_all.py
+
+clean:
+	rm -rf .venv out

@@ -1,0 +1,395 @@
+"""Forward kinematics (DH and PoX), the Jacobian, closed-form inverse kinematics with every branch, numerical IK.
+
+Units: millimetres and radians. Frames: poses are in the world (board) frame; the tool frame is the manufacturer's
+`ee_gripper_link` (x = approach direction out of the gripper, y = finger opening direction, z completes the frame).
+Joint vectors are (5,) or (N, 5) in the order waist, shoulder, elbow, wrist_angle, wrist_rotate.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from armlab.robot import DH_TOOL_ROTATION, RobotModel, rx200
+from armlab.transforms import exp_se3, homogeneous, log_so3, rot_x, rot_y, rot_z
+
+__all__ = [
+    "Unreachable",
+    "fk",
+    "fk_dh",
+    "fk_pox",
+    "dh_link_transform",
+    "link_frames",
+    "joint_positions",
+    "jacobian",
+    "tool_orientation",
+    "ik",
+    "ik_batch",
+    "IKBatchResult",
+    "steepest_pitch",
+    "ik_numerical",
+    "NumericalIKResult",
+    "check_joints",
+]
+
+
+class Unreachable(ValueError):
+    """No joint solution reaches the requested tool pose; the message says why (reach, or which joint limit)."""
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# Input checks
+# ---------------------------------------------------------------------------------------------------------------
+
+def check_joints(q, robot: RobotModel | None = None, check_limits: bool = True) -> np.ndarray:
+    """Validate joint angles: (5,) or (N, 5) finite floats in rad, within the position limits when asked.
+
+    Raises ValueError naming the problem (shape, NaN, or which joint of which row is out of its limits).
+    """
+    robot = robot or rx200()
+    q = np.asarray(q, dtype=float)
+    if q.ndim not in (1, 2) or q.shape[-1] != 5:
+        raise ValueError(f"joint angles must have shape (5,) or (N, 5) (waist, shoulder, elbow, wrist_angle, "
+                         f"wrist_rotate in rad), got shape {q.shape}")
+    if not np.all(np.isfinite(q)):
+        raise ValueError("joint angles contain NaN or infinity")
+    if check_limits:
+        ok = robot.within_limits(q)
+        if not np.all(ok):
+            rows = np.atleast_2d(q)
+            bad = int(np.flatnonzero(~np.atleast_1d(ok))[0])
+            where = "" if q.ndim == 1 else f"row {bad}: "
+            raise ValueError(f"joint angles out of range: {where}" + "; ".join(robot.limit_violations(rows[bad])))
+    return q
+
+
+def _check_position(position, name: str = "position") -> np.ndarray:
+    p = np.asarray(position, dtype=float)
+    if p.ndim not in (1, 2) or p.shape[-1] != 3:
+        raise ValueError(f"{name} must have shape (3,) or (N, 3) (x, y, z in world mm), got shape {p.shape}")
+    if not np.all(np.isfinite(p)):
+        raise ValueError(f"{name} contains NaN or infinity")
+    return p
+
+
+def _check_angle(value, name: str) -> np.ndarray:
+    a = np.asarray(value, dtype=float)
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"{name} contains NaN or infinity")
+    return a
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# Forward kinematics
+# ---------------------------------------------------------------------------------------------------------------
+
+def dh_link_transform(theta, d, a, alpha) -> np.ndarray:
+    """Standard DH link transform(s) (..., 4, 4) = Rz(theta) Tz(d) Tx(a) Rx(alpha); lengths in mm, angles in rad."""
+    theta, d, a, alpha = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in (theta, d, a, alpha)))
+    A = np.zeros(theta.shape + (4, 4))
+    # BEGIN SOLUTION
+    ct, st, ca, sa = np.cos(theta), np.sin(theta), np.cos(alpha), np.sin(alpha)
+    A[..., 0, 0], A[..., 0, 1], A[..., 0, 2], A[..., 0, 3] = ct, -st * ca, st * sa, a * ct
+    A[..., 1, 0], A[..., 1, 1], A[..., 1, 2], A[..., 1, 3] = st, ct * ca, -ct * sa, a * st
+    A[..., 2, 1], A[..., 2, 2], A[..., 2, 3] = sa, ca, d
+    A[..., 3, 3] = 1.0
+    # END SOLUTION
+    return A
+
+
+def link_frames(q, robot: RobotModel | None = None, check_limits: bool = True) -> np.ndarray:
+    """World poses of DH frames 0..5 and the tool: (7, 4, 4) for q (5,), (N, 7, 4, 4) for q (N, 5).
+
+    Frame 0 is the world frame (on the waist axis, z up); frame i moves with joint i (its origin at the shoulder
+    for i = 1, the elbow for 2, the wrist for 3 and 4, the tool point for 5); the last entry is ee_gripper_link.
+    """
+    robot = robot or rx200()
+    q = check_joints(q, robot, check_limits)
+    qs = np.atleast_2d(q)
+    dh = robot.dh
+    A = dh_link_transform(qs + dh[:, 0], dh[:, 1], dh[:, 2], dh[:, 3])  # (N, 5, 4, 4)
+    frames = np.empty((qs.shape[0], 7, 4, 4))
+    frames[:, 0] = np.eye(4)
+    for i in range(5):
+        frames[:, i + 1] = frames[:, i] @ A[:, i]
+    frames[:, 6] = frames[:, 5] @ homogeneous(DH_TOOL_ROTATION)
+    return frames if q.ndim == 2 else frames[0]
+
+
+def fk_dh(q, robot: RobotModel | None = None, check_limits: bool = True) -> np.ndarray:
+    """Tool pose ee_gripper_link in the world, (4, 4) or (N, 4, 4), from the DH table (mm)."""
+    return link_frames(q, robot, check_limits)[..., 6, :, :]
+
+
+def fk_pox(q, robot: RobotModel | None = None, check_limits: bool = True) -> np.ndarray:
+    """Tool pose ee_gripper_link in the world, (4, 4) or (N, 4, 4), by the product of exponentials (mm)."""
+    robot = robot or rx200()
+    q = check_joints(q, robot, check_limits)
+    E = exp_se3(robot.screws, np.atleast_2d(q))  # (N, 5, 4, 4)
+    T = E[:, 0] @ E[:, 1] @ E[:, 2] @ E[:, 3] @ E[:, 4] @ robot.M
+    return T if q.ndim == 2 else T[0]
+
+
+def fk(q, robot: RobotModel | None = None, check_limits: bool = True) -> np.ndarray:
+    """Tool pose in the world: (4, 4) for q (5,) rad, (N, 4, 4) for q (N, 5); translation in mm.
+
+    Raises ValueError for a wrong shape, NaN, or (with check_limits) a joint outside its limits.
+    """
+    return fk_dh(q, robot, check_limits)
+
+
+def joint_positions(q, robot: RobotModel | None = None) -> np.ndarray:
+    """World positions (mm) of base, waist top, shoulder, elbow, wrist, wrist_rotate, tool: (7, 3) or (N, 7, 3).
+
+    The points the viewer and the simulator draw the arm's links between.
+    """
+    robot = robot or rx200()
+    frames = link_frames(q, robot, check_limits=False)
+    base = np.zeros(frames.shape[:-3] + (3,))
+    waist_top = base.copy()
+    waist_top[..., 2] = 65.66
+    wrist = frames[..., 3, :3, 3]
+    approach = frames[..., 6, :3, 0]
+    wrist_rotate = wrist + 65.0 * approach
+    return np.stack([base, waist_top, frames[..., 1, :3, 3], frames[..., 2, :3, 3], wrist, wrist_rotate,
+                     frames[..., 6, :3, 3]], axis=-2)
+
+
+def jacobian(q, robot: RobotModel | None = None) -> np.ndarray:
+    """Geometric Jacobian of the tool point in the world frame: (6, 5) or (N, 6, 5).
+
+    Rows 0-2: linear velocity of the tool point (mm/s per rad/s); rows 3-5: angular velocity (rad/s per rad/s).
+    Column i: [z_i x (p_tool - o_i); z_i] with z_i, o_i the axis and origin of DH frame i (joint i+1's axis).
+    """
+    frames = link_frames(q, robot, check_limits=False)
+    z = frames[..., :5, :3, 2]
+    o = frames[..., :5, :3, 3]
+    p = frames[..., 6, None, :3, 3]
+    J = np.concatenate([np.cross(z, p - o), z], axis=-1)  # (..., 5, 6)
+    return np.swapaxes(J, -1, -2)
+
+
+def tool_orientation(heading, pitch, roll=0.0) -> np.ndarray:
+    """Tool rotation(s) (..., 3, 3) in the world for an arm plane at `heading` (rad, from world +x towards +y),
+    the approach pitched `pitch` below horizontal in that plane, and wrist rotation `roll` (rad)."""
+    return rot_z(heading) @ rot_y(pitch) @ rot_x(roll)
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# Closed-form inverse kinematics
+# ---------------------------------------------------------------------------------------------------------------
+
+# Branch order within the 4 candidates: (waist facing the target | flipped) x (elbow up | elbow down).
+_BRANCHES = (("facing", "elbow up"), ("facing", "elbow down"), ("flipped", "elbow up"), ("flipped", "elbow down"))
+
+
+def _wrap(angle):
+    """Wrap angles to (-pi, pi]."""
+    return np.pi - np.mod(np.pi - angle, 2 * np.pi)
+
+
+@dataclass(frozen=True)
+class _Candidates:
+    q: np.ndarray          # (N, 4, 5) joint solutions per branch (NaN where out of reach)
+    in_reach: np.ndarray   # (N, 4) the wrist centre is within the arm's span
+    valid: np.ndarray      # (N, 4) in reach and within every joint limit
+    wrist_distance: np.ndarray  # (N, 4) distance from shoulder to wrist centre, mm
+
+
+def _planar_geometry(robot: RobotModel):
+    dh = robot.dh
+    shoulder_height = dh[0, 1]
+    upper_arm, forearm = dh[1, 2], dh[2, 2]
+    wrist_to_tool = dh[4, 1]
+    return shoulder_height, upper_arm, forearm, wrist_to_tool
+
+
+def _ik_candidates(P: np.ndarray, pitch: np.ndarray, roll: np.ndarray, robot: RobotModel) -> _Candidates:
+    """Every IK branch for targets P (N, 3) with pitch (N,) and roll (N,), vectorised."""
+    dh = robot.dh
+    h0, L1, L2, Lt = _planar_geometry(robot)
+    o1, o2, o3 = dh[0, 0], dh[1, 0], dh[2, 0]
+    N = P.shape[0]
+    x, y, z = P.T
+    r = np.hypot(x, y)
+    heading = np.where(r > 1e-9, np.arctan2(y, x), o1)  # on the base axis any heading works: keep the waist at 0
+
+    q = np.full((N, 4, 5), np.nan)
+    in_reach = np.zeros((N, 4), bool)
+    distance = np.zeros((N, 4))
+    for b, (waist_branch, elbow_branch) in enumerate(_BRANCHES):
+        flipped = waist_branch == "flipped"
+        # BEGIN SOLUTION
+        q1 = _wrap(heading - o1 + (np.pi if flipped else 0.0))
+        r_plane = -r if flipped else r                       # target's distance along the arm's forward direction
+        psi = np.pi - pitch if flipped else pitch            # approach angle below the arm's forward horizontal
+        wr = r_plane - Lt * np.cos(psi)                      # wrist centre in the arm's plane, from the shoulder
+        wh = z - h0 + Lt * np.sin(psi)
+        d2 = wr**2 + wh**2
+        cos_delta = (d2 - L1**2 - L2**2) / (2 * L1 * L2)
+        ok = np.abs(cos_delta) <= 1 + 1e-12
+        delta = np.arccos(np.clip(cos_delta, -1, 1)) * (-1 if elbow_branch == "elbow up" else 1)
+        upper_arm_elevation = np.arctan2(wh, wr) - np.arctan2(L2 * np.sin(delta), L1 + L2 * np.cos(delta))
+        q2 = _wrap(-upper_arm_elevation - o2)
+        q3 = _wrap(-delta - o3)
+        q4 = _wrap(psi - q2 - q3 - (o2 + o3))
+        # END SOLUTION
+        sol = np.stack([q1, q2, q3, q4, _wrap(roll)], axis=-1)
+        q[:, b] = np.where(ok[:, None], sol, np.nan)
+        in_reach[:, b] = ok
+        distance[:, b] = np.sqrt(d2)
+    valid = in_reach & robot.within_limits(np.nan_to_num(q, nan=1e9))
+    return _Candidates(q, in_reach, valid, distance)
+
+
+def _explain(c: _Candidates, i: int, robot: RobotModel, position, pitch) -> str:
+    """Why target i has no valid branch, in words."""
+    h0, L1, L2, _ = _planar_geometry(robot)
+    head = (f"no joint solution puts the tool at ({position[0]:.1f}, {position[1]:.1f}, {position[2]:.1f}) mm "
+            f"with pitch {np.degrees(pitch):.1f} deg")
+    if not c.in_reach[i].any():
+        d = c.wrist_distance[i].min()
+        if d > L1 + L2:
+            return (f"{head}: out of reach: the wrist centre would be {d:.1f} mm from the shoulder axis, beyond the "
+                    f"{L1 + L2:.1f} mm the upper arm and forearm span (try a smaller pitch or a closer target)")
+        return (f"{head}: too close: the wrist centre would be {d:.1f} mm from the shoulder axis, nearer than the "
+                f"{abs(L1 - L2):.1f} mm the folded arm allows")
+    reasons = []
+    for b in np.flatnonzero(c.in_reach[i]):
+        names = ", ".join(_BRANCHES[b])
+        reasons.append(f"{names}: " + "; ".join(robot.limit_violations(c.q[i, b])))
+    return f"{head}: every branch breaks a joint limit ({' | '.join(reasons)})"
+
+
+def _rank(c: _Candidates, current: np.ndarray) -> np.ndarray:
+    """Branch order per target (N, 4): valid first, then elbow up, then least joint motion from `current`."""
+    motion = np.abs(_wrap(np.nan_to_num(c.q, nan=0.0) - current[:, None, :])).sum(-1)
+    elbow_down = np.array([e == "elbow down" for _, e in _BRANCHES], float)
+    key = (~c.valid) * 1e6 + elbow_down[None, :] * 1e3 + motion
+    return np.argsort(key, axis=1, kind="stable")
+
+
+def _prepare(position, pitch, roll, current, robot):
+    P = _check_position(position)
+    single = P.ndim == 1
+    P = np.atleast_2d(P)
+    n = P.shape[0]
+    pitch = np.broadcast_to(_check_angle(pitch, "pitch"), (n,)).astype(float)
+    roll = np.broadcast_to(_check_angle(roll, "roll"), (n,)).astype(float)
+    cur = robot.home if current is None else check_joints(current, robot, check_limits=False)
+    cur = np.broadcast_to(cur, (n, 5)).astype(float)
+    return P, pitch, roll, cur, single
+
+
+def ik(position, pitch, roll: float = 0.0, current=None, robot: RobotModel | None = None) -> np.ndarray:
+    """All joint solutions (K, 5) that put the tool point at `position` (world mm) within the joint limits.
+
+    The approach direction (tool x axis) is pitched `pitch` rad below horizontal in the vertical plane through the
+    base axis and the target (0 = horizontal pointing away from the base, pi/2 = straight down, > pi/2 = down and
+    back towards the base); wrist_rotate = `roll`. Solutions are ordered best first: elbow up, then least motion
+    from `current` (default: home). Raises Unreachable (a ValueError) saying why when there is none.
+    """
+    robot = robot or rx200()
+    P, pitch_a, roll_a, cur, single = _prepare(position, pitch, roll, current, robot)
+    if not single:
+        raise ValueError("ik takes one position (3,); use ik_batch for (N, 3)")
+    c = _ik_candidates(P, pitch_a, roll_a, robot)
+    if not c.valid[0].any():
+        raise Unreachable(_explain(c, 0, robot, P[0], pitch_a[0]))
+    order = _rank(c, cur)[0]
+    return c.q[0, [b for b in order if c.valid[0, b]]]
+
+
+@dataclass(frozen=True)
+class IKBatchResult:
+    """Best IK solution per target: q (N, 5) rad (NaN where none), ok (N,) bool, branch (N,) index or -1."""
+
+    q: np.ndarray
+    ok: np.ndarray
+    branch: np.ndarray
+
+
+def ik_batch(positions, pitch, roll=0.0, current=None, robot: RobotModel | None = None) -> IKBatchResult:
+    """Best closed-form IK solution for each of N targets (N, 3) mm, vectorised; pitch and roll scalar or (N,)."""
+    robot = robot or rx200()
+    P, pitch_a, roll_a, cur, _ = _prepare(positions, pitch, roll, current, robot)
+    c = _ik_candidates(P, pitch_a, roll_a, robot)
+    best = _rank(c, cur)[:, 0]
+    rows = np.arange(P.shape[0])
+    ok = c.valid[rows, best]
+    q = np.where(ok[:, None], c.q[rows, best], np.nan)
+    return IKBatchResult(q=q, ok=ok, branch=np.where(ok, best, -1))
+
+
+def steepest_pitch(position, roll: float = 0.0, max_pitch: float = np.pi / 2, min_pitch: float = 0.0,
+                   step: float = np.radians(0.5), tol: float = 1e-7, robot: RobotModel | None = None) -> float:
+    """The largest pitch in [min_pitch, max_pitch] (rad) at which `position` (world mm) is reachable.
+
+    Top-down grasps (pi/2) fail at long reach; this finds the steepest approach that still works, by a scan
+    in `step` rad followed by bisection of the boundary to `tol` rad. Raises Unreachable when no pitch works.
+    """
+    robot = robot or rx200()
+    P = _check_position(position)
+    if P.ndim != 1:
+        raise ValueError("steepest_pitch takes one position (3,)")
+    grid = np.linspace(max_pitch, min_pitch, max(2, int(np.ceil((max_pitch - min_pitch) / step)) + 1))
+    ok = ik_batch(np.repeat(P[None], grid.size, 0), grid, roll, robot=robot).ok
+    if not ok.any():
+        raise Unreachable(f"no pitch between {np.degrees(min_pitch):.1f} and {np.degrees(max_pitch):.1f} deg "
+                          f"reaches ({P[0]:.1f}, {P[1]:.1f}, {P[2]:.1f}) mm: "
+                          + str(_explain(_ik_candidates(P[None], np.array([min_pitch]), np.array([roll]), robot),
+                                         0, robot, P, min_pitch)).split(": ", 1)[1])
+    k = int(np.argmax(ok))
+    if k == 0:
+        return float(grid[0])
+    good, bad = grid[k], grid[k - 1]
+    while bad - good > tol:
+        mid = 0.5 * (good + bad)
+        if ik_batch(P[None], mid, roll, robot=robot).ok[0]:
+            good = mid
+        else:
+            bad = mid
+    return float(good)
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# Numerical inverse kinematics (for comparison)
+# ---------------------------------------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class NumericalIKResult:
+    """Result of damped least squares IK: q (5,), success, iterations, final position error (mm)."""
+
+    q: np.ndarray
+    success: bool
+    iterations: int
+    position_error_mm: float
+
+
+def ik_numerical(position, pitch, roll: float = 0.0, q0=None, damping: float = 0.05, tol_mm: float = 1e-6,
+                 max_iterations: int = 200, orientation_scale_mm: float = 100.0,
+                 robot: RobotModel | None = None) -> NumericalIKResult:
+    """Damped least squares IK on the full tool pose, from q0 (default home), clamped to the joint limits.
+
+    Iterates dq = J^T (J J^T + damping^2 I)^-1 e, with e the position error (mm) and the orientation error (rad,
+    weighted by `orientation_scale_mm`). Converges to one nearby solution, or fails where the closed form succeeds.
+    """
+    robot = robot or rx200()
+    P = _check_position(position)
+    x, y, _ = P
+    heading = np.arctan2(y, x) if np.hypot(x, y) > 1e-9 else robot.dh[0, 0]
+    R_target = tool_orientation(heading, float(pitch), float(roll))
+    q = np.array(robot.home if q0 is None else check_joints(q0, robot), dtype=float)
+    weight = np.array([1, 1, 1, orientation_scale_mm, orientation_scale_mm, orientation_scale_mm], float)
+    for it in range(1, max_iterations + 1):
+        T = fk(q, robot, check_limits=False)
+        e = np.concatenate([P - T[:3, 3], log_so3(R_target @ T[:3, :3].T)])
+        if np.linalg.norm(e[:3]) < tol_mm and np.linalg.norm(e[3:]) * orientation_scale_mm < tol_mm:
+            return NumericalIKResult(q, True, it, float(np.linalg.norm(e[:3])))
+        J = jacobian(q, robot) * weight[:, None]
+        ew = e * weight
+        dq = J.T @ np.linalg.solve(J @ J.T + damping**2 * np.eye(6), ew)
+        q = np.clip(q + dq, robot.lower, robot.upper)
+    err = float(np.linalg.norm(P - fk(q, robot, check_limits=False)[:3, 3]))
+    return NumericalIKResult(q, False, max_iterations, err)

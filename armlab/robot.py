@@ -1,0 +1,150 @@
+"""The RX200 description: joint names, limits, named poses, DH and PoX parameters loaded from `data/`.
+
+Units: millimetres and radians. Frames: the world (board) frame of the lab (z up, the arm at home along +y).
+Joint order everywhere: waist, shoulder, elbow, wrist_angle, wrist_rotate; the gripper is separate.
+"""
+
+from __future__ import annotations
+
+import csv
+import functools
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from armlab._paths import data_path
+from armlab.transforms import homogeneous, rotvec_to_matrix
+
+__all__ = ["JOINT_NAMES", "RobotModel", "RobotDataError", "load_robot", "rx200", "DH_TOOL_ROTATION"]
+
+JOINT_NAMES: tuple[str, ...] = ("waist", "shoulder", "elbow", "wrist_angle", "wrist_rotate")
+
+# The last DH frame has z along the approach direction (standard DH puts joint axes on z), while the tool frame
+# ee_gripper_link has x along the approach, y across the fingers and z completing the frame. This fixed
+# rotation relabels the axes: tool x = DH z5, tool y = -DH y5, tool z = DH x5 (no translation).
+DH_TOOL_ROTATION = np.array([[0.0, 0.0, 1.0], [0.0, -1.0, 0.0], [1.0, 0.0, 0.0]])
+
+
+class RobotDataError(ValueError):
+    """A robot description file is missing or malformed; the message names the file, row and problem."""
+
+
+@dataclass(frozen=True)
+class RobotModel:
+    """Kinematic description of a 5-joint arm.
+
+    Attributes:
+        joint_names: the 5 joint names in order.
+        lower, upper: position limits (5,), rad.
+        velocity: velocity limits (5,), rad/s.
+        home, sleep: named poses (5,), rad.
+        dh: (5, 4) standard DH rows (theta_offset rad, d mm, a mm, alpha rad) from the world frame.
+        screws: (5, 6) space-frame screw axes (w, v), v in mm, world frame.
+        M: (4, 4) tool frame ee_gripper_link in the world at q = 0 (mm).
+    """
+
+    joint_names: tuple[str, ...]
+    lower: np.ndarray
+    upper: np.ndarray
+    velocity: np.ndarray
+    home: np.ndarray
+    sleep: np.ndarray
+    dh: np.ndarray
+    screws: np.ndarray
+    M: np.ndarray
+
+    def limit_violations(self, q, tol: float = 1e-9) -> list[str]:
+        """Human-readable list of the joints of q (5,) outside their limits (empty when all are within)."""
+        q = np.asarray(q, dtype=float)
+        out = []
+        for name, value, lo, hi in zip(self.joint_names, q, self.lower, self.upper):
+            if value < lo - tol or value > hi + tol:
+                out.append(f"{name} = {np.degrees(value):.1f} deg is outside its limits "
+                           f"[{np.degrees(lo):.1f}, {np.degrees(hi):.1f}] deg")
+        return out
+
+    def within_limits(self, q, tol: float = 1e-9) -> np.ndarray:
+        """Boolean (...,) telling which joint vectors q (..., 5) respect every position limit."""
+        q = np.asarray(q, dtype=float)
+        return np.all((q >= self.lower - tol) & (q <= self.upper + tol), axis=-1)
+
+
+def _read_rows(path: Path, header: list[str]) -> list[tuple[int, dict[str, str]]]:
+    """Rows of a CSV file with '#' comment lines, as (line number, dict); validates the header."""
+    if not path.is_file():
+        raise RobotDataError(f"{path}: file not found")
+    lines = path.read_text().splitlines()
+    numbered = [(i + 1, line) for i, line in enumerate(lines) if line.strip() and not line.lstrip().startswith("#")]
+    if not numbered:
+        raise RobotDataError(f"{path}: no header row")
+    reader = csv.reader([line for _, line in numbered])
+    rows = list(reader)
+    got = [c.strip() for c in rows[0]]
+    if got != header:
+        raise RobotDataError(f"{path}, line {numbered[0][0]}: header is {got}, expected {header}")
+    out = []
+    for (lineno, _), row in zip(numbered[1:], rows[1:]):
+        if len(row) != len(header):
+            raise RobotDataError(f"{path}, line {lineno}: {len(row)} fields, expected {len(header)}")
+        out.append((lineno, dict(zip(header, (c.strip() for c in row)))))
+    return out
+
+
+def _number(path: Path, lineno: int, row: dict[str, str], key: str) -> float:
+    try:
+        value = float(row[key])
+    except ValueError:
+        raise RobotDataError(f"{path}, line {lineno}: {key} = {row[key]!r} is not a number") from None
+    if not np.isfinite(value):
+        raise RobotDataError(f"{path}, line {lineno}: {key} = {row[key]!r} is not finite")
+    return value
+
+
+def _named_table(path: Path, header: list[str], names: tuple[str, ...]) -> np.ndarray:
+    """Numeric table whose first column names rows in the order `names`."""
+    rows = _read_rows(path, header)
+    if [r[header[0]] for _, r in rows] != list(names):
+        raise RobotDataError(f"{path}: rows are {[r[header[0]] for _, r in rows]}, expected {list(names)}")
+    return np.array([[_number(path, n, r, k) for k in header[1:]] for n, r in rows])
+
+
+def load_robot(joints_csv: Path | str | None = None, dh_csv: Path | str | None = None,
+               pox_csv: Path | str | None = None) -> RobotModel:
+    """Load and validate a robot description; defaults to the RX200 files in `data/`."""
+    joints_path = Path(joints_csv or data_path("rx200_joints.csv"))
+    dh_path = Path(dh_csv or data_path("rx200_dh.csv"))
+    pox_path = Path(pox_csv or data_path("rx200_pox.csv"))
+
+    joints = _named_table(joints_path, ["joint", "lower_rad", "upper_rad", "velocity_rad_s", "home_rad", "sleep_rad"],
+                          JOINT_NAMES)
+    lower, upper, velocity, home, sleep = joints.T
+    for i, name in enumerate(JOINT_NAMES):
+        if not lower[i] < upper[i]:
+            raise RobotDataError(f"{joints_path}: joint {name}: lower limit {lower[i]} is not below upper {upper[i]}")
+        if velocity[i] <= 0:
+            raise RobotDataError(f"{joints_path}: joint {name}: velocity limit {velocity[i]} must be positive")
+        for pose, value in (("home", home[i]), ("sleep", sleep[i])):
+            if not lower[i] <= value <= upper[i]:
+                raise RobotDataError(f"{joints_path}: joint {name}: {pose} pose {value} is outside its limits")
+
+    dh = _named_table(dh_path, ["joint", "theta_offset_rad", "d_mm", "a_mm", "alpha_rad"], JOINT_NAMES)
+
+    pox = _named_table(pox_path, ["name", "wx", "wy", "wz", "vx", "vy", "vz"], JOINT_NAMES + ("ee_home",))
+    screws = pox[:5]
+    norms = np.linalg.norm(screws[:, :3], axis=1)
+    for name, norm in zip(JOINT_NAMES, norms):
+        if abs(norm - 1.0) > 1e-9:
+            raise RobotDataError(f"{pox_path}: joint {name}: rotation axis has length {norm}, expected 1")
+    M = homogeneous(rotvec_to_matrix(pox[5, :3]), pox[5, 3:])
+
+    arrays = [np.array(a, dtype=float) for a in (lower, upper, velocity, home, sleep)]
+    for a in arrays + [dh, screws, M]:
+        a.setflags(write=False)
+    return RobotModel(JOINT_NAMES, *arrays, dh=dh, screws=screws, M=M)
+
+
+@functools.lru_cache(maxsize=1)
+def rx200() -> RobotModel:
+    """The RX200 model from the kit's data files (loaded once)."""
+    return load_robot()

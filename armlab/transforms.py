@@ -1,0 +1,189 @@
+"""SE(3) and SO(3) helpers: rotations, homogeneous transforms, Euler angles, skew matrices and exponentials.
+
+Every function accepts a single item or a stack of them (leading batch dimensions) and is vectorised with numpy.
+Lengths are in millimetres and angles in radians throughout the kit; these helpers are unit-agnostic.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = [
+    "rot_x",
+    "rot_y",
+    "rot_z",
+    "homogeneous",
+    "invert_transform",
+    "transform_points",
+    "skew",
+    "exp_so3",
+    "log_so3",
+    "exp_se3",
+    "rotvec_to_matrix",
+    "euler_zyz_from_matrix",
+    "matrix_from_euler_zyz",
+    "rpy_from_matrix",
+    "matrix_from_rpy",
+]
+
+# Below this value of sin(beta) an Euler decomposition is treated as singular (gimbal lock).
+_SINGULAR_EPS = 1e-9
+
+
+def _rotation(angle, axis: int) -> np.ndarray:
+    angle = np.asarray(angle, dtype=float)
+    c, s = np.cos(angle), np.sin(angle)
+    out = np.zeros(angle.shape + (3, 3))
+    i, j = [(1, 2), (2, 0), (0, 1)][axis]
+    out[..., axis, axis] = 1.0
+    out[..., i, i] = c
+    out[..., j, j] = c
+    out[..., i, j] = -s
+    out[..., j, i] = s
+    return out
+
+
+def rot_x(angle) -> np.ndarray:
+    """Rotation matrix (..., 3, 3) about the x axis by `angle` rad (right-hand rule)."""
+    return _rotation(angle, 0)
+
+
+def rot_y(angle) -> np.ndarray:
+    """Rotation matrix (..., 3, 3) about the y axis by `angle` rad (right-hand rule)."""
+    return _rotation(angle, 1)
+
+
+def rot_z(angle) -> np.ndarray:
+    """Rotation matrix (..., 3, 3) about the z axis by `angle` rad (right-hand rule)."""
+    return _rotation(angle, 2)
+
+
+def homogeneous(rotation=None, translation=None) -> np.ndarray:
+    """4x4 homogeneous transform(s) from a rotation (..., 3, 3) and a translation (..., 3)."""
+    rotation = np.eye(3) if rotation is None else np.asarray(rotation, dtype=float)
+    translation = np.zeros(3) if translation is None else np.asarray(translation, dtype=float)
+    batch = np.broadcast_shapes(rotation.shape[:-2], translation.shape[:-1])
+    out = np.zeros(batch + (4, 4))
+    out[..., :3, :3] = rotation
+    out[..., :3, 3] = translation
+    out[..., 3, 3] = 1.0
+    return out
+
+
+def invert_transform(T) -> np.ndarray:
+    """Inverse of rigid transform(s) (..., 4, 4) without a general matrix inverse."""
+    T = np.asarray(T, dtype=float)
+    R_t = np.swapaxes(T[..., :3, :3], -1, -2)
+    return homogeneous(R_t, -np.einsum("...ij,...j->...i", R_t, T[..., :3, 3]))
+
+
+def transform_points(T, points) -> np.ndarray:
+    """Apply transform T (4, 4) to points (..., 3); returns (..., 3)."""
+    T = np.asarray(T, dtype=float)
+    points = np.asarray(points, dtype=float)
+    return points @ T[:3, :3].T + T[:3, 3]
+
+
+def skew(w) -> np.ndarray:
+    """Skew-symmetric matrix (..., 3, 3) with skew(w) @ v == cross(w, v)."""
+    w = np.asarray(w, dtype=float)
+    out = np.zeros(w.shape[:-1] + (3, 3))
+    out[..., 0, 1], out[..., 0, 2] = -w[..., 2], w[..., 1]
+    out[..., 1, 0], out[..., 1, 2] = w[..., 2], -w[..., 0]
+    out[..., 2, 0], out[..., 2, 1] = -w[..., 1], w[..., 0]
+    return out
+
+
+def exp_so3(axis, angle) -> np.ndarray:
+    """Rodrigues' formula: rotation (..., 3, 3) by `angle` rad about the unit `axis` (..., 3)."""
+    K = skew(axis)
+    angle = np.asarray(angle, dtype=float)[..., None, None]
+    return np.eye(3) + np.sin(angle) * K + (1.0 - np.cos(angle)) * (K @ K)
+
+
+def rotvec_to_matrix(rotvec) -> np.ndarray:
+    """Rotation matrix (..., 3, 3) from a rotation vector (..., 3): axis times angle in rad."""
+    rotvec = np.asarray(rotvec, dtype=float)
+    angle = np.linalg.norm(rotvec, axis=-1)
+    safe = np.where(angle > 0, angle, 1.0)
+    return exp_so3(rotvec / safe[..., None], angle)
+
+
+def log_so3(R) -> np.ndarray:
+    """Rotation vector (..., 3) of rotation matrix (..., 3, 3); the angle is in [0, pi]."""
+    R = np.asarray(R, dtype=float)
+    cos = np.clip((np.trace(R, axis1=-2, axis2=-1) - 1.0) / 2.0, -1.0, 1.0)
+    angle = np.arccos(cos)
+    vee = np.stack([R[..., 2, 1] - R[..., 1, 2], R[..., 0, 2] - R[..., 2, 0], R[..., 1, 0] - R[..., 0, 1]], -1)
+    sin = np.sin(angle)
+    small = sin > 1e-6
+    out = np.where(small[..., None], vee * (angle / np.where(small, 2 * sin, 1.0))[..., None], 0.5 * vee)
+    # Near pi the antisymmetric part vanishes: read the axis from the symmetric part instead.
+    near_pi = (~small) & (cos < 0)
+    if np.any(near_pi):
+        B = (R[near_pi] + np.eye(3)) / 2.0
+        diag = np.clip(np.diagonal(B, axis1=-2, axis2=-1), 0, None)
+        k = np.argmax(diag, axis=-1)
+        col = np.take_along_axis(B, k[:, None, None], axis=-1)[..., 0]
+        axis = col / np.linalg.norm(col, axis=-1, keepdims=True)
+        out[near_pi] = axis * angle[near_pi][..., None]
+    return out
+
+
+def exp_se3(screw, theta) -> np.ndarray:
+    """Matrix exponential of a revolute screw: (..., 4, 4) for screw (w, v) (..., 6), unit w, angle theta (...).
+
+    Lengths in v set the unit of the translation (mm throughout the kit).
+    """
+    screw = np.asarray(screw, dtype=float)
+    theta = np.asarray(theta, dtype=float)
+    w, v = screw[..., :3], screw[..., 3:]
+    W = skew(w)
+    th = theta[..., None, None]
+    R = np.eye(3) + np.sin(th) * W + (1.0 - np.cos(th)) * (W @ W)
+    G = np.eye(3) * th + (1.0 - np.cos(th)) * W + (th - np.sin(th)) * (W @ W)
+    return homogeneous(R, np.einsum("...ij,...j->...i", G, v))
+
+
+def euler_zyz_from_matrix(R) -> np.ndarray:
+    """ZYZ Euler angles (phi, theta, psi) (..., 3) with R = Rz(phi) Ry(theta) Rz(psi), theta in [0, pi].
+
+    At the singularities theta = 0 or pi only phi +/- psi is defined: psi is set to 0 and phi carries the rotation.
+    """
+    R = np.asarray(R, dtype=float)
+    sin_theta = np.hypot(R[..., 0, 2], R[..., 1, 2])
+    theta = np.arctan2(sin_theta, R[..., 2, 2])
+    regular = sin_theta > _SINGULAR_EPS
+    phi = np.where(regular, np.arctan2(R[..., 1, 2], R[..., 0, 2]), 0.0)
+    psi = np.where(regular, np.arctan2(R[..., 2, 1], -R[..., 2, 0]), 0.0)
+    # theta = 0: R = Rz(phi + psi); theta = pi: R = Rz(phi - psi) Ry(pi).
+    phi_singular = np.where(R[..., 2, 2] > 0, np.arctan2(R[..., 1, 0], R[..., 0, 0]),
+                            np.arctan2(-R[..., 1, 0], -R[..., 0, 0]))
+    phi = np.where(regular, phi, phi_singular)
+    return np.stack([phi, theta, psi], axis=-1)
+
+
+def matrix_from_euler_zyz(angles) -> np.ndarray:
+    """Rotation (..., 3, 3) = Rz(phi) Ry(theta) Rz(psi) from ZYZ angles (..., 3) in rad."""
+    angles = np.asarray(angles, dtype=float)
+    return rot_z(angles[..., 0]) @ rot_y(angles[..., 1]) @ rot_z(angles[..., 2])
+
+
+def rpy_from_matrix(R) -> np.ndarray:
+    """Roll, pitch, yaw (..., 3) with R = Rz(yaw) Ry(pitch) Rx(roll), pitch in [-pi/2, pi/2].
+
+    At the singularities pitch = +/- pi/2 only yaw -/+ roll is defined: roll is set to 0 and yaw carries it.
+    """
+    R = np.asarray(R, dtype=float)
+    cos_pitch = np.hypot(R[..., 0, 0], R[..., 1, 0])
+    pitch = np.arctan2(-R[..., 2, 0], cos_pitch)
+    regular = cos_pitch > _SINGULAR_EPS
+    roll = np.where(regular, np.arctan2(R[..., 2, 1], R[..., 2, 2]), 0.0)
+    yaw = np.where(regular, np.arctan2(R[..., 1, 0], R[..., 0, 0]), np.arctan2(-R[..., 0, 1], R[..., 1, 1]))
+    return np.stack([roll, pitch, yaw], axis=-1)
+
+
+def matrix_from_rpy(rpy) -> np.ndarray:
+    """Rotation (..., 3, 3) = Rz(yaw) Ry(pitch) Rx(roll) from (roll, pitch, yaw) (..., 3) in rad."""
+    rpy = np.asarray(rpy, dtype=float)
+    return rot_z(rpy[..., 2]) @ rot_y(rpy[..., 1]) @ rot_x(rpy[..., 0])
