@@ -21,7 +21,7 @@ test: $(STAMP) browser lint
 	MPLBACKEND=Agg $(PY) -m pytest -q tests notebooks $(NBVAL)
 
 lint: $(STAMP)
-	$(PY) -m ruff check armlab tests benchmarks notebooks
+	$(PY) -m ruff check armlab tests benchmarks notebooks tools/build-notebook
 
 unit: $(STAMP)
 	MPLBACKEND=Agg $(PY) -m pytest -q tests
