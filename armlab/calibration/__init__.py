@@ -1,0 +1,29 @@
+"""Camera calibration: checkerboard intrinsics, AprilTag extrinsics, board homography, depth-plane correction,
+grid validation, and calibration files. Units: px for images, mm for the world (board frame)."""
+
+from armlab.calibration.depth import DepthCorrection, board_depth, fit_depth_correction
+from armlab.calibration.extrinsics import (
+    ExtrinsicsResult,
+    calibrate_extrinsics,
+    extrinsics_from_detections,
+    hand_measured_extrinsic,
+)
+from armlab.calibration.homography import BoardView, tag_homography
+from armlab.calibration.intrinsics import (
+    IntrinsicsResult,
+    calibrate_intrinsics,
+    checkerboard_points,
+    compare_intrinsics,
+    find_checkerboard,
+)
+from armlab.calibration.storage import Calibration, CalibrationFileError, load_calibration, save_calibration
+from armlab.calibration.tags import TagDetection, detect_tags
+from armlab.calibration.validation import GridError, grid_world_error
+
+__all__ = [
+    "BoardView", "Calibration", "CalibrationFileError", "DepthCorrection", "ExtrinsicsResult", "GridError",
+    "IntrinsicsResult", "TagDetection", "board_depth", "calibrate_extrinsics", "calibrate_intrinsics",
+    "checkerboard_points", "compare_intrinsics", "detect_tags", "extrinsics_from_detections", "find_checkerboard",
+    "fit_depth_correction", "grid_world_error", "hand_measured_extrinsic", "load_calibration", "save_calibration",
+    "tag_homography",
+]

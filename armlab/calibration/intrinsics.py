@@ -1,0 +1,121 @@
+"""Intrinsic calibration from checkerboard images (Zhang's method through OpenCV).
+
+Units: pixels for K and reprojection errors; the checkerboard's square size in mm sets the scale of the board
+poses (which the result also reports, camera frame, mm).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import cv2
+import numpy as np
+
+from armlab.images import check_gray_or_rgb
+
+__all__ = ["IntrinsicsResult", "calibrate_intrinsics", "find_checkerboard", "checkerboard_points",
+           "compare_intrinsics"]
+
+_SUBPIX_CRITERIA = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 50, 1e-4)
+
+
+@dataclass(frozen=True)
+class IntrinsicsResult:
+    """Camera matrix K (3, 3) px, distortion (5,) Brown-Conrady, overall RMS reprojection error (px), per-view RMS
+    (px) of the views used, their indices in the input list, the views rejected with the reason, the image size
+    (width, height), and each used view's board pose as rotation vectors / translations (camera frame, mm)."""
+
+    K: np.ndarray
+    dist: np.ndarray
+    rms: float
+    per_view_rms: np.ndarray
+    used_views: list[int]
+    rejected_views: dict[int, str]
+    image_size: tuple[int, int]
+    rvecs: list[np.ndarray] = field(repr=False, default_factory=list)
+    tvecs: list[np.ndarray] = field(repr=False, default_factory=list)
+
+    def summary(self) -> str:
+        """One line: focal lengths, centre, RMS and how many views were used."""
+        fx, fy, cx, cy = self.K[0, 0], self.K[1, 1], self.K[0, 2], self.K[1, 2]
+        return (f"fx={fx:.1f} fy={fy:.1f} cx={cx:.1f} cy={cy:.1f} px, RMS {self.rms:.3f} px "
+                f"over {len(self.used_views)} views ({len(self.rejected_views)} rejected)")
+
+
+def checkerboard_points(pattern_size: tuple[int, int], square_mm: float) -> np.ndarray:
+    """Board-frame coordinates (N, 3) mm of the inner corners, row by row as OpenCV returns them (z = 0)."""
+    cols, rows = pattern_size
+    grid = np.mgrid[0:cols, 0:rows].T.reshape(-1, 2) * float(square_mm)
+    return np.column_stack([grid, np.zeros(len(grid))]).astype(np.float32)
+
+
+def find_checkerboard(image, pattern_size: tuple[int, int] = (9, 6)) -> np.ndarray | None:
+    """Sub-pixel inner-corner positions (N, 2) px of a checkerboard in a uint8 gray or RGB image, or None."""
+    gray = check_gray_or_rgb(image)
+    found, corners = cv2.findChessboardCorners(
+        gray, tuple(pattern_size), flags=cv2.CALIB_CB_ADAPTIVE_THRESH | cv2.CALIB_CB_NORMALIZE_IMAGE)
+    if not found:
+        return None
+    # BEGIN SOLUTION
+    corners = cv2.cornerSubPix(gray, corners, (5, 5), (-1, -1), _SUBPIX_CRITERIA)
+    # END SOLUTION
+    return corners.reshape(-1, 2)
+
+
+def calibrate_intrinsics(images, pattern_size: tuple[int, int] = (9, 6), square_mm: float = 25.0,
+                         fix_k3: bool = True, min_views: int = 3) -> IntrinsicsResult:
+    """Calibrate K and distortion from checkerboard views.
+
+    Args:
+        images: list of uint8 grayscale (H, W) or RGB (H, W, 3) images, all the same size.
+        pattern_size: inner corners (columns, rows).
+        square_mm: edge of one square (mm).
+        fix_k3: keep k3 = 0 (the L515's lens has little distortion; k3 over-fits, toolchain.md).
+        min_views: fewest views in which the board must be found.
+
+    Raises ValueError for bad images, mixed sizes, or too few views with a board.
+    """
+    if len(images) == 0:
+        raise ValueError("calibrate_intrinsics needs a list of checkerboard images, got none")
+    if pattern_size[0] < 2 or pattern_size[1] < 2 or square_mm <= 0:
+        raise ValueError(f"pattern_size must count at least 2x2 inner corners and square_mm must be positive, "
+                         f"got {pattern_size}, {square_mm}")
+    object_points = checkerboard_points(pattern_size, square_mm)
+    size = None
+    obj, img, used, rejected = [], [], [], {}
+    for i, image in enumerate(images):
+        gray = check_gray_or_rgb(image, f"images[{i}]")
+        if size is None:
+            size = gray.shape[::-1]
+        elif gray.shape[::-1] != size:
+            raise ValueError(f"images[{i}] is {gray.shape[1]}x{gray.shape[0]}, the first is {size[0]}x{size[1]}")
+        corners = find_checkerboard(gray, pattern_size)
+        if corners is None:
+            rejected[i] = f"no {pattern_size[0]}x{pattern_size[1]} checkerboard found"
+            continue
+        obj.append(object_points)
+        img.append(corners.astype(np.float32))
+        used.append(i)
+    if len(used) < min_views:
+        raise ValueError(f"the checkerboard was found in {len(used)} of {len(images)} images; at least {min_views} "
+                         f"are needed (check pattern_size={tuple(pattern_size)} counts INNER corners)")
+    flags = cv2.CALIB_FIX_K3 if fix_k3 else 0
+    # BEGIN SOLUTION
+    rms, K, dist, rvecs, tvecs = cv2.calibrateCamera(obj, img, size, None, None, flags=flags)
+    # END SOLUTION
+    per_view = []
+    for o, m, r, t in zip(obj, img, rvecs, tvecs):
+        proj, _ = cv2.projectPoints(o, r, t, K, dist)
+        per_view.append(float(np.sqrt(np.mean(np.sum((proj.reshape(-1, 2) - m) ** 2, axis=1)))))
+    return IntrinsicsResult(K=K, dist=dist.ravel()[:5], rms=float(rms), per_view_rms=np.array(per_view),
+                            used_views=used, rejected_views=rejected, image_size=tuple(size),
+                            rvecs=[r.ravel() for r in rvecs], tvecs=[t.ravel() for t in tvecs])
+
+
+def compare_intrinsics(K_a, K_b) -> dict[str, float]:
+    """Differences K_a - K_b in fx, fy, cx, cy (px) and the relative focal-length difference (%)."""
+    K_a, K_b = np.asarray(K_a, float), np.asarray(K_b, float)
+    return {"dfx_px": K_a[0, 0] - K_b[0, 0], "dfy_px": K_a[1, 1] - K_b[1, 1],
+            "dcx_px": K_a[0, 2] - K_b[0, 2], "dcy_px": K_a[1, 2] - K_b[1, 2],
+            "focal_rel_pct": 100 * float(np.mean([(K_a[0, 0] - K_b[0, 0]) / K_b[0, 0],
+                                                   (K_a[1, 1] - K_b[1, 1]) / K_b[1, 1]]))}

@@ -1,0 +1,84 @@
+"""Saving and loading a calibration as JSON (written atomically, validated on load)."""
+
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from armlab.calibration.depth import DepthCorrection
+from armlab.camera import Camera
+
+__all__ = ["Calibration", "save_calibration", "load_calibration", "CalibrationFileError"]
+
+_FORMAT = "armlab-calibration/1"
+
+
+class CalibrationFileError(ValueError):
+    """A calibration file is missing or corrupt; the message names the file and the problem."""
+
+
+@dataclass(frozen=True)
+class Calibration:
+    """Everything pixel + depth -> world needs: the camera (K, dist, T_cam_world, size) and the depth correction."""
+
+    camera: Camera
+    depth_correction: DepthCorrection = field(default_factory=DepthCorrection)
+    notes: str = ""
+
+    def to_dict(self) -> dict:
+        c = self.camera
+        d = self.depth_correction
+        return {"format": _FORMAT, "width": c.width, "height": c.height, "K": c.K.tolist(), "dist": c.dist.tolist(),
+                "T_cam_world": c.T_cam_world.tolist(),
+                "depth_correction": {"a": d.a, "b": d.b, "c": d.c, "residual_mm": d.residual_mm, "inliers": d.inliers},
+                "notes": self.notes}
+
+    @staticmethod
+    def from_dict(raw: dict, source: str = "calibration") -> Calibration:
+        if not isinstance(raw, dict) or raw.get("format") != _FORMAT:
+            raise CalibrationFileError(f"{source}: not an armlab calibration (format must be {_FORMAT!r})")
+        try:
+            camera = Camera(np.array(raw["K"], float), np.array(raw["dist"], float),
+                            np.array(raw["T_cam_world"], float), int(raw["width"]), int(raw["height"]))
+            dc = raw.get("depth_correction", {})
+            correction = DepthCorrection(float(dc.get("a", 0)), float(dc.get("b", 0)), float(dc.get("c", 0)),
+                                         float(dc.get("residual_mm", 0)), int(dc.get("inliers", 0)))
+        except KeyError as e:
+            raise CalibrationFileError(f"{source}: missing field {e}") from None
+        except (TypeError, ValueError) as e:
+            raise CalibrationFileError(f"{source}: invalid value ({e})") from None
+        if not all(np.isfinite([correction.a, correction.b, correction.c])):
+            raise CalibrationFileError(f"{source}: depth correction is not finite")
+        return Calibration(camera, correction, str(raw.get("notes", "")))
+
+
+def save_calibration(calibration: Calibration, path) -> Path:
+    """Write the calibration as JSON atomically (temporary file in the same folder, then rename)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name, suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w") as f:
+            json.dump(calibration.to_dict(), f, indent=2)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return path
+
+
+def load_calibration(path) -> Calibration:
+    """Read and validate a calibration file; raises CalibrationFileError naming the file and the problem."""
+    path = Path(path)
+    if not path.is_file():
+        raise CalibrationFileError(f"{path}: calibration file not found")
+    try:
+        raw = json.loads(path.read_text())
+    except (json.JSONDecodeError, UnicodeDecodeError) as e:
+        raise CalibrationFileError(f"{path}: corrupt calibration file (not valid JSON: {e})") from None
+    return Calibration.from_dict(raw, str(path))

@@ -1,0 +1,78 @@
+"""Checks and small helpers for the images every public API takes.
+
+Images: RGB uint8 (H, W, 3) or grayscale uint8 (H, W). Depth: float32/float64 (H, W) millimetres, camera-frame Z,
+NaN where there is no return. Pixels: OpenCV's (u right, v down, integer = pixel centre).
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import cv2
+import numpy as np
+
+__all__ = ["check_rgb", "check_gray_or_rgb", "check_depth", "to_gray", "sample_depth"]
+
+
+def check_rgb(rgb, name: str = "rgb") -> np.ndarray:
+    """Validate an RGB image: uint8, shape (H, W, 3). Raises ValueError naming the problem."""
+    a = np.asarray(rgb)
+    if a.dtype != np.uint8:
+        raise ValueError(f"{name} must be uint8 RGB (H, W, 3), got dtype {a.dtype}")
+    if a.ndim != 3 or a.shape[2] != 3 or a.shape[0] == 0 or a.shape[1] == 0:
+        raise ValueError(f"{name} must be an RGB image of shape (H, W, 3), got shape {a.shape}")
+    return a
+
+
+def check_gray_or_rgb(image, name: str = "image") -> np.ndarray:
+    """Validate a uint8 grayscale (H, W) or RGB (H, W, 3) image and return it as grayscale (H, W)."""
+    a = np.asarray(image)
+    if a.dtype != np.uint8:
+        raise ValueError(f"{name} must be uint8 grayscale (H, W) or RGB (H, W, 3), got dtype {a.dtype}")
+    if a.ndim == 2 and a.size:
+        return a
+    if a.ndim == 3 and a.shape[2] == 3 and a.size:
+        return cv2.cvtColor(a, cv2.COLOR_RGB2GRAY)
+    raise ValueError(f"{name} must have shape (H, W) or (H, W, 3), got shape {a.shape}")
+
+
+def to_gray(image) -> np.ndarray:
+    """Grayscale uint8 (H, W) of a grayscale or RGB uint8 image."""
+    return check_gray_or_rgb(image)
+
+
+def check_depth(depth, shape: tuple[int, int] | None = None, name: str = "depth_mm") -> np.ndarray:
+    """Validate a depth image: float (H, W) mm, NaN allowed; optionally of the given (H, W). Returns float32."""
+    a = np.asarray(depth)
+    if not np.issubdtype(a.dtype, np.floating):
+        raise ValueError(f"{name} must be a float depth image in mm (NaN = no return), got dtype {a.dtype}")
+    if a.ndim != 2 or a.size == 0:
+        raise ValueError(f"{name} must have shape (H, W), got shape {a.shape}")
+    if shape is not None and a.shape != tuple(shape):
+        raise ValueError(f"{name} has shape {a.shape} but the colour image is {tuple(shape)}: align depth to colour")
+    return a.astype(np.float32, copy=False)
+
+
+def sample_depth(depth: np.ndarray, uv, radius: int = 2) -> np.ndarray:
+    """Median depth (N,) mm of the valid pixels within `radius` px of each pixel uv (N, 2); NaN where none.
+
+    Pixels are rounded to the nearest pixel centre; windows are clipped at the image border.
+    """
+    uv = np.asarray(uv, dtype=float).reshape(-1, 2)
+    h, w = depth.shape
+    out = np.full(len(uv), np.nan)
+    finite = np.all(np.isfinite(uv), axis=1)
+    if not finite.any():
+        return out
+    ui = np.rint(uv[finite, 0]).astype(int)
+    vi = np.rint(uv[finite, 1]).astype(int)
+    offsets = np.arange(-radius, radius + 1)
+    U = np.clip(ui[:, None, None] + offsets[None, None, :], 0, w - 1)
+    V = np.clip(vi[:, None, None] + offsets[None, :, None], 0, h - 1)
+    windows = depth[V, U].reshape(len(ui), -1)
+    inside = (ui >= 0) & (ui < w) & (vi >= 0) & (vi < h)
+    with warnings.catch_warnings():  # all-NaN windows give NaN, which is the answer we want
+        warnings.simplefilter("ignore", RuntimeWarning)
+        med = np.nanmedian(windows, axis=1)
+    out[np.flatnonzero(finite)] = np.where(inside, med, np.nan)
+    return out
