@@ -110,22 +110,27 @@ def rotvec_to_matrix(rotvec) -> np.ndarray:
 
 
 def log_so3(R) -> np.ndarray:
-    """Rotation vector (..., 3) of rotation matrix (..., 3, 3); the angle is in [0, pi]."""
+    """Rotation vector (..., 3) of rotation matrix (..., 3, 3); the angle is in [0, pi].
+
+    The angle comes from atan2(sin, cos) (accurate everywhere, unlike arccos near 0 and pi). Near pi, where the
+    antisymmetric part vanishes, the axis is read from the symmetric part and its sign from the antisymmetric one.
+    """
     R = np.asarray(R, dtype=float)
-    cos = np.clip((np.trace(R, axis1=-2, axis2=-1) - 1.0) / 2.0, -1.0, 1.0)
-    angle = np.arccos(cos)
+    cos = (np.trace(R, axis1=-2, axis2=-1) - 1.0) / 2.0
     vee = np.stack([R[..., 2, 1] - R[..., 1, 2], R[..., 0, 2] - R[..., 2, 0], R[..., 1, 0] - R[..., 0, 1]], -1)
-    sin = np.sin(angle)
-    small = sin > 1e-6
-    out = np.where(small[..., None], vee * (angle / np.where(small, 2 * sin, 1.0))[..., None], 0.5 * vee)
-    # Near pi the antisymmetric part vanishes: read the axis from the symmetric part instead.
-    near_pi = (~small) & (cos < 0)
+    sin = np.linalg.norm(vee, axis=-1) / 2.0
+    angle = np.arctan2(sin, cos)
+    scale = np.where(sin > 1e-12, angle / np.where(sin > 1e-12, 2 * sin, 1.0), 0.5)
+    out = vee * scale[..., None]
+    near_pi = (cos < 0) & (sin < 1e-3)
     if np.any(near_pi):
-        B = (R[near_pi] + np.eye(3)) / 2.0
-        diag = np.clip(np.diagonal(B, axis1=-2, axis2=-1), 0, None)
-        k = np.argmax(diag, axis=-1)
-        col = np.take_along_axis(B, k[:, None, None], axis=-1)[..., 0]
+        # (R + R^T)/2 = cos I + (1 - cos) a a^T: take the column with the largest diagonal of a a^T.
+        Rn, cn = R[near_pi], cos[near_pi]
+        aat = ((Rn + np.swapaxes(Rn, -1, -2)) / 2 - cn[:, None, None] * np.eye(3)) / (1 - cn)[:, None, None]
+        k = np.argmax(np.diagonal(aat, axis1=-2, axis2=-1), axis=-1)
+        col = np.take_along_axis(aat, k[:, None, None], axis=-1)[..., 0]
         axis = col / np.linalg.norm(col, axis=-1, keepdims=True)
+        axis *= np.where(np.sum(axis * vee[near_pi], axis=-1) < 0, -1.0, 1.0)[:, None]
         out[near_pi] = axis * angle[near_pi][..., None]
     return out
 
