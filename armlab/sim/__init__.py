@@ -1,0 +1,52 @@
+"""The simulated lab station: RX200 arm with gripper, block world with scenes, and RGB-D camera.
+
+`make_sim_station(seed=0, scene="random")` (or `armlab.make_station("sim", ...)`) builds all three; the arm and
+camera offer the same interfaces as the real ones (armlab.station.Arm, RGBDCamera). Ground truth for checking is
+kept apart from what a student pipeline should use: `station.world.objects` / `.blocks` (true object poses),
+`station.arm.q_true` (true joint angles) and `station.camera.truth` (the true camera model).
+Units: mm, rad, s; world (board) frame.
+"""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+from armlab.sim.arm import ArmRealism, SimArm
+from armlab.sim.gripper import GripperGeometry
+from armlab.sim.scenes import PRESETS, SceneError, load_scene, save_scene, scene_objects
+from armlab.sim.world import World
+from armlab.station import Station
+
+__all__ = ["make_sim_station", "SimArm", "ArmRealism", "GripperGeometry", "World", "PRESETS", "SceneError",
+           "scene_objects", "load_scene", "save_scene"]
+
+
+def make_sim_station(seed: int = 0, scene: str | os.PathLike | dict = "random",
+                     realism: str | ArmRealism = "realistic", real_time: bool = False,
+                     gripper: GripperGeometry | None = None, camera_realism: str | None = None,
+                     **scene_options) -> Station:
+    """A simulated station: Station(kind="sim", arm, camera, world).
+
+    Args:
+        seed: one seed for everything (scene, arm errors, camera noise): same seed, same station.
+        scene: a preset name (armlab.sim.PRESETS), a JSON scene file or a scene dict; scene_options go to the
+            preset (e.g. n=8 for "random").
+        realism: "realistic" or "ideal" for arm and camera, or an ArmRealism for the arm (camera: "realistic").
+        real_time: blocking moves also take wall-clock time.
+        gripper: finger pad geometry (default GripperGeometry()).
+        camera_realism: the camera's realism when it should differ from the arm's.
+    The arm starts at the sleep pose with the gripper open, as the real lab's arm does.
+    """
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
+        raise ValueError(f"seed must be an integer, got {seed!r}")
+    scene_seed, arm_seed, camera_seed = (int(s.generate_state(1)[0]) for s in np.random.SeedSequence(seed).spawn(3))
+    world = World(scene_objects(scene, scene_seed, **scene_options), real_time=real_time)
+    arm = SimArm(world, realism=realism, gripper=gripper, seed=arm_seed, real_time=real_time)
+    if camera_realism is None:
+        camera_realism = realism if isinstance(realism, str) else "realistic"
+    from armlab.sim.camera import SimCamera  # the renderer is heavier: import it only when a station is built
+
+    camera = SimCamera(world, arm, realism=camera_realism, seed=camera_seed)
+    return Station(kind="sim", arm=arm, camera=camera, world=world)

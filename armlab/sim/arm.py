@@ -1,0 +1,389 @@
+"""The simulated RX200 arm: the manufacturer's time-based motion in simulated time, the driver's refusals, board
+collisions, gravity sag, backlash, encoder noise, torque-off teaching, the gripper and an emergency stop.
+
+Units: rad, s, mm; world (board) frame. Three joint vectors are kept apart:
+- the motor positions (what the servos are commanded to and hold),
+- `q_true`: the physical joint angles = motors + homing offsets + backlash + gravity deflection (what the camera
+  sees and what grasps and collisions use),
+- `joint_positions()`: what the encoders report (motor positions, quantised, with read noise).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, fields, replace
+
+import numpy as np
+
+from armlab import kinematics
+from armlab.profile import default_moving_time, trapezoid_fraction, velocity_violations
+from armlab.robot import RobotModel, rx200
+from armlab.sim.gripper import PAD_NAMES, GripperGeometry, close_on, push_with_pads
+from armlab.sim.world import World
+from armlab.station import EmergencyStopped, MotionRefused
+from armlab.transforms import homogeneous, invert_transform, rot_z, rpy_from_matrix
+
+__all__ = ["ArmRealism", "SimArm", "gravity_deflection"]
+
+GRAVITY = 9.81                 # m/s^2
+_PATH_STEP_RAD = 0.01          # board-collision check: largest joint change between checked path samples
+_POINT_NAMES = ("base", "waist", "shoulder joint", "elbow joint", "wrist joint", "wrist_rotate joint",
+                "tool point")
+
+
+@dataclass(frozen=True)
+class ArmRealism:
+    """How far the simulated arm departs from its ideal model. `ArmRealism.preset("realistic" | "ideal")`.
+
+    Gravity sag: each of shoulder and elbow bends by compliance x the gravity moment of everything beyond it
+    (link masses at their midpoints, the wrist and gripper between the wrist joint and the tool point, a held block
+    at the tool point), in the direction that lowers the arm. The defaults give about 4 mm at 250 mm reach and
+    10-12 mm near 400 mm reach, the 5-15 mm students measure at long reach on real RX200s.
+
+    Attributes:
+        shoulder_compliance_rad_per_nm, elbow_compliance_rad_per_nm: joint deflection per N m of gravity moment.
+        upper_arm_kg, forearm_kg, gripper_kg: link masses (kg).
+        block_density_kg_m3: density of the wooden blocks (for a held block's weight).
+        backlash_rad: gear play per joint; the link trails the motor by half of it in the last direction of motion.
+        joint_offset_std_rad: std of the per-joint homing offsets (drawn once per arm from its seed).
+        encoder_noise_rad: std of the read noise on joint_positions() (seeded).
+        encoder_ticks: encoder counts per turn (readings are quantised; 0 = not quantised).
+    """
+
+    shoulder_compliance_rad_per_nm: float = 0.012
+    elbow_compliance_rad_per_nm: float = 0.009
+    upper_arm_kg: float = 0.30
+    forearm_kg: float = 0.20
+    gripper_kg: float = 0.25
+    block_density_kg_m3: float = 600.0
+    backlash_rad: float = 0.003
+    joint_offset_std_rad: float = 0.002
+    encoder_noise_rad: float = 0.0005
+    encoder_ticks: int = 4096
+
+    def __post_init__(self):
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if not np.isfinite(value) or value < 0:
+                raise ValueError(f"ArmRealism.{f.name} must be a finite number >= 0, got {value}")
+
+    @classmethod
+    def preset(cls, name: str) -> ArmRealism:
+        """"realistic" (the defaults) or "ideal" (no sag, backlash, offsets or noise; unquantised encoders)."""
+        if name == "realistic":
+            return cls()
+        if name == "ideal":
+            return replace(cls(), shoulder_compliance_rad_per_nm=0.0, elbow_compliance_rad_per_nm=0.0,
+                           backlash_rad=0.0, joint_offset_std_rad=0.0, encoder_noise_rad=0.0, encoder_ticks=0)
+        raise ValueError(f"unknown arm realism preset {name!r}: expected 'realistic' or 'ideal'")
+
+
+def gravity_deflection(q, realism: ArmRealism, payload_kg: float = 0.0, robot: RobotModel | None = None):
+    """Joint deflections (..., 5) rad that gravity adds to the joint angles q (..., 5) rad (shoulder, elbow).
+
+    Moment about a joint = g * sum(mass * horizontal distance beyond the joint along the arm's heading); a positive
+    moment (mass in front of the joint) tips the arm forward and down, which is positive shoulder and elbow.
+    """
+    q = np.asarray(q, dtype=float)
+    P = kinematics.joint_positions(q, robot)                   # (..., 7, 3)
+    heading = q[..., 0] + np.pi / 2                            # the arm points along +y at waist = 0
+    h = np.stack([np.cos(heading), np.sin(heading)], axis=-1)
+    r = np.einsum("...kj,...j->...k", P[..., :2], h) / 1000.0  # (..., 7) horizontal reach in m
+    upper, fore, grip = (r[..., 2] + r[..., 3]) / 2, (r[..., 3] + r[..., 4]) / 2, (r[..., 4] + r[..., 6]) / 2
+    m_up, m_fore, m_grip = realism.upper_arm_kg, realism.forearm_kg, realism.gripper_kg
+
+    def moment(pivot, parts):
+        return GRAVITY * sum(m * (x - pivot) for m, x in parts)
+
+    beyond_elbow = [(m_fore, fore), (m_grip, grip), (payload_kg, r[..., 6])]
+    out = np.zeros(q.shape)
+    out[..., 1] = realism.shoulder_compliance_rad_per_nm * moment(r[..., 2], [(m_up, upper), *beyond_elbow])
+    out[..., 2] = realism.elbow_compliance_rad_per_nm * moment(r[..., 3], beyond_elbow)
+    return out
+
+
+@dataclass
+class _Motion:
+    t0: float
+    q0: np.ndarray
+    q1: np.ndarray
+    moving_time: float
+    accel_time: float
+
+
+class SimArm:
+    """A simulated RX200 with gripper in a World (same interface as the real arm, armlab.station.Arm).
+
+    Args:
+        world: the block world (its clock drives the motion).
+        realism: "realistic", "ideal" or an ArmRealism.
+        gripper: finger pad geometry (GripperGeometry()).
+        seed: seeds the homing offsets and the encoder noise.
+        real_time: blocking moves take wall-clock time too (else they return at once, in simulated time).
+        gripper_time_s: simulated time an open or close takes (the manufacturer's default delay is 1 s).
+    """
+
+    def __init__(self, world: World, realism: str | ArmRealism = "realistic", gripper: GripperGeometry | None = None,
+                 seed: int = 0, real_time: bool = False, robot: RobotModel | None = None,
+                 gripper_time_s: float = 1.0):
+        self.robot = robot or rx200()
+        self.world = world
+        self.realism = ArmRealism.preset(realism) if isinstance(realism, str) else realism
+        if not isinstance(self.realism, ArmRealism):
+            raise TypeError(f"realism must be 'realistic', 'ideal' or an ArmRealism, got {realism!r}")
+        self.gripper_geometry = gripper or GripperGeometry()
+        self.real_time = bool(real_time)
+        self.gripper_time_s = float(gripper_time_s)
+        offsets_rng, self._noise_rng = (np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(2))
+        self._offsets = offsets_rng.normal(0.0, self.realism.joint_offset_std_rad, 5)
+        self._motor = self.robot.sleep.astype(float)       # the lab's arm starts asleep
+        self._direction = np.zeros(5)
+        self._motion: _Motion | None = None
+        self._torque = True
+        self._estopped = False
+        self._held: list[tuple[object, np.ndarray]] = []    # (object, its pose in the tool frame)
+        self.gripper_opening_mm = self.gripper_geometry.max_opening_mm
+        self._q_true = self._physical(self._motor)
+        world.add_listener(self._on_time)
+
+    # -- physical model -------------------------------------------------------------------------------------
+    def _payload_kg(self) -> float:
+        return sum(self.realism.block_density_kg_m3 * (o.edge / 1000.0) ** 3 for o, _ in self._held)
+
+    def _physical(self, motor, direction=None) -> np.ndarray:
+        """Physical joint angles (..., 5) for motor positions (..., 5) under the current load and torque state."""
+        q = np.asarray(motor, dtype=float) + self._offsets
+        if not self._torque:                        # held by hand: no servo, no gear load
+            return q
+        d = self._direction if direction is None else direction
+        q = q - 0.5 * self.realism.backlash_rad * np.sign(d)
+        return q + gravity_deflection(q, self.realism, self._payload_kg(), self.robot)
+
+    @property
+    def q_true(self) -> np.ndarray:
+        """The physical joint angles (5,) rad (ground truth: what the camera sees and the world feels)."""
+        self.world.sync()
+        return self._q_true.copy()
+
+    def tool_pose_true(self) -> np.ndarray:
+        """The physical tool pose (4, 4) in the world (ground truth, mm)."""
+        return kinematics.fk(self.q_true, self.robot, check_limits=False)
+
+    @property
+    def holding(self) -> list:
+        """The objects held between the pads (the grasped block and anything stacked on it)."""
+        return [o for o, _ in self._held]
+
+    def _on_time(self, t: float) -> None:
+        m = self._motion
+        if m is not None:
+            s = trapezoid_fraction(t - m.t0, m.moving_time, m.accel_time)
+            self._motor = m.q0 + s * (m.q1 - m.q0)
+            if t - m.t0 >= m.moving_time - 1e-12:
+                self._motor, self._motion = m.q1.copy(), None
+        self._refresh()
+
+    def _refresh(self) -> None:
+        """Recompute the physical pose, carry held objects, and let the pads push what they run into."""
+        self._q_true = self._physical(self._motor)
+        T = kinematics.fk(self._q_true, self.robot, check_limits=False)
+        for obj, T_rel in self._held:
+            T_obj = T @ T_rel
+            obj.position = T_obj[:3, 3].copy()
+            roll, pitch, yaw = rpy_from_matrix(T_obj[:3, :3])
+            obj.yaw, obj.tilt = float(yaw), np.array([roll, pitch])
+        push_with_pads(self.world, T, self.gripper_geometry, self.gripper_opening_mm)
+
+    # -- readings -------------------------------------------------------------------------------------------
+    def joint_positions(self) -> np.ndarray:
+        """What the encoders report (5,) rad: the motor positions, quantised, with read noise."""
+        self.world.sync()
+        r = self.realism
+        q = self._motor + self._noise_rng.normal(0.0, r.encoder_noise_rad, 5) if r.encoder_noise_rad else \
+            self._motor.copy()
+        if r.encoder_ticks:
+            step = 2 * np.pi / r.encoder_ticks
+            q = np.round(q / step) * step
+        return q
+
+    def is_moving(self) -> bool:
+        """True while a move is under way (in simulated time)."""
+        self.world.sync()
+        return self._motion is not None
+
+    @property
+    def torque_enabled(self) -> bool:
+        """True when the motors hold the arm."""
+        return self._torque
+
+    @property
+    def emergency_stopped(self) -> bool:
+        """True after emergency_stop() until reset()."""
+        return self._estopped
+
+    # -- checks ---------------------------------------------------------------------------------------------
+    def _check_ready(self, what: str) -> None:
+        if self._estopped:
+            raise EmergencyStopped(f"{what} refused: the arm is emergency-stopped; call reset() first")
+
+    def _board_collision(self, q0, q1, physical) -> str | None:
+        """Why the straight joint-space path q0 -> q1 (motor positions) would put a part below the board, or None."""
+        dq = np.asarray(q1) - np.asarray(q0)
+        n = max(2, int(np.ceil(np.abs(dq).max() / _PATH_STEP_RAD)) + 1)
+        s = np.linspace(0.0, 1.0, n)
+        Q = physical(q0 + s[:, None] * dq)
+        frames = kinematics.link_frames(Q, self.robot, check_limits=False)
+        T = frames[:, 6]
+        parts = {name: kinematics.joint_positions(Q, self.robot)[:, i] for i, name in enumerate(_POINT_NAMES)
+                 if i >= 2}
+        pads = self.gripper_geometry.pad_corners(T, self.gripper_opening_mm)       # (n, 2, 8, 3)
+        for k, name in enumerate(PAD_NAMES):
+            parts[name] = pads[:, k]
+        for obj, T_rel in self._held:
+            local = (np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)]) * obj.edge / 2)
+            corners_tool = local @ T_rel[:3, :3].T + T_rel[:3, 3]
+            parts[f"held {obj.color} block"] = np.einsum("nij,kj->nki", T[:, :3, :3], corners_tool) + T[:, None, :3, 3]
+        for name, pts in parts.items():
+            pts = pts.reshape(n, -1, 3)
+            z = pts[..., 2]
+            if z.min() < -1e-6:
+                i = int(np.flatnonzero((z < -1e-6).any(axis=1))[0])
+                j = int(np.argmin(z[i]))
+                x, y, zz = pts[i, j]
+                return (f"the {name} would go {-zz:.1f} mm below the board at ({x:.1f}, {y:.1f}) mm, "
+                        f"{100 * s[i]:.0f}% of the way along the move")
+        return None
+
+    # -- motion ---------------------------------------------------------------------------------------------
+    def move_to(self, q, moving_time: float | None = None, accel_time: float | None = None,
+                blocking: bool = True) -> None:
+        """Move to joint positions q (5,) rad in moving_time s (default: the lab's rule, profile.default_moving_time)
+        with accel_time s ramps (default moving_time / 3). Raises MotionRefused before anything moves when q is out
+        of the joint limits, too fast for a joint, or the path would put any part of the arm below the board."""
+        self._check_ready("motion")
+        if not self._torque:
+            raise MotionRefused("motion refused: torque is off (the arm is being moved by hand); "
+                                "call set_torque(True) first")
+        try:
+            q = kinematics.check_joints(q, self.robot, check_limits=False).astype(float)
+        except ValueError as e:
+            raise MotionRefused(f"motion refused: {e}") from None
+        if q.shape != (5,):
+            raise MotionRefused(f"motion refused: move_to takes one joint vector (5,), got shape {q.shape}")
+        limits = self.robot.limit_violations(q)
+        if limits:
+            raise MotionRefused("motion refused (joint limits): " + "; ".join(limits))
+        self.world.sync()
+        start = self._motor.copy()
+        T = default_moving_time(start, q, self.robot) if moving_time is None else float(moving_time)
+        if not np.isfinite(T) or T <= 0:
+            raise MotionRefused(f"motion refused: moving_time must be a positive number of seconds, got {T}")
+        Ta = T / 3 if accel_time is None else float(accel_time)
+        if not np.isfinite(Ta) or not 0 <= Ta <= T / 2 + 1e-12:
+            raise MotionRefused(f"motion refused: accel_time must be between 0 and moving_time / 2 = {T / 2:.3f} s, "
+                                f"got {Ta}")
+        too_fast = velocity_violations(start, q, T, self.robot)
+        if too_fast:
+            raise MotionRefused(f"motion refused (velocity limits, moving time {T:.2f} s): " + "; ".join(too_fast))
+        direction = np.where(q != start, np.sign(q - start), self._direction)
+        hit = self._board_collision(start, q, lambda Q: self._physical(Q, direction))
+        if hit:
+            raise MotionRefused(f"motion refused (collision with the board): {hit}")
+        self._direction = direction
+        self._motion = _Motion(self.world.time_s, start, q, T, Ta)
+        if blocking:
+            self.wait()
+
+    def wait(self) -> None:
+        """Let simulated time run until the current move ends (in real-time mode, the wall clock too)."""
+        self.world.sync()
+        while self._motion is not None:
+            remaining = self._motion.t0 + self._motion.moving_time - self.world.time_s
+            if self.real_time:
+                time.sleep(min(max(remaining, 0.0), 0.02))
+                self.world.sync()
+            else:
+                self.world.advance(max(remaining, 0.0))
+
+    def home(self, moving_time: float | None = None) -> None:
+        """Move to the home pose (all zeros), blocking."""
+        self.move_to(self.robot.home, moving_time)
+
+    def sleep(self, moving_time: float | None = None) -> None:
+        """Move to the sleep pose (safe to power off), blocking."""
+        self.move_to(self.robot.sleep, moving_time)
+
+    def _pass_gripper_time(self) -> None:
+        if self.real_time:
+            time.sleep(self.gripper_time_s)
+            self.world.sync()
+        else:
+            self.world.advance(self.gripper_time_s)
+
+    # -- gripper --------------------------------------------------------------------------------------------
+    def open_gripper(self) -> None:
+        """Open the pads fully; a held block drops onto whatever is below it (or tips off it)."""
+        self._check_ready("opening the gripper")
+        held = sorted(self.holding, key=lambda o: o.position[2])
+        self._held = []
+        self.world.held.difference_update(o.id for o in held)
+        self.gripper_opening_mm = self.gripper_geometry.max_opening_mm
+        for o in held:
+            self.world.settle(o)
+        self._refresh()
+        self._pass_gripper_time()
+
+    def close_gripper(self) -> bool:
+        """Close the pads; True when a block is held (by the grasp rule of armlab.sim.gripper)."""
+        self._check_ready("closing the gripper")
+        if self._held:
+            return True
+        T = kinematics.fk(self._q_true, self.robot, check_limits=False)
+        outcome = close_on(self.world, T, self.gripper_geometry, self.gripper_opening_mm)
+        self.gripper_opening_mm = outcome.opening_mm
+        self.last_grasp = outcome.reason
+        if outcome.held is not None:
+            group = [outcome.held, *self.world.stack_above(outcome.held)]
+            T_tool_world = invert_transform(T)
+            self._held = [(o, T_tool_world @ homogeneous(rot_z(o.yaw), o.position)) for o in group]
+            self.world.held.update(o.id for o in group)
+        self._refresh()
+        self._pass_gripper_time()
+        return outcome.held is not None
+
+    # -- teaching and safety --------------------------------------------------------------------------------
+    def set_torque(self, enabled: bool) -> None:
+        """Torque on (the motors hold the present position) or off (the arm can be posed by hand, move_by_hand)."""
+        self.world.sync()
+        self._motion = None
+        self._torque = bool(enabled)
+        self._refresh()
+
+    def move_by_hand(self, q) -> None:
+        """With torque off, pose the arm by hand at physical joint angles q (5,) rad (a student's hand: no sag, no
+        backlash); the encoders then read it back. Refused (MotionRefused) with torque on, past a joint's hard stop,
+        or through the board."""
+        if self._torque:
+            raise MotionRefused("the motors hold the arm: call set_torque(False) before moving it by hand")
+        q = kinematics.check_joints(q, self.robot, check_limits=False).astype(float)
+        limits = self.robot.limit_violations(q)
+        if limits:
+            raise MotionRefused("the hand cannot push past the hard stops: " + "; ".join(limits))
+        hit = self._board_collision(self._q_true, q, lambda Q: Q)
+        if hit:
+            raise MotionRefused(f"the hand cannot push the arm through the board: {hit}")
+        self._motor = q - self._offsets
+        self._refresh()
+
+    def emergency_stop(self) -> None:
+        """Halt at once where the arm is now; every further motion raises EmergencyStopped until reset()."""
+        self.world.sync()
+        self._motion = None
+        self._estopped = True
+
+    def reset(self) -> None:
+        """Re-initialise after an emergency stop (the arm stays where it stopped, torque on)."""
+        self._estopped = False
+        self._motion = None
+        self._torque = True
+        self._refresh()

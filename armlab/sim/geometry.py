@@ -1,0 +1,93 @@
+"""Small geometry helpers for the simulator: convex polygons in the plane and oriented boxes in space.
+
+Units are whatever the caller uses (mm in the kit). Polygons are (K, 2) arrays of vertices in order (either
+direction); boxes are (centre (3,), rotation (3, 3) whose columns are the box axes, half extents (3,)).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["polygons_overlap", "point_in_convex", "convex_hull", "separation_along", "boxes_overlap",
+           "box_corners", "wrap_quarter"]
+
+
+def wrap_quarter(angle) -> np.ndarray:
+    """An angle (rad) reduced modulo pi/2 into [-pi/4, pi/4): how far a square is turned from another."""
+    return np.mod(np.asarray(angle, dtype=float) + np.pi / 4, np.pi / 2) - np.pi / 4
+
+
+def _edge_normals(poly: np.ndarray) -> np.ndarray:
+    edges = np.roll(poly, -1, axis=0) - poly
+    return np.column_stack([-edges[:, 1], edges[:, 0]])
+
+
+def polygons_overlap(a: np.ndarray, b: np.ndarray, margin: float = 0.0) -> bool:
+    """True when convex polygons a (K, 2) and b (M, 2) overlap by more than `margin` along every separating axis
+    (separating axis theorem); margin < 0 also counts polygons closer than |margin| as overlapping."""
+    for axis in np.vstack([_edge_normals(a), _edge_normals(b)]):
+        n = np.linalg.norm(axis)
+        if n < 1e-12:
+            continue
+        pa, pb = a @ (axis / n), b @ (axis / n)
+        if min(pa.max(), pb.max()) - max(pa.min(), pb.min()) <= margin:
+            return False
+    return True
+
+
+def point_in_convex(point, poly: np.ndarray, tol: float = 1e-9) -> bool:
+    """True when a point (2,) lies inside (or on the border of) the convex polygon (K, 2)."""
+    p = np.asarray(point, dtype=float)
+    edges = np.roll(poly, -1, axis=0) - poly
+    cross = edges[:, 0] * (p[1] - poly[:, 1]) - edges[:, 1] * (p[0] - poly[:, 0])
+    return bool(np.all(cross >= -tol) or np.all(cross <= tol))
+
+
+def convex_hull(points) -> np.ndarray:
+    """Convex hull (K, 2) of points (N, 2), counter-clockwise (Andrew's monotone chain)."""
+    pts = sorted({(float(x), float(y)) for x, y in np.asarray(points, dtype=float)})
+    if len(pts) <= 2:
+        return np.array(pts)
+
+    def half(seq):
+        out: list[tuple[float, float]] = []
+        for p in seq:
+            while len(out) >= 2 and ((out[-1][0] - out[-2][0]) * (p[1] - out[-2][1])
+                                     - (out[-1][1] - out[-2][1]) * (p[0] - out[-2][0])) <= 0:
+                out.pop()
+            out.append(p)
+        return out
+
+    lower, upper = half(pts), half(reversed(pts))
+    return np.array(lower[:-1] + upper[:-1])
+
+
+def separation_along(moving: np.ndarray, fixed: np.ndarray, direction) -> float:
+    """How far polygon `moving` must travel along the unit `direction` (2,) to stop overlapping `fixed` (>= 0)."""
+    d = np.asarray(direction, dtype=float)
+    return max(0.0, float((fixed @ d).max() - (moving @ d).min()))
+
+
+def box_corners(centre, rotation, half) -> np.ndarray:
+    """The 8 corners (8, 3) of an oriented box; rotation columns are the box axes, half the half extents."""
+    signs = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)], dtype=float)
+    return np.asarray(centre, float) + (signs * np.asarray(half, float)) @ np.asarray(rotation, float).T
+
+
+def boxes_overlap(c1, R1, h1, c2, R2, h2, margin: float = 0.0) -> bool:
+    """True when two oriented boxes interpenetrate by more than `margin` (separating axis theorem, 15 axes)."""
+    R1, R2 = np.asarray(R1, float), np.asarray(R2, float)
+    d = np.asarray(c2, float) - np.asarray(c1, float)
+    axes = [R1[:, i] for i in range(3)] + [R2[:, i] for i in range(3)]
+    axes += [np.cross(R1[:, i], R2[:, j]) for i in range(3) for j in range(3)]
+    h1, h2 = np.asarray(h1, float), np.asarray(h2, float)
+    for axis in axes:
+        n = np.linalg.norm(axis)
+        if n < 1e-9:
+            continue
+        axis = axis / n
+        r1 = np.sum(h1 * np.abs(R1.T @ axis))
+        r2 = np.sum(h2 * np.abs(R2.T @ axis))
+        if r1 + r2 - abs(d @ axis) <= margin:
+            return False
+    return True
