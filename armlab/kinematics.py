@@ -229,7 +229,10 @@ def _ik_candidates(P: np.ndarray, pitch: np.ndarray, roll: np.ndarray, robot: Ro
         d2 = wr**2 + wh**2
         cos_delta = (d2 - L1**2 - L2**2) / (2 * L1 * L2)
         ok = np.abs(cos_delta) <= 1 + 1e-12
-        delta = np.arccos(np.clip(cos_delta, -1, 1)) * (-1 if elbow_branch == "elbow up" else 1)
+        # Elbow up = the elbow above the shoulder-wrist line, seen with the target on the right (delta < 0 in the
+        # arm's plane); the flipped waist mirrors that plane, which swaps the sign.
+        up = (elbow_branch == "elbow up") != flipped
+        delta = np.arccos(np.clip(cos_delta, -1, 1)) * (-1 if up else 1)
         upper_arm_elevation = np.arctan2(wh, wr) - np.arctan2(L2 * np.sin(delta), L1 + L2 * np.cos(delta))
         q2 = _wrap(-upper_arm_elevation - o2)
         q3 = _wrap(-delta - o3)
@@ -270,13 +273,18 @@ def _rank(c: _Candidates, current: np.ndarray) -> np.ndarray:
     return np.argsort(key, axis=1, kind="stable")
 
 
+def _per_target(a: np.ndarray, n: int, name: str) -> np.ndarray:
+    if a.ndim > 1 or (a.ndim == 1 and a.shape[0] not in (1, n)):
+        raise ValueError(f"{name} must be a scalar or hold one value per target ({n}), got shape {a.shape}")
+    return np.broadcast_to(a, (n,)).astype(float)
+
+
 def _prepare(position, pitch, roll, current, robot):
     P = _check_position(position)
     single = P.ndim == 1
     P = np.atleast_2d(P)
     n = P.shape[0]
-    pitch = np.broadcast_to(_check_angle(pitch, "pitch"), (n,)).astype(float)
-    roll = np.broadcast_to(_check_angle(roll, "roll"), (n,)).astype(float)
+    pitch, roll = (_per_target(_check_angle(v, name), n, name) for v, name in ((pitch, "pitch"), (roll, "roll")))
     cur = robot.home if current is None else check_joints(current, robot, check_limits=False)
     cur = np.broadcast_to(cur, (n, 5)).astype(float)
     return P, pitch, roll, cur, single
@@ -288,7 +296,10 @@ def ik(position, pitch, roll: float = 0.0, current=None, robot: RobotModel | Non
     The approach direction (tool x axis) is pitched `pitch` rad below horizontal in the vertical plane through the
     base axis and the target (0 = horizontal pointing away from the base, pi/2 = straight down, > pi/2 = down and
     back towards the base); wrist_rotate = `roll`. Solutions are ordered best first: elbow up, then least motion
-    from `current` (default: home). Raises Unreachable (a ValueError) saying why when there is none.
+    from `current` (default: home). Elbow up, whichever way the waist faces: seen from the side with the target to
+    the right of the base axis, the elbow lies to the left of the direction from the shoulder to the wrist centre,
+    i.e. above the shoulder-wrist line whenever the wrist centre is on the target's side of the waist axis.
+    Raises Unreachable (a ValueError) saying why when there is none.
     """
     robot = robot or rx200()
     P, pitch_a, roll_a, cur, single = _prepare(position, pitch, roll, current, robot)
@@ -333,6 +344,11 @@ def steepest_pitch(position, roll: float = 0.0, max_pitch: float = np.pi / 2, mi
     P = _check_position(position)
     if P.ndim != 1:
         raise ValueError("steepest_pitch takes one position (3,)")
+    _check_angle([roll, min_pitch, max_pitch], "roll, min_pitch and max_pitch")
+    if not min_pitch <= max_pitch:
+        raise ValueError(f"min_pitch ({min_pitch} rad) must not exceed max_pitch ({max_pitch} rad)")
+    if not (step > 0 and tol > 0):
+        raise ValueError(f"step ({step} rad) and tol ({tol} rad) must be positive")
     grid = np.linspace(max_pitch, min_pitch, max(2, int(np.ceil((max_pitch - min_pitch) / step)) + 1))
     ok = ik_batch(np.repeat(P[None], grid.size, 0), grid, roll, robot=robot).ok
     if not ok.any():
@@ -368,18 +384,22 @@ class NumericalIKResult:
 
 
 def ik_numerical(position, pitch, roll: float = 0.0, q0=None, damping: float = 0.05, tol_mm: float = 1e-6,
-                 max_iterations: int = 200, orientation_scale_mm: float = 100.0,
+                 max_iterations: int = 200, orientation_scale_mm: float = 100.0, max_step: float = 0.2,
                  robot: RobotModel | None = None) -> NumericalIKResult:
     """Damped least squares IK on the full tool pose, from q0 (default home), clamped to the joint limits.
 
     Iterates dq = J^T (J J^T + damping^2 I)^-1 e, with e the position error (mm) and the orientation error (rad,
-    weighted by `orientation_scale_mm`). Converges to one nearby solution, or fails where the closed form succeeds.
+    weighted by `orientation_scale_mm`), scaled down so that no joint moves more than `max_step` rad per iteration.
+    Converges to one nearby solution, or fails where the closed form succeeds.
     """
     robot = robot or rx200()
     P = _check_position(position)
+    if P.ndim != 1:
+        raise ValueError("ik_numerical takes one position (3,)")
+    pitch, roll = float(_check_angle(pitch, "pitch")), float(_check_angle(roll, "roll"))
     x, y, _ = P
     heading = np.arctan2(y, x) if np.hypot(x, y) > 1e-9 else robot.dh[0, 0]
-    R_target = tool_orientation(heading, float(pitch), float(roll))
+    R_target = tool_orientation(heading, pitch, roll)
     q = np.array(robot.home if q0 is None else check_joints(q0, robot), dtype=float)
     weight = np.array([1, 1, 1, orientation_scale_mm, orientation_scale_mm, orientation_scale_mm], float)
     for it in range(1, max_iterations + 1):
@@ -390,6 +410,7 @@ def ik_numerical(position, pitch, roll: float = 0.0, q0=None, damping: float = 0
         J = jacobian(q, robot) * weight[:, None]
         ew = e * weight
         dq = J.T @ np.linalg.solve(J @ J.T + damping**2 * np.eye(6), ew)
+        dq *= min(1.0, max_step / max(float(np.abs(dq).max()), 1e-300))  # near singularities the step explodes
         q = np.clip(q + dq, robot.lower, robot.upper)
     err = float(np.linalg.norm(P - fk(q, robot, check_limits=False)[:3, 3]))
     return NumericalIKResult(q, False, max_iterations, err)

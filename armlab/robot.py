@@ -60,8 +60,8 @@ class RobotModel:
         out = []
         for name, value, lo, hi in zip(self.joint_names, q, self.lower, self.upper):
             if value < lo - tol or value > hi + tol:
-                out.append(f"{name} = {np.degrees(value):.1f} deg is outside its limits "
-                           f"[{np.degrees(lo):.1f}, {np.degrees(hi):.1f}] deg")
+                out.append(f"{name} = {value:.6f} rad ({np.degrees(value):.1f} deg) is outside its limits "
+                           f"[{lo:.6f}, {hi:.6f}] rad")
         return out
 
     def within_limits(self, q, tol: float = 1e-9) -> np.ndarray:
@@ -101,12 +101,20 @@ def _number(path: Path, lineno: int, row: dict[str, str], key: str) -> float:
     return value
 
 
-def _named_table(path: Path, header: list[str], names: tuple[str, ...]) -> np.ndarray:
-    """Numeric table whose first column names rows in the order `names`."""
+def _named_table(path: Path, header: list[str], names: tuple[str, ...]) -> tuple[np.ndarray, list[int]]:
+    """Numeric table whose first column names rows in the order `names`, and the file line of each row."""
     rows = _read_rows(path, header)
-    if [r[header[0]] for _, r in rows] != list(names):
-        raise RobotDataError(f"{path}: rows are {[r[header[0]] for _, r in rows]}, expected {list(names)}")
-    return np.array([[_number(path, n, r, k) for k in header[1:]] for n, r in rows])
+    for k, name in enumerate(names):
+        if k >= len(rows):
+            raise RobotDataError(f"{path}: row {name!r} is missing (rows must be {list(names)})")
+        lineno, row = rows[k]
+        if row[header[0]] != name:
+            raise RobotDataError(f"{path}, line {lineno}: row {row[header[0]]!r} where {name!r} was expected "
+                                 f"(rows must be {list(names)})")
+    if len(rows) > len(names):
+        raise RobotDataError(f"{path}, line {rows[len(names)][0]}: unexpected extra row "
+                             f"{rows[len(names)][1][header[0]]!r} (rows must be {list(names)})")
+    return np.array([[_number(path, n, r, k) for k in header[1:]] for n, r in rows]), [n for n, _ in rows]
 
 
 def load_robot(joints_csv: Path | str | None = None, dh_csv: Path | str | None = None,
@@ -116,26 +124,28 @@ def load_robot(joints_csv: Path | str | None = None, dh_csv: Path | str | None =
     dh_path = Path(dh_csv or data_path("rx200_dh.csv"))
     pox_path = Path(pox_csv or data_path("rx200_pox.csv"))
 
-    joints = _named_table(joints_path, ["joint", "lower_rad", "upper_rad", "velocity_rad_s", "home_rad", "sleep_rad"],
-                          JOINT_NAMES)
+    joints, joint_lines = _named_table(
+        joints_path, ["joint", "lower_rad", "upper_rad", "velocity_rad_s", "home_rad", "sleep_rad"], JOINT_NAMES)
     lower, upper, velocity, home, sleep = joints.T
     for i, name in enumerate(JOINT_NAMES):
+        where = f"{joints_path}, line {joint_lines[i]}: joint {name}"
         if not lower[i] < upper[i]:
-            raise RobotDataError(f"{joints_path}: joint {name}: lower limit {lower[i]} is not below upper {upper[i]}")
+            raise RobotDataError(f"{where}: lower limit {lower[i]} is not below upper {upper[i]}")
         if velocity[i] <= 0:
-            raise RobotDataError(f"{joints_path}: joint {name}: velocity limit {velocity[i]} must be positive")
+            raise RobotDataError(f"{where}: velocity limit {velocity[i]} must be positive")
         for pose, value in (("home", home[i]), ("sleep", sleep[i])):
             if not lower[i] <= value <= upper[i]:
-                raise RobotDataError(f"{joints_path}: joint {name}: {pose} pose {value} is outside its limits")
+                raise RobotDataError(f"{where}: {pose} pose {value} is outside its limits")
 
-    dh = _named_table(dh_path, ["joint", "theta_offset_rad", "d_mm", "a_mm", "alpha_rad"], JOINT_NAMES)
+    dh, _ = _named_table(dh_path, ["joint", "theta_offset_rad", "d_mm", "a_mm", "alpha_rad"], JOINT_NAMES)
 
-    pox = _named_table(pox_path, ["name", "wx", "wy", "wz", "vx", "vy", "vz"], JOINT_NAMES + ("ee_home",))
+    pox, pox_lines = _named_table(pox_path, ["name", "wx", "wy", "wz", "vx", "vy", "vz"], JOINT_NAMES + ("ee_home",))
     screws = pox[:5]
     norms = np.linalg.norm(screws[:, :3], axis=1)
-    for name, norm in zip(JOINT_NAMES, norms):
+    for name, norm, lineno in zip(JOINT_NAMES, norms, pox_lines):
         if abs(norm - 1.0) > 1e-9:
-            raise RobotDataError(f"{pox_path}: joint {name}: rotation axis has length {norm}, expected 1")
+            raise RobotDataError(f"{pox_path}, line {lineno}: joint {name}: rotation axis has length {norm}, "
+                                 "expected 1")
     M = homogeneous(rotvec_to_matrix(pox[5, :3]), pox[5, 3:])
 
     arrays = [np.array(a, dtype=float) for a in (lower, upper, velocity, home, sleep)]
