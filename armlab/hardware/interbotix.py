@@ -1,0 +1,287 @@
+"""The real Interbotix RX200 through the manufacturer's ROS 2 Python API, behind armlab.station.Arm.
+
+Safety, in the order a move is handled:
+- Every move is checked BEFORE anything is sent (armlab.hardware.safety.check_move): position limits of
+  armlab.robot.rx200(), the driver's velocity rule (armlab.profile.velocity_violations), a valid time profile, and
+  the board-collision check of the straight joint-space path. A refused move raises MotionRefused naming the joint
+  or the reason and sends nothing (not even the trajectory times).
+- Moving time defaults to armlab.profile.default_moving_time and accel time to moving time / 3 (<= moving / 2).
+  The trajectory time is set before set_joint_positions because the driver checks velocities against its stored
+  moving time and its last command, not the new ones; if the driver still refuses, MotionRefused says so.
+- Emergency stop: torque is NOT cut (the arm would fall onto the board). emergency_stop() commands the measured
+  position (the arm stops within HOLD_TIME_S and holds there under torque) and every further motion, gripper
+  included, raises EmergencyStopped until reset(). The gripper keeps its state (a held block is not dropped).
+  Closing the station while stopped leaves the arm holding where it is (it is not moved to sleep: whatever caused
+  the stop may still be in the way) and warns; robot_shutdown() still runs.
+- Teaching: set_torque(False) lets the arm be moved by hand and joint_positions() reads it; moves are refused until
+  set_torque(True), which first commands the measured position so the arm does not jump back when torque returns.
+- Shutdown (see connect_arm): the arm goes to its sleep pose BEFORE robot_shutdown(), or it falls onto the board.
+
+Holding detection: after grasp(), the measured left finger position (the gripper's joint state 'left_finger',
+metres from the gripper centre) is compared with the driver's fully-closed limit (gripper.left_finger_lower_limit):
+the fingers stopped more than HELD_THRESHOLD_MM before fully closed means something is held. The driver stops the
+motor when the finger reaches that limit, so an empty close reads at (or, by overshoot, just below) it.
+
+Joint states are read with core.robot_get_joint_states() (by joint name), which every ROS 2 release of the toolbox
+has. Only ROS 2 is supported: the ROS 1 API (bot.dxl, no robot_startup) is detected and refused with a clear message.
+Units: rad, s, mm in every public method.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import time
+import warnings
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from armlab.hardware import HardwareUnavailable
+from armlab.hardware.safety import DEFAULT_BOARD_MARGIN_MM, check_move
+from armlab.profile import MIN_MOVING_TIME_S
+from armlab.robot import RobotModel, rx200
+from armlab.station import EmergencyStopped, MotionRefused
+
+__all__ = ["HELD_THRESHOLD_MM", "HOLD_TIME_S", "import_interbotix", "RealArm", "connect_arm",
+           "park_and_shutdown"]
+
+HELD_THRESHOLD_MM = 2.0          # fingers stopped > 2 mm short of fully closed -> holding something
+HOLD_TIME_S = MIN_MOVING_TIME_S  # moving time of the stop-and-hold command (accel = half of it)
+GROUP = "arm"
+FINGER_JOINT = "left_finger"
+
+INSTALL_HINT = ("the Interbotix ROS 2 Python API (interbotix_xs_modules.xs_robot, "
+                "interbotix_common_modules.common_robot) is not importable: install the Interbotix X-Series arm "
+                "packages for ROS 2 (the lab's interbotix_ws, e.g. with Trossen's xsarm_amd64_install.sh "
+                "-d humble), then `source /opt/ros/humble/setup.bash && source ~/interbotix_ws/install/setup.bash` "
+                "in the shell that starts Python, and launch the driver: `ros2 launch interbotix_xsarm_control "
+                "xsarm_control.launch.py robot_model:=rx200`")
+ROS1_HINT = ("found the ROS 1 Interbotix API (interbotix_xs_modules.arm, bot.dxl, no robot_startup), which armlab "
+             "does not support: install the ROS 2 packages (Humble or later) and source their setup.bash instead")
+
+
+def _has_module(name: str) -> bool:
+    try:
+        return importlib.util.find_spec(name) is not None
+    except (ImportError, ValueError):
+        return False
+
+
+def import_interbotix() -> tuple[Any, Callable[..., None], Callable[..., None]]:
+    """(InterbotixManipulatorXS, robot_startup, robot_shutdown) from the ROS 2 API.
+
+    Raises HardwareUnavailable saying what to install when it is missing, or that ROS 1 is not supported.
+    """
+    try:
+        from interbotix_common_modules.common_robot.robot import robot_shutdown, robot_startup
+        from interbotix_xs_modules.xs_robot.arm import InterbotixManipulatorXS
+    except ImportError as e:
+        if _has_module("interbotix_xs_modules.arm"):
+            raise HardwareUnavailable(ROS1_HINT) from e
+        raise HardwareUnavailable(f"{INSTALL_HINT} ({e})") from e
+    return InterbotixManipulatorXS, robot_startup, robot_shutdown
+
+
+class RealArm:
+    """The RX200 behind the Arm protocol (see the module docstring for the safety rules).
+
+    Args:
+        bot: a started InterbotixManipulatorXS (its .arm, .gripper and .core are used).
+        robot: the kinematic model whose limits are enforced (default rx200()).
+        board_margin_mm: height above the board every joint and the tool point must keep along a move.
+        grasp_delay_s: how long grasp()/release() drive the fingers before the position is read.
+        held_threshold_mm: see HELD_THRESHOLD_MM.
+        clock, sleep: monotonic time source and sleep function (s), replaceable for tests.
+    """
+
+    def __init__(self, bot: Any, robot: RobotModel | None = None,
+                 board_margin_mm: float = DEFAULT_BOARD_MARGIN_MM, grasp_delay_s: float = 1.0,
+                 held_threshold_mm: float = HELD_THRESHOLD_MM, clock: Callable[[], float] = time.monotonic,
+                 sleep: Callable[[float], None] = time.sleep):
+        self.robot = robot or rx200()
+        self._bot = bot
+        names = tuple(bot.arm.group_info.joint_names)
+        if names != self.robot.joint_names:
+            raise RuntimeError(f"the driver's arm group has joints {names}, expected {self.robot.joint_names}: "
+                               "is the driver running robot_model:=rx200?")
+        self.board_margin_mm = float(board_margin_mm)
+        self.grasp_delay_s = float(grasp_delay_s)
+        self.held_threshold_mm = float(held_threshold_mm)
+        self.finger_closed_mm = 1000.0 * float(bot.gripper.left_finger_lower_limit)
+        self._clock, self._sleep = clock, sleep
+        self._move_ends = clock()
+        self._estopped = False
+        self._torque_on = True
+
+    # --- reading -------------------------------------------------------------------------------------------------
+    def _joint_state(self) -> dict[str, float]:
+        js = self._bot.core.robot_get_joint_states()
+        if js is None:
+            raise RuntimeError("no joint states from the xs_sdk driver yet: is `ros2 launch interbotix_xsarm_control "
+                               "xsarm_control.launch.py robot_model:=rx200` running?")
+        return dict(zip(js.name, js.position))
+
+    def joint_positions(self) -> np.ndarray:
+        """Measured joint positions (5,) rad (also while torque is off, for teaching by hand)."""
+        state = self._joint_state()
+        missing = [n for n in self.robot.joint_names if n not in state]
+        if missing:
+            raise RuntimeError(f"the driver's joint states lack {missing}")
+        return np.array([state[n] for n in self.robot.joint_names], dtype=float)
+
+    def finger_position_mm(self) -> float:
+        """Measured left finger position (mm from the gripper centre)."""
+        state = self._joint_state()
+        if FINGER_JOINT not in state:
+            raise RuntimeError(f"the driver's joint states lack the gripper finger {FINGER_JOINT!r}")
+        return 1000.0 * float(state[FINGER_JOINT])
+
+    @property
+    def estopped(self) -> bool:
+        """True between emergency_stop() and reset()."""
+        return self._estopped
+
+    @property
+    def torque_on(self) -> bool:
+        """False while the arm is torqued off for teaching."""
+        return self._torque_on
+
+    # --- motion --------------------------------------------------------------------------------------------------
+    def _require_motion_allowed(self) -> None:
+        if self._estopped:
+            raise EmergencyStopped("the arm is emergency-stopped (holding position): call reset() before moving it")
+        if not self._torque_on:
+            raise MotionRefused("move refused (nothing was sent): torque is off for teaching; call set_torque(True)")
+
+    def move_to(self, q, moving_time: float | None = None, accel_time: float | None = None,
+                blocking: bool = True) -> None:
+        """Move to q (5,) rad with the time-based profile (default times: see module docstring).
+
+        Waits for a running non-blocking move to end first. Raises MotionRefused (nothing sent) or EmergencyStopped.
+        """
+        self._require_motion_allowed()
+        self.wait()
+        self._require_motion_allowed()
+        moving_time, accel_time = check_move(self.joint_positions(), q, moving_time, accel_time, self.robot,
+                                             self.board_margin_mm)
+        arm = self._bot.arm
+        arm.set_trajectory_time(moving_time, accel_time)
+        self._move_ends = self._clock() + moving_time
+        sent = arm.set_joint_positions([float(x) for x in np.asarray(q, float)], moving_time=moving_time,
+                                       accel_time=accel_time, blocking=blocking)
+        if blocking or not sent:
+            self._move_ends = self._clock()
+        if not sent:
+            raise MotionRefused("move refused by the Interbotix driver (nothing was sent): its joint or velocity "
+                                "limits, which it checks against its last command rather than the measured position")
+
+    def is_moving(self) -> bool:
+        """True while a non-blocking move is under way (until its moving time has passed)."""
+        return self._clock() < self._move_ends
+
+    def wait(self) -> None:
+        """Block until the current move's moving time has passed."""
+        remaining = self._move_ends - self._clock()
+        if remaining > 0:
+            self._sleep(remaining)
+
+    def home(self, moving_time: float | None = None) -> None:
+        """Move to the home pose (all zeros), with every check of move_to."""
+        self.move_to(self.robot.home, moving_time)
+
+    def sleep(self, moving_time: float | None = None) -> None:
+        """Move to the sleep pose (safe to power off), with every check of move_to."""
+        self.move_to(self.robot.sleep, moving_time)
+
+    # --- gripper -------------------------------------------------------------------------------------------------
+    def open_gripper(self) -> None:
+        """Open the gripper (releasing anything held); refused while emergency-stopped."""
+        if self._estopped:
+            raise EmergencyStopped("the arm is emergency-stopped: call reset() before using the gripper")
+        self._bot.gripper.release(self.grasp_delay_s)
+
+    def close_gripper(self) -> bool:
+        """Close the gripper; True when the fingers stopped more than held_threshold_mm before fully closed."""
+        if self._estopped:
+            raise EmergencyStopped("the arm is emergency-stopped: call reset() before using the gripper")
+        self._bot.gripper.grasp(self.grasp_delay_s)
+        return self.finger_position_mm() > self.finger_closed_mm + self.held_threshold_mm
+
+    # --- torque, stop, reset -------------------------------------------------------------------------------------
+    def _hold(self) -> None:
+        """Command the measured position (the driver's last command is re-synchronised to it first)."""
+        arm = self._bot.arm
+        arm.capture_joint_positions()
+        arm.set_trajectory_time(HOLD_TIME_S, HOLD_TIME_S / 2)
+        self._bot.core.robot_write_commands(GROUP, [float(x) for x in arm.get_joint_commands()])
+        self._move_ends = self._clock()
+
+    def set_torque(self, enabled: bool) -> None:
+        """Torque on (holding the measured position: no jump back) or off (move the arm by hand to teach)."""
+        core = self._bot.core
+        if enabled:
+            if not self._torque_on:
+                self._hold()
+            core.robot_torque_enable("group", GROUP, True)
+            self._torque_on = True
+        else:
+            core.robot_torque_enable("group", GROUP, False)
+            self._torque_on = False
+            self._move_ends = self._clock()
+
+    def emergency_stop(self) -> None:
+        """Stop now and hold the measured position under torque; motion raises EmergencyStopped until reset()."""
+        self._estopped = True
+        if self._torque_on:
+            self._hold()
+        self._move_ends = self._clock()
+
+    def reset(self) -> None:
+        """Leave the emergency stop: re-synchronise the driver's command with the measured position."""
+        self._bot.arm.capture_joint_positions()
+        self._estopped = False
+
+
+def park_and_shutdown(arm: RealArm, robot_shutdown: Callable[[], None]) -> None:
+    """Put the arm to sleep (torque on first if it was off), then robot_shutdown() in every case.
+
+    While emergency-stopped the arm is not moved (it keeps holding its position) and a RuntimeWarning says so.
+    A refused or failed sleep move still shuts down, then raises RuntimeError telling to put the arm down by hand.
+    """
+    failure = None
+    try:
+        if arm.estopped:
+            warnings.warn("the arm is emergency-stopped: it was not moved to its sleep pose and holds its position; "
+                          "support it before powering the arm off", RuntimeWarning, stacklevel=2)
+        else:
+            if not arm.torque_on:
+                arm.set_torque(True)
+            arm.sleep()
+    except Exception as e:
+        failure = e
+    finally:
+        robot_shutdown()
+    if failure is not None:
+        raise RuntimeError(f"the arm could not go to its sleep pose before shutdown ({failure}); "
+                           "support it before powering it off") from failure
+
+
+def connect_arm(robot_name: str | None = None, gripper_pressure: float = 0.5,
+                **arm_options) -> tuple[RealArm, Callable[[], None]]:
+    """Start the Interbotix ROS 2 API for the RX200; return (RealArm, closer). The closer = park_and_shutdown.
+
+    arm_options go to RealArm (board_margin_mm, grasp_delay_s, held_threshold_mm).
+    """
+    if not 0.0 <= gripper_pressure <= 1.0:
+        raise ValueError(f"gripper_pressure must lie in [0, 1], got {gripper_pressure}")
+    manipulator, robot_startup, robot_shutdown = import_interbotix()
+    bot = manipulator(robot_model="rx200", group_name=GROUP, gripper_name="gripper", robot_name=robot_name,
+                      moving_time=2.0, accel_time=0.3, gripper_pressure=gripper_pressure)
+    robot_startup()
+    try:
+        arm = RealArm(bot, **arm_options)
+    except BaseException:
+        robot_shutdown()
+        raise
+    return arm, lambda: park_and_shutdown(arm, robot_shutdown)
