@@ -1,0 +1,264 @@
+"""Rasterising planar geometry with a depth buffer in a camera's ideal (undistorted) pinhole image, then the lens.
+
+A `View` is the undistorted pinhole canvas of one `armlab.camera.Camera`: the same focal lengths, a principal point
+shifted by a margin so that the canvas covers every ray the distorted image sees. Geometry is drawn into the canvas
+(flat-shaded convex polygons with `fill_polygons`, textured planes with `draw_plane`), keeping a buffer of inverse
+depth 1/Z (1/mm; 0 = nothing). For a plane, 1/Z is an affine function of undistorted pixel coordinates, so it is
+exact per pixel and interpolates exactly. `View.finish` applies the lens distortion with one `cv2.remap` through maps
+computed once per camera and returns the image the camera records: RGB uint8, depth float32 mm (camera-frame Z).
+
+Units: mm; pixels in OpenCV's convention (integer = pixel centre). Camera frame: x right, y down, z forward.
+"""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from armlab.camera import Camera
+
+__all__ = ["View", "Canvas", "Polygon", "view_for", "NEAR_MM"]
+
+NEAR_MM = 50.0          # geometry closer to the camera than this is clipped away
+
+
+@dataclass(frozen=True)
+class Polygon:
+    """A flat-shaded convex polygon: vertices (K, 3) in the camera frame (mm), counter-clockwise seen from the side
+    its outward `normal` (3,) (camera frame, unit) points to; `color` (3,) RGB 0..255; `surface` an id (>= 1) shared
+    by faces that meet without a depth step (used to find depth edges)."""
+
+    vertices: np.ndarray
+    normal: np.ndarray
+    color: tuple[float, float, float]
+    surface: int
+
+
+class Canvas:
+    """The buffers of one render in the ideal pinhole image: colour (H, W, 3) uint8, inverse depth (H, W) float32
+    (1/mm, 0 where nothing was drawn) and surface ids (H, W) uint16 (0 = nothing)."""
+
+    def __init__(self, height: int, width: int):
+        self.rgb = np.zeros((height, width, 3), np.uint8)
+        self.inv_depth = np.zeros((height, width), np.float32)
+        self.surface = np.zeros((height, width), np.uint16)
+
+    def copy(self) -> Canvas:
+        c = Canvas.__new__(Canvas)
+        c.rgb, c.inv_depth, c.surface = self.rgb.copy(), self.inv_depth.copy(), self.surface.copy()
+        return c
+
+
+class View:
+    """The undistorted pinhole canvas of a camera and the lens maps from it to the camera's (distorted) image.
+
+    Attributes:
+        camera: the camera (true intrinsics, distortion, extrinsic).
+        K: (3, 3) canvas intrinsics (the camera's K with the principal point moved by the margin).
+        width, height: canvas size (px).
+        identity: True when the camera has no distortion: the canvas is the image itself and no remap is needed.
+    """
+
+    def __init__(self, camera: Camera):
+        self.camera = camera
+        W, H = camera.width, camera.height
+        self.identity = not np.any(camera.dist)
+        if self.identity:
+            self.K = camera.K.copy()
+            self.width, self.height = W, H
+            self.map_x = self.map_y = None
+        else:
+            u, v = np.meshgrid(np.arange(W, dtype=np.float64), np.arange(H, dtype=np.float64))
+            xy = camera.normalized_rays(np.column_stack([u.ravel(), v.ravel()])).reshape(H, W, 2)
+            K = camera.K
+            cu = K[0, 0] * xy[..., 0] + K[0, 1] * xy[..., 1]
+            cv = K[1, 1] * xy[..., 1]
+            # margin so that every sampled canvas coordinate (plus the bilinear neighbour) lies inside the canvas
+            left = int(np.ceil(max(0.0, -(cu.min() + K[0, 2])))) + 2
+            top = int(np.ceil(max(0.0, -(cv.min() + K[1, 2])))) + 2
+            right = int(np.ceil(max(0.0, cu.max() + K[0, 2] - (W - 1)))) + 2
+            bottom = int(np.ceil(max(0.0, cv.max() + K[1, 2] - (H - 1)))) + 2
+            self.K = K.copy()
+            self.K[0, 2] += left
+            self.K[1, 2] += top
+            self.width, self.height = W + left + right, H + top + bottom
+            map_x = (cu + self.K[0, 2]).astype(np.float32)
+            map_y = (cv + self.K[1, 2]).astype(np.float32)
+            self.map_x, self.map_y = map_x, map_y
+            # fixed-point maps: faster remaps; the nearest maps pick the canvas pixel whose centre is closest
+            self._fixed = cv2.convertMaps(map_x, map_y, cv2.CV_16SC2)
+            self._nearest = (np.rint(map_x).astype(np.float32), np.rint(map_y).astype(np.float32))
+        self._u = np.arange(self.width, dtype=np.float32)
+        self._v = np.arange(self.height, dtype=np.float32)
+        R, t = camera.T_cam_world[:3, :3], camera.T_cam_world[:3, 3]
+        self._H_world = self.K @ np.column_stack([R[:, 0], R[:, 1], t])   # board plane (x, y, 1) -> canvas pixel
+
+    # -- geometry helpers -------------------------------------------------------------------------------------------
+    def inverse_depth_plane(self, normal, offset: float) -> tuple[float, float, float]:
+        """Coefficients (a, b, c) with 1/Z = a u + b v + c on the canvas for the camera-frame plane n . X = offset."""
+        n = np.asarray(normal, dtype=float)
+        fx, s, cx = self.K[0]
+        fy, cy = self.K[1, 1], self.K[1, 2]
+        # x = (u - cx - s y) / fx, y = (v - cy) / fy; 1/Z = (n_x x + n_y y + n_z) / offset
+        ky = n[1] / fy - n[0] * s / (fx * fy)
+        a = n[0] / fx / offset
+        b = ky / offset
+        c = (n[2] - n[0] * cx / fx - ky * cy) / offset
+        return a, b, c
+
+    def plane_inverse_depth(self, normal, offset: float) -> np.ndarray:
+        """Inverse depth (H, W) float32 of the camera-frame plane n . X = offset over the whole canvas (0 behind)."""
+        a, b, c = self.inverse_depth_plane(normal, offset)
+        w = (a * self._u)[None, :] + (b * self._v + c)[:, None]
+        return np.where(w > 0, w, 0).astype(np.float32)
+
+    # -- drawing ---------------------------------------------------------------------------------------------------
+    def new_canvas(self) -> Canvas:
+        return Canvas(self.height, self.width)
+
+    def draw_plane(self, canvas: Canvas, texture: np.ndarray, H_plane_texel: np.ndarray, T_cam_plane: np.ndarray,
+                   surface: int, border: int = cv2.BORDER_REPLICATE, z_test: bool = True) -> None:
+        """Draw a textured plane: texel (col, row, 1) -> plane (x, y, 1) mm by `H_plane_texel`, plane frame -> camera
+        by `T_cam_plane` (the plane is z = 0 of its frame). Pixels outside the texture repeat its border
+        (BORDER_REPLICATE: an infinite plane) or are not drawn (BORDER_CONSTANT: a finite card)."""
+        R, t = T_cam_plane[:3, :3], T_cam_plane[:3, 3]
+        H = self.K @ np.column_stack([R[:, 0], R[:, 1], t]) @ H_plane_texel
+        size = (self.width, self.height)
+        w = self.plane_inverse_depth(R[:, 2], float(R[:, 2] @ t))
+        if border == cv2.BORDER_CONSTANT:
+            inside = cv2.warpPerspective(np.ones(texture.shape[:2], np.uint8), H, size, flags=cv2.INTER_NEAREST,
+                                         borderMode=cv2.BORDER_CONSTANT, borderValue=0).astype(bool)
+            rgb = cv2.warpPerspective(texture, H, size, flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+        else:
+            inside = w > 0
+            rgb = cv2.warpPerspective(texture, H, size, flags=cv2.INTER_LINEAR, borderMode=border)
+        draw = inside & (w > 0)
+        if z_test:
+            draw &= w > canvas.inv_depth
+        if rgb.ndim == 2:
+            rgb = cv2.cvtColor(rgb, cv2.COLOR_GRAY2RGB)
+        canvas.rgb[draw] = rgb[draw]
+        canvas.inv_depth[draw] = w[draw]
+        canvas.surface[draw] = surface
+
+    def fill_polygons(self, canvas: Canvas, polygons: list[Polygon]) -> None:
+        """Z-buffered flat-shaded convex polygons (back faces culled, clipped at NEAR_MM)."""
+        if not polygons:
+            return
+        counts = np.array([len(p.vertices) for p in polygons])
+        kmax = int(counts.max())
+        V = np.empty((len(polygons), kmax, 3))
+        for i, p in enumerate(polygons):           # pad by repeating the last vertex (harmless for a convex fill)
+            V[i, :counts[i]] = p.vertices
+            V[i, counts[i]:] = p.vertices[-1]
+        normals = np.array([p.normal for p in polygons], dtype=float)
+        colors = np.array([p.color for p in polygons], dtype=float)
+        surfaces = np.array([p.surface for p in polygons])
+        self.fill_polygon_arrays(canvas, V, normals, colors, surfaces)
+
+    def fill_polygon_arrays(self, canvas: Canvas, V: np.ndarray, normals: np.ndarray, colors: np.ndarray,
+                            surfaces: np.ndarray) -> None:
+        """`fill_polygons` on arrays: vertices V (N, K, 3) camera mm (a polygon with fewer vertices repeats its
+        last one), outward normals (N, 3), colours (N, 3) RGB, surface ids (N,)."""
+        K = self.K
+        Hc, Wc = self.height, self.width
+        offsets = np.einsum("nj,nj->n", normals, V[:, 0])
+        front = offsets < -1e-9                      # the camera is in front of the face's plane
+        needs_clip = np.any(V[:, :, 2] < NEAR_MM, axis=1)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            uvw = V @ K.T
+            uv = uvw[..., :2] / uvw[..., 2:3]
+        lo = np.floor(np.min(uv, axis=1))
+        hi = np.ceil(np.max(uv, axis=1)) + 1
+        # inverse depth planes 1/Z = a u + b v + c of all faces at once
+        fx, s, cx = K[0]
+        fy, cy = K[1, 1], K[1, 2]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ky = normals[:, 1] / fy - normals[:, 0] * s / (fx * fy)
+            A = normals[:, 0] / fx / offsets
+            B = ky / offsets
+            C = (normals[:, 2] - normals[:, 0] * cx / fx - ky * cy) / offsets
+        colors = np.clip(np.rint(colors), 0, 255).astype(np.uint8)
+        scratch = np.zeros((Hc, Wc), np.uint8)
+        for i in np.flatnonzero(front):
+            P2 = uv[i]
+            if needs_clip[i]:
+                P = _clip_near(V[i], NEAR_MM)
+                if len(P) < 3:
+                    continue
+                P2 = P @ K.T
+                P2 = P2[:, :2] / P2[:, 2:3]
+                x0, y0 = np.floor(P2.min(axis=0)).astype(int)
+                x1, y1 = (np.ceil(P2.max(axis=0)) + 1).astype(int)
+            else:
+                x0, y0 = int(lo[i, 0]), int(lo[i, 1])
+                x1, y1 = int(hi[i, 0]), int(hi[i, 1])
+            x0, y0, x1, y1 = max(x0, 0), max(y0, 0), min(x1, Wc), min(y1, Hc)
+            if x0 >= x1 or y0 >= y1:
+                continue
+            mask = scratch[y0:y1, x0:x1]
+            mask[:] = 0
+            cv2.fillConvexPoly(mask, np.rint((P2 - (x0, y0)) * 256).astype(np.int32), 1, cv2.LINE_8, 8)
+            w = (A[i] * self._u[x0:x1])[None, :] + (B[i] * self._v[y0:y1] + C[i])[:, None]
+            zb = canvas.inv_depth[y0:y1, x0:x1]
+            upd = mask.view(bool)
+            upd &= w > zb
+            np.copyto(zb, w, where=upd)
+            canvas.rgb[y0:y1, x0:x1][upd] = colors[i]
+            canvas.surface[y0:y1, x0:x1][upd] = surfaces[i]
+
+    # -- the lens ----------------------------------------------------------------------------------------------------
+    def finish(self, canvas: Canvas) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The camera's image of a canvas: rgb (h, w, 3) uint8, depth (h, w) float32 mm (NaN where nothing was
+        drawn) and a boolean (h, w) mask of pixels next to a surface change (a depth edge or a crease)."""
+        edge_canvas = _surface_edges(canvas.surface)
+        if self.identity:
+            rgb, inv, edge = canvas.rgb, canvas.inv_depth, edge_canvas.view(bool)
+        else:
+            rgb = cv2.remap(canvas.rgb, *self._fixed, interpolation=cv2.INTER_LINEAR)
+            inv = cv2.remap(canvas.inv_depth, *self._fixed, interpolation=cv2.INTER_LINEAR)
+            edge = cv2.remap(edge_canvas, *self._nearest, interpolation=cv2.INTER_NEAREST).view(bool)
+            # next to a surface change bilinear mixing of two surfaces is wrong: take the nearest canvas pixel there
+            inv_nearest = cv2.remap(canvas.inv_depth, *self._nearest, interpolation=cv2.INTER_NEAREST)
+            np.copyto(inv, inv_nearest, where=edge)
+        depth = cv2.divide(1.0, inv)           # 0 where inv is 0
+        depth[inv <= 0] = np.nan
+        return rgb, depth, edge
+
+
+def _surface_edges(surface: np.ndarray) -> np.ndarray:
+    """uint8 (0/1) mask of the pixels whose 3x3 neighbourhood holds more than one surface id."""
+    kernel = np.ones((3, 3), np.uint8)
+    return (cv2.dilate(surface, kernel) != cv2.erode(surface, kernel)).view(np.uint8)
+
+
+def _clip_near(P: np.ndarray, near: float) -> np.ndarray:
+    """Sutherland-Hodgman clip of a convex polygon (K, 3) to the half-space z >= near."""
+    out = []
+    for i in range(len(P)):
+        a, b = P[i], P[(i + 1) % len(P)]
+        ina, inb = a[2] >= near, b[2] >= near
+        if ina:
+            out.append(a)
+        if ina != inb:
+            t = (near - a[2]) / (b[2] - a[2])
+            out.append(a + t * (b - a))
+    return np.array(out).reshape(-1, 3)
+
+
+@functools.lru_cache(maxsize=8)
+def _cached_view(K_bytes: bytes, dist_bytes: bytes, T_bytes: bytes, width: int, height: int) -> View:
+    K = np.frombuffer(K_bytes).reshape(3, 3)
+    dist = np.frombuffer(dist_bytes)
+    T = np.frombuffer(T_bytes).reshape(4, 4)
+    return View(Camera(K, dist, T, width, height))
+
+
+def view_for(camera: Camera) -> View:
+    """The (cached) View of a camera: the lens maps are computed once per distinct camera."""
+    return _cached_view(np.ascontiguousarray(camera.K, float).tobytes(),
+                        np.ascontiguousarray(camera.dist, float).tobytes(),
+                        np.ascontiguousarray(camera.T_cam_world, float).tobytes(), camera.width, camera.height)

@@ -1,0 +1,108 @@
+"""The simulated RGB-D camera's renderer: what an L515 above the board sees, as a pure function of the scene.
+
+`render(camera, objects, q, gripper_opening_mm, gripper_geometry, realism, rng)` draws the table and board (grid,
+AprilTags) as one textured plane z = 0, the objects (blocks and distractors, flat-shaded by their faces' angle to the
+light) and the RX200 (dark boxes along its links, the gripper fingers at the opening) with a depth buffer in the
+camera's ideal pinhole image, applies the lens distortion with one remap, then the sensor effects of `realism`.
+
+Inputs: `camera` the TRUE camera (armlab.camera.Camera: K, distortion, T_cam_world); objects: armlab.blocks.
+ObjectState-like (footprint_world(), bottom_z, top_z, color, position); q (5,) rad or None (no arm); mm everywhere.
+Outputs: rgb (H, W, 3) uint8 and depth (H, W) float32 mm = camera-frame Z of the visible surface, NaN = no return.
+"""
+
+from __future__ import annotations
+
+import functools
+
+import cv2
+import numpy as np
+
+from armlab.camera import Camera
+from armlab.sim.board_texture import board_texture
+from armlab.sim.faces import Face, arm_faces, object_faces, shade
+from armlab.sim.raster import Canvas, Polygon, View, view_for
+from armlab.sim.realism import CameraRealism
+from armlab.sim.sensor import apply_color_effects, apply_depth_effects
+
+__all__ = ["render", "render_exact", "scene_faces", "board_canvas", "BOARD_SURFACE", "FIRST_FACE_SURFACE"]
+
+BOARD_SURFACE = 1          # surface id of the table/board plane
+FIRST_FACE_SURFACE = 16    # faces get ids from here on (lower ids are for textured planes)
+
+
+@functools.lru_cache(maxsize=8)
+def board_canvas(view: View) -> Canvas:
+    """The canvas of a view with only the table and board drawn (cached: the board never moves)."""
+    canvas = view.new_canvas()
+    tex = board_texture()
+    view.draw_plane(canvas, tex.image, tex.H_world_texel, view.camera.T_cam_world, BOARD_SURFACE,
+                    border=cv2.BORDER_REPLICATE, z_test=False)
+    for a in (canvas.rgb, canvas.inv_depth, canvas.surface):
+        a.flags.writeable = False
+    return canvas
+
+
+def scene_faces(objects, q=None, gripper_opening_mm: float = 0.0, gripper_geometry=None) -> list[Face]:
+    """World faces of the objects and (when q is given) the arm."""
+    faces: list[Face] = []
+    for obj in objects:
+        faces += object_faces(obj)
+    if q is not None:
+        if gripper_geometry is None:
+            raise ValueError("gripper_geometry is needed to draw the arm (pad_width_mm, pad_height_mm, "
+                             "pad_thickness_mm)")
+        faces += arm_faces(q, gripper_opening_mm, gripper_geometry)
+    return faces
+
+
+def _camera_polygons(faces: list[Face], camera: Camera) -> list[Polygon]:
+    R, t = camera.T_cam_world[:3, :3], camera.T_cam_world[:3, 3]
+    polys = []
+    for i, f in enumerate(faces):
+        k = shade(f.normal)
+        color = tuple(min(255.0, c * k) for c in f.color)
+        polys.append(Polygon(f.vertices @ R.T + t, R @ f.normal, color, FIRST_FACE_SURFACE + i))
+    return polys
+
+
+def draw_faces(view: View, canvas: Canvas, faces: list[Face]) -> None:
+    """Rasterise world faces into a canvas of the view (z-buffered, shaded)."""
+    if len(faces) + FIRST_FACE_SURFACE > np.iinfo(np.uint16).max:
+        raise ValueError(f"too many faces to draw ({len(faces)})")
+    view.fill_polygons(canvas, _camera_polygons(faces, view.camera))
+
+
+def render_exact(camera: Camera, objects, q=None, gripper_opening_mm: float = 0.0, gripper_geometry=None,
+                 planes=()) -> tuple[np.ndarray, np.ndarray]:
+    """The exact image of the scene through the camera (no sensor effects): rgb (H, W, 3) uint8, depth (H, W)
+    float32 mm. `planes`: extra callables drawing into the canvas, each called as plane(view, canvas)."""
+    view = view_for(camera)
+    canvas = board_canvas(view).copy()
+    for draw in planes:
+        draw(view, canvas)
+    draw_faces(view, canvas, scene_faces(objects, q, gripper_opening_mm, gripper_geometry))
+    rgb, depth, _ = view.finish(canvas)
+    return rgb, depth
+
+
+def _check_camera(camera) -> None:
+    if not isinstance(camera, Camera):
+        raise TypeError(f"camera must be an armlab.camera.Camera, got {type(camera).__name__}")
+
+
+def render(camera: Camera, objects, q=None, gripper_opening_mm: float = 0.0, gripper_geometry=None,
+           realism: CameraRealism | None = None, rng: np.random.Generator | None = None,
+           planes=()) -> tuple[np.ndarray, np.ndarray]:
+    """What the RGB-D camera records: rgb (H, W, 3) uint8 and depth (H, W) float32 mm (camera-frame Z, NaN = no
+    return) of the board, `objects`, and the arm at joint angles q (5,) rad (None: no arm) with its fingers
+    `gripper_opening_mm` apart. `realism` (default ideal) adds the sensor effects, drawn from `rng` (per frame)."""
+    _check_camera(camera)
+    realism = realism if realism is not None else CameraRealism.ideal()
+    rgb, depth = render_exact(camera, objects, q, gripper_opening_mm, gripper_geometry, planes)
+    if realism.is_ideal:
+        return rgb, depth
+    if rng is None:
+        raise ValueError("a numpy Generator `rng` is needed for a realism with noise")
+    rgb_out = apply_color_effects(rgb, (camera.K[0, 2], camera.K[1, 2]), realism, rng)
+    depth_out = apply_depth_effects(depth, rgb, realism, rng)
+    return rgb_out, depth_out
