@@ -1,0 +1,353 @@
+"""The meshcat viewer: the RX200 drawn from primitives, the board, frames, objects, the camera and point clouds.
+
+Every public method takes world (board-frame) millimetres and radians. Inside meshcat the kit's scene hangs under one
+node scaled by 1/1000, so meshcat sees metres (its camera, grid and lights assume metres).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import os
+import warnings
+import weakref
+from pathlib import Path
+
+import numpy as np
+import zmq
+
+with warnings.catch_warnings():  # meshcat 0.3.2 imports zmq.eventloop.ioloop, deprecated since pyzmq 17
+    warnings.simplefilter("ignore", DeprecationWarning)
+    import meshcat
+    import meshcat.geometry as mg
+    from meshcat.animation import Animation
+
+from armlab import kinematics
+from armlab.blocks import LAB_RGB, ObjectState
+from armlab.camera import Camera
+from armlab.lab import LabConfig, lab_config
+from armlab.robot import rx200
+from armlab.transforms import homogeneous
+from armlab.viz import geometry as geo
+from armlab.viz.server import ZMQ_ENV, ServerProcess, probe, start_server
+
+__all__ = ["Viewer", "ROOT", "DEFAULT_EYE_MM"]
+
+ROOT = "armlab"                                  # the kit's node: /meshcat/armlab
+DEFAULT_EYE_MM = (900.0, -650.0, 700.0)          # where the browser's camera starts (it looks at the world origin)
+_TIMEOUT_MS = 30_000                             # a dead server raises instead of hanging forever
+_ARM, _JOINT, _GRIPPER, _TOOL = 0x303030, 0x606060, 0x8a8a8a, 0xd02020
+
+
+def _rgb_hex(rgb) -> int:
+    r, g, b = (int(c) for c in rgb)
+    return (r << 16) | (g << 8) | b
+
+
+def _mm_to_m_root() -> np.ndarray:
+    return np.diag([1e-3, 1e-3, 1e-3, 1.0])
+
+
+def _lines(points_mm: np.ndarray, color: int) -> mg.LineSegments:
+    return mg.LineSegments(mg.PointsGeometry(np.asarray(points_mm, np.float32).T), mg.LineBasicMaterial(color=color))
+
+
+def _stop(server: ServerProcess | None) -> None:
+    if server is not None:
+        server.stop()
+
+
+class Viewer:
+    """A meshcat viewer of the lab that owns its server.
+
+    Viewer() connects to the server whose zmq URL is in $ARMLAB_MESHCAT_ZMQ (the shared test-session server) or else
+    starts its own; close() (or leaving a `with` block) stops an owned server for sure and removes the kit's scene
+    from a shared one. Open `viewer.url` in a browser to watch live; save_html() writes a self-contained snapshot.
+
+    Args:
+        zmq_url: connect to this meshcat server instead (default: $ARMLAB_MESHCAT_ZMQ, else start one).
+        q: initial joint angles (5,) rad (default: home).
+        gripper_opening_mm: distance between the finger pads (mm).
+        frames: draw the triads of kinematics.link_frames (world, DH 1..5, tool).
+        lab: the lab config whose board, grid and tags are drawn (default: armlab.lab.lab_config()).
+    """
+
+    def __init__(self, zmq_url: str | None = None, *, q=None, gripper_opening_mm: float = 40.0, frames: bool = True,
+                 lab: LabConfig | None = None):
+        self._server: ServerProcess | None = None
+        self._vis: meshcat.Visualizer | None = None
+        url = zmq_url or os.environ.get(ZMQ_ENV) or None
+        if url is None:
+            self._server = start_server()
+            url = self._server.zmq_url
+        self._finalizer = weakref.finalize(self, _stop, self._server)
+        try:
+            probe(url)
+            with contextlib.redirect_stdout(io.StringIO()):  # meshcat prints its URL; we let the caller decide
+                self._vis = meshcat.Visualizer(zmq_url=url)
+            self._vis.window.zmq_socket.setsockopt(zmq.RCVTIMEO, _TIMEOUT_MS)
+            self._vis.window.zmq_socket.setsockopt(zmq.SNDTIMEO, _TIMEOUT_MS)
+            self.zmq_url, self.url = url, self._vis.url()
+            self._lab = lab or lab_config()
+            self._objects: dict[int, tuple] = {}
+            self._root = self._vis[ROOT]
+            self._root.delete()                       # a fresh scene, whatever an earlier user left behind
+            self._animated = True
+            self._clear_animation()                   # meshcat keeps animations on its global /meshcat node
+            self._root.set_transform(_mm_to_m_root())
+            self._vis["/Grid"].set_property("visible", False)
+            self._vis["/Axes"].set_property("visible", False)
+            self.look_from(DEFAULT_EYE_MM)
+            self._draw_board()
+            self._draw_arm(frames)
+            self.q = np.array(rx200().home, dtype=float)
+            self.gripper_opening_mm = float(gripper_opening_mm)
+            self.show(self.q if q is None else q, gripper_opening_mm=gripper_opening_mm)
+        except BaseException:
+            self.close()
+            raise
+
+    # -- lifecycle ----------------------------------------------------------------------------------------------
+    @property
+    def owns_server(self) -> bool:
+        """True when this viewer started its server (and close() stops it)."""
+        return self._server is not None
+
+    @property
+    def server(self) -> ServerProcess | None:
+        """The owned server process (None when connected to a shared one)."""
+        return self._server
+
+    @property
+    def closed(self) -> bool:
+        return self._vis is None
+
+    def close(self) -> None:
+        """Stop an owned server (kill + wait), or remove the kit's scene from a shared one. Idempotent."""
+        vis, self._vis = self._vis, None
+        if vis is not None:
+            if self._server is None:
+                with contextlib.suppress(zmq.ZMQError):
+                    vis[ROOT].delete()
+                    if self._animated:
+                        vis.set_animation(Animation(), play=False)
+            vis.window.zmq_socket.close(linger=0)
+        self._finalizer()
+
+    def __enter__(self) -> Viewer:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def __repr__(self) -> str:
+        return f"Viewer({'closed' if self.closed else self.url})"
+
+    def _node(self, path: str) -> meshcat.Visualizer:
+        if self._vis is None:
+            raise RuntimeError("this Viewer is closed")
+        return self._root[path]
+
+    # -- static parts -------------------------------------------------------------------------------------------
+    def look_from(self, eye_mm) -> None:
+        """Put the browser's camera at world point eye_mm (3,) mm, looking at the world origin with +z up."""
+        eye = np.asarray(eye_mm, dtype=float)
+        if eye.shape != (3,) or not np.all(np.isfinite(eye)) or np.linalg.norm(eye) < 1.0:
+            raise ValueError(f"eye_mm must be a finite world point (3,) mm away from the origin, got {eye_mm!r}")
+        if self._vis is None:
+            raise RuntimeError("this Viewer is closed")
+        x, y, z = eye / 1000.0  # meshcat's camera node is y-up: (x, y, z) in the z-up world is (x, z, -y) there
+        self._vis["/Cameras/default"].set_transform(np.eye(4))
+        self._vis["/Cameras/default/rotated/<object>"].set_property("position", [x, z, -y])
+
+    def _draw_board(self) -> None:
+        lab = self._lab
+        (x0, x1), (y0, y1) = lab.board_x, lab.board_y
+        thickness = 12.0
+        plate = self._node("board/plate")
+        plate.set_object(mg.Box([x1 - x0, y1 - y0, thickness]), mg.MeshLambertMaterial(color=0xd9cfb8))
+        plate.set_transform(homogeneous(None, [(x0 + x1) / 2, (y0 + y1) / 2, -thickness / 2]))
+        self._node("board/grid").set_object(_lines(geo.board_grid_segments(lab), 0x8c8270))
+        size = lab.tags.size_mm
+        for tag_id, pose in geo.tag_poses(lab).items():
+            node = self._node(f"board/tags/tag_{tag_id}")
+            node.set_object(mg.Box([size, size, 1.0]), mg.MeshLambertMaterial(color=0x101010))
+            node.set_transform(pose)
+        self._node("world_frame").set_object(mg.triad(100.0))
+
+    def _draw_arm(self, frames: bool) -> None:
+        for i, (name, radius) in enumerate(zip(geo.LINK_NAMES, geo.LINK_RADII_MM)):
+            length = float(np.linalg.norm(np.diff(kinematics.joint_positions(np.zeros(5))[i:i + 2], axis=0)))
+            self._node(f"arm/links/{name}").set_object(mg.Cylinder(length, radius), mg.MeshLambertMaterial(color=_ARM))
+        for name, _, _ in geo.JOINT_DRUMS:
+            self._node(f"arm/joints/{name}").set_object(mg.Cylinder(geo.DRUM_LENGTH_MM, geo.DRUM_RADIUS_MM),
+                                                        mg.MeshLambertMaterial(color=_JOINT))
+        for side in ("left_finger", "right_finger"):
+            self._node(f"arm/gripper/{side}").set_object(mg.Box(geo.FINGER_SIZE_MM),
+                                                         mg.MeshLambertMaterial(color=_GRIPPER))
+        self._node("arm/gripper/palm").set_object(mg.Box(geo.PALM_SIZE_MM), mg.MeshLambertMaterial(color=_GRIPPER))
+        self._node("arm/gripper/tool_point").set_object(mg.Sphere(6.0), mg.MeshLambertMaterial(color=_TOOL))
+        if frames:
+            for i in range(7):
+                self._node(f"arm/frames/{geo.frame_name(i)}").set_object(mg.triad(60.0))
+
+    # -- the arm ------------------------------------------------------------------------------------------------
+    def show(self, q, gripper_opening_mm: float | None = None) -> None:
+        """Draw the arm at joints q (5,) rad with the finger pads gripper_opening_mm apart (default: unchanged).
+
+        Raises ValueError (and draws nothing) for a wrong shape, NaN, a joint outside its limits or a bad opening.
+        """
+        opening = self.gripper_opening_mm if gripper_opening_mm is None else gripper_opening_mm
+        q = np.asarray(q, dtype=float)
+        if q.shape != (5,):
+            raise ValueError(f"show takes one joint vector (5,) rad, got shape {q.shape}; use animate for a trajectory")
+        parts = geo.arm_part_poses(q, opening)
+        arm = self._node("arm")
+        self._clear_animation()  # a loaded animation would move the arm away from this pose in the browser
+        for path, pose in parts.poses.items():
+            arm[path].set_transform(pose)
+        self.q, self.gripper_opening_mm = q.copy(), float(opening)
+
+    def _clear_animation(self) -> None:
+        if self._animated:
+            self._vis.set_animation(Animation(), play=False)
+            self._animated = False
+
+    def animate(self, times_s, qs, gripper_opening_mm=None, fps: int = 30, repetitions: int = 1) -> None:
+        """Load a joint trajectory as a meshcat animation (it plays in the browser and in saved snapshots).
+
+        times_s (N,) increasing seconds from 0; qs (N, 5) rad; gripper_opening_mm one value or (N,) mm (default:
+        the current opening). The arm is left drawn at the last pose.
+        """
+        t = np.asarray(times_s, dtype=float)
+        qs = np.asarray(qs, dtype=float)
+        if t.ndim != 1 or len(t) < 2 or qs.shape != (len(t), 5):
+            raise ValueError(f"animate needs times_s (N,) with N >= 2 and qs (N, 5); got {t.shape} and {qs.shape}")
+        if not np.all(np.isfinite(t)) or t[0] < 0 or np.any(np.diff(t) <= 0):
+            raise ValueError("times_s must be finite, start at or after 0 s and strictly increase")
+        if int(fps) < 1 or int(repetitions) < 1:
+            raise ValueError("fps and repetitions must be positive integers")
+        opening = self.gripper_opening_mm if gripper_opening_mm is None else gripper_opening_mm
+        parts = geo.arm_part_poses(qs, opening)
+        arm = self._node("arm")
+        animation = Animation(default_framerate=int(fps))
+        for k, time_s in enumerate(t):
+            with animation.at_frame(arm, float(time_s * fps)) as frame:
+                for path, poses in parts.poses.items():
+                    frame[path].set_transform(poses[k])
+        self.show(qs[-1], float(np.broadcast_to(opening, len(t))[-1]))
+        self._vis.set_animation(animation, play=True, repetitions=int(repetitions))
+        self._animated = True
+
+    def joint_sliders(self):
+        """ipywidgets sliders (one per joint, rad, within the limits, plus the gripper opening in mm) that move
+        the arm. Returns a VBox; display it in a live notebook."""
+        import ipywidgets as widgets
+
+        robot = rx200()
+        sliders = [widgets.FloatSlider(value=float(v), min=float(lo), max=float(hi), step=0.01, description=name,
+                                       readout_format=".2f", continuous_update=True)
+                   for name, v, lo, hi in zip(robot.joint_names, self.q, robot.lower, robot.upper)]
+        gripper = widgets.FloatSlider(value=self.gripper_opening_mm, min=0.0, max=geo.MAX_GRIPPER_OPENING_MM, step=1.0,
+                                      description="gripper mm", readout_format=".0f", continuous_update=True)
+
+        def update(_change=None):
+            self.show([s.value for s in sliders], gripper.value)
+
+        for s in [*sliders, gripper]:
+            s.observe(update, names="value")
+        return widgets.VBox([*sliders, gripper])
+
+    # -- the station --------------------------------------------------------------------------------------------
+    def draw_objects(self, objects: list[ObjectState]) -> None:
+        """Draw blocks and distractors (armlab.blocks.ObjectState) in their LAB_RGB colours; objects drawn earlier
+        and missing from `objects` are removed. Geometry is sent once per object; later calls only move it."""
+        objects = list(objects)
+        ids = [o.id for o in objects]
+        if len(set(ids)) != len(ids):
+            raise ValueError(f"object ids must be unique, got {ids}")
+        for gone in set(self._objects) - set(ids):
+            self._node(f"objects/{gone}").delete()
+            del self._objects[gone]
+        for obj in objects:
+            node = self._node(f"objects/{obj.id}")
+            key = (obj.shape, obj.edge, obj.color)
+            if self._objects.get(obj.id) != key:
+                vertices, faces = geo.object_mesh(obj)
+                node.set_object(mg.TriangularMeshGeometry(vertices, faces),
+                                mg.MeshLambertMaterial(color=_rgb_hex(LAB_RGB[obj.color])))
+                self._objects[obj.id] = key
+            node.set_transform(geo.object_pose(obj))
+
+    def draw_camera(self, camera: Camera, depth_mm: float | None = None, name: str = "camera") -> None:
+        """Draw a camera's view frustum (centre to the image corners at depth_mm, default: the depth at which it
+        sees the board centre) and its frame (x right, y down, z optical axis) at its pose."""
+        if not isinstance(camera, Camera):
+            raise TypeError(f"draw_camera takes an armlab.camera.Camera, got {type(camera).__name__}")
+        if depth_mm is None:
+            (x0, x1), (y0, y1) = self._lab.board_x, self._lab.board_y
+            depth_mm = float(camera.depth_of([[(x0 + x1) / 2, (y0 + y1) / 2, 0.0]])[0])
+        node = self._node(f"cameras/{name}")
+        node["frustum"].set_object(_lines(geo.frustum_segments(camera, depth_mm), 0xffaa00))
+        node["frame"].set_object(mg.triad(80.0))
+        node["frame"].set_transform(camera.T_world_cam)
+
+    def draw_point_cloud(self, points_world, colors, name: str = "cloud", point_size_mm: float = 4.0) -> None:
+        """Draw points (N, 3) world mm with colours (N, 3) uint8 RGB; rows with NaN are skipped."""
+        P = np.asarray(points_world, dtype=float)
+        C = np.asarray(colors)
+        if P.ndim != 2 or P.shape[1] != 3:
+            raise ValueError(f"points_world must have shape (N, 3) (world mm), got {P.shape}")
+        if C.shape != P.shape or C.dtype != np.uint8:
+            raise ValueError(f"colors must be uint8 (N, 3) RGB matching the points, got {C.dtype} {C.shape}")
+        if not point_size_mm > 0:
+            raise ValueError(f"point_size_mm must be positive, got {point_size_mm}")
+        keep = np.all(np.isfinite(P), axis=1)
+        cloud = mg.PointCloud(P[keep].T.astype(np.float32), (C[keep].T / 255.0).astype(np.float32),
+                              size=float(point_size_mm))
+        self._node(f"clouds/{name}").set_object(cloud)
+
+    def draw_rgbd(self, rgb, depth_mm, camera: Camera, stride: int = 4, name: str = "cloud") -> int:
+        """Draw an RGB-D frame as a world point cloud (every stride-th pixel); returns the number of points."""
+        points, colors = geo.rgbd_to_point_cloud(rgb, depth_mm, camera, stride)
+        self.draw_point_cloud(points, colors, name=name)
+        return len(points)
+
+    def delete(self, path: str) -> None:
+        """Remove a drawn item, e.g. "objects", "cameras/camera" or "clouds/cloud"."""
+        path = str(path).strip("/")
+        top = path.split("/")[0]
+        if top not in ("objects", "cameras", "clouds"):
+            raise ValueError(f"delete: {path!r} is not a station drawing (objects/..., cameras/..., clouds/...)")
+        self._node(path).delete()
+        for object_id in list(self._objects):
+            if path == "objects" or path == f"objects/{object_id}":
+                del self._objects[object_id]
+
+    def set_visible(self, path: str, visible: bool) -> None:
+        """Show or hide a part of the scene: "arm", "arm/frames", "board", "objects", "cameras", "clouds", ..."""
+        path = str(path).strip("/")
+        if not path:
+            raise ValueError("set_visible needs a path such as 'arm' or 'board'")
+        self._node(path).set_property("visible", bool(visible))
+
+    # -- snapshots ----------------------------------------------------------------------------------------------
+    def static_html(self) -> str:
+        """The whole scene as one self-contained HTML page (about 0.9 MB, animations included, no network)."""
+        if self._vis is None:
+            raise RuntimeError("this Viewer is closed")
+        return self._vis.static_html()
+
+    def save_html(self, path) -> Path:
+        """Write static_html() to `path` atomically (temporary file + rename); returns the path."""
+        path = Path(path)
+        if not path.parent.is_dir():
+            raise FileNotFoundError(f"save_html: folder {path.parent} does not exist")
+        html = self.static_html()
+        tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+        try:
+            tmp.write_text(html, encoding="utf-8")
+            tmp.replace(path)
+        finally:
+            tmp.unlink(missing_ok=True)
+        return path
