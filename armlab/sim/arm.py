@@ -26,6 +26,7 @@ from armlab.transforms import homogeneous, invert_transform, rot_z, rpy_from_mat
 __all__ = ["ArmRealism", "SimArm", "gravity_deflection"]
 
 GRAVITY = 9.81                 # m/s^2
+BOARD_CONTACT_TOL_MM = 1.0     # a part may touch the board this far in (rubber pads, wood): not a collision
 _PATH_STEP_RAD = 0.01          # board-collision check: largest joint change between checked path samples
 _POINT_NAMES = ("base", "waist", "shoulder joint", "elbow joint", "wrist joint", "wrist_rotate joint",
                 "tool point")
@@ -246,12 +247,16 @@ class SimArm:
         for name, pts in parts.items():
             pts = pts.reshape(n, -1, 3)
             z = pts[..., 2]
-            if z.min() < -1e-6:
-                i = int(np.flatnonzero((z < -1e-6).any(axis=1))[0])
-                j = int(np.argmin(z[i]))
+            # A part may press into the board by BOARD_CONTACT_TOL_MM (compliance) and never needs to rise above
+            # where it already is (e.g. a held block whose weight adds sag as it is lifted off the board).
+            below = z < np.minimum(-BOARD_CONTACT_TOL_MM, z[0]) - 1e-9
+            if below.any():
+                first = int(np.flatnonzero(below.any(axis=1))[0])
+                i, j = np.unravel_index(np.argmin(z), z.shape)
                 x, y, zz = pts[i, j]
                 return (f"the {name} would go {-zz:.1f} mm below the board at ({x:.1f}, {y:.1f}) mm, "
-                        f"{100 * s[i]:.0f}% of the way along the move")
+                        f"{100 * s[i]:.0f}% of the way along the move (it would touch the board at "
+                        f"{100 * s[first]:.0f}%)")
         return None
 
     # -- motion ---------------------------------------------------------------------------------------------

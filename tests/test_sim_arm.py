@@ -1,0 +1,319 @@
+"""The simulated arm and gripper: driver refusals, board collisions, motion in simulated time, emergency stop,
+teaching by hand, gravity sag, and grasping, carrying, dropping, stacking and tipping by geometry."""
+
+import numpy as np
+import pytest
+
+from armlab import kinematics
+from armlab.blocks import ObjectState, block_edge
+from armlab.profile import trapezoid_fraction
+from armlab.robot import rx200
+from armlab.sim import ArmRealism, GripperGeometry, SimArm, World
+from armlab.sim.arm import gravity_deflection
+from armlab.sim.geometry import wrap_quarter
+from armlab.station import Arm, EmergencyStopped, MotionRefused
+
+DOWN = np.pi / 2
+
+
+def aligned_roll(position, yaw: float) -> float:
+    """The wrist roll that puts the closing direction (tool y) across the faces of a cube turned by `yaw`, for a
+    top-down grasp at `position`: found from FK, not assumed."""
+    y = kinematics.fk(kinematics.ik(position, DOWN, 0.0)[0])[:3, 1]
+    mis = float(wrap_quarter(np.arctan2(y[1], y[0]) - yaw))
+    for roll in (mis, -mis):
+        y = kinematics.fk(kinematics.ik(position, DOWN, roll)[0])[:3, 1]
+        if abs(wrap_quarter(np.arctan2(y[1], y[0]) - yaw)) < 1e-9:
+            return roll
+    raise AssertionError("no roll aligns the pads")
+
+
+def move_tool(arm, position, roll: float = 0.0, pitch: float = DOWN) -> None:
+    q = kinematics.ik(np.asarray(position, float), pitch, roll, current=arm.joint_positions())[0]
+    arm.move_to(q)
+
+
+def cube(color="red", size="large", xy=(0.0, 250.0), yaw=0.0, z=None, id=0):
+    e = block_edge(size)
+    return ObjectState(color, size, e, np.array([xy[0], xy[1], e / 2 if z is None else z]), yaw, "cube", id)
+
+
+def make(objects=(), realism="ideal", seed=0):
+    world = World(objects)
+    return world, SimArm(world, realism=realism, seed=seed)
+
+
+def pick(arm, block, yaw=None, dz=0.0, above=80.0) -> bool:
+    """Top-down pick of `block` at half its height (+dz), closing direction across its faces (or at yaw)."""
+    roll = aligned_roll(block.position, block.yaw if yaw is None else yaw)
+    target = block.position + [0, 0, dz]
+    move_tool(arm, target + [0, 0, above], roll)
+    move_tool(arm, target, roll)
+    return arm.close_gripper()
+
+
+# -- the driver's refusals -----------------------------------------------------------------------------------------
+
+def test_starts_asleep_with_the_arm_protocol():
+    world, arm = make()
+    assert isinstance(arm, Arm)
+    np.testing.assert_allclose(arm.joint_positions(), rx200().sleep, atol=1e-12)
+    assert arm.gripper_opening_mm == pytest.approx(GripperGeometry().max_opening_mm)
+
+
+def test_position_limit_refused_naming_the_joint_and_nothing_moves():
+    world, arm = make()
+    before, t = arm.joint_positions(), world.time_s
+    with pytest.raises(MotionRefused, match=r"joint limits\): elbow = .*100.0 deg.* is outside"):
+        arm.move_to([0.0, 0.0, np.radians(100), 0.0, 0.0], moving_time=5.0)
+    np.testing.assert_array_equal(arm.joint_positions(), before)
+    assert world.time_s == t
+
+
+def test_velocity_limit_refused_as_the_driver_does():
+    world, arm = make()
+    arm.home()
+    goal = np.array([0.0, 1.2, -1.0, 0.0, 0.0])
+    with pytest.raises(MotionRefused, match="shoulder would need 1.20 rad/s, above its 1.00 rad/s limit"):
+        arm.move_to(goal, moving_time=1.0)
+    np.testing.assert_array_equal(arm.joint_positions(), rx200().home)
+    arm.move_to(goal, moving_time=1.25)          # 0.96 rad/s: accepted
+    np.testing.assert_allclose(arm.joint_positions(), goal, atol=1e-12)
+
+
+def test_bad_arguments_are_refused_clearly():
+    world, arm = make()
+    with pytest.raises(MotionRefused, match="shape"):
+        arm.move_to([0.0, 0.0, 0.0, 0.0])
+    with pytest.raises(MotionRefused, match="NaN"):
+        arm.move_to([0.0, np.nan, 0.0, 0.0, 0.0])
+    with pytest.raises(MotionRefused, match="accel_time"):
+        arm.move_to(rx200().home, moving_time=2.0, accel_time=1.5)
+    np.testing.assert_array_equal(arm.joint_positions(), rx200().sleep)
+
+
+def test_goal_below_the_board_is_refused_naming_the_part():
+    world, arm = make()
+    q = kinematics.ik([0.0, 300.0, -5.0], DOWN)[0]
+    with pytest.raises(MotionRefused, match=r"collision with the board\): the (tool point|left finger pad|right "
+                                            r"finger pad) would go [0-9.]+ mm below the board at \(") as e:
+        arm.move_to(q)
+    assert "mm below the board at (0.0, 300.0) mm, 100% of the way" in str(e.value)
+    np.testing.assert_array_equal(arm.joint_positions(), rx200().sleep)
+
+
+def test_path_that_dips_below_the_board_is_refused_though_both_ends_are_clear():
+    world, arm = make()
+    start = kinematics.ik([0.0, 390.0, 45.0], 0.25)[0]
+    goal = kinematics.ik([0.0, 285.0, 30.0], 1.52)[0]
+    arm.move_to(kinematics.ik([0.0, 300.0, 150.0], 0.25)[0])
+    arm.move_to(start)
+    with pytest.raises(MotionRefused, match="below the board") as e:
+        arm.move_to(goal)
+    percent = int(str(e.value).split("% of the way")[0].rsplit(" ", 1)[1])
+    assert 0 < percent < 100                               # in the middle of the path, not at either end
+    np.testing.assert_allclose(arm.joint_positions(), start, atol=1e-12)
+    arm.move_to(kinematics.ik([0.0, 300.0, 150.0], 0.25)[0])   # the same goal by a safe way is fine
+    arm.move_to(goal)
+    np.testing.assert_allclose(arm.joint_positions(), goal, atol=1e-12)
+
+
+# -- simulated time, emergency stop ---------------------------------------------------------------------------
+
+def test_non_blocking_move_follows_the_time_based_profile_in_simulated_time():
+    world, arm = make()
+    arm.home()
+    goal = np.array([0.5, 0.3, 0.2, -0.4, 0.1])
+    arm.move_to(goal, moving_time=2.0, accel_time=0.5, blocking=False)
+    assert arm.is_moving()
+    world.advance(0.8)
+    s = trapezoid_fraction(0.8, 2.0, 0.5)
+    assert 0 < s < 1
+    np.testing.assert_allclose(arm.joint_positions(), s * goal, atol=1e-12)
+    arm.wait()
+    assert not arm.is_moving()
+    np.testing.assert_allclose(arm.joint_positions(), goal, atol=1e-12)
+
+
+def test_emergency_stop_halts_mid_motion_and_refuses_until_reset():
+    world, arm = make()
+    arm.home()
+    goal = np.array([1.0, 0.2, 0.1, 0.0, 0.0])
+    arm.move_to(goal, moving_time=2.0, accel_time=0.5, blocking=False)
+    world.advance(0.5)
+    arm.emergency_stop()
+    stopped = arm.joint_positions()
+    np.testing.assert_allclose(stopped, trapezoid_fraction(0.5, 2.0, 0.5) * goal, atol=1e-12)
+    world.advance(3.0)
+    np.testing.assert_array_equal(arm.joint_positions(), stopped)       # it stays where it was
+    with pytest.raises(EmergencyStopped):
+        arm.move_to(goal)
+    with pytest.raises(EmergencyStopped):
+        arm.close_gripper()
+    with pytest.raises(EmergencyStopped):
+        arm.home()
+    np.testing.assert_array_equal(arm.joint_positions(), stopped)
+    arm.reset()
+    arm.move_to(goal)
+    np.testing.assert_allclose(arm.joint_positions(), goal, atol=1e-12)
+
+
+# -- realism ------------------------------------------------------------------------------------------------------
+
+def test_gravity_sag_lowers_the_true_tool_more_at_long_reach():
+    drops = {}
+    for reach in (200.0, 370.0):
+        world, arm = make(realism=ArmRealism(backlash_rad=0, joint_offset_std_rad=0, encoder_noise_rad=0))
+        target = np.array([0.0, reach, 40.0])
+        move_tool(arm, target + [0, 0, 40], 0.0)
+        move_tool(arm, target, 0.0)
+        commanded = kinematics.fk(arm.joint_positions())[:3, 3]
+        assert np.abs(commanded - target).max() < 0.5                  # encoders: the arm thinks it is there
+        drops[reach] = commanded[2] - arm.tool_pose_true()[2, 3]
+    assert 1.0 < drops[200.0] < 5.0
+    assert 5.0 < drops[370.0] < 15.0                                    # what students measure at long reach
+
+
+def test_sag_is_the_gravity_moment_times_compliance():
+    r = ArmRealism()
+    q = np.array([0.3, 0.0, 0.0, 0.0, 0.0])                            # arm stretched out horizontally
+    P = kinematics.joint_positions(q)
+    reach = lambda i: np.hypot(*P[i, :2]) / 1000                       # noqa: E731
+    upper, fore, grip = (reach(2) + reach(3)) / 2, (reach(3) + reach(4)) / 2, (reach(4) + reach(6)) / 2
+    m_elbow = 9.81 * (r.forearm_kg * (fore - reach(3)) + r.gripper_kg * (grip - reach(3)))
+    m_shoulder = 9.81 * (r.upper_arm_kg * upper + r.forearm_kg * fore + r.gripper_kg * grip)
+    d = gravity_deflection(q, r)
+    np.testing.assert_allclose(d, [0, r.shoulder_compliance_rad_per_nm * m_shoulder,
+                                   r.elbow_compliance_rad_per_nm * m_elbow, 0, 0], rtol=1e-12)
+    assert np.all(gravity_deflection(q, ArmRealism.preset("ideal")) == 0)
+
+
+def test_encoder_readings_are_seeded_quantised_and_ideal_is_exact():
+    readings = [SimArm(World(), seed=s).joint_positions() for s in (4, 4, 5)]
+    np.testing.assert_array_equal(readings[0], readings[1])
+    step = 2 * np.pi / 4096
+    np.testing.assert_allclose(readings[0] / step, np.round(readings[0] / step), atol=1e-9)
+    assert np.abs(readings[0] - rx200().sleep).max() < 0.005
+    world, arm = make(realism="ideal")
+    np.testing.assert_array_equal(arm.q_true, arm.joint_positions())
+    with pytest.raises(ValueError, match="unknown arm realism preset 'fuzzy'"):
+        SimArm(World(), realism="fuzzy")
+
+
+# -- teaching by hand ---------------------------------------------------------------------------------------------
+
+def test_torque_off_teaching_reads_back_the_hand_pose():
+    world, arm = make(realism="realistic", seed=2)
+    arm.home()
+    taught = kinematics.ik([120.0, 260.0, 80.0], DOWN, 0.2)[0]
+    with pytest.raises(MotionRefused, match="set_torque"):
+        arm.move_by_hand(taught)
+    arm.set_torque(False)
+    with pytest.raises(MotionRefused, match="torque is off"):
+        arm.move_to(taught)
+    arm.move_by_hand(taught)
+    np.testing.assert_allclose(arm.q_true, taught, atol=1e-12)               # the hand puts it exactly there
+    assert np.abs(arm.joint_positions() - taught).max() < 0.01              # encoders: offsets + noise only
+    with pytest.raises(MotionRefused, match="through the board"):
+        arm.move_by_hand(kinematics.ik([120.0, 260.0, -10.0], DOWN, 0.2)[0])
+    recorded = arm.joint_positions()
+    arm.set_torque(True)                                                    # the motors take the weight: it sags
+    assert arm.q_true[1] > taught[1] + 1e-3
+    arm.home()
+    arm.move_to(recorded)                                                   # replaying the taught waypoint
+    np.testing.assert_allclose(arm.joint_positions(), recorded, atol=0.005)
+
+
+# -- grasping by geometry -----------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("size", ["large", "small"])
+def test_aligned_grasp_holds_and_carries_the_block(size):
+    block = cube(size=size, yaw=0.3)
+    world, arm = make([block])
+    assert pick(arm, block)
+    assert arm.gripper_opening_mm == pytest.approx(block_edge(size))
+    move_tool(arm, [150.0, 200.0, 120.0], aligned_roll([150.0, 200.0, 120.0], 0.0))
+    tool = arm.tool_pose_true()
+    np.testing.assert_allclose(block.position, tool[:3, 3], atol=1e-6)     # carried rigidly, centred on the pads
+    assert abs(wrap_quarter(block.yaw)) < 1e-9                              # turned with the wrist to yaw 0 (mod 90)
+
+
+def test_misaligned_by_45_degrees_fails_and_turns_the_block():
+    block = cube(yaw=0.0)
+    world, arm = make([block])
+    assert not pick(arm, block, yaw=np.pi / 4)
+    assert "slipped" in arm.last_grasp
+    assert abs(wrap_quarter(block.yaw - np.pi / 4)) < 1e-9                  # squared against the pads
+    assert block.position[2] == pytest.approx(19.0)
+    move_tool(arm, block.position + [0, 0, 100], aligned_roll(block.position, np.pi / 4))
+    assert block.position[2] == pytest.approx(19.0)                         # left behind on the board
+    assert world.problems() == []
+
+
+def test_too_high_fails():
+    block = cube(size="small")
+    world, arm = make([block])
+    assert not pick(arm, block, dz=block.edge / 2 + 4.0)
+    assert "too high" in arm.last_grasp
+    np.testing.assert_allclose(block.position, [0.0, 250.0, 12.5])
+
+
+def test_finger_landing_on_a_block_shoves_it_aside():
+    block = cube(xy=(45.0, 250.0), yaw=0.2)
+    world, arm = make([block])
+    roll = aligned_roll([0.0, 250.0, 19.0], 0.0)
+    move_tool(arm, [0.0, 250.0, 100.0], roll)
+    move_tool(arm, [0.0, 250.0, 19.0], roll)        # the +x pad (x 31..37 mm) lands on the block
+    moved = block.position[:2] - [45.0, 250.0]
+    assert moved[0] > 10.0 and abs(moved[1]) < 1e-9     # pushed outwards along the closing direction, clear of it
+    assert abs(wrap_quarter(block.yaw)) < 1e-9                              # squared against the flat pad
+    assert world.problems() == []
+    assert not arm.close_gripper()
+
+
+# -- releasing: dropping, stacking, tipping -----------------------------------------------------------------------
+
+def test_release_drops_the_block_onto_the_board():
+    block = cube()
+    world, arm = make([block])
+    assert pick(arm, block)
+    target = np.array([-120.0, 200.0, 80.0])
+    move_tool(arm, target, aligned_roll(target, 0.0))
+    arm.open_gripper()
+    np.testing.assert_allclose(block.position, [-120.0, 200.0, 19.0], atol=1e-6)
+    assert arm.holding == [] and world.problems() == []
+
+
+def _place_on(offset: float):
+    lower, upper = cube("red", xy=(100.0, 250.0), id=0), cube("blue", xy=(-100.0, 250.0), id=1)
+    world, arm = make([lower, upper])
+    assert pick(arm, upper)
+    target = lower.position + [offset, 0.0, 38.0 + 5.0]
+    move_tool(arm, target + [0, 0, 40], aligned_roll(target, 0.0))
+    move_tool(arm, target, aligned_roll(target, 0.0))
+    arm.open_gripper()
+    return world, lower, upper
+
+
+def test_release_onto_a_block_stacks_it():
+    world, lower, upper = _place_on(8.0)
+    np.testing.assert_allclose(upper.position, [108.0, 250.0, 38.0 + 19.0], atol=1e-6)
+    assert world.problems() == []
+
+
+def test_release_too_far_off_the_block_below_tips_it_off():
+    world, lower, upper = _place_on(25.0)                 # centre beyond the 19 mm half edge: not supported
+    assert upper.position[2] == pytest.approx(19.0)       # fell to the board
+    assert upper.position[0] > 100.0 + 38.0 - 1e-6        # beside the block, on the side it hung over
+    assert not World.footprints_overlap(upper, lower)
+    assert world.problems() == []
+
+
+def test_held_block_counts_in_the_board_collision_check():
+    block = cube()
+    world, arm = make([block])
+    assert pick(arm, block)
+    move_tool(arm, [0.0, 250.0, 80.0], aligned_roll(block.position, 0.0))
+    q = kinematics.ik([0.0, 250.0, 10.0], DOWN, aligned_roll(block.position, 0.0))[0]
+    with pytest.raises(MotionRefused, match="held red block would go"):
+        arm.move_to(q)
