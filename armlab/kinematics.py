@@ -205,45 +205,43 @@ def _planar_geometry(robot: RobotModel):
     return shoulder_height, upper_arm, forearm, wrist_to_tool
 
 
+# Per branch: is the waist turned away from the target, and is delta (the forearm's angle from the upper arm's line,
+# counter-clockwise in the arm's plane seen with the arm's forward direction on the right) negative? Elbow up = the
+# elbow above the shoulder-wrist line as seen with the target on the right: delta < 0 facing the target; the flipped
+# waist mirrors the arm's plane, which swaps the sign.
+_FLIPPED = np.array([w == "flipped" for w, _ in _BRANCHES])
+_DELTA_NEGATIVE = np.array([e == "elbow up" for _, e in _BRANCHES]) != _FLIPPED
+
+
 def _ik_candidates(P: np.ndarray, pitch: np.ndarray, roll: np.ndarray, robot: RobotModel) -> _Candidates:
-    """Every IK branch for targets P (N, 3) with pitch (N,) and roll (N,), vectorised."""
+    """Every IK branch for targets P (N, 3) with pitch (N,) and roll (N,), vectorised over targets and branches."""
     dh = robot.dh
     h0, L1, L2, Lt = _planar_geometry(robot)
     o1, o2, o3 = dh[0, 0], dh[1, 0], dh[2, 0]
-    N = P.shape[0]
-    x, y, z = P.T
+    x, y, z = (c[:, None] for c in P.T)                     # (N, 1): broadcast against the 4 branches
+    pitch = pitch[:, None]
     r = np.hypot(x, y)
     heading = np.where(r > 1e-9, np.arctan2(y, x), o1)  # on the base axis any heading works: keep the waist at 0
-
-    q = np.full((N, 4, 5), np.nan)
-    in_reach = np.zeros((N, 4), bool)
-    distance = np.zeros((N, 4))
-    for b, (waist_branch, elbow_branch) in enumerate(_BRANCHES):
-        flipped = waist_branch == "flipped"
-        # BEGIN SOLUTION
-        q1 = _wrap(heading - o1 + (np.pi if flipped else 0.0))
-        r_plane = -r if flipped else r                       # target's distance along the arm's forward direction
-        psi = np.pi - pitch if flipped else pitch            # approach angle below the arm's forward horizontal
-        wr = r_plane - Lt * np.cos(psi)                      # wrist centre in the arm's plane, from the shoulder
-        wh = z - h0 + Lt * np.sin(psi)
-        d2 = wr**2 + wh**2
-        cos_delta = (d2 - L1**2 - L2**2) / (2 * L1 * L2)
-        ok = np.abs(cos_delta) <= 1 + 1e-12
-        # Elbow up = the elbow above the shoulder-wrist line, seen with the target on the right (delta < 0 in the
-        # arm's plane); the flipped waist mirrors that plane, which swaps the sign.
-        up = (elbow_branch == "elbow up") != flipped
-        delta = np.arccos(np.clip(cos_delta, -1, 1)) * (-1 if up else 1)
-        upper_arm_elevation = np.arctan2(wh, wr) - np.arctan2(L2 * np.sin(delta), L1 + L2 * np.cos(delta))
-        q2 = _wrap(-upper_arm_elevation - o2)
-        q3 = _wrap(-delta - o3)
-        q4 = _wrap(psi - q2 - q3 - (o2 + o3))
-        # END SOLUTION
-        sol = np.stack([q1, q2, q3, q4, _wrap(roll)], axis=-1)
-        q[:, b] = np.where(ok[:, None], sol, np.nan)
-        in_reach[:, b] = ok
-        distance[:, b] = np.sqrt(d2)
-    valid = in_reach & robot.within_limits(np.nan_to_num(q, nan=1e9))
-    return _Candidates(q, in_reach, valid, distance)
+    flipped = _FLIPPED                                       # (4,)
+    # BEGIN SOLUTION
+    q1 = _wrap(heading - o1 + np.where(flipped, np.pi, 0.0))
+    r_plane = np.where(flipped, -r, r)                      # target's distance along the arm's forward direction
+    psi = np.where(flipped, np.pi - pitch, pitch)           # approach angle below the arm's forward horizontal
+    wr = r_plane - Lt * np.cos(psi)                         # wrist centre in the arm's plane, from the shoulder
+    wh = z - h0 + Lt * np.sin(psi)
+    d2 = wr**2 + wh**2
+    cos_delta = (d2 - L1**2 - L2**2) / (2 * L1 * L2)
+    ok = np.abs(cos_delta) <= 1 + 1e-12
+    delta = np.arccos(np.clip(cos_delta, -1, 1)) * np.where(_DELTA_NEGATIVE, -1.0, 1.0)
+    upper_arm_elevation = np.arctan2(wh, wr) - np.arctan2(L2 * np.sin(delta), L1 + L2 * np.cos(delta))
+    q2 = _wrap(-upper_arm_elevation - o2)
+    q3 = _wrap(-delta - o3)
+    q4 = _wrap(psi - q2 - q3 - (o2 + o3))
+    # END SOLUTION
+    q5 = np.broadcast_to(_wrap(roll)[:, None], q2.shape)
+    q = np.where(ok[..., None], np.stack([np.broadcast_to(q1, q2.shape), q2, q3, q4, q5], axis=-1), np.nan)
+    valid = ok & robot.within_limits(q)                     # NaN (out of reach) compares False: not within
+    return _Candidates(q, ok, valid, np.sqrt(d2))
 
 
 def _explain(c: _Candidates, i: int, robot: RobotModel, position, pitch) -> str:
@@ -267,7 +265,7 @@ def _explain(c: _Candidates, i: int, robot: RobotModel, position, pitch) -> str:
 
 def _rank(c: _Candidates, current: np.ndarray) -> np.ndarray:
     """Branch order per target (N, 4): valid first, then elbow up, then least joint motion from `current`."""
-    motion = np.abs(_wrap(np.nan_to_num(c.q, nan=0.0) - current[:, None, :])).sum(-1)
+    motion = np.abs(_wrap(np.where(c.valid[..., None], c.q, current[:, None, :]) - current[:, None, :])).sum(-1)
     elbow_down = np.array([e == "elbow down" for _, e in _BRANCHES], float)
     key = (~c.valid) * 1e6 + elbow_down[None, :] * 1e3 + motion
     return np.argsort(key, axis=1, kind="stable")
