@@ -172,21 +172,21 @@ class World:
             obj.position[2] = height   # it falls from the support's top, then settles again below
         raise RuntimeError(f"{_describe(obj)} did not come to rest after {_MAX_CHAIN} tip-offs")
 
-    def shove(self, obj: ObjectState, direction, distance: float, _depth: int = 0) -> None:
+    def shove(self, obj: ObjectState, direction, distance: float, _moved: tuple = ()) -> None:
         """Slide obj (and everything stacked on it) horizontally by distance mm along direction (2,), pushing any
         object it runs into, then let the moved objects settle."""
         d = np.asarray(direction, dtype=float)[:2]
         d = d / np.linalg.norm(d)
-        group = [obj, *self.stack_above(obj)]
+        group = [obj, *(o for o in self.stack_above(obj) if all(o is not m for m in _moved))]
         for o in group:
             o.position[:2] += d * distance
-        if _depth < _MAX_CHAIN:
-            for other in self._free(group):
+        if len(_moved) < _MAX_CHAIN:
+            for other in self._free([*_moved, *group]):
                 hits = [m for m in group if self.collide(m, other)]
                 if hits:
                     need = max(separation_along(p, q, d) for m in hits for p in other.footprint_world()
                                for q in m.footprint_world())
-                    self.shove(other, d, need + 0.5, _depth + 1)
+                    self.shove(other, d, need + 0.5, (*_moved, *group))
         for o in group:
             if o.id not in self.held:
                 self.settle(o)
