@@ -256,7 +256,12 @@ class Viewer:
 
         for s in [*sliders, gripper]:
             s.observe(update, names="value")
-        return widgets.VBox([*sliders, gripper])
+
+        class JointSliders(widgets.VBox):
+            def __repr__(self) -> str:  # short and deterministic: nbval compares a displayed widget's text
+                return f"JointSliders({', '.join(c.description for c in self.children)})"
+
+        return JointSliders([*sliders, gripper])
 
     # -- the station --------------------------------------------------------------------------------------------
     def draw_objects(self, objects: list[ObjectState]) -> None:

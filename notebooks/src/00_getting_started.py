@@ -1,0 +1,182 @@
+# %% [markdown]
+# # 00 · Getting started: the kit, its frames and the arm viewer
+#
+# **armlab** is the course kit of the robot-arm lab: an Interbotix **RX200** arm (5 joints + a gripper) above a board
+# of coloured wooden blocks, watched by an RGB-D camera. The notebooks 00 → 07 take you from camera calibration and
+# kinematics to block detection and autonomous pick-and-place. Everything runs on a simulated station out of the box,
+# and the same code drives the real arm and camera in the lab.
+#
+# This notebook is for every student on day one. You will learn
+# 1. the **coordinate frames** every function of the kit uses,
+# 2. how to **move the arm in the 3D viewer** and read where its tool is,
+# 3. how the **check cells** at the end of each section tell you whether your work is right.
+#
+# Units everywhere: **millimetres and radians**.
+
+# %%
+import numpy as np
+import matplotlib.pyplot as plt
+from IPython import get_ipython
+
+from armlab import kinematics
+from armlab.camera import Camera, look_at
+from armlab.lab import lab_config
+from armlab.robot import rx200
+from armlab.viz import Viewer
+
+get_ipython().run_line_magic("matplotlib", "inline")  # figures appear below their cell
+np.set_printoptions(precision=3, suppress=True)
+robot = rx200()
+lab = lab_config()
+print("joints:", ", ".join(robot.joint_names))
+
+# %% [markdown]
+# ## 1 · Coordinate frames
+#
+# | frame | where | axes |
+# |---|---|---|
+# | **world** (= board) | on the board, right below the waist axis | +x right, +y away from the robot, +z up |
+# | `base_link` (manufacturer) | same origin | world turned −90° about z: $x_b = y_w$, $y_b = -x_w$ |
+# | **tool** `ee_gripper_link` | between the finger pads | x = approach direction, y = finger opening direction |
+# | **camera** | optical centre | x right, y down in the image, z along the optical axis |
+#
+# A pose is a 4×4 homogeneous transform. Forward kinematics gives the tool pose in the world,
+# $T_{world,tool}(q) = \begin{bmatrix} R & p \\ 0 & 1 \end{bmatrix}$, with $p$ the tool point in mm. The camera's
+# extrinsic $T_{cam,world}$ maps world points into the camera frame: $p_{cam} = T_{cam,world}\, p_{world}$.
+#
+# At home (all joints 0) the arm points along +y:
+
+# %%
+T_home = kinematics.fk(robot.home)
+print("tool point at home (mm):", T_home[:3, 3])
+print("approach direction (tool x):", T_home[:3, 0].round(12) + 0.0)  # + 0.0 turns -0 into 0
+print("finger opening direction (tool y):", T_home[:3, 1].round(12) + 0.0)
+
+# %% [markdown]
+# The board is 1000 × 650 mm with a 50 mm grid and four AprilTags; the camera hangs about 1 m above it, tilted towards
+# the robot. `Camera.project` turns world points into pixels (OpenCV convention: u right, v down):
+
+# %%
+camera = Camera(lab.factory_K, lab.factory_dist, look_at(lab.camera_position_mm, lab.camera_look_at_mm),
+                *lab.image_size)
+print(camera)
+tag_centres = np.array([[x, y, 0.0] for x, y in lab.tags.centres_mm.values()])
+for tag_id, (u, v) in zip(lab.tags.centres_mm, camera.project(tag_centres)):
+    print(f"tag {tag_id} at {lab.tags.centres_mm[tag_id]} mm -> pixel ({u:.1f}, {v:.1f})")
+
+# %% [markdown]
+# **Check:** going world → pixel → world (the ray through the pixel meets the board plane z = 0) must return the tag
+# centres.
+
+# %%
+back = camera.pixel_to_plane(camera.project(tag_centres), 0.0)
+err = np.abs(back - tag_centres).max()
+assert err < 1e-6, err
+print("OK: world -> pixel -> board plane round trip of the 4 tag centres within 1e-6 mm")
+
+# %% [markdown]
+# ## 2 · The arm in the viewer
+#
+# `Viewer()` starts a meshcat server and draws the board, the tags, the arm (links between the joint positions, the
+# joint drums along their axes, the gripper) and the frames of every link. Open the printed URL in your browser to
+# rotate and zoom. Use it in a `with` block, or call `viewer.close()` when done: that stops its server.
+
+# %%
+viewer = Viewer()
+print(viewer)
+
+# %% [markdown]
+# `viewer.show(q, gripper_opening_mm=...)` moves the drawn arm to joint angles `q` (waist, shoulder, elbow,
+# wrist_angle, wrist_rotate in rad). Positive shoulder, elbow and wrist_angle tip the arm forward and down; positive
+# waist turns it towards −x. Here are a few poses and where forward kinematics puts the tool:
+
+# %%
+poses = {
+    "home": robot.home,
+    "sleep": robot.sleep,
+    "reach left, down": np.array([0.6, 0.3, 0.2, 0.9, 0.0]),
+    "tall": np.array([-0.4, -0.6, -0.5, 0.2, 0.0]),
+}
+for name, q in poses.items():
+    viewer.show(q, gripper_opening_mm=30.0)
+    x, y, z = kinematics.fk(q)[:3, 3].round(1) + 0.0
+    print(f"{name:>17}: q = {q} rad -> tool at ({x:7.1f}, {y:7.1f}, {z:7.1f}) mm")
+
+# %% [markdown]
+# A picture of the same poses (drawn with matplotlib from `kinematics.joint_positions`, the very points the viewer
+# draws its links between): a top view of the board and a side view along the arm.
+
+# %%
+fig, (top, side) = plt.subplots(1, 2, figsize=(9, 3.6), dpi=70)
+top.add_patch(plt.Rectangle((lab.board_x[0], lab.board_y[0]), 1000, 650, color="wheat"))
+top.plot(tag_centres[:, 0], tag_centres[:, 1], "ks", ms=4)
+for name, q in poses.items():
+    p = kinematics.joint_positions(q)
+    top.plot(p[:, 0], p[:, 1], "o-", label=name)
+    heading = np.array([-np.sin(q[0]), np.cos(q[0])])  # the arm's forward direction on the board
+    side.plot(p[:, :2] @ heading, p[:, 2], "o-", label=name)
+top.set(xlabel="x (mm)", ylabel="y (mm)", title="top view (world)", aspect="equal")
+side.set(xlabel="along the arm's heading (mm)", ylabel="z (mm)", title="side view", aspect="equal")
+side.axhline(0, color="peru")
+side.legend(fontsize=7)
+fig.tight_layout()
+
+# %% [markdown]
+# **Live:** in JupyterLab the sliders below move the arm in the viewer (joint angles in rad, gripper in mm). Try to
+# touch the tag at (250, 275) with the tool point.
+
+# %%
+sliders = viewer.joint_sliders()
+sliders
+
+# %% [markdown]
+# A trajectory plays as an animation in the viewer (and in a saved snapshot, `viewer.save_html("scene.html")`, a
+# self-contained page you can open anywhere). The driver moves every joint with a trapezoidal velocity profile;
+# `armlab.profile` has it:
+
+# %%
+from armlab.profile import default_moving_time, trapezoid_fraction
+
+T = default_moving_time(robot.sleep, robot.home)
+times = np.linspace(0.0, T, 31)
+s = trapezoid_fraction(times, T, T / 3)
+qs = robot.sleep + s[:, None] * (robot.home - robot.sleep)
+viewer.animate(times, qs, gripper_opening_mm=np.linspace(30, 60, len(times)))
+print(f"sleep -> home in {T:.2f} s, {len(times)} keyframes; the tool ends at {kinematics.fk(qs[-1])[:3, 3]} mm")
+
+# %% [markdown]
+# **Check:** the links the viewer draws must join exactly the joint positions of the kinematic model, at every pose
+# (the viewer's cylinders run along their local y axis, so a link's ends are its pose applied to (0, ±L/2, 0)).
+
+# %%
+from armlab.viz.geometry import LINK_NAMES, arm_part_poses
+
+qs_check = np.random.default_rng(0).uniform(robot.lower, robot.upper, (100, 5))
+points = kinematics.joint_positions(qs_check)
+parts = arm_part_poses(qs_check)
+gap = 0.0
+for i, name in enumerate(LINK_NAMES):
+    T_link = parts.poses[f"links/{name}"]
+    half = np.linalg.norm(points[0, i + 1] - points[0, i]) / 2
+    ends = T_link[:, :3, 3, None] + T_link[:, :3, 1, None] * np.array([-half, half])
+    gap = max(gap, np.abs(np.swapaxes(ends, 1, 2) - points[:, i:i + 2]).max())
+assert gap < 1e-9, gap
+tool = kinematics.fk(robot.home)[:3, 3]
+assert np.allclose(tool, [0.0, 408.575, 304.57], atol=1e-9), tool
+print(f"OK: drawn links join the joint positions at 100 random poses (gaps below 1e-9 mm); "
+      f"home tool point {tool} mm matches the manufacturer")
+
+# %%
+viewer.close()
+print(viewer)
+
+# %% [markdown]
+# ## 3 · How to check your work
+#
+# - Each section ends with a **check cell** like the ones above: it asserts a number against a known answer and
+#   prints one line starting with `OK`. If it raises, your code (or your calibration) is not right yet.
+# - Your instructor runs every notebook top to bottom with `pytest --nbval`, which re-executes each cell and compares
+#   its printed output with the stored one: keep outputs deterministic (seeded random numbers, no timings).
+# - `make test` runs the kit's own tests and all notebooks; `make lab` opens JupyterLab on `notebooks/`.
+#
+# Next: **01 · camera calibration**.
