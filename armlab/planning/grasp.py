@@ -1,0 +1,111 @@
+"""Grasp pose choice for a block: wrist roll from the block's yaw, top-down pitch with a fallback at long reach.
+
+Frames: world (board) mm and rad. The tool frame is ee_gripper_link (x = approach, y = the fingers' closing
+direction). For a tool point in the vertical arm plane at heading h = atan2(y, x), IK gives the orientation
+kinematics.tool_orientation(h, pitch, roll) = Rz(h) Ry(pitch) Rx(roll), whose y column is
+
+    y_tool = (cos h sin(pitch) sin(roll) - sin h cos(roll),  sin h sin(pitch) sin(roll) + cos h cos(roll),
+              cos(pitch) sin(roll)).
+
+Top-down (pitch = pi/2): y_tool = (sin(roll - h), cos(roll - h), 0), a horizontal direction at angle
+pi/2 + h - roll from world +x. A cube of yaw `yaw` has face normals at yaw + k pi/2, so the fingers close across two
+opposite faces when pi/2 + h - roll = yaw (mod pi/2), i.e. roll = h - yaw (mod pi/2); the smallest wrist turn takes
+the representative in [-pi/4, pi/4) (face_roll).
+
+Tilted (pitch < pi/2, at long reach): only roll = 0 or pi keeps y_tool horizontal (its z component is
+cos(pitch) sin(roll)); any other roll tilts the closing direction, so the flat pads would meet the vertical faces
+on an edge. We use roll = 0: the fingers close horizontally, perpendicular to the arm plane (angle h + pi/2). They
+are across two faces exactly when the heading is aligned with the block's faces (h = yaw mod pi/2); otherwise they
+meet the block `misalignment` = |h - yaw| (mod pi/2, at most pi/4) off square and a closing parallel gripper turns
+the block square to its fingers. The grasp reports the misalignment so a caller can prefer another block or nudge it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from armlab import kinematics
+from armlab.kinematics import Unreachable
+from armlab.robot import RobotModel, rx200
+
+__all__ = ["GraspPose", "face_roll", "face_misalignment", "choose_grasp", "TOP_DOWN"]
+
+TOP_DOWN = np.pi / 2
+_PITCH_STEP = np.radians(1.0)   # fallback pitches are tried from the steepest downwards in this step
+_SEGMENT_STEP_MM = 5.0          # spacing of the reachability check along the vertical approach
+
+
+@dataclass(frozen=True)
+class GraspPose:
+    """Where and how the tool grasps: tool point position (3,) world mm, heading, pitch and roll (rad).
+
+    top_down: pitch is pi/2. misalignment: angle (rad) between the fingers' closing direction and the nearest block
+    face normal (0 when the fingers are square across two faces).
+    """
+
+    position: np.ndarray
+    heading: float
+    pitch: float
+    roll: float
+    top_down: bool
+    misalignment: float
+
+
+def face_roll(heading: float, yaw: float) -> float:
+    """Wrist roll (rad, in [-pi/4, pi/4)) that closes top-down fingers across two opposite faces of a block of
+    yaw `yaw` (rad) seen from an arm plane at `heading` (rad): roll = heading - yaw (mod pi/2), the smaller turn."""
+    # BEGIN SOLUTION
+    return float(np.mod(heading - yaw + np.pi / 4, np.pi / 2) - np.pi / 4)
+    # END SOLUTION
+
+
+def face_misalignment(heading: float, pitch: float, roll: float, yaw: float) -> float:
+    """Angle (rad, 0..pi/4 for a horizontal closing direction) between the tool y axis of
+    tool_orientation(heading, pitch, roll) and the nearest face normal of a block of yaw `yaw`."""
+    y_tool = kinematics.tool_orientation(heading, pitch, roll)[:, 1]
+    normals = np.array([[np.cos(yaw), np.sin(yaw), 0.0], [-np.sin(yaw), np.cos(yaw), 0.0]])
+    return float(np.arccos(np.clip(np.abs(normals @ y_tool).max(), 0.0, 1.0)))
+
+
+def _vertical_ok(position: np.ndarray, top_z: float, pitch: float, roll: float, robot: RobotModel) -> bool:
+    """True when every point from `position` straight up to top_z is reachable at pitch/roll on one IK branch."""
+    n = max(2, int(np.ceil((top_z - position[2]) / _SEGMENT_STEP_MM)) + 1)
+    pts = np.repeat(position[None], n, axis=0)
+    pts[:, 2] = np.linspace(position[2], max(top_z, position[2]), n)
+    res = kinematics.ik_batch(pts, pitch, roll, robot=robot)
+    return bool(res.ok.all() and np.all(res.branch == res.branch[0]))
+
+
+def choose_grasp(position, yaw: float, approach_z: float | None = None,
+                 robot: RobotModel | None = None) -> GraspPose:
+    """Grasp (or release) pose for a block whose tool point goes to `position` (3,) world mm, block yaw `yaw` rad.
+
+    Top-down (pitch = pi/2, roll = face_roll) when the tool can go straight down from approach_z (world mm, default:
+    the position's own height) to the position; else the steepest pitch (from kinematics.steepest_pitch, then in
+    1 deg steps down) at which that whole vertical approach is reachable, with roll = 0 (see the module notes).
+    Raises Unreachable saying why when no pitch works, ValueError for bad input.
+    """
+    robot = robot or rx200()
+    p = np.asarray(position, dtype=float)
+    if p.shape != (3,) or not np.all(np.isfinite(p)):
+        raise ValueError(f"grasp position must be 3 finite numbers (x, y, z in world mm), got {position!r}")
+    if not np.isfinite(yaw):
+        raise ValueError(f"block yaw must be finite (rad), got {yaw}")
+    top_z = p[2] if approach_z is None else float(approach_z)
+    if not np.isfinite(top_z):
+        raise ValueError(f"approach_z must be finite (mm), got {approach_z}")
+    if np.hypot(p[0], p[1]) < 1.0:
+        raise Unreachable(f"({p[0]:.1f}, {p[1]:.1f}) mm is on the waist axis: the arm cannot grasp below itself")
+    heading = float(np.arctan2(p[1], p[0]))
+    roll = face_roll(heading, yaw)
+    if _vertical_ok(p, top_z, TOP_DOWN, roll, robot):
+        return GraspPose(p, heading, TOP_DOWN, roll, True, face_misalignment(heading, TOP_DOWN, roll, yaw))
+    steepest = kinematics.steepest_pitch(p, robot=robot)   # raises Unreachable (with the reason) if none
+    for pitch in np.arange(min(steepest, TOP_DOWN - _PITCH_STEP), -1e-9, -_PITCH_STEP):
+        if _vertical_ok(p, top_z, pitch, 0.0, robot):
+            return GraspPose(p, heading, float(pitch), 0.0, False, face_misalignment(heading, pitch, 0.0, yaw))
+    raise Unreachable(f"the tool reaches ({p[0]:.1f}, {p[1]:.1f}, {p[2]:.1f}) mm (pitch up to "
+                      f"{np.degrees(steepest):.1f} deg) but cannot come straight down to it from z = {top_z:.1f} mm "
+                      f"at any pitch")

@@ -1,0 +1,221 @@
+"""Pick and place plans: transit above the target, open, descend in a straight line, grasp or release, lift.
+
+Heights (world mm):
+- grasp: the tool point (the centre of the finger pads) at the block's centre, `grasp_depth` = edge / 2 below its top
+  face, as the lab did ("half the block height"): the pads cover the middle of the block's side faces, the fingertips
+  stay above the board for both block sizes, and a held block's bottom face is edge - grasp_depth below the tool point.
+- place: the held block's bottom-face centre at the requested position, so the tool point goes to
+  position z + edge - grasp_depth (= z + edge / 2 for a grasp at the centre).
+- transit: a straight rise from the start to height z_t (when lower), then a joint-space move to the hover point
+  straight above the target at z_t, where z_t starts at the
+  target's top (pick) or the place height (place) + clearance (+ the held block's overhang), then is raised until the
+  sampled transit clears every obstacle near the path (transit.transit_clearance: wrist and tool points
+  `clearance` above the tops of the obstacles they pass, a held block lifted over them). A height out of reach is
+  refused with Unreachable naming the obstacle.
+The descent and lift are Cartesian segments (trajectory.cartesian_line) at the grasp's pitch and roll
+(grasp.choose_grasp: top-down with the roll across the block's faces, or the steepest reachable pitch).
+
+Camera clear: the arm stands upright over its base (CAMERA_CLEAR_POSE: elbow -90 deg, gripper pointing up). Seen from
+the overhead camera (about 1 m up at y = 337 mm), everything in that pose projects onto the board behind the
+robot's own base (y < 60 mm along x = 0, see the tests), so it hides none of the board in front of the robot where
+blocks start, and it stays well above any stack. The manufacturer's sleep pose instead leaves the gripper 74 mm above
+the board at y = 123 mm, in front of the base, where it hides blocks and can hit stacks.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from armlab import kinematics
+from armlab.kinematics import Unreachable
+from armlab.robot import RobotModel, rx200
+
+from .grasp import choose_grasp
+from .plan import GripperStep, MoveStep, Plan
+from .trajectory import cartesian_line, joint_move, reverse
+from .transit import DEFAULT_CLEARANCE_MM, GRIPPER_RADIUS_MM, Obstacle, as_obstacles, transit_clearance
+
+__all__ = ["CAMERA_CLEAR_POSE", "grasp_height", "place_tool_height", "plan_pick", "plan_place", "plan_pick_place",
+           "plan_camera_clear"]
+
+CAMERA_CLEAR_POSE = np.array([0.0, 0.0, -np.pi / 2, 0.0, 0.0])
+_MAX_RAISES = 8
+
+
+def _check_edge_depth(edge: float, grasp_depth: float | None) -> float:
+    if not np.isfinite(edge) or edge <= 0:
+        raise ValueError(f"block edge must be a positive length in mm, got {edge}")
+    depth = edge / 2 if grasp_depth is None else float(grasp_depth)
+    if not 0 < depth <= edge:
+        raise ValueError(f"grasp_depth must be in (0, edge] = (0, {edge}] mm below the top face, got {grasp_depth}")
+    return depth
+
+
+def _point(p, name: str) -> np.ndarray:
+    a = np.asarray(p, dtype=float)
+    if a.shape != (3,):
+        raise ValueError(f"{name} must have shape (3,) (x, y, z in world mm), got shape {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"{name} contains NaN or infinity: {a}")
+    return a
+
+
+def grasp_height(top_z: float, edge: float, grasp_depth: float | None = None) -> float:
+    """Tool point height (world mm) to grasp a block whose top face is at top_z: top_z - grasp_depth."""
+    # BEGIN SOLUTION
+    return float(top_z - _check_edge_depth(edge, grasp_depth))
+    # END SOLUTION
+
+
+def place_tool_height(place_z: float, edge: float, grasp_depth: float | None = None) -> float:
+    """Tool point height (world mm) that puts a held block's bottom face at place_z: place_z + edge - grasp_depth."""
+    # BEGIN SOLUTION
+    return float(place_z + edge - _check_edge_depth(edge, grasp_depth))
+    # END SOLUTION
+
+
+def _near_segment(obstacles: list[Obstacle], a: np.ndarray, b: np.ndarray) -> list[Obstacle]:
+    """Obstacles whose footprint comes within the gripper's radius of the horizontal segment a -> b."""
+    ab = b[:2] - a[:2]
+    out = []
+    for o in obstacles:
+        ap = np.array([o.x, o.y]) - a[:2]
+        u = np.clip(ap @ ab / max(ab @ ab, 1e-12), 0.0, 1.0)
+        if np.linalg.norm(ap - u * ab) < o.radius + GRIPPER_RADIUS_MM:
+            out.append(o)
+    return out
+
+
+def _tool_pitch_roll(q: np.ndarray, robot: RobotModel) -> tuple[np.ndarray, float, float]:
+    """Tool point (3,) mm and the (pitch, roll) rad with fk(q) = tool_orientation(heading of the point, pitch, roll)."""
+    T = kinematics.fk(q, robot)
+    p = T[:3, 3]
+    M = kinematics.tool_orientation(np.arctan2(p[1], p[0]), 0.0, 0.0).T @ T[:3, :3]   # = Ry(pitch) Rx(roll)
+    return p, float(np.arctan2(-M[2, 0], M[0, 0])), float(np.arctan2(M[2, 1], M[1, 1]))
+
+
+def _rise(q0: np.ndarray, z_t: float, scaling: str, robot: RobotModel):
+    """Lift the tool from q0 to height z_t above the same point: a Cartesian segment at the current pitch and roll
+    when the arm can keep them all the way up, else a joint move to the steepest pitch that reaches the point above
+    (wrist_angle runs out when a top-down tool rises near the base). None when the tool is already high enough or
+    q0 is not a pose the closed-form IK reproduces (e.g. the tool over the waist axis)."""
+    p, pitch, roll = _tool_pitch_roll(q0, robot)
+    if p[2] >= z_t - 1.0 or np.hypot(p[0], p[1]) < 1.0:
+        return None
+    up = np.array([p[0], p[1], z_t])
+    try:
+        seg = cartesian_line(p, up, pitch, roll, current=q0, robot=robot)
+        return seg if np.abs(seg.start - q0).max() <= 1e-6 else None
+    except Unreachable:
+        steepest = kinematics.steepest_pitch(up, roll, max_pitch=min(pitch, np.pi / 2), robot=robot)
+        return joint_move(q0, kinematics.ik(up, steepest, roll, current=q0, robot=robot)[0], scaling, robot=robot)
+
+
+def _approach(q_start, target: np.ndarray, yaw: float, floor_z: float, held_below: float, action: str,
+              obstacles, clearance: float, scaling: str, robot: RobotModel, what: str) -> Plan:
+    """transit to the hover point over target, [open], descend, open/close, lift back (see the module notes)."""
+    if not np.isfinite(clearance) or clearance < 0:
+        raise ValueError(f"clearance must be a non-negative length in mm, got {clearance}")
+    if not np.isfinite(yaw):
+        raise ValueError(f"yaw must be finite (rad), got {yaw}")
+    q0 = kinematics.check_joints(q_start, robot)
+    if q0.shape != (5,):
+        raise ValueError(f"q_start must have shape (5,) (rad), got {q0.shape}")
+    obs = as_obstacles(obstacles)
+    z_t = max(floor_z + clearance + held_below, float(target[2]))
+    near = _near_segment(obs, kinematics.fk(q0, robot)[:3, 3], target)
+    if near:
+        z_t = max(z_t, max(o.top for o in near) + clearance + held_below)
+    for _ in range(_MAX_RAISES):
+        hover = np.array([target[0], target[1], z_t])
+        try:
+            grasp = choose_grasp(target, yaw, approach_z=z_t, robot=robot)
+            down = cartesian_line(hover, target, grasp.pitch, grasp.roll, robot=robot)
+            rise = _rise(q0, z_t, scaling, robot)
+        except Unreachable as e:
+            raise Unreachable(f"{what}: cannot move straight up or down to the transit height {z_t:.1f} mm: "
+                              f"{e}") from None
+        transit = joint_move(q0 if rise is None else rise.end, down.start, scaling, robot=robot)
+        c = transit_clearance(transit, obs, clearance, held_below)
+        if rise is not None and c.clear:
+            c = transit_clearance(rise, obs, clearance, held_below)
+            if not c.clear:
+                o = c.obstacle
+                raise Unreachable(f"{what}: rising from the start passes {c.deficit:.1f} mm too low over the "
+                                  f"obstacle at ({o.x:.1f}, {o.y:.1f}) mm (top {o.top:.1f} mm)")
+        if c.clear:
+            break
+        o = c.obstacle
+        if c.sample == 0:
+            raise Unreachable(f"{what}: the arm starts {c.deficit:.1f} mm too low over the obstacle at ({o.x:.1f}, "
+                              f"{o.y:.1f}) mm (top {o.top:.1f} mm); lift it first, or leave a held block out of the "
+                              f"obstacles")
+        z_t += c.deficit + 1.0
+    else:
+        raise Unreachable(f"{what}: no transit height up to {z_t:.1f} mm clears the obstacle at ({o.x:.1f}, "
+                          f"{o.y:.1f}) mm (top {o.top:.1f} mm) by {clearance:.0f} mm")
+    steps = ([] if rise is None else [MoveStep(rise, "rise")]) + [MoveStep(transit, "transit")]
+    if action == "close":
+        steps.append(GripperStep("open", "open before grasping"))
+    steps += [MoveStep(down, "descend"), GripperStep(action, "grasp" if action == "close" else "release"),
+              MoveStep(reverse(down), "lift")]
+    return Plan(tuple(steps))
+
+
+def plan_pick(q_start, top, yaw: float, edge: float, obstacles=(), clearance: float = DEFAULT_CLEARANCE_MM,
+              grasp_depth: float | None = None, scaling: str = "trapezoid",
+              robot: RobotModel | None = None) -> Plan:
+    """Plan to pick the block whose top-face centre is `top` (3,) world mm, yaw rad, cube edge mm, from q_start (5,).
+
+    Steps: transit (joint move) to the hover point, open, descend (Cartesian) to the grasp height, close, lift
+    (Cartesian) back to the hover point. obstacles: everything standing on the board (the target may be included).
+    """
+    robot = robot or rx200()
+    top = _point(top, "block top")
+    target = np.array([top[0], top[1], grasp_height(top[2], edge, grasp_depth)])
+    return _approach(q_start, target, yaw, top[2], 0.0, "close", obstacles, clearance, scaling, robot,
+                     f"picking the block at ({top[0]:.1f}, {top[1]:.1f}, {top[2]:.1f}) mm")
+
+
+def plan_place(q_start, position, edge: float, yaw: float = 0.0, obstacles=(),
+               clearance: float = DEFAULT_CLEARANCE_MM, grasp_depth: float | None = None, scaling: str = "trapezoid",
+               robot: RobotModel | None = None) -> Plan:
+    """Plan to put the held block's bottom-face centre at `position` (3,) world mm with yaw rad, from q_start (5,).
+
+    Steps: transit to the hover point (the held block lifted `clearance` over everything near the path), descend
+    (Cartesian) until the tool point is at place_tool_height, open, lift. obstacles: everything on the board except the
+    held block. The yaw is reached exactly for top-down placing; a tilted place leaves the block square to the fingers.
+    """
+    robot = robot or rx200()
+    position = _point(position, "place position")
+    depth = _check_edge_depth(edge, grasp_depth)
+    target = np.array([position[0], position[1], place_tool_height(position[2], edge, depth)])
+    return _approach(q_start, target, yaw, position[2], edge - depth, "open", obstacles, clearance, scaling, robot,
+                     f"placing at ({position[0]:.1f}, {position[1]:.1f}, {position[2]:.1f}) mm")
+
+
+def plan_pick_place(q_start, top, yaw: float, edge: float, position, place_yaw: float = 0.0, obstacles=(),
+                    clearance: float = DEFAULT_CLEARANCE_MM, grasp_depth: float | None = None,
+                    scaling: str = "trapezoid", robot: RobotModel | None = None) -> Plan:
+    """plan_pick then plan_place; the picked block (the obstacle whose top matches `top` within 1 mm) is left out
+    of the obstacles for the place."""
+    robot = robot or rx200()
+    pick = plan_pick(q_start, top, yaw, edge, obstacles, clearance, grasp_depth, scaling, robot)
+    t = np.asarray(top, float)
+    rest = [o for o in as_obstacles(obstacles) if np.abs(np.array([o.x, o.y, o.top]) - t).max() > 1.0]
+    place = plan_place(pick.end, position, edge, place_yaw, rest, clearance, grasp_depth, scaling, robot)
+    return pick.then(place)
+
+
+def plan_camera_clear(q_start, obstacles=(), clearance: float = DEFAULT_CLEARANCE_MM, held_below: float = 0.0,
+                      scaling: str = "trapezoid", robot: RobotModel | None = None) -> Plan:
+    """Joint move from q_start (5,) to CAMERA_CLEAR_POSE, refused (Unreachable) if it would pass too low over an
+    obstacle (held_below: how far a held block hangs below the tool point, mm)."""
+    robot = robot or rx200()
+    move = joint_move(q_start, CAMERA_CLEAR_POSE, scaling, robot=robot)
+    c = transit_clearance(move, as_obstacles(obstacles), clearance, held_below)
+    if not c.clear:
+        o = c.obstacle
+        raise Unreachable(f"moving to the camera-clear pose would pass {c.deficit:.1f} mm too low over the obstacle "
+                          f"at ({o.x:.1f}, {o.y:.1f}) mm (top {o.top:.1f} mm): lift the arm first")
+    return Plan((MoveStep(move, "camera clear"),))

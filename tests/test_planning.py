@@ -1,0 +1,373 @@
+"""armlab.planning: time scaling, velocity limits, Cartesian lines, grasp choice, clearance, place heights, execute."""
+
+import re
+
+import numpy as np
+import pytest
+
+from armlab import kinematics, planning
+from armlab.blocks import ObjectState
+from armlab.kinematics import Unreachable
+from armlab.lab import lab_config
+from armlab.planning import timing
+from armlab.profile import default_moving_time, trapezoid_fraction
+from armlab.robot import rx200
+from armlab.station import EmergencyStopped, MotionRefused
+
+ROBOT = rx200()
+
+
+def random_poses(rng, n):
+    return rng.uniform(ROBOT.lower, ROBOT.upper, size=(n, 5))
+
+
+# ---------------------------------------------------------------------------------------------------- time scaling
+
+@pytest.mark.parametrize("scaling", planning.SCALINGS)
+def test_time_scaling_is_rest_to_rest_and_rate_is_the_derivative(scaling):
+    T = 2.0
+    t = np.linspace(0, T, 4001)
+    s, ds = planning.time_scaling(t, T, scaling)
+    assert s[0] == 0 and s[-1] == pytest.approx(1.0, abs=1e-12)
+    assert ds[0] == pytest.approx(0.0, abs=1e-12) and ds[-1] == pytest.approx(0.0, abs=1e-12)
+    assert np.all(np.diff(s) >= -1e-15)
+    numeric = np.gradient(s, t)
+    assert np.abs(numeric - ds)[5:-5].max() < 2e-3
+    assert ds.max() == pytest.approx(timing.peak_rate(T, scaling), rel=1e-4)
+
+
+def test_trapezoid_scaling_is_the_manufacturers_profile():
+    t = np.linspace(-0.5, 3.5, 301)
+    s, _ = planning.time_scaling(t, 3.0, "trapezoid", accel_time=0.7)
+    assert np.array_equal(s, trapezoid_fraction(t, 3.0, 0.7))
+
+
+@pytest.mark.parametrize("scaling", planning.SCALINGS)
+def test_random_moves_never_exceed_velocity_limits(scaling):
+    rng = np.random.default_rng(1)
+    a, b = random_poses(rng, 200), random_poses(rng, 200)
+    worst = 0.0
+    for q0, q1 in zip(a, b):
+        move = planning.joint_move(q0, q1, scaling)
+        t = np.linspace(0, move.duration, 1001)
+        q, qd = move.sample(t)
+        assert np.allclose(q[0], q0) and np.allclose(q[-1], q1)
+        worst = max(worst, float((np.abs(qd) / ROBOT.velocity).max()))
+        if scaling == "trapezoid":
+            assert move.duration == pytest.approx(default_moving_time(q0, q1))
+    assert worst <= 1 + 1e-9
+    assert worst > 0.95          # the moving time is not padded far beyond what the limits need
+
+
+def test_shoulder_move_reaches_but_does_not_exceed_its_1_rad_s_limit():
+    q1 = np.array([0.0, 1.5, 0.0, 0.0, 0.0])
+    move = planning.joint_move(np.zeros(5), q1)
+    assert move.duration == pytest.approx(2.25)          # 1.5 rad / (1 rad/s * (1 - 1/3))
+    assert move.peak_speed()[1] == pytest.approx(1.0, rel=1e-3)
+    with pytest.raises(ValueError, match="shoulder"):
+        planning.joint_move(np.zeros(5), q1, duration=1.0)
+
+
+def test_quintic_waypoints_stream_through_the_curve_within_limits():
+    move = planning.joint_move(np.zeros(5), [1.0, 0.8, -0.5, 0.3, 2.0], "quintic")
+    wps = move.waypoints()
+    assert np.allclose(wps[-1].q, move.end)
+    assert sum(w.moving_time for w in wps) == pytest.approx(move.duration)
+    prev = move.start
+    for w in wps:
+        assert w.accel_time == 0 and np.all(np.abs(w.q - prev) / w.moving_time <= ROBOT.velocity + 1e-9)
+        prev = w.q
+
+
+def test_joint_move_rejects_bad_input():
+    with pytest.raises(ValueError, match="NaN"):
+        planning.joint_move(np.zeros(5), [0, np.nan, 0, 0, 0])
+    with pytest.raises(ValueError, match="shape"):
+        planning.joint_move(np.zeros(4), np.zeros(5))
+    with pytest.raises(ValueError, match="shoulder"):
+        planning.joint_move(np.zeros(5), [0, 3.0, 0, 0, 0])
+    with pytest.raises(ValueError, match="scaling"):
+        planning.joint_move(np.zeros(5), np.ones(5) * 0.1, "cubic")
+
+
+# ---------------------------------------------------------------------------------------------- Cartesian lines
+
+def distance_to_line(p, a, b):
+    u = (b - a) / np.linalg.norm(b - a)
+    rel = p - a
+    along = np.clip(rel @ u, 0, np.linalg.norm(b - a))
+    return np.linalg.norm(rel - along[:, None] * u, axis=1)
+
+
+@pytest.mark.parametrize("p0, p1, pitch, roll", [
+    ((100, 250, 150), (100, 250, 19), np.pi / 2, 0.4),        # final approach, top-down
+    ((-200, 150, 60), (200, 300, 60), np.pi / 2, 0.0),        # long horizontal sweep
+    ((0, 380, 120), (60, 430, 19), np.radians(60), 0.0),      # tilted, diagonal
+])
+def test_cartesian_line_keeps_the_tool_on_the_line(p0, p1, pitch, roll):
+    p0, p1 = np.array(p0, float), np.array(p1, float)
+    seg = planning.cartesian_line(p0, p1, pitch, roll)
+    t = np.linspace(0, seg.duration, 3001)
+    q, qd = seg.sample(t)
+    T = kinematics.fk(q)
+    assert distance_to_line(T[:, :3, 3], p0, p1).max() <= 0.5
+    assert np.allclose(T[0, :3, 3], p0, atol=1e-6) and np.allclose(T[-1, :3, 3], p1, atol=1e-6)
+    # orientation held at every knot: approach pitched `pitch` in the arm plane, wrist roll `roll`
+    Tk = kinematics.fk(seg.knots)
+    heading = np.arctan2(Tk[:, 1, 3], Tk[:, 0, 3])
+    assert np.abs(Tk[:, :3, :3] - kinematics.tool_orientation(heading, pitch, roll)).max() < 1e-9
+    assert np.all(np.abs(qd) <= ROBOT.velocity + 1e-9)
+    assert np.abs(np.diff(q, axis=0)).max() < 0.05                 # one branch: no jumps between samples
+    back = planning.reverse(seg)
+    assert np.allclose(back.sample(t)[0], q[::-1])
+
+
+def test_cartesian_line_names_where_it_leaves_the_workspace():
+    p0, p1 = np.array([0.0, 300, 40]), np.array([0.0, 700, 40])
+    with pytest.raises(Unreachable, match="of the way along") as err:
+        planning.cartesian_line(p0, p1, np.pi / 2)
+    m = re.search(r"fails (\d+)% of the way along, at \(([-\d.]+), ([-\d.]+), ([-\d.]+)\) mm", str(err.value))
+    assert m, str(err.value)
+    where = np.array([float(m.group(i)) for i in (2, 3, 4)])
+    with pytest.raises(Unreachable):
+        kinematics.ik(where + [0, 0.3, 0], np.pi / 2)
+    kinematics.ik(where - [0, 0.3, 0], np.pi / 2)    # just before the named point the line is still reachable
+    assert 20 <= int(m.group(1)) <= 40
+
+
+def test_cartesian_line_rejects_bad_input():
+    with pytest.raises(ValueError, match="NaN"):
+        planning.cartesian_line([0, 200, np.nan], [0, 250, 50], np.pi / 2)
+    with pytest.raises(ValueError, match="shape"):
+        planning.cartesian_line([0, 200], [0, 250, 50], np.pi / 2)
+
+
+# ----------------------------------------------------------------------------------------------------- grasps
+
+def test_roll_puts_fingers_across_faces_by_fk():
+    rng = np.random.default_rng(2)
+    for _ in range(300):
+        r, h = rng.uniform(120, 320), rng.uniform(0.1, np.pi - 0.1)
+        p = np.array([r * np.cos(h), r * np.sin(h), rng.uniform(10, 80)])
+        yaw = rng.uniform(-np.pi, np.pi)
+        g = planning.choose_grasp(p, yaw)
+        assert g.top_down and abs(g.roll) <= np.pi / 4 + 1e-12 and g.misalignment < 1e-7
+        R = kinematics.fk(kinematics.ik(p, g.pitch, g.roll)[0])[:3, :3]
+        y_tool = R[:, 1]
+        normal_a = np.array([np.cos(yaw), np.sin(yaw), 0.0])
+        normal_b = np.array([-np.sin(yaw), np.cos(yaw), 0.0])
+        # perpendicular to one face normal = closing straight across the other pair of faces
+        assert min(abs(y_tool @ normal_a), abs(y_tool @ normal_b)) < 1e-9
+        assert R[2, 0] == pytest.approx(-1.0, abs=1e-12)            # approach straight down
+
+
+def test_roll_takes_the_smaller_turn():
+    # target straight ahead (+y, heading pi/2): roll = heading - yaw mod 90 deg, in [-45, 45) deg
+    for yaw_deg, roll_deg in [(0, 0), (20, -20), (-30, 30), (80, 10), (100, -10), (135, -45), (-170, -10)]:
+        assert np.degrees(planning.face_roll(np.pi / 2, np.radians(yaw_deg))) == pytest.approx(roll_deg, abs=1e-9)
+
+
+def test_pitch_falls_back_at_long_reach_with_horizontal_fingers():
+    p = np.array([0.0, 450.0, 19.0])
+    g = planning.choose_grasp(p, 0.2, approach_z=120.0)
+    assert not g.top_down and g.roll == 0.0
+    assert g.pitch <= kinematics.steepest_pitch(p) + 1e-12 and g.pitch > np.radians(30)
+    q = kinematics.ik(p, g.pitch, g.roll)[0]
+    R = kinematics.fk(q)[:3, :3]
+    assert abs(R[2, 1]) < 1e-9                             # closing direction horizontal
+    assert g.misalignment == pytest.approx(0.2, abs=1e-9)  # heading pi/2 vs yaw 0.2: 0.2 rad off square
+    # the whole vertical approach is reachable at that pitch
+    seg = planning.cartesian_line([0, 450, 120], p, g.pitch, g.roll)
+    assert np.allclose(kinematics.fk(seg.end)[:3, 3], p, atol=1e-6)
+    assert planning.choose_grasp(np.array([0.0, 200, 19]), 0.2).top_down
+
+
+def test_unreachable_block_says_why():
+    with pytest.raises(Unreachable, match="out of reach"):
+        planning.choose_grasp(np.array([0.0, 700.0, 19.0]), 0.0)
+    with pytest.raises(ValueError, match="grasp position"):
+        planning.choose_grasp(np.array([0.0, np.nan, 19.0]), 0.0)
+    with pytest.raises(Unreachable, match="picking the block"):
+        planning.plan_pick(ROBOT.home, [0, 700, 38], 0.0, 38)
+
+
+# ----------------------------------------------------------------------------------------- heights and clearance
+
+def tool_z(q):
+    return kinematics.fk(q)[2, 3]
+
+
+def test_grasp_and_place_heights():
+    pick = planning.plan_pick(ROBOT.sleep, [120, 250, 38], 0.1, 38)
+    descend = [s for s in pick.steps if s.label == "descend"][0].trajectory
+    assert tool_z(descend.end) == pytest.approx(38 - 19, abs=1e-6)
+    assert np.allclose(kinematics.fk(descend.end)[:2, 3], [120, 250], atol=1e-6)
+    place = planning.plan_place(pick.end, [-100, 200, 38], 25)
+    descend = [s for s in place.steps if s.label == "descend"][0].trajectory
+    assert tool_z(descend.end) == pytest.approx(38 + 12.5, abs=1e-6)      # bottom face on the 38 mm top
+    place = planning.plan_place(pick.end, [-100, 200, 38], 25, grasp_depth=5)
+    descend = [s for s in place.steps if s.label == "descend"][0].trajectory
+    assert tool_z(descend.end) == pytest.approx(38 + 20, abs=1e-6)
+    assert planning.place_tool_height(0.0, 38) == 19.0 and planning.grasp_height(76.0, 38) == 57.0
+    with pytest.raises(ValueError, match="grasp_depth"):
+        planning.plan_place(pick.end, [-100, 200, 38], 25, grasp_depth=30)
+    assert [s.action for s in pick.steps if isinstance(s, planning.GripperStep)] == ["open", "close"]
+    assert [s.action for s in place.steps if isinstance(s, planning.GripperStep)] == ["open"]
+
+
+def stack(x, y, n, edge=38.0):
+    return [ObjectState("red", "large", edge, [x, y, edge / 2 + i * edge], yaw=0.3, id=i) for i in range(n)]
+
+
+def heights_near(plan, obstacle, held_below, dt=0.005):
+    q = np.vstack([s.trajectory.sample(np.arange(0, s.duration, dt))[0] for s in plan.steps
+                   if s.label in ("rise", "transit")])
+    pts = kinematics.joint_positions(q)
+    near = np.linalg.norm(pts[:, [4, 6], :2] - [obstacle.x, obstacle.y], axis=-1) < obstacle.radius + 45
+    return pts[:, 4, 2][near[:, 0]], pts[:, 6, 2][near[:, 1]] - held_below
+
+
+def test_transit_clears_a_stack_between_pick_and_place():
+    tower = stack(0, 320, 4)                 # top at 152 mm, under the arc the arm sweeps between the two spots
+    blocks = stack(-200, 250, 1) + tower
+    obstacle = planning.as_obstacles(tower)[-1]
+    assert obstacle.top == 152 and obstacle.radius == pytest.approx(19 * np.sqrt(2))
+    pick = planning.plan_pick(ROBOT.sleep, [-200, 250, 38], 0.0, 38, blocks)
+    place = planning.plan_place(pick.end, [200, 250, 0], 38, 0.0, tower)
+    wrist, tool = heights_near(place, obstacle, held_below=19)
+    assert tool.size > 10 and wrist.size > 10                  # the transit does pass over the stack
+    assert tool.min() >= 152 + 50 - 1e-6 and wrist.min() >= 152 + 50 - 1e-6
+    # without the obstacles the same move would sweep the held block through the stack
+    bare = planning.plan_place(pick.end, [200, 250, 0], 38)
+    assert heights_near(bare, obstacle, held_below=19)[1].min() < 152
+
+
+def test_transit_height_out_of_reach_is_refused():
+    tower = [planning.Obstacle(150, 200, 600, 20)]            # a tall post beside the block
+    with pytest.raises(Unreachable, match="transit height"):
+        planning.plan_pick(ROBOT.sleep, [150, 250, 38], 0.0, 38, tower)
+
+
+def test_obstacles_reject_bad_items():
+    with pytest.raises(ValueError, match="obstacle 1"):
+        planning.as_obstacles([(0, 0, 10, 5), "tower"])
+    with pytest.raises(ValueError, match="finite"):
+        planning.Obstacle(0, np.nan, 10, 5)
+
+
+def test_camera_clear_pose_hides_nothing_in_front_of_the_base():
+    cam = lab_config().camera_position_mm
+
+    def shadow(q):  # where the arm's points are seen on the board from the camera
+        pts = kinematics.joint_positions(q)
+        s = cam[2] / (cam[2] - pts[:, 2])
+        return cam[:2] + (pts[:, :2] - cam[:2]) * s[:, None]
+
+    clear = shadow(planning.CAMERA_CLEAR_POSE)
+    assert clear[:, 1].max() < 60 and np.abs(clear[:, 0]).max() < 1e-6
+    assert shadow(ROBOT.sleep)[:, 1].max() > 100                # the sleep pose's gripper would hide blocks
+    plan = planning.plan_camera_clear(ROBOT.sleep)
+    assert np.allclose(plan.end, planning.CAMERA_CLEAR_POSE)
+    # after picking the top block of a stack the move rises away from the rest of it: clear
+    hover = planning.plan_pick(ROBOT.sleep, [150, 250, 114], 0.0, 38, stack(150, 250, 3)).end
+    planning.plan_camera_clear(hover, stack(150, 250, 2), held_below=19)
+    with pytest.raises(Unreachable, match="too low"):           # the held block would scrape the stack it came from
+        planning.plan_camera_clear(hover, stack(150, 250, 3), held_below=19)
+
+
+# --------------------------------------------------------------------------------------------- plans and execute
+
+class RecordingArm:
+    """A fake arm: records every call, tracks its joint positions, optionally fails on the n-th call."""
+
+    def __init__(self, q, fail_at=None, error=None):
+        self.q = np.array(q, float)
+        self.calls = []
+        self.fail_at, self.error = fail_at, error
+
+    def _record(self, call):
+        if self.fail_at is not None and len(self.calls) == self.fail_at:
+            raise self.error
+        self.calls.append(call)
+
+    def joint_positions(self):
+        return self.q.copy()
+
+    def move_to(self, q, moving_time=None, accel_time=None, blocking=True):
+        self._record(("move_to", np.array(q, float), moving_time, accel_time))
+        self.q = np.array(q, float)
+
+    def open_gripper(self):
+        self._record(("open",))
+
+    def close_gripper(self):
+        self._record(("close",))
+        return True
+
+
+def executed_motion(start, calls, t):
+    """Joint angles at times t if each move_to follows the manufacturer's profile from the previous pose."""
+    out = np.full((len(t), 5), np.nan)
+    q_prev, t0 = np.array(start, float), 0.0
+    for call in calls:
+        if call[0] == "move_to":
+            _, q, T, Ta = call
+            sel = (t >= t0) & (t <= t0 + T + 1e-9)
+            out[sel] = q_prev + np.outer(trapezoid_fraction(t[sel] - t0, T, Ta), q - q_prev)
+            q_prev, t0 = q, t0 + T
+        else:
+            sel = (t >= t0) & (t <= t0 + planning.GRIPPER_TIME_S + 1e-9)
+            out[sel] = q_prev
+            t0 += planning.GRIPPER_TIME_S
+    return out
+
+
+def test_execute_sends_the_plan_to_any_arm():
+    plan = planning.plan_pick_place(ROBOT.sleep, [150, 250, 38], 0.4, 38, [-150, 200, 0], 0.2,
+                                    stack(150, 250, 1) + stack(0, 230, 3))
+    arm = RecordingArm(ROBOT.sleep)
+    result = planning.execute(plan, arm)
+    kinds = [c[0] for c in arm.calls]
+    gripper = [k for k in kinds if k != "move_to"]
+    assert gripper == ["open", "close", "open"] and result.holding is True
+    assert result.commands == len(arm.calls) == sum(
+        len(s.trajectory.waypoints()) if isinstance(s, planning.MoveStep) else 1 for s in plan.steps)
+    first, wp = arm.calls[0], plan.steps[0].trajectory.waypoints()[0]
+    assert np.array_equal(first[1], wp.q) and (first[2], first[3]) == (wp.moving_time, wp.accel_time)
+    assert np.allclose(arm.q, plan.end)
+    # what the arm does for these commands is exactly what the plan samples
+    t = np.linspace(0, plan.duration, 5000)
+    assert np.abs(executed_motion(ROBOT.sleep, arm.calls, t) - plan.sample(t).q).max() < 1e-9
+
+
+@pytest.mark.parametrize("error", [EmergencyStopped("e-stop pressed"), MotionRefused("elbow limit")])
+def test_execute_propagates_arm_errors_and_stops(error):
+    plan = planning.plan_pick(ROBOT.sleep, [150, 250, 38], 0.0, 38)
+    arm = RecordingArm(ROBOT.sleep, fail_at=3, error=error)
+    with pytest.raises(type(error), match=str(error)):
+        planning.execute(plan, arm)
+    assert len(arm.calls) == 3 and ("close",) not in arm.calls
+
+
+def test_execute_refuses_a_plan_from_elsewhere():
+    plan = planning.plan_pick(ROBOT.sleep, [150, 250, 38], 0.0, 38)
+    arm = RecordingArm(ROBOT.home)
+    with pytest.raises(ValueError, match="not where the plan starts"):
+        planning.execute(plan, arm)
+    assert arm.calls == []
+
+
+def test_plan_sampling_and_plot():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    plan = planning.plan_pick(ROBOT.sleep, [150, 250, 38], 0.0, 38)
+    s = planning.sample_plan(plan, dt=0.01)
+    assert s.t[-1] == pytest.approx(plan.duration) and np.allclose(s.q[-1], plan.end)
+    assert np.all(np.abs(np.diff(s.q, axis=0)) <= ROBOT.velocity * 0.01 + 1e-9)      # continuous, within limits
+    close_t = plan.step_times[[i for i, st in enumerate(plan.steps) if getattr(st, "action", "") == "close"][0]]
+    assert not s.closed[s.t < close_t].any() and s.closed[s.t >= close_t].all()
+    ax = planning.plot_plan(plan)
+    assert [ln.get_label() for ln in ax.get_lines()][:5] == list(ROBOT.joint_names)
+    with pytest.raises(ValueError, match="join up"):
+        planning.Plan((plan.steps[0], planning.MoveStep(planning.joint_move(ROBOT.home, ROBOT.sleep))))
