@@ -50,6 +50,7 @@ class LabConfig:
     factory_K: np.ndarray                # (3, 3)
     factory_dist: np.ndarray             # (5,) Brown-Conrady k1, k2, p1, p2, k3
     block_edges_mm: dict[str, float]     # {"large": 38, "small": 25}
+    robot_base_half_mm: tuple[float, float] = (55.0, 60.0)  # the arm's base plate (x, y half sizes) at the origin
 
     def grid_points(self) -> np.ndarray:
         """World points (N, 3) of the printed grid (every grid_mm from grid_x/grid_y's first to last line, z = 0)."""
@@ -57,6 +58,12 @@ class LabConfig:
         ys = np.arange(self.grid_y[0], self.grid_y[1] + self.grid_mm / 2, self.grid_mm)
         X, Y = np.meshgrid(xs, ys)
         return np.stack([X.ravel(), Y.ravel(), np.zeros(X.size)], axis=1)
+
+    def on_robot_base(self, xy, margin_mm: float = 0.0) -> np.ndarray:
+        """Boolean (...,) telling which world points (..., 2 or 3) lie over the arm's base plate (plus a margin)."""
+        xy = np.asarray(xy, dtype=float)
+        hx, hy = self.robot_base_half_mm
+        return (np.abs(xy[..., 0]) <= hx + margin_mm) & (np.abs(xy[..., 1]) <= hy + margin_mm)
 
     def on_board(self, xy) -> np.ndarray:
         """Boolean (...,) telling which world points (..., 2 or 3) lie over the board."""
@@ -90,6 +97,7 @@ def load_lab(path: Path | str | None = None) -> LabConfig:
             factory_K=np.array(cam["factory_K"], float),
             factory_dist=np.array(cam["factory_dist"], float),
             block_edges_mm={"large": float(blocks["large_mm"]), "small": float(blocks["small_mm"])},
+            robot_base_half_mm=tuple(float(v) for v in raw.get("robot_base", {}).get("half_extent_mm", (55.0, 60.0))),
         )
     except KeyError as e:
         raise ValueError(f"{path}: missing key {e}") from None

@@ -1,0 +1,39 @@
+"""Per-pixel world coordinates from a depth image, vectorised with per-pixel coefficients cached per camera.
+
+For pixel (u, v) with undistorted normalised coordinates (x, y) and depth Z (camera-frame, mm), the camera-frame
+point is Z (x, y, 1), so each world coordinate is an affine function of Z: X_w = Z * k(u, v) + t. The coefficients
+k are computed once per camera; a frame then costs one multiply-add per coordinate and pixel.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from armlab.camera import Camera
+
+__all__ = ["world_coefficients", "world_from_depth"]
+
+_CACHE: dict[int, tuple[Camera, np.ndarray]] = {}
+
+
+def world_coefficients(camera: Camera) -> np.ndarray:
+    """(3, H, W) float32 coefficients k with world_xyz = depth * k + T_world_cam translation."""
+    key = id(camera)
+    hit = _CACHE.get(key)
+    if hit is not None and hit[0] is camera:
+        return hit[1]
+    v, u = np.mgrid[0:camera.height, 0:camera.width]
+    xy = camera.normalized_rays(np.column_stack([u.ravel(), v.ravel()]).astype(float))
+    rays_cam = np.column_stack([xy, np.ones(len(xy))])
+    k = (rays_cam @ camera.T_world_cam[:3, :3].T).T.reshape(3, camera.height, camera.width).astype(np.float32)
+    if len(_CACHE) > 8:
+        _CACHE.clear()
+    _CACHE[key] = (camera, k)
+    return k
+
+
+def world_from_depth(depth_mm: np.ndarray, camera: Camera) -> np.ndarray:
+    """World coordinates (3, H, W) float32 mm of every pixel (NaN where depth is NaN)."""
+    k = world_coefficients(camera)
+    t = camera.T_world_cam[:3, 3].astype(np.float32)
+    return depth_mm[None] * k + t[:, None, None]
