@@ -317,6 +317,18 @@ def test_importing_armlab_imports_no_vendor_module():
     assert out.strip() == "[]"
 
 
+def test_no_module_outside_armlab_hardware_imports_a_vendor_package():
+    import re
+    from pathlib import Path
+
+    package = Path(armlab.hardware.__file__).parent.parent
+    pattern = re.compile(r"^\s*(from|import)\s+(pyrealsense2|interbotix_\w+)", re.MULTILINE)
+    offenders = [str(p.relative_to(package)) for p in package.rglob("*.py")
+                 if "hardware" not in p.relative_to(package).parts and pattern.search(p.read_text())]
+    assert offenders == []
+    assert pattern.search((package / "hardware" / "interbotix.py").read_text())     # the pattern does match
+
+
 def test_missing_vendor_modules_name_what_to_install(monkeypatch):
     for name in VENDOR_MODULES + ("interbotix_xs_modules.arm",):
         monkeypatch.setitem(sys.modules, name, None)    # not importable, even on a lab machine
@@ -401,12 +413,26 @@ def test_refused_moves_send_nothing(arm, vendors, target, options, reason):
     np.testing.assert_array_equal(arm.joint_positions(), before)
 
 
-def test_malformed_target_is_a_value_error_and_sends_nothing(arm, vendors):
-    with pytest.raises(ValueError, match="shape"):
+def test_malformed_target_is_refused_and_sends_nothing(arm, vendors):
+    with pytest.raises(MotionRefused, match="shape"):
         arm.move_to([0.0, 0.1, 0.2, 0.3])
-    with pytest.raises(ValueError, match="NaN"):
+    with pytest.raises(MotionRefused, match="shape"):
+        arm.move_to(np.zeros((2, 5)))
+    with pytest.raises(MotionRefused, match="NaN"):
         arm.move_to([0.0, np.nan, 0.2, 0.3, 0.0])
     assert calls(vendors.log) == []
+
+
+def test_reset_after_a_stop_while_teaching_returns_torque_without_a_jump(arm, vendors):
+    arm.set_torque(False)
+    vendors.world.q = Q_READY.copy()                            # moved by hand, then the stop button is hit
+    arm.emergency_stop()
+    assert calls(vendors.log) == []                             # nothing to hold with torque off
+    arm.reset()
+    assert calls(vendors.log, "robot_write_commands")[-1][2] == list(Q_READY)
+    assert vendors.log[-1] == ("robot_torque_enable", "group", "arm", True) and arm.torque_on
+    arm.home()
+    np.testing.assert_allclose(arm.joint_positions(), 0.0)
 
 
 def test_collision_check_looks_along_the_path_not_only_at_the_ends(arm, vendors):

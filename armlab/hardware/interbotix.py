@@ -238,8 +238,11 @@ class RealArm:
         self._move_ends = self._clock()
 
     def reset(self) -> None:
-        """Leave the emergency stop: re-synchronise the driver's command with the measured position."""
-        self._bot.arm.capture_joint_positions()
+        """Leave the emergency stop: the arm stays where it is, torque on, the driver's command re-synchronised."""
+        if self._torque_on:
+            self._bot.arm.capture_joint_positions()
+        else:
+            self.set_torque(True)
         self._estopped = False
 
 

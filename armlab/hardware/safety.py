@@ -69,15 +69,18 @@ def check_move(q_from, q_to, moving_time: float | None = None, accel_time: float
                board_margin_mm: float = DEFAULT_BOARD_MARGIN_MM) -> tuple[float, float]:
     """Validate a move from the measured q_from to q_to (5,) rad; return the (moving_time, accel_time) to send (s).
 
-    Defaults: moving_time = armlab.profile.default_moving_time, accel_time = moving_time / 3. Raises ValueError for
-    a malformed q_to, MotionRefused naming the joint or the reason for a joint limit, an impossible time profile
+    Defaults: moving_time = armlab.profile.default_moving_time, accel_time = moving_time / 3. Raises MotionRefused
+    (a ValueError) naming the problem: a malformed q_to, a joint limit (which joint), an impossible time profile
     (accel_time must lie in [0, moving_time / 2]), a joint faster than its velocity limit, or a board collision.
     """
     robot = robot or rx200()
     q_from = check_joints(q_from, robot, check_limits=False)
-    q_to = check_joints(q_to, robot, check_limits=False)
+    try:
+        q_to = check_joints(q_to, robot, check_limits=False)
+    except ValueError as e:
+        raise _refuse(str(e)) from None
     if q_to.ndim != 1 or q_from.ndim != 1:
-        raise ValueError("a move takes one joint vector (5,) rad")
+        raise _refuse(f"a move takes one joint vector (5,) rad, got shape {q_to.shape}")
     limits = robot.limit_violations(q_to)
     if limits:
         raise _refuse("; ".join(limits))
