@@ -1,0 +1,221 @@
+"""The simulated RGB-D camera against geometry: board depth, block tops, occlusion by the arm, AprilTags, realism."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from types import SimpleNamespace
+
+import cv2
+import numpy as np
+import pytest
+
+from armlab.blocks import LAB_RGB, ObjectState
+from armlab.camera import Camera
+from armlab.kinematics import joint_positions
+from armlab.lab import lab_config
+from armlab.sim.board_texture import BOARD_RGB
+from armlab.sim.camera import CameraRealism, SimCamera, true_camera
+from armlab.sim.faces import ARM_RGB, shade
+from armlab.sim.render import render
+
+GRIPPER = SimpleNamespace(pad_width_mm=20.0, pad_height_mm=16.0, pad_thickness_mm=6.0)
+SLEEP = np.array([0.0, -1.80, 1.55, 0.8, 0.0])
+# the realistic camera's geometry (intrinsics, distortion, mount error) without any image or depth noise
+EXACT_DISTORTED = replace(CameraRealism.ideal(), **{k: getattr(CameraRealism(), k) for k in (
+    "mount_offset_mm", "mount_rotvec_rad", "focal_scale", "principal_offset_px", "distortion")})
+
+
+def cube(color, x, y, edge=38.0, z0=0.0, yaw=0.3, id=0):
+    return ObjectState(color, "large" if edge > 30 else "small", edge, [x, y, z0 + edge / 2], yaw, id=id)
+
+
+def stand_ins(objects=(), q=SLEEP, opening=40.0, time_s=1.5):
+    world = SimpleNamespace(objects=list(objects), time_s=time_s)
+    arm = SimpleNamespace(q_true=np.asarray(q, float), gripper_opening_mm=opening, gripper_geometry=GRIPPER)
+    return world, arm
+
+
+@pytest.fixture(scope="module", params=["ideal", "distorted"])
+def camera(request) -> Camera:
+    return true_camera(CameraRealism.ideal() if request.param == "ideal" else EXACT_DISTORTED)
+
+
+def pixel_grid(camera, step=37, border=3):
+    u, v = np.meshgrid(np.arange(border, camera.width - border, step), np.arange(border, camera.height - border, step))
+    return np.column_stack([u.ravel(), v.ravel()]).astype(float)
+
+
+def test_board_depth_is_the_plane_everywhere(camera):
+    rgb, depth = render(camera, [])
+    assert rgb.shape == (720, 1280, 3) and rgb.dtype == np.uint8
+    assert depth.shape == (720, 1280) and depth.dtype == np.float32
+    assert not np.isnan(depth).any()
+    uv = pixel_grid(camera)
+    expected = camera.depth_of(camera.pixel_to_plane(uv, 0.0))
+    got = depth[uv[:, 1].astype(int), uv[:, 0].astype(int)]
+    assert np.max(np.abs(got - expected)) < 0.02          # mm, over the whole image (~800-1100 mm)
+
+
+def test_board_points_have_board_and_grid_colours(camera):
+    lab = lab_config()
+    rgb, _ = render(camera, [])
+    cells = np.array([[x + 25, y + 25, 0] for x in (-400, -200, 0, 150, 300) for y in (-125, 75, 275, 375)], float)
+    uv = np.rint(camera.project(cells)).astype(int)
+    assert np.abs(rgb[uv[:, 1], uv[:, 0]].astype(int) - BOARD_RGB).max() <= 2
+    crossings = lab.grid_points()[::7]
+    tags = np.array(list(lab.tags.centres_mm.values()))
+    crossings = crossings[np.min(np.linalg.norm(crossings[:, None, :2] - tags, axis=2), axis=1) > 30]  # not on a tag
+    uv = np.rint(camera.project(crossings)).astype(int)
+    inside = (uv[:, 0] >= 0) & (uv[:, 0] < 1280) & (uv[:, 1] >= 0) & (uv[:, 1] < 720)
+    values = rgb[uv[inside, 1], uv[inside, 0]].mean(axis=1)
+    assert np.all(values < np.mean(BOARD_RGB) - 40)        # the printed grid lines are dark
+
+
+def test_block_tops_have_their_colour_and_depth(camera):
+    objs = [cube("red", -200, 300, 38, id=1), cube("blue", 150, 50, 25, id=2), cube("yellow", 300, 350, 38, id=3),
+            cube("green", 0, 200, 38, z0=38.0, id=4), cube("violet", 0, 200, 38, id=5)]   # green stacked on violet
+    rgb, depth = render(camera, objs)
+    for o in objs[:4]:
+        top = np.array([[o.position[0], o.position[1], o.top_z]])
+        u, v = np.rint(camera.project(top)[0]).astype(int)
+        assert np.abs(rgb[v, u].astype(int) - LAB_RGB[o.color]).max() <= 1, o.color
+        # depth at the pixel centre: the top plane seen through that pixel
+        hit = camera.pixel_to_plane(np.array([[u, v]], float), o.top_z)
+        assert depth[v, u] == pytest.approx(camera.depth_of(hit)[0], abs=0.02)
+    # a side face is darker than the top (shaded by its angle to the light)
+    assert shade(np.array([0.0, -1.0, 0.0])) < 0.8 < shade(np.array([0.0, 0.0, 1.0])) == pytest.approx(1.0)
+
+
+def test_arm_occludes_a_block_behind_it(camera):
+    q = np.array([0.4, 0.2, 0.3, 0.5, 0.0])
+    P = joint_positions(q)
+    mid = (P[3] + P[4]) / 2                                   # middle of the forearm, ~250 mm up
+    ground = camera.pixel_to_plane(camera.project(mid[None]), 0.0)[0]
+    block = cube("yellow", ground[0], ground[1], 38, yaw=0.0)
+    u, v = np.rint(camera.project(mid[None])[0]).astype(int)
+    rgb_free, depth_free = render(camera, [block])
+    rgb_arm, depth_arm = render(camera, [block], q, 40.0, GRIPPER)
+    assert np.abs(rgb_free[v, u].astype(int) - LAB_RGB["yellow"]).max() <= 1
+    assert np.all(rgb_arm[v, u] <= max(ARM_RGB) + 5)           # the dark arm hides the yellow block
+    assert depth_arm[v, u] < depth_free[v, u] - 150          # and it is nearer than the block's top
+    assert depth_arm[v, u] == pytest.approx(camera.depth_of(mid[None])[0], abs=25)   # within the link's half width
+
+
+def test_gripper_fingers_are_drawn_at_the_opening(camera):
+    q = np.zeros(5)                                          # home: the tool horizontal, fingers seen from above
+    from armlab.kinematics import fk
+    T = fk(q)
+    _, depth_open = render(camera, [], q, 62.0, GRIPPER)
+    _, depth_shut = render(camera, [], q, 18.0, GRIPPER)
+    for sign in (1, -1):
+        tip = T[:3, 3] + T[:3, 1] * sign * (62.0 / 2 + 3.0) + T[:3, 0] * 6.0    # inside the open finger's pad
+        u, v = np.rint(camera.project(tip[None])[0]).astype(int)
+        assert depth_open[v, u] < depth_shut[v, u] - 50         # the finger is there only when opened that wide
+
+
+def test_apriltags_detected_at_the_right_places():
+    pupil = pytest.importorskip("pupil_apriltags")
+    lab = lab_config()
+    world, arm = stand_ins([cube("red", 0, 250, 38)])
+    cam = SimCamera(world, arm, realism="realistic", seed=3)
+    detector = pupil.Detector(families="tag36h11", quad_decimate=2.0)
+    errors = []
+    for _ in range(3):
+        frame = cam.capture()
+        gray = np.ascontiguousarray(frame.rgb.mean(axis=2).astype(np.uint8))
+        found = {d.tag_id: d.corners - 0.5 for d in detector.detect(gray) if d.hamming == 0}
+        assert sorted(found) == [1, 2, 3, 4]
+        for tag_id, corners in found.items():
+            expected = cam.truth.project(lab.tags.corners_world(tag_id))
+            errors.append(np.linalg.norm(corners - expected, axis=1).max())
+    assert max(errors) < 1.0, errors
+
+
+def test_sim_camera_contract():
+    lab = lab_config()
+    world, arm = stand_ins([cube("orange", 100, 100)], time_s=2.25)
+    cam = SimCamera(world, arm)
+    frame = cam.capture()
+    assert frame.rgb.shape == (720, 1280, 3) and frame.rgb.dtype == np.uint8
+    assert frame.depth.shape == (720, 1280) and frame.depth.dtype == np.float32
+    assert frame.timestamp == 2.25
+    assert np.array_equal(cam.K, lab.factory_K) and np.array_equal(cam.dist, lab.factory_dist)
+    assert (cam.width, cam.height) == (1280, 720)
+    rel = np.abs(np.diag(cam.truth.K)[:2] / np.diag(cam.K)[:2] - 1)
+    assert np.all((rel > 0.005) & (rel < 0.025))           # true focal lengths 0.5-2.5 % off the factory values
+    assert np.any(cam.truth.dist != 0)
+    mount = np.linalg.norm(cam.truth.position - lab.camera_position_mm)
+    assert 0 < mount < 20
+
+
+def test_realistic_capture_is_deterministic_per_seed_and_frame():
+    world, arm = stand_ins([cube("green", -50, 150)])
+    a, b = SimCamera(world, arm, seed=7), SimCamera(world, arm, seed=7)
+    fa = [a.capture() for _ in range(2)]
+    fb = [b.capture() for _ in range(2)]
+    for x, y in zip(fa, fb):
+        assert np.array_equal(x.rgb, y.rgb)
+        assert np.array_equal(x.depth, y.depth, equal_nan=True)
+    assert not np.array_equal(fa[0].rgb, fa[1].rgb)           # consecutive frames have fresh noise
+    other = SimCamera(world, arm, seed=8).capture()
+    assert not np.array_equal(other.rgb, fa[0].rgb)
+
+
+def test_ideal_preset_has_no_noise():
+    world, arm = stand_ins([cube("blue", 50, 300)])
+    cam = SimCamera(world, arm, realism="ideal", seed=1)
+    f1, f2 = cam.capture(), cam.capture()
+    assert np.array_equal(f1.rgb, f2.rgb) and np.array_equal(f1.depth, f2.depth)
+    assert not np.isnan(f1.depth).any()
+    assert np.array_equal(cam.truth.K, cam.K) and not np.any(cam.truth.dist)
+    # an untextured board cell is exactly the board colour, pixel for pixel
+    uv = np.rint(cam.truth.project(np.array([[-400.0, 125.0, 0.0], [-350.0, 175.0, 0.0]]))).astype(int)
+    patch = f1.rgb[uv[1, 1] + 3:uv[0, 1] - 3, uv[0, 0] + 3:uv[1, 0] - 3]
+    assert patch.size > 300 and np.all(patch == BOARD_RGB)
+
+
+def test_realistic_depth_noise_bias_and_dropouts():
+    world, arm = stand_ins([cube("red", x, 200, 38, id=i) for i, x in enumerate((-300, -100, 100, 300))])
+    realism = CameraRealism()
+    cam = SimCamera(world, arm, realism=realism, seed=0)
+    frames = [cam.capture() for _ in range(4)]
+    truth = cam.truth
+    uv = pixel_grid(truth, step=9, border=40)
+    board = truth.pixel_to_plane(uv, 0.0)
+    # board pixels well away from the blocks and the arm (found in the exact rendering)
+    _, exact_depth = render(truth, world.objects, arm.q_true, arm.gripper_opening_mm, GRIPPER)
+    plane = truth.depth_of(truth.pixel_to_plane(pixel_grid(truth, step=1, border=0), 0.0)).reshape(720, 1280)
+    clear = cv2.erode((np.abs(exact_depth - plane) < 0.1).astype(np.uint8), np.ones((9, 9), np.uint8))
+    keep = lab_config().on_board(board) & (clear[uv[:, 1].astype(int), uv[:, 0].astype(int)] > 0)
+    uv, board = uv[keep], board[keep]
+    iu, iv = uv[:, 0].astype(int), uv[:, 1].astype(int)
+    exact = truth.depth_of(board)
+    err = np.stack([f.depth[iv, iu] for f in frames]) - exact
+    # planar bias: ~ b_u (u/W - 1/2) + b_v (v/H - 1/2) + b_0, about 20 mm across the image
+    A = np.column_stack([iu / 1280 - 0.5, iv / 720 - 0.5, np.ones(len(iu))])
+    mean_err = np.nanmean(err, axis=0)
+    coef = np.linalg.lstsq(A, mean_err, rcond=None)[0]
+    assert np.allclose(coef, realism.depth_bias_mm, atol=1.0)
+    # noise: sigma 2.5 mm at 1 m, growing as Z^2 (bright board: no darkness factor)
+    resid = (err - A @ coef) / (exact / 1000) ** 2
+    assert np.nanstd(resid) == pytest.approx(realism.depth_noise_mm, rel=0.15)
+    # dropouts: NaN around the blocks' edges, few elsewhere
+    nan = np.isnan(frames[0].depth)
+    assert 0.0005 < nan.mean() < 0.05
+    assert np.isnan(err).mean() < 0.01
+
+
+def test_bad_input_is_refused():
+    world, arm = stand_ins()
+    with pytest.raises(ValueError, match="realism"):
+        SimCamera(world, arm, realism="cinematic")
+    with pytest.raises(ValueError, match="seed"):
+        SimCamera(world, arm, seed=1.5)
+    with pytest.raises(ValueError, match="pixel_noise"):
+        CameraRealism(pixel_noise=-1.0)
+    with pytest.raises(ValueError, match="distortion"):
+        CameraRealism(distortion=(0.1, 0.0))
+    with pytest.raises(TypeError, match="Camera"):
+        render("not a camera", [])
+    with pytest.raises(ValueError, match="gripper_geometry"):
+        render(true_camera(CameraRealism.ideal()), [], SLEEP)
