@@ -26,7 +26,7 @@ from armlab.hardware.interbotix import HOLD_TIME_S, RealArm
 from armlab.hardware.safety import DEFAULT_BOARD_MARGIN_MM, board_collision, check_move, path_heights
 from armlab.profile import default_moving_time
 from armlab.robot import rx200
-from armlab.station import EmergencyStopped, Frame, MotionRefused
+from armlab.station import Arm, EmergencyStopped, Frame, MotionRefused, RGBDCamera
 
 VENDOR_MODULES = ("interbotix_xs_modules", "interbotix_xs_modules.xs_robot", "interbotix_xs_modules.xs_robot.arm",
                   "interbotix_common_modules", "interbotix_common_modules.common_robot",
@@ -360,6 +360,7 @@ def test_connect_passes_the_manufacturer_arguments_and_starts_up(vendors):
                                    moving_time=2.0, accel_time=0.3, gripper_pressure=0.7)
         assert calls(vendors.log, "robot_startup") == [("robot_startup",)]
         assert calls(vendors.log) == []     # connecting moves nothing
+        assert isinstance(st.arm, Arm) and isinstance(st.camera, RGBDCamera)
 
 
 # ---------------------------------------------------------------------------------------------------------------
