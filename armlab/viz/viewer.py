@@ -76,6 +76,7 @@ class Viewer:
                  lab: LabConfig | None = None):
         self._server: ServerProcess | None = None
         self._vis: meshcat.Visualizer | None = None
+        self._animated = False
         url = zmq_url or os.environ.get(ZMQ_ENV) or None
         if url is None:
             self._server = start_server()
