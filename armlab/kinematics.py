@@ -211,6 +211,7 @@ def _planar_geometry(robot: RobotModel):
 # waist mirrors the arm's plane, which swaps the sign.
 _FLIPPED = np.array([w == "flipped" for w, _ in _BRANCHES])
 _DELTA_NEGATIVE = np.array([e == "elbow up" for _, e in _BRANCHES]) != _FLIPPED
+_ELBOW_DOWN = np.array([e == "elbow down" for _, e in _BRANCHES], float)
 
 
 def _ik_candidates(P: np.ndarray, pitch: np.ndarray, roll: np.ndarray, robot: RobotModel) -> _Candidates:
@@ -238,8 +239,9 @@ def _ik_candidates(P: np.ndarray, pitch: np.ndarray, roll: np.ndarray, robot: Ro
     q3 = _wrap(-delta - o3)
     q4 = _wrap(psi - q2 - q3 - (o2 + o3))
     # END SOLUTION
-    q5 = np.broadcast_to(_wrap(roll)[:, None], q2.shape)
-    q = np.where(ok[..., None], np.stack([np.broadcast_to(q1, q2.shape), q2, q3, q4, q5], axis=-1), np.nan)
+    q = np.empty(q2.shape + (5,))
+    q[..., 0], q[..., 1], q[..., 2], q[..., 3], q[..., 4] = q1, q2, q3, q4, _wrap(roll)[:, None]
+    q[~ok] = np.nan
     valid = ok & robot.within_limits(q)                     # NaN (out of reach) compares False: not within
     return _Candidates(q, ok, valid, np.sqrt(d2))
 
@@ -266,15 +268,16 @@ def _explain(c: _Candidates, i: int, robot: RobotModel, position, pitch) -> str:
 def _rank(c: _Candidates, current: np.ndarray) -> np.ndarray:
     """Branch order per target (N, 4): valid first, then elbow up, then least joint motion from `current`."""
     motion = np.abs(_wrap(np.where(c.valid[..., None], c.q, current[:, None, :]) - current[:, None, :])).sum(-1)
-    elbow_down = np.array([e == "elbow down" for _, e in _BRANCHES], float)
-    key = (~c.valid) * 1e6 + elbow_down[None, :] * 1e3 + motion
+    key = (~c.valid) * 1e6 + _ELBOW_DOWN * 1e3 + motion
     return np.argsort(key, axis=1, kind="stable")
 
 
 def _per_target(a: np.ndarray, n: int, name: str) -> np.ndarray:
     if a.ndim > 1 or (a.ndim == 1 and a.shape[0] not in (1, n)):
         raise ValueError(f"{name} must be a scalar or hold one value per target ({n}), got shape {a.shape}")
-    return np.broadcast_to(a, (n,)).astype(float)
+    out = np.empty(n)
+    out[:] = a
+    return out
 
 
 def _prepare(position, pitch, roll, current, robot):
@@ -283,8 +286,8 @@ def _prepare(position, pitch, roll, current, robot):
     P = np.atleast_2d(P)
     n = P.shape[0]
     pitch, roll = (_per_target(_check_angle(v, name), n, name) for v, name in ((pitch, "pitch"), (roll, "roll")))
-    cur = robot.home if current is None else check_joints(current, robot, check_limits=False)
-    cur = np.broadcast_to(cur, (n, 5)).astype(float)
+    cur = np.empty((n, 5))
+    cur[:] = robot.home if current is None else check_joints(current, robot, check_limits=False)
     return P, pitch, roll, cur, single
 
 
@@ -307,7 +310,7 @@ def ik(position, pitch, roll: float = 0.0, current=None, robot: RobotModel | Non
     if not c.valid[0].any():
         raise Unreachable(_explain(c, 0, robot, P[0], pitch_a[0]))
     order = _rank(c, cur)[0]
-    return c.q[0, [b for b in order if c.valid[0, b]]]
+    return c.q[0, order[: int(c.valid[0].sum())]]   # ranking puts the valid branches first
 
 
 @dataclass(frozen=True)
