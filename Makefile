@@ -18,7 +18,7 @@ demo: $(STAMP)
 
 ## make test: lint + unit tests + every notebook under nbval (installs headless Chromium for the browser checks)
 test: $(STAMP) browser lint
-	MPLBACKEND=Agg $(PY) -m pytest -q tests notebooks $(NBVAL)
+	$(PY) -m pytest -q tests notebooks $(NBVAL)
 
 lint: $(STAMP)
 	$(PY) -m ruff check armlab tests benchmarks notebooks tools/build-notebook
@@ -27,7 +27,7 @@ unit: $(STAMP)
 	MPLBACKEND=Agg $(PY) -m pytest -q tests
 
 notebooks: $(STAMP)
-	MPLBACKEND=Agg $(PY) -m pytest -q notebooks $(NBVAL)
+	$(PY) -m pytest -q notebooks $(NBVAL)
 
 browser:
 	bash tools/ensure-chromium
