@@ -16,7 +16,6 @@
 # %%
 import numpy as np
 import matplotlib.pyplot as plt
-from IPython import get_ipython
 
 from armlab import kinematics
 from armlab.camera import Camera, look_at
@@ -24,7 +23,6 @@ from armlab.lab import lab_config
 from armlab.robot import rx200
 from armlab.viz import Viewer
 
-get_ipython().run_line_magic("matplotlib", "inline")  # figures appear below their cell
 np.set_printoptions(precision=3, suppress=True)
 robot = rx200()
 lab = lab_config()
@@ -166,12 +164,92 @@ assert np.allclose(tool, [0.0, 408.575, 304.57], atol=1e-9), tool
 print(f"OK: drawn links join the joint positions at 100 random poses (gaps below 1e-9 mm); "
       f"home tool point {tool} mm matches the manufacturer")
 
+# %% [markdown]
+# ## 3 · The station: simulated or real
+#
+# Everything above the hardware talks to a **station**: an arm, an RGB-D camera and, in simulation, the world with
+# its ground truth. One call makes it; the same code then runs in the lab with `make_station("real")`.
+
+# %%
+from armlab import make_station
+
+station = make_station("sim", seed=0, scene="random", n=6)
+frame = station.camera.capture()
+print("rgb:", frame.rgb.shape, frame.rgb.dtype, "| depth:", frame.depth.shape, frame.depth.dtype,
+      f"| depth range {np.nanmin(frame.depth):.0f}-{np.nanmax(frame.depth):.0f} mm")
+print("the camera reports its factory intrinsics: fx =", station.camera.K[0, 0], "px")
+
+# %% [markdown]
+# A frame is a colour image (RGB, `uint8`) and a depth image aligned to it: each depth pixel holds the camera-frame
+# **Z** of the surface it sees, in mm (`NaN` where the sensor got no return). The blocks stand out as nearer
+# (darker-blue) patches; the arm at its sleep pose is in the picture too.
+
+# %%
+fig, (ax_rgb, ax_depth) = plt.subplots(1, 2, figsize=(10, 3), dpi=70)
+ax_rgb.imshow(frame.rgb)
+ax_rgb.set_title("RGB")
+im = ax_depth.imshow(frame.depth, cmap="viridis", vmin=850, vmax=1100)
+ax_depth.set_title("depth (mm)")
+fig.colorbar(im, ax=ax_depth, fraction=0.03)
+for ax in (ax_rgb, ax_depth):
+    ax.axis("off")
+fig.tight_layout()
+
+# %% [markdown]
+# The arm moves with the manufacturer's time-based profile. In simulation time is simulated: a 2 s move takes
+# milliseconds. Moves the real driver would refuse (joint limits, joint speeds such as the shoulder's 1 rad/s) or that
+# would hit the board are refused **before** anything moves, with a message saying why.
+
+# %%
+from armlab.station import MotionRefused
+
+station.arm.home()
+print("encoders after home:", station.arm.joint_positions().round(3))
+try:
+    station.arm.move_to([0.0, 1.2, 1.0, 0.5, 0.0])   # tips the arm into the board
+except MotionRefused as refusal:
+    print("refused:", str(refusal).split(":")[0])
+print("still at home:", bool(np.allclose(station.arm.joint_positions(), robot.home, atol=0.01)))
+
+# %% [markdown]
+# The viewer can draw the whole station: the blocks of the world, the camera's frustum and the depth image turned into
+# a point cloud in the world frame (each pixel's depth through the camera model; here the simulator's true camera,
+# `station.camera.truth`, which a student pipeline never uses — notebook 01 calibrates its own).
+
+# %%
+viewer.show(station.arm.joint_positions(), gripper_opening_mm=station.arm.gripper_opening_mm)
+viewer.draw_objects(station.world.objects)
+viewer.draw_camera(station.camera.truth)
+n_points = viewer.draw_rgbd(frame.rgb, frame.depth, station.camera.truth, stride=8)
+print(f"drew {len(station.world.objects)} blocks, the camera and a cloud of {n_points} points")
+
+# %% [markdown]
+# **Check:** the depth the camera measures at each block's top-face centre must put that point back on the block
+# (pixel + depth → world through the true camera), within the sensor's noise and bias (about 2.5 mm noise, up to
+# ~20 mm of planar bias before calibration — notebook 01 removes it).
+
+# %%
+from armlab.images import sample_depth
+
+truth = station.camera.truth
+tops = np.array([b.position + [0, 0, b.edge / 2] for b in station.world.blocks])
+uv = truth.project(tops)
+back = truth.pixel_to_world(uv, sample_depth(frame.depth, uv, radius=3))
+err = np.linalg.norm(back - tops, axis=1)
+assert np.all(err < 30), err
+print(f"OK: {len(tops)} block tops seen where they are: error {err.min():.0f}-{err.max():.0f} mm before depth calibration")
+
+# %% [markdown]
+# **On the real arm** only the first line changes: `make_station("real")` (see the README: it needs the Interbotix
+# ROS 2 packages and `pyrealsense2`). Use it in a `with` block, so that the arm goes to its sleep pose before the
+# driver shuts down, even when your code raises. There is no `world` there: the truth is what you measure.
+
 # %%
 viewer.close()
 print(viewer)
 
 # %% [markdown]
-# ## 3 · How to check your work
+# ## 4 · How to check your work
 #
 # - Each section ends with a **check cell** like the ones above: it asserts a number against a known answer and
 #   prints one line starting with `OK`. If it raises, your code (or your calibration) is not right yet.
