@@ -204,7 +204,8 @@ def test_grasp_and_place_heights():
     assert np.allclose(kinematics.fk(descend.end)[:2, 3], [120, 250], atol=1e-6)
     place = planning.plan_place(pick.end, [-100, 200, 38], 25)
     descend = [s for s in place.steps if s.label == "descend"][0].trajectory
-    assert tool_z(descend.end) == pytest.approx(38 + 12.5, abs=1e-6)      # bottom face on the 38 mm top
+    assert tool_z(descend.end) == pytest.approx(38 + 18, abs=1e-6)        # bottom face on the 38 mm top
+    assert planning.default_grasp_depth(25) == 7 and planning.default_grasp_depth(38) == 19
     place = planning.plan_place(pick.end, [-100, 200, 38], 25, grasp_depth=5)
     descend = [s for s in place.steps if s.label == "descend"][0].trajectory
     assert tool_z(descend.end) == pytest.approx(38 + 20, abs=1e-6)
@@ -371,3 +372,19 @@ def test_plan_sampling_and_plot():
     assert [ln.get_label() for ln in ax.get_lines()][:5] == list(ROBOT.joint_names)
     with pytest.raises(ValueError, match="join up"):
         planning.Plan((plan.steps[0], planning.MoveStep(planning.joint_move(ROBOT.home, ROBOT.sleep))))
+
+
+@pytest.mark.parametrize("seed", [0, 3])
+def test_pick_and_place_round_trips_on_the_simulator(seed):
+    from armlab import make_station
+
+    station = make_station("sim", seed=seed, realism="realistic")
+    arm, world = station.arm, station.world
+    for i, block in enumerate([b for b in world.blocks if b.is_block][:3]):
+        top = block.position + [0, 0, block.edge / 2]
+        dest = np.array([-150.0 + 150 * i, 150.0, 0.0])
+        plan = planning.plan_pick_place(arm.joint_positions(), top, block.yaw, block.edge, dest, 0.3, world.blocks)
+        assert planning.execute(plan, arm).holding
+        assert np.abs(block.position - dest - [0, 0, block.edge / 2]).max() < 3.0     # mm, with realistic errors
+        turn = np.degrees(block.yaw - 0.3) % 90
+        assert min(turn, 90 - turn) < 2.0                                           # square to the requested yaw

@@ -8,41 +8,43 @@ pickplace (pick, place and camera-clear plans).
 
 from .grasp import GraspPose, choose_grasp, face_misalignment, face_roll
 from .pickplace import (
-                        CAMERA_CLEAR_POSE,
-                        grasp_height,
-                        place_tool_height,
-                        plan_camera_clear,
-                        plan_pick,
-                        plan_pick_place,
-                        plan_place,
+    CAMERA_CLEAR_POSE,
+    default_grasp_depth,
+    grasp_height,
+    place_tool_height,
+    plan_camera_clear,
+    plan_pick,
+    plan_pick_place,
+    plan_place,
 )
 from .plan import (
-                        GRIPPER_TIME_S,
-                        ExecutionResult,
-                        GripperStep,
-                        MoveStep,
-                        Plan,
-                        PlanSample,
-                        execute,
-                        plot_plan,
-                        sample_plan,
+    GRIPPER_TIME_S,
+    ExecutionResult,
+    GripperStep,
+    MoveStep,
+    Plan,
+    PlanSample,
+    execute,
+    plot_plan,
+    sample_plan,
 )
 from .timing import SCALINGS, moving_time, time_scaling
 from .trajectory import (
-                        CartesianSegment,
-                        JointTrajectory,
-                        PiecewiseTrajectory,
-                        Trajectory,
-                        Waypoint,
-                        cartesian_line,
-                        joint_move,
-                        reverse,
+    CartesianSegment,
+    JointTrajectory,
+    PiecewiseTrajectory,
+    Trajectory,
+    Waypoint,
+    cartesian_line,
+    joint_move,
+    reverse,
 )
 from .transit import DEFAULT_CLEARANCE_MM, Clearance, Obstacle, as_obstacles, transit_clearance
 
 __all__ = [
     "GraspPose", "choose_grasp", "face_misalignment", "face_roll",
-    "CAMERA_CLEAR_POSE", "grasp_height", "place_tool_height", "plan_camera_clear", "plan_pick", "plan_pick_place",
+    "CAMERA_CLEAR_POSE", "default_grasp_depth", "grasp_height", "place_tool_height", "plan_camera_clear", "plan_pick",
+    "plan_pick_place",
     "plan_place",
     "GRIPPER_TIME_S", "ExecutionResult", "GripperStep", "MoveStep", "Plan", "PlanSample", "execute", "plot_plan",
     "sample_plan",

@@ -1,14 +1,16 @@
 """Pick and place plans: transit above the target, open, descend in a straight line, grasp or release, lift.
 
 Heights (world mm):
-- grasp: the tool point (the centre of the finger pads) at the block's centre, `grasp_depth` = edge / 2 below its top
-  face, as the lab did ("half the block height"): the pads cover the middle of the block's side faces, the fingertips
-  stay above the board for both block sizes, and a held block's bottom face is edge - grasp_depth below the tool point.
+- grasp: the tool point (the centre of the finger pads) `grasp_depth` below the block's top face: at the block's
+  centre (edge / 2), as the lab did ("half the block height"), unless that would bring the finger tips (about 8 mm
+  beyond the tool point) within 10 mm of whatever the block stands on (real arms sag 5-15 mm at long reach): then
+  edge - 18 mm (7 mm for the 25 mm cubes; the 38 mm cubes are grasped at their centre). A held block's bottom face is
+  edge - grasp_depth below the tool point.
 - place: the held block's bottom-face centre at the requested position, so the tool point goes to
   position z + edge - grasp_depth (= z + edge / 2 for a grasp at the centre).
 - transit: a straight rise from the start to height z_t (when lower), then a joint-space move to the hover point
-  straight above the target at z_t, where z_t starts at the
-  target's top (pick) or the place height (place) + clearance (+ the held block's overhang), then is raised until the
+  straight above the target at z_t, where z_t starts at `clearance` above the top of the block being picked or of the
+  block once placed (so the empty gripper clears it after the lift), then is raised until the
   sampled transit clears every obstacle near the path (transit.transit_clearance: wrist and tool points
   `clearance` above the tops of the obstacles they pass, a held block lifted over them). A height out of reach is
   refused with Unreachable naming the obstacle.
@@ -35,20 +37,30 @@ from .plan import GripperStep, MoveStep, Plan
 from .trajectory import cartesian_line, joint_move, reverse
 from .transit import DEFAULT_CLEARANCE_MM, GRIPPER_RADIUS_MM, Obstacle, as_obstacles, transit_clearance
 
-__all__ = ["CAMERA_CLEAR_POSE", "grasp_height", "place_tool_height", "plan_pick", "plan_place", "plan_pick_place",
-           "plan_camera_clear"]
+__all__ = ["CAMERA_CLEAR_POSE", "default_grasp_depth", "grasp_height", "place_tool_height", "plan_pick", "plan_place",
+           "plan_pick_place", "plan_camera_clear"]
 
 CAMERA_CLEAR_POSE = np.array([0.0, 0.0, -np.pi / 2, 0.0, 0.0])
+FINGERTIP_MM = 8.0          # finger tips beyond the tool point along the approach (half of a 16 mm pad)
+TIP_MARGIN_MM = 10.0        # finger tips at least this far above what the grasped block stands on
 _MAX_RAISES = 8
 
 
 def _check_edge_depth(edge: float, grasp_depth: float | None) -> float:
     if not np.isfinite(edge) or edge <= 0:
         raise ValueError(f"block edge must be a positive length in mm, got {edge}")
-    depth = edge / 2 if grasp_depth is None else float(grasp_depth)
+    depth = default_grasp_depth(edge) if grasp_depth is None else float(grasp_depth)
     if not 0 < depth <= edge:
         raise ValueError(f"grasp_depth must be in (0, edge] = (0, {edge}] mm below the top face, got {grasp_depth}")
     return depth
+
+
+def default_grasp_depth(edge: float) -> float:
+    """Tool point depth (mm) below a cube's top face: its centre, or higher so the finger tips stay TIP_MARGIN_MM
+    above the surface under the cube."""
+    # BEGIN SOLUTION
+    return float(min(edge / 2, edge - FINGERTIP_MM - TIP_MARGIN_MM))
+    # END SOLUTION
 
 
 def _point(p, name: str) -> np.ndarray:
@@ -91,7 +103,7 @@ def _tool_pitch_roll(q: np.ndarray, robot: RobotModel) -> tuple[np.ndarray, floa
     T = kinematics.fk(q, robot)
     p = T[:3, 3]
     M = kinematics.tool_orientation(np.arctan2(p[1], p[0]), 0.0, 0.0).T @ T[:3, :3]   # = Ry(pitch) Rx(roll)
-    return p, float(np.arctan2(-M[2, 0], M[0, 0])), float(np.arctan2(M[2, 1], M[1, 1]))
+    return p, float(np.arctan2(-M[2, 0], M[0, 0])), float(np.arctan2(-M[1, 2], M[1, 1]))
 
 
 def _rise(q0: np.ndarray, z_t: float, scaling: str, robot: RobotModel):
@@ -100,7 +112,7 @@ def _rise(q0: np.ndarray, z_t: float, scaling: str, robot: RobotModel):
     (wrist_angle runs out when a top-down tool rises near the base). None when the tool is already high enough or
     q0 is not a pose the closed-form IK reproduces (e.g. the tool over the waist axis)."""
     p, pitch, roll = _tool_pitch_roll(q0, robot)
-    if p[2] >= z_t - 1.0 or np.hypot(p[0], p[1]) < 1.0:
+    if p[2] >= z_t or np.hypot(p[0], p[1]) < 1.0:
         return None
     up = np.array([p[0], p[1], z_t])
     try:
@@ -108,12 +120,22 @@ def _rise(q0: np.ndarray, z_t: float, scaling: str, robot: RobotModel):
         return seg if np.abs(seg.start - q0).max() <= 1e-6 else None
     except Unreachable:
         steepest = kinematics.steepest_pitch(up, roll, max_pitch=min(pitch, np.pi / 2), robot=robot)
-        return joint_move(q0, kinematics.ik(up, steepest, roll, current=q0, robot=robot)[0], scaling, robot=robot)
+        move = joint_move(q0, kinematics.ik(up, steepest, roll, current=q0, robot=robot)[0], scaling, robot=robot)
+        q, _ = move.sample(np.linspace(0.0, move.duration, 200))
+        low = kinematics.joint_positions(q)[:, 4:, 2].min(axis=0) - kinematics.joint_positions(q0)[4:, 2]
+        if low.min() < -1.0:
+            raise Unreachable(f"rising from ({p[0]:.1f}, {p[1]:.1f}, {p[2]:.1f}) mm the wrist or tool would first dip "
+                              f"{-low.min():.1f} mm") from None
+        return move
 
 
 def _approach(q_start, target: np.ndarray, yaw: float, floor_z: float, held_below: float, action: str,
               obstacles, clearance: float, scaling: str, robot: RobotModel, what: str) -> Plan:
-    """transit to the hover point over target, [open], descend, open/close, lift back (see the module notes)."""
+    """transit to the hover point over target, [open], descend, open/close, lift back (see the module notes).
+
+    floor_z: the top (mm) the empty tool must clear at the hover point when the plan ends (the picked block's top, or
+    the placed block's top); held_below: how far a held block hangs below the tool point during the transit.
+    """
     if not np.isfinite(clearance) or clearance < 0:
         raise ValueError(f"clearance must be a non-negative length in mm, got {clearance}")
     if not np.isfinite(yaw):
@@ -122,7 +144,7 @@ def _approach(q_start, target: np.ndarray, yaw: float, floor_z: float, held_belo
     if q0.shape != (5,):
         raise ValueError(f"q_start must have shape (5,) (rad), got {q0.shape}")
     obs = as_obstacles(obstacles)
-    z_t = max(floor_z + clearance + held_below, float(target[2]))
+    z_t = max(floor_z + clearance, float(target[2]))
     near = _near_segment(obs, kinematics.fk(q0, robot)[:3, 3], target)
     if near:
         z_t = max(z_t, max(o.top for o in near) + clearance + held_below)
@@ -136,20 +158,10 @@ def _approach(q_start, target: np.ndarray, yaw: float, floor_z: float, held_belo
             raise Unreachable(f"{what}: cannot move straight up or down to the transit height {z_t:.1f} mm: "
                               f"{e}") from None
         transit = joint_move(q0 if rise is None else rise.end, down.start, scaling, robot=robot)
-        c = transit_clearance(transit, obs, clearance, held_below)
-        if rise is not None and c.clear:
-            c = transit_clearance(rise, obs, clearance, held_below)
-            if not c.clear:
-                o = c.obstacle
-                raise Unreachable(f"{what}: rising from the start passes {c.deficit:.1f} mm too low over the "
-                                  f"obstacle at ({o.x:.1f}, {o.y:.1f}) mm (top {o.top:.1f} mm)")
+        c = transit_clearance(transit, obs, clearance, held_below)   # the rise only goes up from where the arm is
         if c.clear:
             break
         o = c.obstacle
-        if c.sample == 0:
-            raise Unreachable(f"{what}: the arm starts {c.deficit:.1f} mm too low over the obstacle at ({o.x:.1f}, "
-                              f"{o.y:.1f}) mm (top {o.top:.1f} mm); lift it first, or leave a held block out of the "
-                              f"obstacles")
         z_t += c.deficit + 1.0
     else:
         raise Unreachable(f"{what}: no transit height up to {z_t:.1f} mm clears the obstacle at ({o.x:.1f}, "
@@ -190,8 +202,8 @@ def plan_place(q_start, position, edge: float, yaw: float = 0.0, obstacles=(),
     position = _point(position, "place position")
     depth = _check_edge_depth(edge, grasp_depth)
     target = np.array([position[0], position[1], place_tool_height(position[2], edge, depth)])
-    return _approach(q_start, target, yaw, position[2], edge - depth, "open", obstacles, clearance, scaling, robot,
-                     f"placing at ({position[0]:.1f}, {position[1]:.1f}, {position[2]:.1f}) mm")
+    return _approach(q_start, target, yaw, position[2] + edge, edge - depth, "open", obstacles, clearance, scaling,
+                     robot, f"placing at ({position[0]:.1f}, {position[1]:.1f}, {position[2]:.1f}) mm")
 
 
 def plan_pick_place(q_start, top, yaw: float, edge: float, position, place_yaw: float = 0.0, obstacles=(),
