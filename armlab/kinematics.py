@@ -52,11 +52,11 @@ def check_joints(q, robot: RobotModel | None = None, check_limits: bool = True) 
     if q.ndim not in (1, 2) or q.shape[-1] != 5:
         raise ValueError(f"joint angles must have shape (5,) or (N, 5) (waist, shoulder, elbow, wrist_angle, "
                          f"wrist_rotate in rad), got shape {q.shape}")
-    if not np.all(np.isfinite(q)):
+    if not np.isfinite(q).all():
         raise ValueError("joint angles contain NaN or infinity")
     if check_limits:
         ok = robot.within_limits(q)
-        if not np.all(ok):
+        if not ok.all():
             rows = np.atleast_2d(q)
             bad = int(np.flatnonzero(~np.atleast_1d(ok))[0])
             where = "" if q.ndim == 1 else f"row {bad}: "
@@ -68,14 +68,14 @@ def _check_position(position, name: str = "position") -> np.ndarray:
     p = np.asarray(position, dtype=float)
     if p.ndim not in (1, 2) or p.shape[-1] != 3:
         raise ValueError(f"{name} must have shape (3,) or (N, 3) (x, y, z in world mm), got shape {p.shape}")
-    if not np.all(np.isfinite(p)):
+    if not np.isfinite(p).all():
         raise ValueError(f"{name} contains NaN or infinity")
     return p
 
 
 def _check_angle(value, name: str) -> np.ndarray:
     a = np.asarray(value, dtype=float)
-    if not np.all(np.isfinite(a)):
+    if not np.isfinite(a).all():
         raise ValueError(f"{name} contains NaN or infinity")
     return a
 
@@ -225,7 +225,7 @@ def _ik_candidates(P: np.ndarray, pitch: np.ndarray, roll: np.ndarray, robot: Ro
     heading = np.where(r > 1e-9, np.arctan2(y, x), o1)  # on the base axis any heading works: keep the waist at 0
     flipped = _FLIPPED                                       # (4,)
     # BEGIN SOLUTION
-    q1 = _wrap(heading - o1 + np.where(flipped, np.pi, 0.0))
+    q1 = heading - o1 + np.where(flipped, np.pi, 0.0)
     r_plane = np.where(flipped, -r, r)                      # target's distance along the arm's forward direction
     psi = np.where(flipped, np.pi - pitch, pitch)           # approach angle below the arm's forward horizontal
     wr = r_plane - Lt * np.cos(psi)                         # wrist centre in the arm's plane, from the shoulder
@@ -235,12 +235,13 @@ def _ik_candidates(P: np.ndarray, pitch: np.ndarray, roll: np.ndarray, robot: Ro
     ok = np.abs(cos_delta) <= 1 + 1e-12
     delta = np.arccos(np.clip(cos_delta, -1, 1)) * np.where(_DELTA_NEGATIVE, -1.0, 1.0)
     upper_arm_elevation = np.arctan2(wh, wr) - np.arctan2(L2 * np.sin(delta), L1 + L2 * np.cos(delta))
-    q2 = _wrap(-upper_arm_elevation - o2)
-    q3 = _wrap(-delta - o3)
-    q4 = _wrap(psi - q2 - q3 - (o2 + o3))
+    q2 = -upper_arm_elevation - o2
+    q3 = -delta - o3
+    q4 = psi - q2 - q3 - (o2 + o3)
     # END SOLUTION
     q = np.empty(q2.shape + (5,))
-    q[..., 0], q[..., 1], q[..., 2], q[..., 3], q[..., 4] = q1, q2, q3, q4, _wrap(roll)[:, None]
+    q[..., 0], q[..., 1], q[..., 2], q[..., 3], q[..., 4] = q1, q2, q3, q4, roll[:, None]
+    q = _wrap(q)                                            # every joint angle in (-pi, pi]
     q[~ok] = np.nan
     valid = ok & robot.within_limits(q)                     # NaN (out of reach) compares False: not within
     return _Candidates(q, ok, valid, np.sqrt(d2))

@@ -67,7 +67,7 @@ class RobotModel:
     def within_limits(self, q, tol: float = 1e-9) -> np.ndarray:
         """Boolean (...,) telling which joint vectors q (..., 5) respect every position limit."""
         q = np.asarray(q, dtype=float)
-        return np.all((q >= self.lower - tol) & (q <= self.upper + tol), axis=-1)
+        return ((q >= self.lower - tol) & (q <= self.upper + tol)).all(axis=-1)
 
 
 def _read_rows(path: Path, header: list[str]) -> list[tuple[int, dict[str, str]]]:
