@@ -14,9 +14,10 @@ from armlab.calibration.tags import TagDetection, detect_tags
 from armlab.camera import check_intrinsics, look_at
 from armlab.images import check_rgb
 from armlab.lab import TagLayout, lab_config
-from armlab.transforms import homogeneous
+from armlab.transforms import homogeneous, invert_transform, log_so3
 
-__all__ = ["ExtrinsicsResult", "calibrate_extrinsics", "extrinsics_from_detections", "hand_measured_extrinsic"]
+__all__ = ["ExtrinsicsResult", "calibrate_extrinsics", "extrinsics_from_detections", "hand_measured_extrinsic",
+           "compare_extrinsics"]
 
 
 @dataclass(frozen=True)
@@ -32,13 +33,19 @@ class ExtrinsicsResult:
 
 def extrinsics_from_detections(detections: list[TagDetection], K, dist,
                                layout: TagLayout | None = None) -> ExtrinsicsResult:
-    """Board pose from tag detections: solvePnP (SQPNP, then Levenberg-Marquardt refinement) over every corner.
+    """Board pose from tag detections: solvePnP (SQPNP, then Levenberg-Marquardt refinement) over every corner
+    (IPPE when only one tag is seen). Tags that are not on the board are ignored.
 
     Raises ValueError when no tag of the layout was detected.
     """
     K, dist = check_intrinsics(K, dist)
     layout = layout or lab_config().tags
-    known = [d for d in detections if d.tag_id in layout.centres_mm]
+    best: dict[int, TagDetection] = {}
+    for d in detections:  # one detection per board tag: the most confident, should a tag be seen twice
+        if d.tag_id in layout.centres_mm and (d.tag_id not in best
+                                              or d.decision_margin > best[d.tag_id].decision_margin):
+            best[d.tag_id] = d
+    known = [best[i] for i in sorted(best)]
     missing = sorted(set(layout.centres_mm) - {d.tag_id for d in known})
     if not known:
         raise ValueError(f"no board AprilTag (ids {sorted(layout.centres_mm)}, family {layout.family}) was "
@@ -76,3 +83,15 @@ def hand_measured_extrinsic(position_mm=None, look_at_mm=None) -> np.ndarray:
     cfg = lab_config()
     return look_at(cfg.camera_position_mm if position_mm is None else position_mm,
                    cfg.camera_look_at_mm if look_at_mm is None else look_at_mm)
+
+
+def compare_extrinsics(T_a, T_b) -> dict[str, float]:
+    """How far apart two extrinsics T_cam_world (4, 4) put the camera: the camera centres' distance (mm, and per world
+    axis a - b), and the angle (deg) of the rotation between the two camera orientations."""
+    T_a, T_b = np.asarray(T_a, float), np.asarray(T_b, float)
+    if T_a.shape != (4, 4) or T_b.shape != (4, 4):
+        raise ValueError(f"extrinsics must be 4x4 transforms, got shapes {T_a.shape} and {T_b.shape}")
+    d = invert_transform(T_a)[:3, 3] - invert_transform(T_b)[:3, 3]
+    angle = np.linalg.norm(log_so3(T_a[:3, :3] @ T_b[:3, :3].T))
+    return {"position_mm": float(np.linalg.norm(d)), "dx_mm": float(d[0]), "dy_mm": float(d[1]),
+            "dz_mm": float(d[2]), "angle_deg": float(np.degrees(angle))}

@@ -12,6 +12,7 @@ import numpy as np
 
 from armlab.calibration.depth import DepthCorrection
 from armlab.camera import Camera
+from armlab.images import check_depth, sample_depth
 
 __all__ = ["Calibration", "save_calibration", "load_calibration", "CalibrationFileError"]
 
@@ -30,6 +31,20 @@ class Calibration:
     depth_correction: DepthCorrection = field(default_factory=DepthCorrection)
     notes: str = ""
 
+    def __post_init__(self):
+        if not isinstance(self.camera, Camera):
+            raise TypeError(f"Calibration.camera must be an armlab.camera.Camera, got {type(self.camera).__name__}")
+        if not isinstance(self.depth_correction, DepthCorrection):
+            raise TypeError("Calibration.depth_correction must be an armlab.calibration.DepthCorrection")
+
+    def pixel_to_world(self, uv, depth_mm, radius: int = 2) -> np.ndarray:
+        """World points (N, 3) mm seen at pixels uv (N, 2) of a depth image depth_mm (H, W) mm: the depth is
+        bias-corrected, read as the median of the valid pixels within `radius` px, and back-projected through the
+        camera. NaN rows where the depth has no return."""
+        depth = self.depth_correction.apply(check_depth(depth_mm, self.camera.image_shape))
+        uv = np.asarray(uv, float).reshape(-1, 2)
+        return self.camera.pixel_to_world(uv, sample_depth(depth, uv, radius))
+
     def to_dict(self) -> dict:
         c = self.camera
         d = self.depth_correction
@@ -46,6 +61,8 @@ class Calibration:
             camera = Camera(np.array(raw["K"], float), np.array(raw["dist"], float),
                             np.array(raw["T_cam_world"], float), int(raw["width"]), int(raw["height"]))
             dc = raw.get("depth_correction", {})
+            if not isinstance(dc, dict):
+                raise TypeError(f"depth_correction must be an object, got {type(dc).__name__}")
             correction = DepthCorrection(float(dc.get("a", 0)), float(dc.get("b", 0)), float(dc.get("c", 0)),
                                          float(dc.get("residual_mm", 0)), int(dc.get("inliers", 0)))
         except KeyError as e:
@@ -58,13 +75,16 @@ class Calibration:
 
 
 def save_calibration(calibration: Calibration, path) -> Path:
-    """Write the calibration as JSON atomically (temporary file in the same folder, then rename)."""
+    """Write the calibration as JSON atomically (temporary file in the same folder, then rename): a failed write
+    leaves any previous file untouched. Raises ValueError for non-finite values (JSON has no NaN)."""
+    if not isinstance(calibration, Calibration):
+        raise TypeError(f"save_calibration takes a Calibration, got {type(calibration).__name__}")
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name, suffix=".tmp")
     try:
         with os.fdopen(fd, "w") as f:
-            json.dump(calibration.to_dict(), f, indent=2)
+            json.dump(calibration.to_dict(), f, indent=2, allow_nan=False)
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
@@ -75,6 +95,8 @@ def save_calibration(calibration: Calibration, path) -> Path:
 def load_calibration(path) -> Calibration:
     """Read and validate a calibration file; raises CalibrationFileError naming the file and the problem."""
     path = Path(path)
+    if path.is_dir():
+        raise CalibrationFileError(f"{path}: is a folder, not a calibration file")
     if not path.is_file():
         raise CalibrationFileError(f"{path}: calibration file not found")
     try:
