@@ -5,6 +5,7 @@ from armlab.calibration.depth import DepthCorrection, board_depth, fit_depth_cor
 from armlab.calibration.extrinsics import (
     ExtrinsicsResult,
     calibrate_extrinsics,
+    compare_extrinsics,
     extrinsics_from_detections,
     hand_measured_extrinsic,
 )
@@ -18,12 +19,12 @@ from armlab.calibration.intrinsics import (
 )
 from armlab.calibration.storage import Calibration, CalibrationFileError, load_calibration, save_calibration
 from armlab.calibration.tags import TagDetection, detect_tags
-from armlab.calibration.validation import GridError, grid_world_error
+from armlab.calibration.validation import GridError, grid_world_error, visible_grid_points
 
 __all__ = [
     "BoardView", "Calibration", "CalibrationFileError", "DepthCorrection", "ExtrinsicsResult", "GridError",
     "IntrinsicsResult", "TagDetection", "board_depth", "calibrate_extrinsics", "calibrate_intrinsics",
-    "checkerboard_points", "compare_intrinsics", "detect_tags", "extrinsics_from_detections", "find_checkerboard",
-    "fit_depth_correction", "grid_world_error", "hand_measured_extrinsic", "load_calibration", "save_calibration",
-    "tag_homography",
+    "checkerboard_points", "compare_extrinsics", "compare_intrinsics", "detect_tags", "extrinsics_from_detections",
+    "find_checkerboard", "fit_depth_correction", "grid_world_error", "hand_measured_extrinsic", "load_calibration",
+    "save_calibration", "tag_homography", "visible_grid_points",
 ]
