@@ -205,12 +205,12 @@ def _planar_geometry(robot: RobotModel):
     return shoulder_height, upper_arm, forearm, wrist_to_tool
 
 
-# Per branch: is the waist turned away from the target, and is delta (the forearm's angle from the upper arm's line,
-# counter-clockwise in the arm's plane seen with the arm's forward direction on the right) negative? Elbow up = the
+# Per branch: is the waist turned away from the target, and the sign of delta (the forearm's angle from the upper
+# arm's line, counter-clockwise in the arm's plane seen with the arm's forward direction on the right). Elbow up = the
 # elbow above the shoulder-wrist line as seen with the target on the right: delta < 0 facing the target; the flipped
 # waist mirrors the arm's plane, which swaps the sign.
-_FLIPPED = np.array([w == "flipped" for w, _ in _BRANCHES])
-_DELTA_NEGATIVE = np.array([e == "elbow up" for _, e in _BRANCHES]) != _FLIPPED
+_FLIPPED = np.array([w == "flipped" for w, _ in _BRANCHES], float)               # 1.0 where flipped
+_DELTA_SIGN = np.where(np.array([e == "elbow up" for _, e in _BRANCHES]) != _FLIPPED.astype(bool), -1.0, 1.0)
 _ELBOW_DOWN = np.array([e == "elbow down" for _, e in _BRANCHES], float)
 
 
@@ -223,17 +223,18 @@ def _ik_candidates(P: np.ndarray, pitch: np.ndarray, roll: np.ndarray, robot: Ro
     pitch = pitch[:, None]
     r = np.hypot(x, y)
     heading = np.where(r > 1e-9, np.arctan2(y, x), o1)  # on the base axis any heading works: keep the waist at 0
-    flipped = _FLIPPED                                       # (4,)
+    flipped = _FLIPPED                                       # (4,): 1 where the waist turns away from the target
+    side = 1.0 - 2.0 * flipped                               # +1 facing, -1 flipped
     # BEGIN SOLUTION
-    q1 = heading - o1 + np.where(flipped, np.pi, 0.0)
-    r_plane = np.where(flipped, -r, r)                      # target's distance along the arm's forward direction
-    psi = np.where(flipped, np.pi - pitch, pitch)           # approach angle below the arm's forward horizontal
+    q1 = heading - o1 + np.pi * flipped
+    r_plane = side * r                                      # target's distance along the arm's forward direction
+    psi = np.pi * flipped + side * pitch                    # approach angle below the arm's forward horizontal
     wr = r_plane - Lt * np.cos(psi)                         # wrist centre in the arm's plane, from the shoulder
     wh = z - h0 + Lt * np.sin(psi)
     d2 = wr**2 + wh**2
     cos_delta = (d2 - L1**2 - L2**2) / (2 * L1 * L2)
     ok = np.abs(cos_delta) <= 1 + 1e-12
-    delta = np.arccos(np.clip(cos_delta, -1, 1)) * np.where(_DELTA_NEGATIVE, -1.0, 1.0)
+    delta = np.arccos(np.minimum(np.maximum(cos_delta, -1.0), 1.0)) * _DELTA_SIGN   # sign: see _DELTA_SIGN
     upper_arm_elevation = np.arctan2(wh, wr) - np.arctan2(L2 * np.sin(delta), L1 + L2 * np.cos(delta))
     q2 = -upper_arm_elevation - o2
     q3 = -delta - o3
@@ -268,8 +269,8 @@ def _explain(c: _Candidates, i: int, robot: RobotModel, position, pitch) -> str:
 
 def _rank(c: _Candidates, current: np.ndarray) -> np.ndarray:
     """Branch order per target (N, 4): valid first, then elbow up, then least joint motion from `current`."""
-    motion = np.abs(_wrap(np.where(c.valid[..., None], c.q, current[:, None, :]) - current[:, None, :])).sum(-1)
-    key = (~c.valid) * 1e6 + _ELBOW_DOWN * 1e3 + motion
+    motion = np.abs(_wrap(c.q - current[:, None, :])).sum(-1)                   # NaN where out of reach
+    key = np.where(c.valid, _ELBOW_DOWN * 1e3 + motion, np.inf)               # motion < 5 pi < 1e3
     return np.argsort(key, axis=1, kind="stable")
 
 
@@ -308,10 +309,12 @@ def ik(position, pitch, roll: float = 0.0, current=None, robot: RobotModel | Non
     if not single:
         raise ValueError("ik takes one position (3,); use ik_batch for (N, 3)")
     c = _ik_candidates(P, pitch_a, roll_a, robot)
-    if not c.valid[0].any():
+    branches = np.flatnonzero(c.valid[0])
+    if branches.size == 0:
         raise Unreachable(_explain(c, 0, robot, P[0], pitch_a[0]))
-    order = _rank(c, cur)[0]
-    return c.q[0, order[: int(c.valid[0].sum())]]   # ranking puts the valid branches first
+    if branches.size > 1:
+        branches = _rank(c, cur)[0, : branches.size]  # ranking puts the valid branches first
+    return c.q[0, branches]
 
 
 @dataclass(frozen=True)
