@@ -64,6 +64,7 @@ class Replay:
         try:
             np.savez_compressed(tmp, times=self.times, q=self.q, gripper=self.gripper,
                                 snapshots=np.array(json.dumps(self.snapshots)))
+            os.chmod(tmp, 0o644)
             os.replace(tmp, path)
         except BaseException:
             Path(tmp).unlink(missing_ok=True)

@@ -31,7 +31,7 @@ from .scoring import LEVELS, TIME_LIMIT_S, Score, score_event
 from .sky import HANDOVER_XY, TOWER_XY, HandOver, Sky
 from .sort_stack import SortStack
 
-__all__ = ["EventResult", "MoveLog", "run_event", "see", "make_strategy", "MAX_PICK_TRIES"]
+__all__ = ["EventResult", "MoveLog", "Look", "run_event", "see", "make_strategy", "MAX_PICK_TRIES"]
 
 MAX_PICK_TRIES = 3
 CLEAR_VIEW_MIN_CLEARANCE_MM = 25.0                     # finger tips reach 8 mm below the tool point
@@ -106,13 +106,23 @@ def _clear_view(arm, obstacles) -> None:
         return
 
 
-def see(station, ctx, obstacles=(), settings: DetectionSettings | None = None) -> list:
+@dataclass(frozen=True)
+class Look:
+    """One look at the board: the frame, its corrected depth (H, W) mm and every object's top face detected."""
+
+    frame: object
+    depth: np.ndarray
+    objects: list
+
+
+def see(station, ctx, obstacles=(), settings: DetectionSettings | None = None) -> Look:
     """Arm out of the camera's view, one frame, corrected depth, every object's top face (detect_objects)."""
     _clear_view(ctx.arm, obstacles)
     frame = station.camera.capture()
     depth = ctx.calibration.depth_correction.apply(frame.depth)
     q = ctx.arm.joint_positions()
-    return detection.detect_objects(frame.rgb, depth, ctx.calibration.camera, arm_q=q, settings=settings)
+    objects = detection.detect_objects(frame.rgb, depth, ctx.calibration.camera, arm_q=q, settings=settings)
+    return Look(frame, depth, objects)
 
 
 def _obstacles(seen, move: Move, extra=()) -> list:
@@ -153,7 +163,7 @@ def run_event(station, event: str, level: int = 1, time_limit_s: float | None = 
             stopped = "time is up"
             break
         extra = [Obstacle(*TOWER_XY, strategy.height * block_edge("large"), 27.0)] if event == "sky" else []
-        seen = see(station, ctx, [*board, *extra], settings)
+        seen = see(station, ctx, [*board, *extra], settings).objects
         board = list(seen)
         looks += 1
         move = strategy.next_move(seen)

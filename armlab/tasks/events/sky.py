@@ -3,8 +3,9 @@
 HandOver is the scene's side (the person handing the blocks over, acting on the simulated world): it puts one large
 block at HANDOVER_XY (with a little jitter in position and turn, as a hand would) at the start and after every block
 that ends on the tower. Sky is the robot's side: it picks the block at the hand-over spot and puts it on the tower at
-TOWER_XY, the next level up; the tower's top is believed from what was placed and, while the camera can measure it
-(below the detector's height limit), centred on the detected top face so placement errors do not accumulate.
+TOWER_XY, the next level up, always aimed at the same (x, y) so placement errors do not add up (the detected top
+face of a tall tower drifts by a few mm per 100 mm of height, more than the arm errs); the tower's height is believed
+from what was placed and checked against the detected top while it is below the detector's height limit.
 The tower stops when the next level is out of the arm's reach: with the default 50 mm transit clearance the top-down
 or tilted approach above a 12-block tower (456 mm) needs the tool at about 530 mm, beyond the RX200's reach at that
 radius. Units: mm, rad; world (board) frame.
@@ -73,10 +74,8 @@ class Sky:
             return None
         e = block_edge("large")
         tops = [b for b in seen if b.is_block and np.linalg.norm(np.asarray(b.position[:2]) - TOWER_XY) < NEAR_MM]
-        if tops:                             # the tower's top face is in view: trust it for x, y and the count
-            top = max(tops, key=lambda b: b.position[2])
-            self.height = int(round(top.position[2] / e))
-            self.top_xy = np.asarray(top.position[:2], float)
+        if tops:                             # the tower's top face is in view: trust it for the count
+            self.height = int(round(max(b.position[2] for b in tops) / e))
         handed = [b for b in seen if b.is_block and np.linalg.norm(np.asarray(b.position[:2]) - HANDOVER_XY) < NEAR_MM]
         if not handed:
             return None
