@@ -1,6 +1,6 @@
 """Line 'em up strategy: the large and the small blocks each in one straight line, rainbow order, square to it.
 
-Layout: both lines run along x at y = LINE_Y (large on one side of the robot, small on the other, red nearest the
+Layout: both lines run along x at one of y = LINE_Y (large on one side of the robot, small on the other, red nearest the
 base), at a pitch that keeps each line under 300 mm. Along x, at headings within 45 deg of the line, a top-down
 gripper placing a block square to the line closes ACROSS the line, so its pads never touch the neighbours. The
 layout (side and y) is chosen once from the first look: the one whose slots the fewest distractors (which cannot be
@@ -23,7 +23,7 @@ __all__ = ["LineUp", "line_slots", "PITCH_MM"]
 
 PITCH_MM = {"large": 50.0, "small": 40.0}     # 6 large: 5 x 50 + 38 = 288 mm; 6 small: 5 x 40 + 25 = 225 mm
 FIRST_X_MM = 110.0                            # |x| of the red slot (nearest the base)
-LINE_Y = (-95.0, -80.0)                       # y of the lines tried
+LINE_Y = (-95.0, -80.0, 80.0, 95.0)           # y of the lines tried (|y| < |x| at every slot, within reach)
 AT_SLOT_MM = 8.0
 
 
