@@ -237,7 +237,8 @@ uv = truth.project(tops)
 back = truth.pixel_to_world(uv, sample_depth(frame.depth, uv, radius=3))
 err = np.linalg.norm(back - tops, axis=1)
 assert np.all(err < 30), err
-print(f"OK: {len(tops)} block tops seen where they are: error {err.min():.0f}-{err.max():.0f} mm before depth calibration")
+print(f"OK: {len(tops)} block tops seen where they are: error {err.min():.0f}-{err.max():.0f} mm "
+      "before depth calibration")
 
 # %% [markdown]
 # **On the real arm** only the first line changes: `make_station("real")` (see the README: it needs the Interbotix
