@@ -13,28 +13,15 @@ Units: mm; pixels in OpenCV's convention (integer = pixel centre). Camera frame:
 from __future__ import annotations
 
 import functools
-from dataclasses import dataclass
 
 import cv2
 import numpy as np
 
 from armlab.camera import Camera
 
-__all__ = ["View", "Canvas", "Polygon", "view_for", "NEAR_MM"]
+__all__ = ["View", "Canvas", "view_for", "NEAR_MM"]
 
 NEAR_MM = 50.0          # geometry closer to the camera than this is clipped away
-
-
-@dataclass(frozen=True)
-class Polygon:
-    """A flat-shaded convex polygon: vertices (K, 3) in the camera frame (mm), counter-clockwise seen from the side
-    its outward `normal` (3,) (camera frame, unit) points to; `color` (3,) RGB 0..255; `surface` an id (>= 1) shared
-    by faces that meet without a depth step (used to find depth edges)."""
-
-    vertices: np.ndarray
-    normal: np.ndarray
-    color: tuple[float, float, float]
-    surface: int
 
 
 class Canvas:
@@ -144,25 +131,30 @@ class View:
         canvas.inv_depth[draw] = w[draw]
         canvas.surface[draw] = surface
 
-    def fill_polygons(self, canvas: Canvas, polygons: list[Polygon]) -> None:
-        """Z-buffered flat-shaded convex polygons (back faces culled, clipped at NEAR_MM)."""
-        if not polygons:
-            return
-        counts = np.array([len(p.vertices) for p in polygons])
-        kmax = int(counts.max())
-        V = np.empty((len(polygons), kmax, 3))
-        for i, p in enumerate(polygons):           # pad by repeating the last vertex (harmless for a convex fill)
-            V[i, :counts[i]] = p.vertices
-            V[i, counts[i]:] = p.vertices[-1]
-        normals = np.array([p.normal for p in polygons], dtype=float)
-        colors = np.array([p.color for p in polygons], dtype=float)
-        surfaces = np.array([p.surface for p in polygons])
-        self.fill_polygon_arrays(canvas, V, normals, colors, surfaces)
+    def fill_polygons(self, canvas: Canvas, vertices: np.ndarray, normals: np.ndarray, colors: np.ndarray,
+                      surfaces: np.ndarray) -> None:
+        """Z-buffered flat-shaded convex polygons (back faces culled, clipped at NEAR_MM): vertices (N, K, 3) camera
+        mm (a polygon with fewer corners repeats its last one), outward unit normals (N, 3) camera frame, colours
+        (N, 3) RGB 0..255, surface ids (N,) >= 1 (used to find depth edges; give faces of different planes
+        different ids).
 
-    def fill_polygon_arrays(self, canvas: Canvas, V: np.ndarray, normals: np.ndarray, colors: np.ndarray,
-                            surfaces: np.ndarray) -> None:
-        """`fill_polygons` on arrays: vertices V (N, K, 3) camera mm (a polygon with fewer vertices repeats its
-        last one), outward normals (N, 3), colours (N, 3) RGB, surface ids (N,)."""
+        Each polygon is filled (OpenCV, 8 bits of sub-pixel precision) into a mask over its pixel box, where its
+        float32 inverse depth plane replaces the buffer's wherever it is nearer."""
+        V = np.asarray(vertices, dtype=float)
+        if V.ndim != 3 or V.shape[2] != 3 or V.shape[1] < 3:
+            raise ValueError(f"vertices must be (N, K >= 3, 3) camera mm, got shape {V.shape}")
+        N = len(V)
+        normals = np.asarray(normals, dtype=float)
+        colors = np.asarray(colors, dtype=float)
+        surfaces = np.asarray(surfaces)
+        if normals.shape != (N, 3) or colors.shape != (N, 3) or surfaces.shape != (N,):
+            raise ValueError(f"normals and colours must be ({N}, 3) and surfaces ({N},), got {normals.shape}, "
+                             f"{colors.shape} and {surfaces.shape}")
+        if N == 0:
+            return
+        if surfaces.min() < 1 or surfaces.max() > np.iinfo(np.uint16).max:
+            raise ValueError("surface ids must be within 1..65535")
+        surfaces = surfaces.astype(np.uint16)
         K = self.K
         Hc, Wc = self.height, self.width
         offsets = np.einsum("nj,nj->n", normals, V[:, 0])
@@ -171,44 +163,56 @@ class View:
         with np.errstate(divide="ignore", invalid="ignore"):
             uvw = V @ K.T
             uv = uvw[..., :2] / uvw[..., 2:3]
-        lo = np.floor(np.min(uv, axis=1))
-        hi = np.ceil(np.max(uv, axis=1)) + 1
-        # inverse depth planes 1/Z = a u + b v + c of all faces at once
-        fx, s, cx = K[0]
-        fy, cy = K[1, 1], K[1, 2]
-        with np.errstate(divide="ignore", invalid="ignore"):
+            # inverse depth planes 1/Z = a u + b v + c of all faces at once
+            fx, s, cx = K[0]
+            fy, cy = K[1, 1], K[1, 2]
             ky = normals[:, 1] / fy - normals[:, 0] * s / (fx * fy)
-            A = normals[:, 0] / fx / offsets
-            B = ky / offsets
-            C = (normals[:, 2] - normals[:, 0] * cx / fx - ky * cy) / offsets
-        colors = np.clip(np.rint(colors), 0, 255).astype(np.uint8)
-        scratch = np.zeros((Hc, Wc), np.uint8)
-        for i in np.flatnonzero(front):
-            P2 = uv[i]
+            A = (normals[:, 0] / fx / offsets).tolist()
+            B = (ky / offsets).tolist()
+            C = ((normals[:, 2] - normals[:, 0] * cx / fx - ky * cy) / offsets).tolist()
+        # pixel boxes [x0, x1) x [y0, y1) within the canvas and fixed-point (8 bits) corners relative to the box of
+        # the faces that need no near clipping
+        simple = front & ~needs_clip
+        uv_s = np.where(simple[:, None, None], uv, 0.0)
+        box = np.column_stack([np.floor(uv_s.min(axis=1)), np.ceil(uv_s.max(axis=1)) + 1])
+        box = np.clip(box, 0, [Wc, Hc, Wc, Hc]).astype(np.int64)
+        corners = np.rint((uv_s - box[:, None, :2]) * 256).astype(np.int32)
+        boxes = box.tolist()
+        palette = np.clip(np.rint(colors), 0, 255).astype(np.uint8)
+        mask_buf = np.empty((Hc, Wc), np.uint8)
+        surface_buf = np.empty((Hc, Wc), np.uint16)
+        color_buf = np.empty((Hc, Wc, 3), np.uint8)
+        u, v = self._u, self._v
+        for i in np.flatnonzero(front).tolist():
             if needs_clip[i]:
                 P = _clip_near(V[i], NEAR_MM)
                 if len(P) < 3:
                     continue
                 P2 = P @ K.T
                 P2 = P2[:, :2] / P2[:, 2:3]
-                x0, y0 = np.floor(P2.min(axis=0)).astype(int)
-                x1, y1 = (np.ceil(P2.max(axis=0)) + 1).astype(int)
+                x0, y0 = np.floor(P2.min(axis=0)).astype(int).tolist()
+                x1, y1 = (np.ceil(P2.max(axis=0)) + 1).astype(int).tolist()
+                x0, y0, x1, y1 = max(x0, 0), max(y0, 0), min(x1, Wc), min(y1, Hc)
+                pts = np.rint((P2 - (x0, y0)) * 256).astype(np.int32)
             else:
-                x0, y0 = int(lo[i, 0]), int(lo[i, 1])
-                x1, y1 = int(hi[i, 0]), int(hi[i, 1])
-            x0, y0, x1, y1 = max(x0, 0), max(y0, 0), min(x1, Wc), min(y1, Hc)
+                x0, y0, x1, y1 = boxes[i]
+                pts = corners[i]
             if x0 >= x1 or y0 >= y1:
                 continue
-            mask = scratch[y0:y1, x0:x1]
-            mask[:] = 0
-            cv2.fillConvexPoly(mask, np.rint((P2 - (x0, y0)) * 256).astype(np.int32), 1, cv2.LINE_8, 8)
-            w = (A[i] * self._u[x0:x1])[None, :] + (B[i] * self._v[y0:y1] + C[i])[:, None]
+            mask = mask_buf[y0:y1, x0:x1]
+            mask.fill(0)
+            cv2.fillConvexPoly(mask, pts, 1, cv2.LINE_8, 8)
+            # float32 inverse depth of the face's plane over the box; the winners: inside and nearer
+            w = np.add.outer(B[i] * v[y0:y1] + C[i], A[i] * u[x0:x1])
             zb = canvas.inv_depth[y0:y1, x0:x1]
-            upd = mask.view(bool)
-            upd &= w > zb
-            np.copyto(zb, w, where=upd)
-            canvas.rgb[y0:y1, x0:x1][upd] = colors[i]
-            canvas.surface[y0:y1, x0:x1][upd] = surfaces[i]
+            win = cv2.bitwise_and(cv2.compare(w, zb, cv2.CMP_GT), mask)
+            cv2.copyTo(w, win, zb)
+            tile = surface_buf[y0:y1, x0:x1]
+            tile.fill(surfaces[i])
+            cv2.copyTo(tile, win, canvas.surface[y0:y1, x0:x1])
+            tile = color_buf[y0:y1, x0:x1]
+            tile[:] = palette[i]
+            cv2.copyTo(tile, win, canvas.rgb[y0:y1, x0:x1])
 
     # -- the lens ----------------------------------------------------------------------------------------------------
     def finish(self, canvas: Canvas) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -19,8 +19,8 @@ import numpy as np
 
 from armlab.camera import Camera
 from armlab.sim.board_texture import board_texture
-from armlab.sim.faces import Face, arm_faces, object_faces, shade
-from armlab.sim.raster import Canvas, Polygon, View, view_for
+from armlab.sim.faces import FaceSet, arm_faces, objects_faces
+from armlab.sim.raster import Canvas, View, view_for
 from armlab.sim.realism import CameraRealism
 from armlab.sim.sensor import apply_color_effects, apply_depth_effects
 
@@ -42,34 +42,25 @@ def board_canvas(view: View) -> Canvas:
     return canvas
 
 
-def scene_faces(objects, q=None, gripper_opening_mm: float = 0.0, gripper_geometry=None) -> list[Face]:
+def scene_faces(objects, q=None, gripper_opening_mm: float = 0.0, gripper_geometry=None) -> FaceSet:
     """World faces of the objects and (when q is given) the arm."""
-    faces: list[Face] = []
-    for obj in objects:
-        faces += object_faces(obj)
+    sets = [objects_faces(objects)]
     if q is not None:
         if gripper_geometry is None:
             raise ValueError("gripper_geometry is needed to draw the arm (pad_width_mm, pad_height_mm, "
                              "pad_thickness_mm)")
-        faces += arm_faces(q, gripper_opening_mm, gripper_geometry)
-    return faces
+        sets.append(arm_faces(q, gripper_opening_mm, gripper_geometry))
+    return FaceSet.concat(sets)
 
 
-def _camera_polygons(faces: list[Face], camera: Camera) -> list[Polygon]:
-    R, t = camera.T_cam_world[:3, :3], camera.T_cam_world[:3, 3]
-    polys = []
-    for i, f in enumerate(faces):
-        k = shade(f.normal)
-        color = tuple(min(255.0, c * k) for c in f.color)
-        polys.append(Polygon(f.vertices @ R.T + t, R @ f.normal, color, FIRST_FACE_SURFACE + i))
-    return polys
-
-
-def draw_faces(view: View, canvas: Canvas, faces: list[Face]) -> None:
-    """Rasterise world faces into a canvas of the view (z-buffered, shaded)."""
+def draw_faces(view: View, canvas: Canvas, faces: FaceSet) -> None:
+    """Rasterise world faces into a canvas of the view (z-buffered, shaded); face i gets surface id
+    FIRST_FACE_SURFACE + i."""
     if len(faces) + FIRST_FACE_SURFACE > np.iinfo(np.uint16).max:
         raise ValueError(f"too many faces to draw ({len(faces)})")
-    view.fill_polygons(canvas, _camera_polygons(faces, view.camera))
+    R, t = view.camera.T_cam_world[:3, :3], view.camera.T_cam_world[:3, 3]
+    view.fill_polygons(canvas, faces.vertices @ R.T + t, faces.normals @ R.T, faces.shaded_colors(),
+                       FIRST_FACE_SURFACE + np.arange(len(faces)))
 
 
 def render_exact(camera: Camera, objects, q=None, gripper_opening_mm: float = 0.0, gripper_geometry=None,

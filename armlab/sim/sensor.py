@@ -2,31 +2,57 @@
 noise, planar bias, quantisation and dropouts (NaN) on depth. Driven by a `CameraRealism` and a per-frame numpy
 Generator, so a seed and a frame number repeat exactly.
 
-Gaussian noise is drawn fast from random bytes through a 256-entry inverse-CDF table (quantised normal deviates).
+Per-pixel random fields are windows of cached pools instead of fresh draws (drawing ~4 M deviates costs more than
+the rest of a frame): a pool is a field of independent standard normal (or uniform byte) values `POOL_MARGIN` pixels
+larger than the image each way, drawn once per process from a fixed seed; each frame takes the window at an offset
+drawn from its Generator (and, for normal noise, a random sign). Within a frame every pixel's value is an independent
+draw with the exact distribution; two frames share values only shifted by the difference of their offsets, so frames
+still differ pixel by pixel and averaging frames still averages the noise away.
 Units: colour in 8-bit levels (DN), depth in mm (camera-frame Z), pixels in OpenCV's convention.
 """
 
 from __future__ import annotations
 
 import functools
-from statistics import NormalDist
 
 import cv2
 import numpy as np
 
 from armlab.sim.realism import CameraRealism
 
-__all__ = ["apply_color_effects", "apply_depth_effects", "gaussian_field"]
+__all__ = ["apply_color_effects", "apply_depth_effects", "normal_field", "uniform_bytes", "POOL_MARGIN"]
 
-# inverse normal CDF at the centres of 256 equal-probability bins: byte -> standard normal deviate (sigma ~ 0.99)
-_NORMAL_LUT = np.array([NormalDist().inv_cdf((i + 0.5) / 256) for i in range(256)])
-_NORMAL_LUT = (_NORMAL_LUT / _NORMAL_LUT.std()).astype(np.float32)
+POOL_MARGIN = 128          # pool size beyond the image (px, each axis): (POOL_MARGIN + 1)^2 windows per pool
+_POOL_SEED = 0x5EED_F1E1D
 
 
-def gaussian_field(rng: np.random.Generator, shape: tuple[int, ...]) -> np.ndarray:
-    """Standard normal deviates (float32, quantised to 256 levels) of the given shape."""
-    raw = np.frombuffer(rng.bytes(int(np.prod(shape))), np.uint8).reshape(shape)
-    return cv2.LUT(raw, _NORMAL_LUT) if raw.ndim <= 3 and raw.shape[-1] <= 4 else _NORMAL_LUT[raw]
+@functools.lru_cache(maxsize=4)
+def _pool(shape: tuple[int, ...], kind: str) -> np.ndarray:
+    """Read-only pool for fields of `shape`: (H + M, W + M, ...) standard normal float32 or uniform uint8."""
+    rng = np.random.default_rng([_POOL_SEED, len(shape), *shape, kind == "normal"])
+    size = (shape[0] + POOL_MARGIN, shape[1] + POOL_MARGIN) + tuple(shape[2:])
+    pool = rng.standard_normal(size, dtype=np.float32) if kind == "normal" else rng.integers(0, 256, size, np.uint8)
+    pool.flags.writeable = False
+    return pool
+
+
+def _window(rng: np.random.Generator, shape: tuple[int, ...], kind: str) -> np.ndarray:
+    if len(shape) < 2 or min(shape) < 1:
+        raise ValueError(f"a random field needs a shape (H, W[, C]) of positive sizes, got {shape}")
+    oy, ox = rng.integers(0, POOL_MARGIN + 1, 2).tolist()
+    return _pool(tuple(int(n) for n in shape), kind)[oy:oy + shape[0], ox:ox + shape[1]]
+
+
+def normal_field(rng: np.random.Generator, shape: tuple[int, ...]) -> tuple[np.ndarray, float]:
+    """A read-only (H, W[, C]) float32 field of standard normal deviates and a random sign (+1.0 or -1.0) to scale
+    it by (a window of the cached pool, chosen by `rng`)."""
+    field = _window(rng, shape, "normal")
+    return field, float(rng.integers(0, 2) * 2 - 1)
+
+
+def uniform_bytes(rng: np.random.Generator, shape: tuple[int, ...]) -> np.ndarray:
+    """A read-only (H, W[, C]) uint8 field of independent uniform values 0..255 (a window of the cached pool)."""
+    return _window(rng, shape, "uniform")
 
 
 @functools.lru_cache(maxsize=8)
@@ -64,10 +90,11 @@ def apply_color_effects(rgb: np.ndarray, principal_point: tuple[float, float], r
     H, W = rgb.shape[:2]
     gain = _gain_map(H, W, float(principal_point[0]), float(principal_point[1]), realism)
     flicker = 1.0 + realism.flicker * float(rng.standard_normal()) if realism.flicker > 0 else 1.0
-    out = cv2.multiply(rgb.astype(np.float32), gain, scale=flicker)
-    if realism.pixel_noise > 0:
-        out = cv2.scaleAdd(gaussian_field(rng, (H, W, 3)), realism.pixel_noise, out)
-    return np.clip(np.rint(out), 0, 255).astype(np.uint8)
+    if realism.pixel_noise <= 0:
+        return cv2.multiply(rgb, gain, scale=flicker, dtype=cv2.CV_8U)      # rounds to nearest and saturates
+    lit = cv2.multiply(rgb, gain, scale=flicker, dtype=cv2.CV_32F)
+    noise, sign = normal_field(rng, (H, W, 3))
+    return cv2.addWeighted(lit, 1.0, noise, sign * realism.pixel_noise, 0.0, dtype=cv2.CV_8U)
 
 
 def apply_depth_effects(depth: np.ndarray, rgb_exact: np.ndarray, realism: CameraRealism,
@@ -79,19 +106,22 @@ def apply_depth_effects(depth: np.ndarray, rgb_exact: np.ndarray, realism: Camer
     if realism.depth_noise_mm > 0:
         gray = cv2.cvtColor(rgb_exact, cv2.COLOR_RGB2GRAY)
         sigma = cv2.LUT(gray, _dark_lut(realism.dark_depth_noise, realism.depth_noise_mm * 1e-6))
+        noise, sign = normal_field(rng, (H, W))
         sigma = cv2.multiply(cv2.multiply(sigma, depth), depth)    # sigma_1m * (Z / 1 m)^2 * darkness
-        out = cv2.scaleAdd(cv2.multiply(sigma, gaussian_field(rng, (H, W))), 1.0, out)
+        out = cv2.scaleAdd(cv2.multiply(sigma, noise, scale=sign), 1.0, out)
     if any(realism.depth_bias_mm):
-        out += _bias_map(H, W, realism)
+        out = cv2.add(out, _bias_map(H, W, realism))
     if realism.depth_quantum_mm > 0:
-        out = np.rint(out / realism.depth_quantum_mm) * np.float32(realism.depth_quantum_mm)
+        q = np.float32(realism.depth_quantum_mm)
+        np.rint(np.divide(out, q, out=out), out=out)
+        out *= q
     drop = ~(depth >= realism.min_range_mm)
     if realism.depth_edge_dropout > 0 or realism.depth_dropout > 0:
-        u = np.frombuffer(rng.bytes(H * W), np.uint8).reshape(H, W)
-        filled = np.nan_to_num(depth, nan=0.0)
+        u = uniform_bytes(rng, (H, W))
+        filled = cv2.patchNaNs(depth.copy(), 0.0)
         kernel = np.ones((3, 3), np.uint8)
-        step = (cv2.dilate(filled, kernel) - cv2.erode(filled, kernel)) > 8.0
+        step = cv2.subtract(cv2.dilate(filled, kernel), cv2.erode(filled, kernel)) > 8.0
         drop |= step & (u < 256 * realism.depth_edge_dropout)
         drop |= u < 256 * realism.depth_dropout
     out[drop] = np.nan
-    return out.astype(np.float32, copy=False)
+    return out
