@@ -26,17 +26,43 @@ NEAR_MM = 50.0          # geometry closer to the camera than this is clipped awa
 
 class Canvas:
     """The buffers of one render in the ideal pinhole image: colour (H, W, 3) uint8, inverse depth (H, W) float32
-    (1/mm, 0 where nothing was drawn) and surface ids (H, W) uint16 (0 = nothing)."""
+    (1/mm, 0 where nothing was drawn) and surface ids (H, W) uint16 (0 = nothing).
+
+    A canvas can be frozen (read-only, e.g. the cached board); a copy of a frozen canvas remembers it as `base` and
+    records in `dirty` the canvas rectangles (x0, y0, x1, y1), end exclusive, that drawing may have changed since
+    (None: unknown, anywhere), so that `View.finish` redoes the lens only there."""
 
     def __init__(self, height: int, width: int):
         self.rgb = np.zeros((height, width, 3), np.uint8)
         self.inv_depth = np.zeros((height, width), np.float32)
         self.surface = np.zeros((height, width), np.uint16)
+        self.base: Canvas | None = None
+        self.dirty: list[tuple[int, int, int, int]] | None = None
+        self.finished = None         # a frozen canvas caches View.finish's result here
+
+    @property
+    def frozen(self) -> bool:
+        return not self.rgb.flags.writeable
+
+    def freeze(self) -> Canvas:
+        """Make the buffers read-only (returns self)."""
+        for a in (self.rgb, self.inv_depth, self.surface):
+            a.flags.writeable = False
+        return self
 
     def copy(self) -> Canvas:
+        """A writable copy (of a frozen canvas: with it as base and nothing dirty yet)."""
         c = Canvas.__new__(Canvas)
         c.rgb, c.inv_depth, c.surface = self.rgb.copy(), self.inv_depth.copy(), self.surface.copy()
+        c.base, c.dirty, c.finished = (self, [], None) if self.frozen else (None, None, None)
         return c
+
+    def mark_dirty(self, rect: tuple[int, int, int, int] | None) -> None:
+        """Record that the rectangle (x0, y0, x1, y1) (None: anything) may have changed."""
+        if rect is None or self.dirty is None:
+            self.dirty = None
+        else:
+            self.dirty.append(rect)
 
 
 class View:
@@ -77,7 +103,8 @@ class View:
             self.map_x, self.map_y = map_x, map_y
             # fixed-point maps: faster remaps; the nearest maps pick the canvas pixel whose centre is closest
             self._fixed = cv2.convertMaps(map_x, map_y, cv2.CV_16SC2)
-            self._nearest = (np.rint(map_x).astype(np.float32), np.rint(map_y).astype(np.float32))
+            self._nearest = cv2.convertMaps(np.rint(map_x), np.rint(map_y), cv2.CV_16SC2, nninterpolation=True)[0]
+            self._tiles = _tile_sources(map_x, map_y)
         self._u = np.arange(self.width, dtype=np.float32)
         self._v = np.arange(self.height, dtype=np.float32)
         R, t = camera.T_cam_world[:3, :3], camera.T_cam_world[:3, 3]
@@ -127,6 +154,7 @@ class View:
             draw &= w > canvas.inv_depth
         if rgb.ndim == 2:
             rgb = cv2.cvtColor(rgb, cv2.COLOR_GRAY2RGB)
+        canvas.mark_dirty(None)
         canvas.rgb[draw] = rgb[draw]
         canvas.inv_depth[draw] = w[draw]
         canvas.surface[draw] = surface
@@ -213,24 +241,95 @@ class View:
             tile = color_buf[y0:y1, x0:x1]
             tile[:] = palette[i]
             cv2.copyTo(tile, win, canvas.rgb[y0:y1, x0:x1])
+            canvas.mark_dirty((x0, y0, x1, y1))
 
     # -- the lens ----------------------------------------------------------------------------------------------------
     def finish(self, canvas: Canvas) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The camera's image of a canvas: rgb (h, w, 3) uint8, depth (h, w) float32 mm (NaN where nothing was
-        drawn) and a boolean (h, w) mask of pixels next to a surface change (a depth edge or a crease)."""
-        edge_canvas = _surface_edges(canvas.surface)
+        drawn) and a boolean (h, w) mask of pixels next to a surface change (a depth edge or a crease).
+
+        With distortion, a copy of a frozen canvas reuses its base's image and redoes the lens only in the image
+        tiles whose source pixels lie near a dirty rectangle (same result, pixel for pixel, as the whole image)."""
         if self.identity:
-            rgb, inv, edge = canvas.rgb, canvas.inv_depth, edge_canvas.view(bool)
+            rgb, inv, edge = canvas.rgb, canvas.inv_depth, _surface_edges(canvas.surface).view(bool)
+            depth = cv2.divide(1.0, inv)           # 0 where inv is 0
+            depth[inv <= 0] = np.nan
+            return rgb, depth, edge
+        base = canvas.base
+        if base is None or canvas.dirty is None:
+            rgb = np.empty((self.camera.height, self.camera.width, 3), np.uint8)
+            depth = np.empty((self.camera.height, self.camera.width), np.float32)
+            edge = np.empty((self.camera.height, self.camera.width), np.uint8)
+            self._lens(canvas, rgb, depth, edge, [(0, 0, self.camera.width, self.camera.height)])
         else:
-            rgb = cv2.remap(canvas.rgb, *self._fixed, interpolation=cv2.INTER_LINEAR)
-            inv = cv2.remap(canvas.inv_depth, *self._fixed, interpolation=cv2.INTER_LINEAR)
-            edge = cv2.remap(edge_canvas, *self._nearest, interpolation=cv2.INTER_NEAREST).view(bool)
-            # next to a surface change bilinear mixing of two surfaces is wrong: take the nearest canvas pixel there
-            inv_nearest = cv2.remap(canvas.inv_depth, *self._nearest, interpolation=cv2.INTER_NEAREST)
-            np.copyto(inv, inv_nearest, where=edge)
-        depth = cv2.divide(1.0, inv)           # 0 where inv is 0
-        depth[inv <= 0] = np.nan
+            if base.finished is None:
+                self.finish(base)                  # caches it
+            rgb, depth, edge = (a.copy() for a in base.finished)
+            self._lens(canvas, rgb, depth, edge, self._dirty_runs(canvas.dirty))
+        edge = edge.view(bool)
+        if canvas.frozen:
+            canvas.finished = (rgb, depth, edge.view(np.uint8))
+            for a in canvas.finished:
+                a.flags.writeable = False
         return rgb, depth, edge
+
+    def _lens(self, canvas: Canvas, rgb: np.ndarray, depth: np.ndarray, edge: np.ndarray, rects) -> None:
+        """Write the distorted image of `canvas` into the image rectangles (u0, v0, u1, v1) of rgb, depth, edge."""
+        if not rects:
+            return
+        edge_canvas = _surface_edges(canvas.surface)
+        m1, m2 = self._fixed
+        for u0, v0, u1, v1 in rects:
+            f1, f2, near = m1[v0:v1, u0:u1], m2[v0:v1, u0:u1], self._nearest[v0:v1, u0:u1]
+            cv2.remap(canvas.rgb, f1, f2, cv2.INTER_LINEAR, dst=rgb[v0:v1, u0:u1])
+            inv = cv2.remap(canvas.inv_depth, f1, f2, cv2.INTER_LINEAR)
+            e = cv2.remap(edge_canvas, near, None, cv2.INTER_NEAREST, dst=edge[v0:v1, u0:u1])
+            # next to a surface change bilinear mixing of two surfaces is wrong: take the nearest canvas pixel there
+            cv2.copyTo(cv2.remap(canvas.inv_depth, near, None, cv2.INTER_NEAREST), e, inv)
+            d = cv2.divide(1.0, inv, dst=depth[v0:v1, u0:u1])           # 0 where inv is 0
+            d[inv <= 0] = np.nan
+
+    def _dirty_runs(self, dirty: list[tuple[int, int, int, int]]) -> list[tuple[int, int, int, int]]:
+        """Image rectangles covering every tile whose source pixels (with the bilinear and 3x3 edge neighbours) meet a
+        dirty canvas rectangle: per tile row, runs of such tiles (gaps of one clean tile bridged)."""
+        if not dirty:
+            return []
+        src, tile = self._tiles
+        r = np.asarray(dirty)
+        hit = ((src[:, :, 0, None] < r[:, 2]) & (src[:, :, 2, None] > r[:, 0])
+               & (src[:, :, 1, None] < r[:, 3]) & (src[:, :, 3, None] > r[:, 1])).any(axis=2)
+        W, H = self.camera.width, self.camera.height
+        rects = []
+        for ty, row in enumerate(hit.tolist()):
+            tx = 0
+            while tx < len(row):
+                if not row[tx]:
+                    tx += 1
+                    continue
+                start = tx
+                while tx < len(row) and (row[tx] or (tx + 1 < len(row) and row[tx + 1])):
+                    tx += 1
+                rects.append((start * tile, ty * tile, min(tx * tile, W), min((ty + 1) * tile, H)))
+        return rects
+
+
+TILE_PX = 48                 # image tiles of the partial lens update
+
+
+def _tile_sources(map_x: np.ndarray, map_y: np.ndarray) -> tuple[np.ndarray, int]:
+    """For each TILE_PX image tile: the canvas box (x0, y0, x1, y1), end exclusive, of every canvas pixel its lens
+    output can depend on (bilinear neighbours, and the 3x3 neighbourhoods behind the surface-edge mask):
+    (rows, cols, 4) int, and the tile size."""
+    H, W = map_x.shape
+    rows, cols = -(-H // TILE_PX), -(-W // TILE_PX)
+    src = np.empty((rows, cols, 4), np.int64)
+    for ty in range(rows):
+        for tx in range(cols):
+            mx = map_x[ty * TILE_PX:(ty + 1) * TILE_PX, tx * TILE_PX:(tx + 1) * TILE_PX]
+            my = map_y[ty * TILE_PX:(ty + 1) * TILE_PX, tx * TILE_PX:(tx + 1) * TILE_PX]
+            src[ty, tx] = (np.floor(mx.min()) - 2, np.floor(my.min()) - 2, np.floor(mx.max()) + 3,
+                           np.floor(my.max()) + 3)
+    return src, TILE_PX
 
 
 def _surface_edges(surface: np.ndarray) -> np.ndarray:

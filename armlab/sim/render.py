@@ -37,9 +37,7 @@ def board_canvas(view: View) -> Canvas:
     tex = board_texture()
     view.draw_plane(canvas, tex.image, tex.H_world_texel, view.camera.T_cam_world, BOARD_SURFACE,
                     border=cv2.BORDER_REPLICATE, z_test=False)
-    for a in (canvas.rgb, canvas.inv_depth, canvas.surface):
-        a.flags.writeable = False
-    return canvas
+    return canvas.freeze()
 
 
 def scene_faces(objects, q=None, gripper_opening_mm: float = 0.0, gripper_geometry=None) -> FaceSet:
