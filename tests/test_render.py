@@ -219,3 +219,82 @@ def test_bad_input_is_refused():
         render("not a camera", [])
     with pytest.raises(ValueError, match="gripper_geometry"):
         render(true_camera(CameraRealism.ideal()), [], SLEEP)
+
+
+def test_partial_lens_update_matches_the_whole_image():
+    from armlab.sim.raster import view_for
+    from armlab.sim.render import board_canvas, draw_faces, scene_faces
+    camera = true_camera(EXACT_DISTORTED)
+    view = view_for(camera)
+    objs = [cube("red", -300, 100, id=1), cube("blue", 200, 380, 25, id=2)]
+    canvas = board_canvas(view).copy()
+    draw_faces(view, canvas, scene_faces(objs, SLEEP, 40.0, GRIPPER))
+    assert canvas.dirty and len(view._dirty_runs(canvas.dirty)) > 0
+    part = view.finish(canvas)
+    canvas.dirty = None                                     # unknown changes: the lens over the whole image
+    whole = view.finish(canvas)
+    assert np.array_equal(part[0], whole[0]) and np.array_equal(part[2], whole[2])
+    assert np.array_equal(np.isnan(part[1]), np.isnan(whole[1]))
+    assert np.nanmax(np.abs(part[1] - whole[1])) < 1e-3    # mm: float rounding of the remap only
+    board_only = view.finish(board_canvas(view).copy())     # nothing drawn: the cached board image itself
+    assert np.array_equal(board_only[0], view.finish(board_canvas(view))[0])
+
+
+def test_noise_fields_are_independent_per_pixel_and_per_frame():
+    from armlab.sim.sensor import normal_field, uniform_bytes
+    a, sa = normal_field(np.random.default_rng(1), (720, 1280))
+    b, sb = normal_field(np.random.default_rng(2), (720, 1280))
+    a2, sa2 = normal_field(np.random.default_rng(1), (720, 1280))
+    assert np.array_equal(a, a2) and sa == sa2                 # the same generator state gives the same field
+    assert a.shape == (720, 1280) and a.dtype == np.float32 and abs(sa) == 1.0
+    assert abs(a.mean()) < 0.01 and a.std() == pytest.approx(1.0, abs=0.01)
+    assert abs(np.corrcoef(a[:, :-1].ravel(), a[:, 1:].ravel())[0, 1]) < 0.01      # neighbours uncorrelated
+    assert abs(np.corrcoef(a.ravel(), b.ravel())[0, 1]) < 0.01                      # other frames uncorrelated
+    u = uniform_bytes(np.random.default_rng(3), (720, 1280))
+    assert u.dtype == np.uint8 and np.mean(u < 64) == pytest.approx(0.25, abs=0.005)
+    with pytest.raises(ValueError, match="shape"):
+        normal_field(np.random.default_rng(0), (720,))
+
+
+def test_realistic_colour_noise_level_and_averaging_over_frames():
+    realism = replace(CameraRealism(), flicker=0.0)
+    world, arm = stand_ins([])
+    cam = SimCamera(world, None, realism=realism, seed=4)
+    frames = np.stack([cam.capture().rgb for _ in range(8)]).astype(float)
+    patch = frames[:, 300:420, 500:700]                       # board pixels, mostly flat
+    per_pixel = patch.std(axis=0, ddof=1)
+    # per-pixel sigma over frames: the pixel noise (plus rounding to whole levels)
+    assert np.median(per_pixel) == pytest.approx(np.hypot(realism.pixel_noise, 12 ** -0.5), rel=0.1)
+    # the mean of 8 frames keeps 1/sqrt(8) of the noise: frames' noise is independent at each pixel
+    mean8 = patch.mean(axis=0)
+    mean_other = np.stack([cam.capture().rgb for _ in range(8)]).astype(float)[:, 300:420, 500:700].mean(axis=0)
+    assert np.std(mean8 - mean_other) / np.sqrt(2) == pytest.approx(np.median(per_pixel) / np.sqrt(8), rel=0.15)
+
+
+def test_face_sets_of_a_tilted_cube_and_the_arm():
+    from armlab.sim.faces import arm_faces, objects_faces
+    block = cube("green", 100, 200, 30.0, yaw=0.4)
+    block.tilt = np.array([0.3, -0.2])
+    faces = objects_faces([block])
+    assert len(faces) == 6
+    centroids = faces.vertices.mean(axis=1)
+    out = np.einsum("ij,ij->i", centroids - block.position, faces.normals)
+    assert np.allclose(out, 15.0)                              # every face 15 mm out along its own normal
+    assert np.allclose(np.linalg.norm(faces.normals, axis=1), 1.0)
+    assert np.allclose(np.linalg.norm(faces.vertices - block.position, axis=2), 15.0 * np.sqrt(3))   # the corners
+    arm = arm_faces(SLEEP, 40.0, GRIPPER)
+    assert len(arm) == 6 * 8                                   # base, 4 links, housing, 2 fingers
+    assert np.all(np.isin(arm.colors, [36, 38, 52, 54]))
+
+
+def test_fill_polygons_refuses_bad_arrays():
+    from armlab.sim.raster import view_for
+    view = view_for(true_camera(CameraRealism.ideal()))
+    canvas = view.new_canvas()
+    with pytest.raises(ValueError, match="vertices"):
+        view.fill_polygons(canvas, np.zeros((2, 2, 3)), np.zeros((2, 3)), np.zeros((2, 3)), np.ones(2))
+    with pytest.raises(ValueError, match="normals"):
+        view.fill_polygons(canvas, np.zeros((2, 4, 3)), np.zeros((3, 3)), np.zeros((2, 3)), np.ones(2))
+    with pytest.raises(ValueError, match="surface"):
+        view.fill_polygons(canvas, np.zeros((2, 4, 3)), np.zeros((2, 3)), np.zeros((2, 3)), np.zeros(2))
+    assert not canvas.inv_depth.any()                          # nothing was drawn
