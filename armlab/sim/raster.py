@@ -4,8 +4,12 @@ A `View` is the undistorted pinhole canvas of one `armlab.camera.Camera`: the sa
 shifted by a margin so that the canvas covers every ray the distorted image sees. Geometry is drawn into the canvas
 (flat-shaded convex polygons with `fill_polygons`, textured planes with `draw_plane`), keeping a buffer of inverse
 depth 1/Z (1/mm; 0 = nothing). For a plane, 1/Z is an affine function of undistorted pixel coordinates, so it is
-exact per pixel and interpolates exactly. `View.finish` applies the lens distortion with one `cv2.remap` through maps
+exact per pixel and interpolates exactly. `View.finish` applies the lens distortion with `cv2.remap` through maps
 computed once per camera and returns the image the camera records: RGB uint8, depth float32 mm (camera-frame Z).
+
+Speed (a 1280x720 frame in ~10-25 ms on one core): the board is drawn once per camera into a frozen canvas whose
+camera image is cached too; a frame copies it, draws its few hundred faces (one masked z-test per face box, OpenCV
+fills and copies), and redoes the lens only in the image tiles whose source pixels a face box touched.
 
 Units: mm; pixels in OpenCV's convention (integer = pixel centre). Camera frame: x right, y down, z forward.
 """

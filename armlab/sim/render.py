@@ -3,7 +3,8 @@
 `render(camera, objects, q, gripper_opening_mm, gripper_geometry, realism, rng)` draws the table and board (grid,
 AprilTags) as one textured plane z = 0, the objects (blocks and distractors, flat-shaded by their faces' angle to the
 light) and the RX200 (dark boxes along its links, the gripper fingers at the opening) with a depth buffer in the
-camera's ideal pinhole image, applies the lens distortion with one remap, then the sensor effects of `realism`.
+camera's ideal pinhole image, applies the lens distortion (a remap, redone per frame only where faces were drawn),
+then the sensor effects of `realism`. The board's canvas and camera image are cached per camera.
 
 Inputs: `camera` the TRUE camera (armlab.camera.Camera: K, distortion, T_cam_world); objects: armlab.blocks.
 ObjectState-like (footprint_world(), bottom_z, top_z, color, position); q (5,) rad or None (no arm); mm everywhere.
