@@ -13,7 +13,7 @@ import numpy as np
 from armlab.blocks import block_edge
 from armlab.lab import lab_config
 
-__all__ = ["Move", "footprint_radius", "occupied_by", "free_spot", "is_stacked", "REACH_MM", "GAP_MM"]
+__all__ = ["Move", "footprint_radius", "occupied_by", "free_spot", "is_stacked", "covered", "REACH_MM", "GAP_MM"]
 
 REACH_MM = (170.0, 320.0)     # radii where staging spots go: top-down picks and places work well there
 GAP_MM = 25.0                 # free space kept around a staged block for the finger pads
@@ -45,6 +45,14 @@ def footprint_radius(b) -> float:
 def is_stacked(b, tol_mm: float = 10.0) -> bool:
     """True when a detected cube's top is higher than one block of its size (it stands on something)."""
     return bool(b.position[2] > block_edge(b.size) + tol_mm)
+
+
+def covered(b, seen, tol_mm: float = 5.0) -> bool:
+    """True when another detection stands on b (higher, its centre over b's footprint): b cannot be picked without
+    lifting it too (e.g. the visible rim of a large block under a small one)."""
+    return any(o is not b and o.position[2] > b.position[2] + tol_mm
+               and np.linalg.norm(np.asarray(o.position[:2]) - np.asarray(b.position[:2])) < footprint_radius(b)
+               for o in seen)
 
 
 def occupied_by(xy, radius: float, seen, ignore=()) -> list:

@@ -15,9 +15,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from armlab.blocks import COLORS, block_edge
+from armlab.blocks import COLORS
+from armlab.planning.transit import GRIPPER_RADIUS_MM
 
-from .layout import Move, footprint_radius, free_spot, is_stacked
+from .layout import Move, covered, footprint_radius, free_spot, is_stacked
 
 __all__ = ["LineUp", "line_slots", "PITCH_MM"]
 
@@ -37,8 +38,9 @@ def line_slots(large_side: int = 1, y: float = -95.0, colors=COLORS) -> dict[tup
 
 
 def _overlaps_slot(b, slot, size) -> bool:
-    """True when detection b covers the slot (centre within half the two footprints' sizes)."""
-    return bool(np.linalg.norm(np.asarray(b.position[:2]) - slot[:2]) < footprint_radius(b) + block_edge(size) / 2)
+    """True when detection b stands where the open gripper comes down to place a block in the slot (within the
+    gripper's radius, GRIPPER_RADIUS_MM, of the slot's centre, plus b's own footprint radius)."""
+    return bool(np.linalg.norm(np.asarray(b.position[:2]) - slot[:2]) < footprint_radius(b) + GRIPPER_RADIUS_MM)
 
 
 class LineUp:
@@ -69,12 +71,13 @@ class LineUp:
         if self.slots is None:
             self.choose_layout(seen)
         cubes = [b for b in seen if b.is_block]
-        todo = [b for b in cubes if not self.done(b) and (b.size, b.color) not in self.skipped]
+        todo = [b for b in cubes if not self.done(b) and (b.size, b.color) not in self.skipped and not covered(b, seen)]
         todo.sort(key=lambda b: (-b.position[2], np.hypot(*b.position[:2])))
         blockers = []
         for b in todo:
             slot = self.slots[(b.size, b.color)]
-            taken = [o for o in seen if o is not b and _overlaps_slot(o, slot, b.size)]
+            taken = [o for o in seen if o is not b and _overlaps_slot(o, slot, b.size)
+                     and not (o.is_block and self.done(o))]      # the pads close across the line: neighbours are fine
             if not taken:
                 return Move(b, slot.copy(), 0.0, "line")
             blockers += [o for o in taken if o.is_block and not self.done(o)]

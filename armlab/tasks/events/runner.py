@@ -22,6 +22,7 @@ from armlab.blocks import block_edge
 from armlab.detection import DetectionSettings
 from armlab.kinematics import Unreachable
 from armlab.planning import DEFAULT_CLEARANCE_MM, Obstacle
+from armlab.station import MotionRefused
 from armlab.tasks import pickplace
 
 from .layout import Move, footprint_radius
@@ -89,21 +90,26 @@ def make_strategy(event: str, level: int):
     return {"sort_stack": SortStack, "line_up": LineUp, "sky": Sky}[event](level)
 
 
-def _clear_view(arm, obstacles) -> None:
-    """The camera-clear pose (tasks.perception.clear_view); when the move from a hover point would pass lower than
-    the default clearance over a neighbour, with a smaller one that still keeps the finger tips above it."""
-    for clearance in (DEFAULT_CLEARANCE_MM, CLEAR_VIEW_MIN_CLEARANCE_MM):
-        q = np.asarray(arm.joint_positions(), dtype=float)
-        if np.abs(q - planning.CAMERA_CLEAR_POSE).max() < 0.02:
-            return
-        try:
-            plan = planning.plan_camera_clear(q, obstacles, clearance=clearance)
-        except Unreachable:
-            if clearance == CLEAR_VIEW_MIN_CLEARANCE_MM:
-                raise
-            continue
-        planning.execute(plan, arm)
+def _clear_view(arm, obstacles, held_below: float = 0.0) -> None:
+    """The camera-clear pose (tasks.perception.clear_view's move). When the move from a hover point would pass lower
+    than the default clearance over a neighbour, try a smaller clearance that still keeps the finger tips above it,
+    then lift the arm back first (shoulder back by 0.3 or 0.6 rad, which raises the tool over the board)."""
+    q = np.asarray(arm.joint_positions(), dtype=float)
+    if np.abs(q - planning.CAMERA_CLEAR_POSE).max() < 0.02:
         return
+    lifts = [None] + [np.clip(q - [0.0, d, 0.0, 0.0, 0.0], arm.robot.lower, arm.robot.upper) for d in (0.3, 0.6)]
+    for q_up in lifts:
+        for clearance in (DEFAULT_CLEARANCE_MM, CLEAR_VIEW_MIN_CLEARANCE_MM):
+            try:
+                plan = planning.plan_camera_clear(q if q_up is None else q_up, obstacles, clearance=clearance,
+                                                  held_below=held_below)
+            except Unreachable:
+                continue
+            if q_up is not None:
+                plan = planning.Plan((planning.MoveStep(planning.joint_move(q, q_up), "lift back"),)).then(plan)
+            planning.execute(plan, arm)
+            return
+    raise Unreachable("cannot move the arm out of the camera's view without passing too low over a block")
 
 
 @dataclass(frozen=True)
@@ -188,18 +194,23 @@ def run_event(station, event: str, level: int = 1, time_limit_s: float | None = 
             continue
         truth = list(station.arm.holding)[:1]
         try:
-            pickplace.place(station, move.to, move.yaw, obstacles=obstacles)
-        except Unreachable as e:      # e.g. the tower is as high as the arm can stack: put the block back down
-            strategy_stop = getattr(strategy, "unreachable", None)
-            if strategy_stop is None:
-                raise
-            strategy_stop(f"the next level is out of reach ({e})")
+            try:
+                pickplace.place(station, move.to, move.yaw, obstacles=obstacles)
+            except MotionRefused:   # refused before moving (e.g. a joint limit on the way up): retry from clear
+                _clear_view(ctx.arm, obstacles, held_below=block_edge(move.block.size) / 2)
+                pickplace.place(station, move.to, move.yaw, obstacles=obstacles)
+        except (Unreachable, MotionRefused) as e:   # e.g. the tower is as high as the arm can stack: put it back
+            why = f"cannot place the {key[0]} {key[1]} block ({e})"
             back = np.asarray(move.block.position, float) - [0.0, 0.0, block_edge(move.block.size)]
             pickplace.place(station, back, move.yaw, obstacles=obstacles)
             board = [*obstacles, move.block]
-            moves.append(MoveLog(move.describe() + " (out of reach: put back)", t_start, world.time_s - t0, True,
+            moves.append(MoveLog(move.describe() + " (cannot place: put back)", t_start, world.time_s - t0, True,
                                  False, np.full(3, np.nan)))
-            continue
+            if hasattr(strategy, "unreachable"):
+                strategy.unreachable(f"the next level is out of reach: {why}")
+                continue
+            stopped = why
+            break
         strategy.placed(move)
         board = [*obstacles, Obstacle(float(move.to[0]), float(move.to[1]),
                                       float(move.to[2]) + block_edge(move.block.size), footprint_radius(move.block))]

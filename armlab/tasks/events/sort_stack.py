@@ -13,7 +13,7 @@ import numpy as np
 
 from armlab.blocks import COLORS, block_edge
 
-from .layout import Move, free_spot, is_stacked
+from .layout import Move, covered, free_spot, is_stacked
 
 __all__ = ["SortStack", "STACK_XY", "ROW_XY"]
 
@@ -65,6 +65,7 @@ class SortStack:
         todo = [b for b in cubes if not self.done(b)]
         if not todo:
             return None
+        todo = [b for b in todo if not covered(b, seen)] or todo
         stacked = [b for b in todo if is_stacked(b)]
         if stacked and self.level > 1:       # unstack first: the rainbow order needs every colour seen
             b = max(stacked, key=lambda b: b.position[2])
