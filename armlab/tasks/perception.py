@@ -1,0 +1,109 @@
+"""Perception for the task layer: calibrate a station's camera and see the board with the arm out of the way.
+
+calibrate_camera(station): intrinsics (the saved checkerboard views, data/checkerboard, through
+armlab.calibration.calibrate_intrinsics; or the device's factory values; or given K, dist), then with the arm in the
+camera-clear pose (armlab.planning.plan_camera_clear) one frame: AprilTag extrinsics
+(calibration.calibrate_extrinsics) and the planar depth correction (calibration.fit_depth_correction, arm pixels
+excluded). The result is an armlab.calibration.Calibration (save/load it with calibration.save_calibration /
+load_calibration).
+look(station, calibration): arm camera-clear, capture, correct the depth, detect the blocks (detection.detect_blocks
+with the arm masked out). surface_point(...): the world point (mm) under a pixel, from the median corrected depth in a
+small window. Units: px, mm, rad; world (board) frame.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from armlab import calibration, detection, planning
+from armlab.calibration import Calibration
+from armlab.camera import Camera
+from armlab.station import Frame
+
+__all__ = ["Observation", "calibrate_camera", "clear_view", "look", "surface_point", "checkerboard_intrinsics"]
+
+
+@dataclass(frozen=True)
+class Observation:
+    """One look at the board: the frame, its corrected depth (H, W) mm, the blocks detected and the arm's joints."""
+
+    frame: Frame
+    depth: np.ndarray
+    blocks: list
+    arm_q: np.ndarray
+
+
+def checkerboard_intrinsics(folder=None) -> tuple[np.ndarray, np.ndarray]:
+    """K (3, 3) and dist (5,) calibrated from a folder of checkerboard views (default: data/checkerboard)."""
+    from armlab.sim.checkerboard import load_dataset  # reads the saved views (no simulation involved)
+
+    images, meta = load_dataset(folder)
+    result = calibration.calibrate_intrinsics(images, tuple(meta.get("pattern_size", (9, 6))),
+                                              float(meta.get("square_mm", 25.0)))
+    return result.K, result.dist
+
+
+def clear_view(arm, obstacles=()) -> None:
+    """Move the arm to the camera-clear pose (planning.plan_camera_clear) unless it is already there."""
+    q = np.asarray(arm.joint_positions(), dtype=float)
+    if np.abs(q - planning.CAMERA_CLEAR_POSE).max() < 0.02:
+        return
+    planning.execute(planning.plan_camera_clear(q, obstacles), arm)
+
+
+def calibrate_camera(station, intrinsics="checkerboard", arm=None) -> Calibration:
+    """Calibrate the station's camera (see the module notes).
+
+    intrinsics: "checkerboard" (data/checkerboard views), "factory" (station.camera.K, dist) or a (K, dist) pair.
+    arm: the arm to move out of view (default station.arm; pass a tasks GuardedArm to keep its guards).
+    Raises ValueError when the tags are not seen or the board has too little depth.
+    """
+    if isinstance(intrinsics, str):
+        if intrinsics == "checkerboard":
+            K, dist = checkerboard_intrinsics()
+        elif intrinsics == "factory":
+            K, dist = station.camera.K, station.camera.dist
+        else:
+            raise ValueError(f"intrinsics must be 'checkerboard', 'factory' or (K, dist), got {intrinsics!r}")
+    else:
+        K, dist = intrinsics
+    arm = arm or station.arm
+    clear_view(arm)
+    frame = station.camera.capture()
+    ext = calibration.calibrate_extrinsics(frame.rgb, K, dist)
+    camera = Camera(K, dist, ext.T_cam_world, frame.rgb.shape[1], frame.rgb.shape[0])
+    exclude = detection.arm_mask(camera, np.asarray(arm.joint_positions(), float))
+    correction = calibration.fit_depth_correction(frame.depth, camera, exclude=exclude)
+    return Calibration(camera, correction, notes=f"tags {ext.tag_ids}, reprojection {ext.rms_px:.2f} px, depth "
+                                                 f"residual {correction.residual_mm:.1f} mm")
+
+
+def look(station, calib: Calibration, arm=None, obstacles=(), clear: bool = True) -> Observation:
+    """Move the arm out of view (unless clear=False), capture a frame and detect the blocks on it."""
+    arm = arm or station.arm
+    if clear:
+        clear_view(arm, obstacles)
+    frame = station.camera.capture()
+    depth = calib.depth_correction.apply(frame.depth)
+    q = np.asarray(arm.joint_positions(), dtype=float)
+    blocks = detection.detect_blocks(frame.rgb, depth, calib.camera, arm_q=q)
+    return Observation(frame, depth, blocks, q)
+
+
+def surface_point(calib: Calibration, depth: np.ndarray, uv, radius: int = 3) -> np.ndarray:
+    """World point (3,) mm of the surface seen at pixel uv = (u, v) of a corrected depth image (H, W) mm: the median
+    depth of the (2 radius + 1)^2 window around it. Raises ValueError when the pixel is outside the image or the
+    window has no depth."""
+    uv = np.asarray(uv, dtype=float)
+    if uv.shape != (2,) or not np.all(np.isfinite(uv)):
+        raise ValueError(f"a pixel is (u, v): two finite numbers, got {uv!r}")
+    h, w = depth.shape
+    u, v = int(round(uv[0])), int(round(uv[1]))
+    if not (0 <= u < w and 0 <= v < h):
+        raise ValueError(f"pixel ({uv[0]:.1f}, {uv[1]:.1f}) is outside the {w}x{h} image")
+    window = depth[max(0, v - radius):v + radius + 1, max(0, u - radius):u + radius + 1]
+    if not np.isfinite(window).any():
+        raise ValueError(f"no depth around pixel ({u}, {v}): the camera saw no surface there")
+    return calib.camera.pixel_to_world(uv[None], np.array([np.nanmedian(window)]))[0]

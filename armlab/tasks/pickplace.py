@@ -1,0 +1,149 @@
+"""Pick and place on a station: detected block -> plan (armlab.planning) -> execute on the station's arm.
+
+Works the same on the simulated and the real station: it uses only the Arm protocol (through a GuardedArm, which
+compensates sag) and station.camera. Each station gets a TaskContext on first use (kept on the station object):
+- calibration: the camera calibration (perception.calibrate_camera, done once, or set by the caller);
+- sag: the sag model (tasks.sag). In simulation it is fitted on first use from 24 poses measured with the
+  simulator's ground truth (arm.tool_pose_true, a stand-in for a student's touch-off measurements); on the real arm
+  it stays zero until the caller sets one (calibrate_sag with a measuring function, or a saved model);
+- known: what stands on the board (detections from the last look, updated by picks and places), the obstacles plans
+  avoid; held: the block in the gripper.
+place() releases the block RELEASE_GAP_MM above the requested bottom height, so a residual arm error never pushes
+it into what it is put on (the block drops that little and settles); at long reach, where the tool is tilted, also
+by how far the tilted block's lowest edge hangs below its bottom-face centre. Units: mm, rad; world (board) frame.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from armlab import planning
+from armlab.blocks import block_edge
+from armlab.calibration import Calibration
+from armlab.planning import Obstacle
+
+from . import perception
+from .guard import GuardedArm
+from .sag import SagModel, calibration_poses, fit_sag
+
+__all__ = ["TaskContext", "context", "calibrate_sag", "pick", "place", "look", "RELEASE_GAP_MM"]
+
+RELEASE_GAP_MM = 2.0
+
+
+@dataclass
+class TaskContext:
+    """Per-station state of the task layer (see the module notes)."""
+
+    arm: GuardedArm
+    calibration: Calibration | None = None
+    held: object | None = None              # the picked detection Block while it is in the gripper
+    known: list = field(default_factory=list)
+    last: perception.Observation | None = None
+
+    @property
+    def held_edge(self) -> float:
+        if self.held is None:
+            raise ValueError("the gripper holds no block: pick one first")
+        return block_edge(self.held.size)
+
+
+def calibrate_sag(arm, measure: Callable[[], np.ndarray], poses=None) -> SagModel:
+    """Fit a SagModel: move the raw arm (no compensation) to each pose (default sag.calibration_poses), passing
+    above it first, and call measure() -> tool point (3,) world mm there. Returns the fitted model."""
+    poses = calibration_poses(arm.robot) if poses is None else np.asarray(poses, dtype=float)
+    from armlab import kinematics
+
+    q_cmd, measured = [], []
+    for q in poses:
+        p = kinematics.fk(q, arm.robot)[:3, 3]
+        above = kinematics.ik(p + [0.0, 0.0, 60.0], np.pi / 2, 0.0, current=q, robot=arm.robot)[0] \
+            if np.hypot(p[0], p[1]) < 330 else None
+        if above is not None:
+            arm.move_to(above)
+        arm.move_to(q)
+        q_cmd.append(np.asarray(arm.joint_positions(), dtype=float))
+        measured.append(np.asarray(measure(), dtype=float))
+        if above is not None:
+            arm.move_to(above)
+    return fit_sag(np.array(q_cmd), np.array(measured), arm.robot)
+
+
+def context(station, intrinsics="checkerboard") -> TaskContext:
+    """The station's TaskContext, created (camera calibrated, sag fitted in simulation) on first use."""
+    ctx = getattr(station, "_tasks_context", None)
+    if ctx is None:
+        arm = GuardedArm(station.arm)
+        if station.kind == "sim":
+            arm.sag = calibrate_sag(station.arm, lambda: station.arm.tool_pose_true()[:3, 3])
+        ctx = TaskContext(arm)
+        ctx.calibration = perception.calibrate_camera(station, intrinsics, arm=arm)
+        station._tasks_context = ctx
+    return ctx
+
+
+def look(station) -> perception.Observation:
+    """Move the arm out of view, capture and detect; the blocks seen become the known obstacles."""
+    ctx = context(station)
+    obs = perception.look(station, ctx.calibration, ctx.arm, obstacles=ctx.known)
+    ctx.last, ctx.known = obs, list(obs.blocks)
+    return obs
+
+
+def _same(a, b) -> bool:
+    pa, pb = np.asarray(a.position if not isinstance(a, Obstacle) else (a.x, a.y, a.top), float), \
+        np.asarray(b.position if not isinstance(b, Obstacle) else (b.x, b.y, b.top), float)
+    return bool(np.abs(pa - pb).max() < 1.0)
+
+
+def pick(station, block, obstacles=None) -> bool:
+    """Pick a detected block (detection.Block: .position top-face centre world mm, .yaw rad, .size).
+
+    Plans with planning.plan_pick around `obstacles` (default: the known blocks) and runs the plan on the guarded arm.
+    Returns close_gripper's answer (True when the block is held). Raises ValueError when the gripper already holds a
+    block, kinematics.Unreachable (a ValueError) when the block cannot be reached (nothing moves then), and lets the
+    arm's MotionRefused / EmergencyStopped through.
+    """
+    ctx = context(station)
+    if ctx.held is not None:
+        raise ValueError(f"the gripper already holds the {ctx.held.color} block: place it first")
+    edge = block_edge(block.size)
+    obs = ctx.known if obstacles is None else list(obstacles)
+    plan = planning.plan_pick(ctx.arm.joint_positions(), block.position, float(block.yaw), edge, obstacles=obs)
+    held = bool(planning.execute(plan, ctx.arm).holding)
+    ctx.known = [k for k in ctx.known if not _same(k, block)]
+    if held:
+        ctx.held = block
+    return held
+
+
+def _tilt_drop(position: np.ndarray, edge: float, yaw: float) -> float:
+    """How far (mm) the lowest edge of a held cube hangs below its bottom-face centre when the place is not top-down:
+    the cube turns with the tool by pi/2 - pitch, so that edge sits (edge / 2) cos(pitch) lower."""
+    tool = np.array([position[0], position[1], planning.place_tool_height(position[2], edge)])
+    try:
+        grasp = planning.choose_grasp(tool, yaw)
+    except ValueError:          # unreachable: plan_place says why
+        return 0.0
+    return 0.0 if grasp.top_down else float(edge / 2 * abs(np.cos(grasp.pitch)))
+
+
+def place(station, position, yaw: float = 0.0, obstacles=None) -> bool:
+    """Put the held block's bottom-face centre at `position` (3,) world mm with yaw (rad); True when the plan ran
+    through (the gripper opened there). Raises ValueError when nothing is held or for bad input, Unreachable when
+    the spot cannot be reached (nothing moves then)."""
+    ctx = context(station)
+    edge = ctx.held_edge
+    p = np.asarray(position, dtype=float)
+    if p.shape != (3,) or not np.all(np.isfinite(p)):
+        raise ValueError(f"place position must be 3 finite numbers (x, y, z in world mm), got {position!r}")
+    obs = ctx.known if obstacles is None else list(obstacles)
+    gap = RELEASE_GAP_MM + _tilt_drop(p, edge, float(yaw))
+    plan = planning.plan_place(ctx.arm.joint_positions(), p + [0.0, 0.0, gap], edge, float(yaw), obstacles=obs)
+    planning.execute(plan, ctx.arm)
+    ctx.held = None
+    ctx.known = [*ctx.known, Obstacle(float(p[0]), float(p[1]), float(p[2] + edge), edge / np.sqrt(2))]
+    return True

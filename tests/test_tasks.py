@@ -1,0 +1,126 @@
+"""armlab.tasks: sag model, guarded arm, pick and place on the realistic simulated station."""
+
+import numpy as np
+import pytest
+
+from armlab import kinematics, make_station, tasks
+from armlab.profile import velocity_violations
+from armlab.tasks.sag import SagModel, calibration_poses, fit_sag
+
+# Four blocks: aligned and yawed, both sizes, spread over reach and heading (world mm, yaw rad).
+SCENE = {"objects": [
+    {"color": "red", "size": "large", "position_mm": [-150.0, 200.0], "yaw_rad": 0.0},
+    {"color": "blue", "size": "large", "position_mm": [180.0, 250.0], "yaw_rad": np.radians(35.0)},
+    {"color": "green", "size": "small", "position_mm": [0.0, 320.0], "yaw_rad": 0.0},
+    {"color": "yellow", "size": "small", "position_mm": [260.0, 60.0], "yaw_rad": np.radians(-30.0)},
+]}
+TARGETS = np.array([[-250.0, 50.0, 0.0], [-80.0, 130.0, 0.0], [100.0, 140.0, 0.0], [-120.0, 330.0, 0.0]])
+
+
+@pytest.fixture(scope="module")
+def station():
+    st = make_station("sim", seed=5, scene=SCENE)
+    tasks.look(st)
+    return st
+
+
+def _measured_sag(seed=3, noise_mm=0.0):
+    st = make_station("sim", seed=seed, scene="empty")
+    rng = np.random.default_rng(seed)
+    model = tasks.calibrate_sag(st.arm, lambda: st.arm.tool_pose_true()[:3, 3] + rng.normal(0, noise_mm, 3))
+    return st, model
+
+
+def test_sag_fit_predicts_the_simulators_bend_at_new_poses():
+    st, model = _measured_sag(noise_mm=1.0)          # touch-off readings with 1 mm errors
+    assert model.poses == len(calibration_poses()) and model.rms_mm < 2.5
+    rng = np.random.default_rng(1)
+    raw, comp = [], []
+    for _ in range(12):
+        r, th, z = rng.uniform(200, 330), rng.uniform(-1.0, 1.0), rng.uniform(40, 100)
+        p = np.array([r * np.sin(th), r * np.cos(th), z])
+        q = kinematics.ik(p, np.pi / 2, 0.0)[0]
+        for cmd, out in ((q, raw), (model.command(q), comp)):
+            st.arm.move_to(kinematics.ik(p + [0, 0, 60], np.pi / 2, 0.0)[0])
+            st.arm.move_to(cmd)
+            out.append(st.arm.tool_pose_true()[:3, 3] - p)
+    raw, comp = np.abs(raw), np.abs(comp)
+    assert raw[:, 2].max() > 4.0                        # the arm really sags
+    assert comp.max() < 1.5 and comp[:, 2].mean() < 0.8  # and the fitted model takes it out
+
+
+def test_sag_command_inverts_physical():
+    model = SagModel(np.array([-1e-4, 2e-5, 1.5e-4, 1e-4, -1e-4, 0.001, -0.02, 0.006, 0.002]))
+    q = kinematics.ik([100.0, 300.0, 40.0], np.pi / 2, 0.3)[0]
+    assert np.abs(model.physical(model.command(q)) - q).max() < 1e-8
+
+
+def test_fit_sag_refuses_bad_input():
+    q = calibration_poses()
+    p = kinematics.fk(q)[:, :3, 3]
+    with pytest.raises(ValueError, match="at least 9 poses"):
+        fit_sag(q[:5], p[:5])
+    with pytest.raises(ValueError, match=r"\(N, 5\)"):
+        fit_sag(q, p[:, :2])
+    bad = p.copy()
+    bad[3, 1] = np.nan
+    with pytest.raises(ValueError, match="finite"):
+        fit_sag(q, bad)
+    with pytest.raises(ValueError, match="do not determine"):
+        fit_sag(np.repeat(q[:1], 12, axis=0), np.repeat(p[:1], 12, axis=0))
+    assert np.abs(fit_sag(q, p).params).max() < 1e-9    # an arm that does not sag fits to zero
+
+
+def test_pick_and_place_aligned_and_yawed_blocks_of_both_sizes(station):
+    ctx = tasks.context(station)
+    seen = sorted(ctx.last.blocks, key=lambda b: b.color)
+    assert [b.color for b in seen] == ["blue", "green", "red", "yellow"]
+    for block, target in zip(seen, TARGETS):
+        truth = next(o for o in station.world.blocks if o.color == block.color)
+        assert tasks.pick(station, block), f"{block.color} {block.size} not grasped: {station.arm.last_grasp}"
+        assert station.arm.holding[0] is truth
+        assert tasks.place(station, target)
+        bottom = truth.position - [0.0, 0.0, truth.edge / 2]
+        err = np.abs(bottom - target)
+        assert err[:2].max() < 3.0 and err[2] < 0.5, f"{block.color} placed {err} mm off"
+        assert np.abs(truth.tilt).max() < 1e-6            # standing upright, not tipped
+    assert not station.arm.holding
+
+
+def test_every_command_sent_respects_the_velocity_limits(station):
+    sent = tasks.context(station).arm.sent
+    assert len(sent) > 50
+    for q_from, q_cmd, T, _ in sent:
+        if T is not None:
+            assert velocity_violations(q_from, q_cmd, T) == []
+
+
+def test_guarded_arm_stretches_a_move_the_compensation_makes_too_fast():
+    st = make_station("sim", seed=0, scene="empty", realism="ideal")
+    st.arm.move_to(kinematics.ik([0.0, 250.0, 100.0], np.pi / 2, 0.0)[0])
+    arm = tasks.GuardedArm(st.arm, SagModel(np.array([0, 0, 5e-4, 0, 0, 0, 0, 0, 0])))  # shoulder bends with reach
+    stretched = []
+    for step in (0.3, -0.3):                              # the shoulder moves the tool out, then back in
+        start = arm.joint_positions()
+        target = start + [0.0, step, 0.0, 0.0, 0.0]
+        T = 0.3 / st.arm.robot.velocity[1]                # exactly at the limit for the uncompensated change
+        arm.move_to(target, moving_time=T, accel_time=0.0)
+        q_from, q_cmd, T_sent, _ = arm.sent[-1]
+        assert T_sent >= T and velocity_violations(q_from, q_cmd, T_sent) == []
+        assert np.allclose(arm.joint_positions(), target, atol=1e-6)
+        stretched.append(T_sent > T)
+    assert any(stretched)
+
+
+def test_pick_refuses_while_holding_and_place_refuses_when_empty():
+    st = make_station("sim", seed=2, scene=SCENE)
+    obs = tasks.look(st)
+    with pytest.raises(ValueError, match="holds no block"):
+        tasks.place(st, [0.0, 250.0, 0.0])
+    assert tasks.pick(st, obs.blocks[0])
+    q = st.arm.joint_positions()
+    with pytest.raises(ValueError, match="already holds"):
+        tasks.pick(st, obs.blocks[1])
+    with pytest.raises(kinematics.Unreachable):
+        tasks.place(st, [450.0, 400.0, 0.0])
+    assert np.allclose(st.arm.joint_positions(), q, atol=0.005)   # nothing moved
