@@ -12,11 +12,16 @@ def main(argv: list[str] | None = None) -> int:
     demo = sub.add_parser("demo", help="run the end-to-end demo headless on the simulator")
     demo.add_argument("--out", default="out", help="folder for the demo's images and replay (default: out/)")
     demo.add_argument("--seed", type=int, default=0)
+    demo.add_argument("--event", default="sort_stack", choices=["sort_stack", "line_up", "sky"],
+                      help="the competition event to run (default: sort_stack)")
+    demo.add_argument("--level", type=int, default=3, help="the event's level, 1-3 (default: 3; sky: 1)")
+    demo.add_argument("--no-html", action="store_true", help="skip the meshcat replay page")
     args = parser.parse_args(argv)
     if args.command == "demo":
         from armlab.demo import run_demo
 
-        return run_demo(out_dir=args.out, seed=args.seed)
+        level = 1 if args.event == "sky" else args.level
+        return run_demo(out_dir=args.out, seed=args.seed, event=args.event, level=level, html=not args.no_html)
     return 2
 
 

@@ -1,0 +1,193 @@
+# %% [markdown]
+# # 07 · Autonomous tasks: the competition events
+#
+# Everything so far comes together: the station calibrates its camera, **looks** at the board (detection), **plans**
+# a pick and a place (IK, trajectories, clearance), **acts**, and looks again to check what happened. In this
+# notebook you run the lab's three competition events on the simulator and score them by the rules:
+#
+# - **sort 'n stack** (180 s): small blocks left, large right, into $y<0$; levels 2–3: one stack per size, rainbow
+#   order, red at the bottom. +30 per block.
+# - **line 'em up** (600 s): large and small blocks in two lines, rainbow order, centres within 30 mm of the line,
+#   each line shorter than 300 mm. +30 per block, +20 neatness per line.
+# - **to the sky** (600 s): large blocks handed over one at a time; one tower as high as possible. 30 points for each
+#   of the first 8 blocks, then 50.
+#
+# Level 3 boards start with blocks **stacked** two or three high and **distractors** (arches, cylinders, triangles)
+# that must be left alone. The score is computed from the simulator's **ground truth** at the end (never from what
+# the robot believes), and the time is **simulated** seconds. Units: mm, rad, s; world (board) frame.
+
+# %%
+import numpy as np
+import matplotlib.pyplot as plt
+from IPython import get_ipython
+
+from armlab.blocks import LAB_RGB, block_edge
+from armlab.robot import JOINT_NAMES
+from armlab.tasks.events import columns, event_station, run_event, score_event
+from armlab.tasks.events.replay import objects_from_snapshot
+from armlab.tasks.events import scoring
+from armlab.tasks.events.sky import TOWER_XY
+
+get_ipython().run_line_magic("matplotlib", "inline")
+np.set_printoptions(precision=2, suppress=True)
+
+
+def draw_board(ax, objects, title):
+    """Top view of the board: every object's footprint in its lab colour (distractors hatched), stacks labelled."""
+    ax.add_patch(plt.Rectangle((-500, -175), 1000, 650, color="0.93", zorder=0))
+    for col in columns(objects):
+        for o in col:
+            for poly in o.footprint_world():
+                ax.add_patch(plt.Polygon(poly, closed=True, fc=np.array(LAB_RGB[o.color]) / 255,
+                                         ec="k", lw=0.5, hatch=None if o.is_block else "///"))
+        if len(col) > 1:
+            ax.annotate(str(len(col)), col[-1].position[:2], color="w", ha="center", va="center", fontsize=7)
+    ax.add_patch(plt.Rectangle((-55, -60), 110, 120, fc="0.4", zorder=1))   # the arm's base plate
+    ax.set(xlim=(-500, 500), ylim=(-175, 475), aspect="equal", title=title)
+    ax.tick_params(labelsize=7)
+
+
+def before_after(result):
+    fig, axes = plt.subplots(1, 2, figsize=(9, 3.2), dpi=70)
+    snaps = result.replay.snapshots
+    draw_board(axes[0], objects_from_snapshot(snaps[0][2]), "start")
+    draw_board(axes[1], objects_from_snapshot(snaps[-1][2]), f"end ({result.time_s:.0f} s simulated)")
+    fig.tight_layout()
+
+
+# %% [markdown]
+# ## 1 · Scoring from the world state
+#
+# A scorer reads the objects on the board (true centres and yaws) and applies the rules. Only objects **at rest**
+# count: an object rests when its bottom face lies on the board or on the top face of what is under it, and it is
+# neither tilted nor held. `columns` follows those supports: each column is a stack, bottom first. Here is a
+# hand-made finished sort 'n stack board — and the same board with two large blocks swapped:
+
+# %%
+def stack(colors, size, x, y):
+    e = block_edge(size)
+    from armlab.blocks import ObjectState
+    return [ObjectState(c, size, e, np.array([x, y, e / 2 + k * e])) for k, c in enumerate(colors)]
+
+
+board = stack(["red", "green", "violet"], "large", 200, -100) + stack(["orange", "yellow", "blue"], "small", -200, -100)
+for i, o in enumerate(board):
+    o.id = i
+print(score_event("sort_stack", 3, board).table())
+board[0].color, board[1].color = "green", "red"
+print("swapped:", score_event("sort_stack", 3, board).points, "points")
+
+# %% [markdown]
+# **Exercise.** "To the sky" pays 30 points for each of the first 8 blocks of the tower and 50 for every block
+# above: $\text{points}(n) = 30\,\min(n, 8) + 50\,\max(n - 8, 0)$. Write it.
+
+# %%
+def sky_points(n):
+    """Points for a tower of n large blocks."""
+    # BEGIN SOLUTION
+    return 30 * min(n, 8) + 50 * max(n - 8, 0)
+    # END SOLUTION
+
+
+# %%
+ns = np.arange(0, 25)
+assert all(sky_points(n) == scoring.sky_points(n) for n in ns)
+assert sky_points(8) == 240 and sky_points(20) == 840
+print(f"sky_points agrees with the kit's scorer for towers of 0..24 blocks; the class record (20) is worth "
+      f"{sky_points(20)} points")
+
+# %% [markdown]
+# ## 2 · Sort 'n stack, level 3
+#
+# The strategy (`armlab.tasks.events.sort_stack`) works only from detections:
+# 1. **unstack first**: a block seen standing on another is staged on a free spot (the one below is hidden, so the
+#    rainbow order can only be planned once every block is seen);
+# 2. then, the block with the **earliest rainbow colour** goes on top of its size's stack at (±200, −100) mm;
+# 3. after every move the robot **looks again**: the stack's detected top height corrects its belief, a block that
+#    fell is found and moved again, a failed grasp is retried.
+#
+# Distractors are detected as such (`detect_objects(...).shape == "distractor"`) and only avoided.
+
+# %%
+station = event_station("sort_stack", 3, seed=0)
+sort3 = run_event(station, "sort_stack", 3)
+for m in sort3.moves:
+    print(f"{m.t_start:6.1f} s  {m.move}")
+print(sort3.score.table())
+before_after(sort3)
+
+# %% [markdown]
+# The replay holds the arm's joint angles every 0.1 s of simulated time (`result.replay.q`) and a snapshot of the
+# world after every move. `result.replay.to_viewer(Viewer())` plays it in meshcat (the demo saves it as
+# `out/replay.html`). The shaded bands are where the gripper is closed (holding a block):
+
+# %%
+r = sort3.replay
+fig, ax = plt.subplots(figsize=(9, 3), dpi=70)
+for j, name in enumerate(JOINT_NAMES):
+    ax.plot(r.times, r.q[:, j], lw=1, label=name)
+ax.fill_between(r.times, 0, 1, where=r.gripper < 50, transform=ax.get_xaxis_transform(), color="0.85", zorder=0)
+ax.set(xlabel="simulated time (s)", ylabel="joint angle (rad)")
+_ = ax.legend(fontsize=7, ncol=5, loc="lower right")
+
+# %%
+assert sort3.score.full_marks and sort3.within_limit
+assert sort3.score == score_event("sort_stack", 3, station.world.objects)
+err = np.linalg.norm(sort3.placement_errors[:, :2], axis=1)
+assert err.max() < 3.0
+print(f"sort 'n stack level 3: {sort3.score.points:g}/{sort3.score.max_points} in {sort3.time_s:.0f} s of 180 s, "
+      f"placement error at most {err.max():.1f} mm")
+
+# %% [markdown]
+# ## 3 · Line 'em up, level 3
+#
+# Both lines run along $x$, red nearest the base, 50 mm apart for large blocks (5·50 + 38 = 288 mm < 300) and 40 mm
+# for small ones. Along $x$ and at headings within 45° of the line, a top-down gripper placing a block square to
+# the line closes **across** the line, so its pads never touch the neighbours (only 12 mm away). The layout (side,
+# $y$) is chosen on the first look to avoid distractors; blocks standing where the gripper must come down are moved
+# out of the way first, and the highest blocks go first (never lift a block with another on it).
+
+# %%
+station = event_station("line_up", 3, seed=0)
+line3 = run_event(station, "line_up", 3)
+print(line3.summary())
+print(line3.score.table())
+before_after(line3)
+
+# %%
+assert line3.score.full_marks and line3.within_limit
+print(f"line 'em up level 3: {line3.score.points:g}/{line3.score.max_points} in {line3.time_s:.0f} s of 600 s")
+
+# %% [markdown]
+# ## 4 · To the sky
+#
+# The scene hands over a large block at (−200, 150) mm after each one that ends on the tower; the robot stacks them at
+# a fixed spot (aiming at the same $x, y$ every time keeps errors from adding up). How high can it go? The arm must
+# carry the block **over** the tower (50 mm clearance) and come straight down onto it. With the top at $z$, the
+# tool must reach about $z + 38 + 50$ mm above the board at the tower's radius: the RX200 runs out of reach there
+# long before 20 blocks ($20 \cdot 38 = 760$ mm, above anything the arm can touch).
+
+# %%
+station = event_station("sky", seed=0)
+sky = run_event(station, "sky")
+tower = len(sky.score.lines)
+print(sky.summary())
+heights = [o.top_z for o in max(columns(station.world.objects), key=len)]
+print(f"tower: {tower} blocks, top at {heights[-1]:.0f} mm; {sky.score.points:g} points")
+
+# %%
+fig, ax = plt.subplots(figsize=(3.5, 4), dpi=70)
+col = max(columns(station.world.objects), key=len)
+for o in col:
+    ax.add_patch(plt.Rectangle((o.position[0] - 19, o.bottom_z), 38, 38, fc=np.array(LAB_RGB[o.color]) / 255,
+                               ec="k", lw=0.5))
+ax.axhline(heights[-1], color="0.5", ls=":")
+ax.set(xlim=(TOWER_XY[0] - 80, TOWER_XY[0] + 80), ylim=(0, 520), aspect="equal", xlabel="x (mm)",
+       ylabel="z (mm)", title="the tower, side view")
+ax.tick_params(labelsize=7)
+
+# %%
+assert tower >= 11 and sky.score.points == scoring.sky_points(tower)
+assert "out of reach" in sky.stopped
+print(f"to the sky: a stable tower of {tower} blocks ({sky.score.points:g} points); it stopped because the next "
+      f"level is out of the arm's reach")
