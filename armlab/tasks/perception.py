@@ -45,12 +45,13 @@ def checkerboard_intrinsics(folder=None) -> tuple[np.ndarray, np.ndarray]:
     return result.K, result.dist
 
 
-def clear_view(arm, obstacles=()) -> None:
-    """Move the arm to the camera-clear pose (planning.plan_camera_clear) unless it is already there."""
+def clear_view(arm, obstacles=(), held_below: float = 0.0) -> None:
+    """Move the arm to the camera-clear pose (planning.plan_camera_clear) unless it is already there; held_below: how
+    far a held block hangs below the tool point (mm)."""
     q = np.asarray(arm.joint_positions(), dtype=float)
     if np.abs(q - planning.CAMERA_CLEAR_POSE).max() < 0.02:
         return
-    planning.execute(planning.plan_camera_clear(q, obstacles), arm)
+    planning.execute(planning.plan_camera_clear(q, obstacles, held_below=held_below), arm)
 
 
 def calibrate_camera(station, intrinsics="checkerboard", arm=None) -> Calibration:
@@ -80,11 +81,12 @@ def calibrate_camera(station, intrinsics="checkerboard", arm=None) -> Calibratio
                                                  f"residual {correction.residual_mm:.1f} mm")
 
 
-def look(station, calib: Calibration, arm=None, obstacles=(), clear: bool = True) -> Observation:
+def look(station, calib: Calibration, arm=None, obstacles=(), clear: bool = True,
+         held_below: float = 0.0) -> Observation:
     """Move the arm out of view (unless clear=False), capture a frame and detect the blocks on it."""
     arm = arm or station.arm
     if clear:
-        clear_view(arm, obstacles)
+        clear_view(arm, obstacles, held_below)
     frame = station.camera.capture()
     depth = calib.depth_correction.apply(frame.depth)
     q = np.asarray(arm.joint_positions(), dtype=float)

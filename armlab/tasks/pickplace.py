@@ -86,10 +86,13 @@ def context(station, intrinsics="checkerboard") -> TaskContext:
 
 
 def look(station) -> perception.Observation:
-    """Move the arm out of view, capture and detect; the blocks seen become the known obstacles."""
+    """Move the arm out of view (carrying a held block), capture and detect; the blocks seen become the known
+    obstacles."""
     ctx = context(station)
-    obs = perception.look(station, ctx.calibration, ctx.arm, obstacles=ctx.known)
-    ctx.last, ctx.known = obs, list(obs.blocks)
+    held_below = 0.0 if ctx.held is None else ctx.held_edge - planning.default_grasp_depth(ctx.held_edge)
+    obs = perception.look(station, ctx.calibration, ctx.arm, obstacles=ctx.known, held_below=held_below)
+    ctx.last = obs
+    ctx.known = list(obs.blocks)
     return obs
 
 

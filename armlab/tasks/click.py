@@ -1,0 +1,95 @@
+"""Click-to-grab and click-to-drop: a pixel (u, v) of the current camera frame -> world point -> plan -> execute.
+
+The current frame is the last look at the board (tasks.look: arm out of view; tasks.context(station).last.frame is
+what a GUI shows; both functions look again after acting). The pixel goes to the world through the calibrated camera
+and the corrected depth (perception.surface_point: the median depth around the pixel, Camera.pixel_to_world).
+click_grab picks the detected block under the click (the nearest detected top-face centre, within one block edge);
+click_drop puts the held block's bottom face on the surface under the click (the board, or the top of a block or
+stack). Everything is checked and planned before anything moves: a click off the board, on the robot, on bare board
+(grab), or where the arm cannot reach raises ClickRefused (a ValueError) and the arm stays where it is.
+Units: px, mm, rad; world (board) frame.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from armlab.blocks import block_edge
+from armlab.kinematics import Unreachable
+from armlab.lab import lab_config
+
+from . import perception
+from .pickplace import context, look, pick, place
+
+__all__ = ["ClickRefused", "click_grab", "click_drop", "click_world"]
+
+
+class ClickRefused(ValueError):
+    """A click that cannot be acted on (off the board, on the robot, nothing there, out of reach); nothing moved."""
+
+
+def click_world(station, uv, frame=None) -> np.ndarray:
+    """World point (3,) mm of the surface at pixel uv of `frame` (default: a new capture), depth corrected; raises
+    ClickRefused off the board or on the robot's base."""
+    ctx = context(station)
+    frame = frame or station.camera.capture()
+    depth = ctx.calibration.depth_correction.apply(frame.depth)
+    try:
+        p = perception.surface_point(ctx.calibration, depth, uv)
+    except ValueError as e:
+        raise ClickRefused(f"click at {tuple(np.round(np.asarray(uv, float), 1))}: {e}") from None
+    cfg = lab_config()
+    if not cfg.on_board(p[:2]):
+        raise ClickRefused(f"click at ({p[0]:.0f}, {p[1]:.0f}) mm is off the board (x in {cfg.board_x}, "
+                           f"y in {cfg.board_y} mm)")
+    if cfg.on_robot_base(p[:2], margin_mm=10.0):
+        raise ClickRefused(f"click at ({p[0]:.0f}, {p[1]:.0f}) mm is on the robot's base")
+    return p
+
+
+def _current(station):
+    """The frame the user sees: the last look (taken now, arm out of view, when there is none yet)."""
+    ctx = context(station)
+    return ctx.last if ctx.last is not None else look(station)
+
+
+def click_grab(station, uv) -> bool:
+    """Pick the block under pixel uv = (u, v) of the current frame; True when it is held (see tasks.pick). The view
+    is refreshed (tasks.look) after the pick."""
+    ctx = context(station)
+    if ctx.held is not None:
+        raise ClickRefused(f"the gripper already holds the {ctx.held.color} block: drop it first")
+    obs = _current(station)
+    p = click_world(station, uv, obs.frame)
+    if not obs.blocks:
+        raise ClickRefused(f"no block on the board to grab (click at ({p[0]:.0f}, {p[1]:.0f}) mm)")
+    d = np.array([np.hypot(*(b.position[:2] - p[:2])) for b in obs.blocks])
+    best = obs.blocks[int(np.argmin(d))]
+    if d.min() > best.edge_mm:
+        raise ClickRefused(f"no block at the click ({p[0]:.0f}, {p[1]:.0f}, {p[2]:.0f}) mm: the nearest, the "
+                           f"{best.color} one, is {d.min():.0f} mm away")
+    try:
+        held = pick(station, best)
+    except Unreachable as e:
+        raise ClickRefused(f"the {best.color} block at ({best.position[0]:.0f}, {best.position[1]:.0f}) mm cannot "
+                           f"be picked: {e}") from None
+    look(station)
+    return held
+
+
+def click_drop(station, uv, yaw: float = 0.0) -> bool:
+    """Put the held block on the surface under pixel uv = (u, v) of the current frame (see tasks.place); a click
+    where the held block itself stood puts it on what it stood on. The view is refreshed after the drop."""
+    ctx = context(station)
+    if ctx.held is None:
+        raise ClickRefused("the gripper holds no block: grab one first")
+    p = click_world(station, uv, _current(station).frame)
+    held = ctx.held
+    if np.hypot(*(p[:2] - held.position[:2])) < held.edge_mm / 2 and p[2] > held.position[2] - held.edge_mm / 2:
+        p[2] = held.position[2] - block_edge(held.size)      # the frame still shows the block the arm now holds
+    try:
+        done = place(station, p, yaw)
+    except Unreachable as e:
+        raise ClickRefused(f"cannot drop at ({p[0]:.0f}, {p[1]:.0f}, {p[2]:.0f}) mm: {e}") from None
+    look(station)
+    return done

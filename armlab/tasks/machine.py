@@ -1,0 +1,160 @@
+"""The station's state machine (the lab's GUI states): idle, estop, calibrate, detect, execute, teach, repeat,
+click-grab, click-drop.
+
+Every command runs from "idle" and returns there; "teach" lasts from teach_start() to teach_finish(). The
+emergency stop is honoured at every step: estop() (safe to call from another thread or a callback while a command
+runs) halts the arm at once (arm.emergency_stop()), and the guarded arm the commands move through
+(tasks.GuardedArm) refuses every further command, so the running command ends with EmergencyStopped and the machine
+stays in "estop". An EmergencyStopped raised by the arm itself (a hardware stop) has the same effect. In "estop" every
+command is refused (EmergencyStopped) until reset(). Any other error returns the machine to "idle" and propagates.
+`history` lists the states entered, in order.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from armlab import planning
+from armlab.station import EmergencyStopped
+
+from . import click, perception, pickplace, teach
+
+__all__ = ["STATES", "TaskMachine", "MachineBusy"]
+
+STATES: tuple[str, ...] = ("idle", "estop", "calibrate", "detect", "execute", "teach", "repeat", "click-grab",
+                           "click-drop")
+
+
+class MachineBusy(RuntimeError):
+    """A command arrived while another one (or teaching) is under way."""
+
+
+class TaskMachine:
+    """The lab's state machine over a station (sim or real)."""
+
+    def __init__(self, station):
+        self.station = station
+        self.state = "idle"
+        self.history: list[str] = ["idle"]
+        self.program: teach.TeachProgram | None = None
+        self._stop = False
+        self._recorder: teach.Recorder | None = None
+
+    # -- states ---------------------------------------------------------------------------------------------
+    def _enter(self, state: str) -> None:
+        self.state = state
+        self.history.append(state)
+
+    def _context(self) -> pickplace.TaskContext:
+        ctx = pickplace.context(self.station)
+        ctx.arm.should_stop = lambda: self._stop
+        return ctx
+
+    def _run(self, state: str, action: Callable[[], Any]) -> Any:
+        if self.state == "estop":
+            raise EmergencyStopped(f"{state} refused: the station is emergency-stopped; call reset() first")
+        if self.state != "idle":
+            raise MachineBusy(f"{state} refused: the machine is in {self.state!r}")
+        self._enter(state)
+        try:
+            result = action()
+        except EmergencyStopped:
+            if self.state != "estop":
+                self._enter("estop")
+            raise
+        except BaseException:
+            self._enter("estop" if self._stop else "idle")
+            raise
+        if self._stop:          # stopped between the last command and the end of the action
+            if self.state != "estop":
+                self._enter("estop")
+            raise EmergencyStopped(f"{state} was emergency-stopped")
+        self._enter("idle")
+        return result
+
+    # -- safety ---------------------------------------------------------------------------------------------
+    def estop(self) -> None:
+        """Halt the arm now; every command is refused until reset()."""
+        self._stop = True
+        self.station.arm.emergency_stop()
+        if self.state != "estop":
+            self._enter("estop")
+
+    def reset(self) -> None:
+        """Leave "estop": re-initialise the arm (torque on, where it stopped) and go to "idle"."""
+        self.station.arm.reset()
+        self._stop = False
+        self._recorder = None
+        self._enter("idle")
+
+    # -- commands -------------------------------------------------------------------------------------------
+    def calibrate(self, intrinsics="checkerboard"):
+        """Calibrate the camera (tasks.perception.calibrate_camera); returns the Calibration."""
+        def action():
+            ctx = self._context()
+            ctx.calibration = perception.calibrate_camera(self.station, intrinsics, arm=ctx.arm)
+            return ctx.calibration
+        return self._run("calibrate", action)
+
+    def detect(self) -> list:
+        """Look at the board (arm out of view) and return the detected blocks."""
+        return self._run("detect", lambda: (self._context(), pickplace.look(self.station))[1].blocks)
+
+    def execute(self, work) -> Any:
+        """Run a planning.Plan (returns planning.ExecutionResult) or a list of (block, place position) pairs: pick
+        each block and place it (returns the list of pick answers)."""
+        def action():
+            ctx = self._context()
+            if isinstance(work, planning.Plan):
+                return planning.execute(work, ctx.arm)
+            out = []
+            for block, position in work:
+                out.append(pickplace.pick(self.station, block))
+                if out[-1]:
+                    pickplace.place(self.station, np.asarray(position, float))
+            return out
+        return self._run("execute", action)
+
+    def click_grab(self, uv) -> bool:
+        """Pick the block under pixel uv of the current frame (tasks.click_grab)."""
+        return self._run("click-grab", lambda: (self._context(), click.click_grab(self.station, uv))[1])
+
+    def click_drop(self, uv) -> bool:
+        """Drop the held block on the surface under pixel uv of the current frame (tasks.click_drop)."""
+        return self._run("click-drop", lambda: (self._context(), click.click_drop(self.station, uv))[1])
+
+    def teach_start(self, name: str = "") -> None:
+        """Enter "teach": torque off; pose the arm by hand and call teach_record() at each waypoint."""
+        if self.state == "estop":
+            raise EmergencyStopped("teach refused: the station is emergency-stopped; call reset() first")
+        if self.state != "idle":
+            raise MachineBusy(f"teach refused: the machine is in {self.state!r}")
+        self._recorder = teach.Recorder(self.station.arm, name)
+        self._enter("teach")
+
+    def teach_record(self, gripper: str = "open") -> np.ndarray:
+        """Record the arm's joints (5,) rad with the gripper state wanted there."""
+        if self.state != "teach" or self._recorder is None:
+            raise MachineBusy(f"teach_record refused: the machine is in {self.state!r}, not 'teach'")
+        return self._recorder.record(gripper)
+
+    def teach_finish(self) -> teach.TeachProgram:
+        """Torque back on, leave "teach"; the recorded program becomes `program` (and is returned)."""
+        if self.state != "teach" or self._recorder is None:
+            raise MachineBusy(f"teach_finish refused: the machine is in {self.state!r}, not 'teach'")
+        rec, self._recorder = self._recorder, None
+        try:
+            self.program = rec.finish()
+        finally:
+            self._enter("idle")
+        return self.program
+
+    def repeat(self, program: teach.TeachProgram | None = None) -> planning.ExecutionResult:
+        """Replay a program (default: the last taught one) through the guarded arm."""
+        program = program or self.program
+        if program is None:
+            raise ValueError("nothing to repeat: teach a program or pass one")
+        return self._run("repeat", lambda: teach.repeat(self._context().arm, program))

@@ -1,0 +1,183 @@
+"""armlab.tasks: click-to-grab/drop, the state machine and its emergency stop, teach and repeat (realistic sim)."""
+
+import json
+
+import numpy as np
+import pytest
+
+from armlab import make_station, tasks
+from armlab.station import EmergencyStopped
+from armlab.tasks import teach
+
+SCENE = {"objects": [
+    {"color": "red", "size": "large", "position_mm": [-150.0, 200.0], "yaw_rad": 0.4},
+    {"color": "green", "size": "small", "position_mm": [150.0, 250.0], "yaw_rad": 0.0},
+]}
+
+
+def _pixel(station, world_point):
+    return tasks.context(station).calibration.camera.project(np.asarray(world_point, float)[None])[0]
+
+
+def _truth(station, color):
+    return next(o for o in station.world.blocks if o.color == color)
+
+
+@pytest.fixture()
+def station():
+    st = make_station("sim", seed=7, scene=SCENE)
+    tasks.look(st)
+    return st
+
+
+def test_click_grab_then_click_drop_moves_the_clicked_block(station):
+    red = _truth(station, "red")
+    assert tasks.click_grab(station, _pixel(station, red.position + [0, 0, red.edge / 2]))
+    assert station.arm.holding == [red]
+    target = np.array([0.0, 300.0, 0.0])
+    assert tasks.click_drop(station, _pixel(station, target))
+    assert not station.arm.holding
+    err = red.position - [0, 0, red.edge / 2] - target
+    assert np.abs(err).max() < 4.0, err                     # click-to-world through the camera + placing
+
+
+def test_click_drop_on_a_block_stacks_on_it(station):
+    red, green = _truth(station, "red"), _truth(station, "green")
+    assert tasks.click_grab(station, _pixel(station, green.position + [0, 0, green.edge / 2]))
+    assert tasks.click_drop(station, _pixel(station, red.position + [0, 0, red.edge / 2]))
+    assert green.bottom_z == pytest.approx(red.top_z, abs=0.5)
+    assert np.hypot(*(green.position[:2] - red.position[:2])) < 5.0
+
+
+@pytest.mark.parametrize("where, message", [
+    ((480.0, 300.0, 0.0), "off the board"),            # board x ends at 500; the view reaches beyond it
+    ((0.0, 20.0, 0.0), "robot's base"),
+    ((250.0, 350.0, 0.0), "no block at the click"),
+])
+def test_bad_grab_clicks_are_refused_and_nothing_moves(station, where, message):
+    q = station.arm.q_true
+    uv = _pixel(station, where)
+    if where[0] > 400:
+        uv = np.array([1279.0, uv[1]])                     # the image's right edge sees the floor beyond the board
+    with pytest.raises(tasks.ClickRefused, match=message):
+        tasks.click_grab(station, uv)
+    assert np.allclose(station.arm.q_true, q)
+
+
+def test_unreachable_and_out_of_image_clicks_are_refused(station):
+    with pytest.raises(tasks.ClickRefused, match="holds no block"):
+        tasks.click_drop(station, (640, 360))
+    with pytest.raises(tasks.ClickRefused, match="outside"):
+        tasks.click_grab(station, (1500, 100))
+    red = _truth(station, "red")
+    assert tasks.click_grab(station, _pixel(station, red.position + [0, 0, red.edge / 2]))
+    q = station.arm.q_true
+    with pytest.raises(tasks.ClickRefused, match="cannot drop"):
+        tasks.click_drop(station, _pixel(station, (-420.0, 420.0, 0.0)))    # on the board, out of reach
+    assert np.allclose(station.arm.q_true, q) and station.arm.holding == [red]
+
+
+def test_estop_during_a_pick_halts_the_arm_and_refuses_commands_until_reset(station):
+    machine = tasks.TaskMachine(station)
+    blocks = machine.detect()
+    assert machine.history == ["idle", "detect", "idle"]
+    t0 = station.world.time_s
+    stopped_at = {}
+
+    def press_estop(t):                                    # a callback 1.5 s (simulated) into the pick
+        if t > t0 + 1.5 and not stopped_at:
+            machine.estop()
+            stopped_at["q"] = station.arm.q_true
+            stopped_at["t"] = t
+
+    station.world.add_listener(press_estop)
+    with pytest.raises(EmergencyStopped):
+        machine.execute([(blocks[0], (0.0, 300.0, 0.0))])
+    assert machine.state == "estop" and stopped_at
+    station.world.advance(3.0)
+    assert np.allclose(station.arm.q_true, stopped_at["q"])             # halted where the stop came
+    assert not station.arm.holding
+    for command in (machine.detect, lambda: machine.click_grab((640, 360)), machine.calibrate):
+        with pytest.raises(EmergencyStopped):
+            command()
+    with pytest.raises(EmergencyStopped):
+        station.arm.move_to(station.arm.joint_positions())
+    assert np.allclose(station.arm.q_true, stopped_at["q"])
+    machine.reset()
+    assert machine.state == "idle"
+    assert machine.execute([(machine.detect()[0], (0.0, 300.0, 0.0))]) == [True]
+    assert machine.history[-2:] == ["execute", "idle"]
+
+
+def test_machine_states_and_busy_refusals(station):
+    machine = tasks.TaskMachine(station)
+    assert set(machine.history) <= set(tasks.STATES)
+    machine.teach_start("t")
+    assert machine.state == "teach"
+    with pytest.raises(tasks.MachineBusy):
+        machine.detect()
+    q = station.arm.q_true
+    station.arm.move_by_hand(q + [0.1, 0, 0, 0, 0])
+    machine.teach_record("open")
+    station.arm.move_by_hand(q + [0.2, 0, 0, 0, 0])
+    machine.teach_record("closed")
+    program = machine.teach_finish()
+    assert len(program) == 2 and machine.state == "idle" and station.arm.torque_enabled
+    result = machine.repeat()
+    assert result.grasps == (False,)                       # closed on nothing
+    assert machine.history[-2:] == ["repeat", "idle"]
+
+
+def _swap_program(seed=0):
+    st = make_station("sim", seed=seed, scene="swap")
+    poses, grip = teach.swap_waypoints()
+    return teach.teach_by_hand(st.arm, poses, grip, "swap")
+
+
+def test_teach_file_round_trip(tmp_path):
+    program = _swap_program()
+    path = teach.save_teach(program, tmp_path / "swap.json")
+    back = teach.load_teach(path)
+    assert back.gripper == program.gripper and back.name == "swap"
+    assert np.abs(back.q - program.q).max() < 1e-6
+    assert not list(tmp_path.glob("*.tmp"))
+
+
+@pytest.mark.parametrize("edit, message", [
+    (lambda d: d.update(format="other"), "not an armlab teach file"),
+    (lambda d: d["waypoints"][2].update(q=[0.0, 0.1, 0.2]), "waypoint 2: 'q' must be 5 numbers"),
+    (lambda d: d["waypoints"][1].update(gripper="half"), "waypoint 1: gripper state"),
+    (lambda d: d["waypoints"][3].update(q=[0.0, 3.0, 0.0, 0.0, 0.0]), "waypoint 3: shoulder"),
+    (lambda d: d.update(waypoints=d["waypoints"][:1]), "at least 2 waypoints"),
+    (lambda d: d["waypoints"][0].pop("gripper"), "waypoint 0 must be an object"),
+])
+def test_bad_teach_files_are_refused(tmp_path, edit, message):
+    path = teach.save_teach(_swap_program(), tmp_path / "swap.json")
+    data = json.loads(path.read_text())
+    edit(data)
+    path.write_text(json.dumps(data))
+    with pytest.raises(tasks.TeachFileError, match=message):
+        teach.load_teach(path)
+
+
+def test_corrupt_and_missing_teach_files(tmp_path):
+    (tmp_path / "bad.json").write_text("{not json")
+    with pytest.raises(tasks.TeachFileError, match="not valid JSON"):
+        teach.load_teach(tmp_path / "bad.json")
+    with pytest.raises(tasks.TeachFileError, match="not found"):
+        teach.load_teach(tmp_path / "none.json")
+
+
+def test_saved_swap_program_swaps_the_blocks_in_the_swap_scene():
+    from armlab._paths import data_path
+
+    program = teach.load_teach(data_path("teach/swap.json"))
+    st = make_station("sim", seed=11, scene="swap")
+    red, blue = _truth(st, "red"), _truth(st, "blue")
+    a, b = red.position.copy(), blue.position.copy()
+    machine = tasks.TaskMachine(st)
+    result = machine.repeat(program)
+    assert result.grasps == (True, True, True)
+    assert np.abs(red.position - b).max() < 3.0 and np.abs(blue.position - a).max() < 3.0
+    for plan_step_moves in (s for s in program.to_plan().steps if hasattr(s, "trajectory")):
+        assert np.all(plan_step_moves.trajectory.peak_speed() <= st.arm.robot.velocity + 1e-9)
