@@ -102,15 +102,13 @@ def apply_depth_effects(depth: np.ndarray, rgb_exact: np.ndarray, realism: Camer
     """The recorded depth (H, W) float32 mm of exact depth `depth` (NaN = nothing) whose surfaces have the exact
     colours `rgb_exact` (darker surfaces are noisier)."""
     H, W = depth.shape
-    out = depth.copy()
+    out = cv2.add(depth, _bias_map(H, W, realism)) if any(realism.depth_bias_mm) else depth.copy()
     if realism.depth_noise_mm > 0:
         gray = cv2.cvtColor(rgb_exact, cv2.COLOR_RGB2GRAY)
         sigma = cv2.LUT(gray, _dark_lut(realism.dark_depth_noise, realism.depth_noise_mm * 1e-6))
         noise, sign = normal_field(rng, (H, W))
-        sigma = cv2.multiply(cv2.multiply(sigma, depth), depth)    # sigma_1m * (Z / 1 m)^2 * darkness
-        out = cv2.scaleAdd(cv2.multiply(sigma, noise, scale=sign), 1.0, out)
-    if any(realism.depth_bias_mm):
-        out = cv2.add(out, _bias_map(H, W, realism))
+        # out += sigma_1m * darkness * (Z / 1 m)^2 * noise
+        cv2.accumulateProduct(cv2.multiply(sigma, noise, scale=sign), cv2.multiply(depth, depth), out)
     if realism.depth_quantum_mm > 0:
         q = np.float32(realism.depth_quantum_mm)
         np.rint(np.divide(out, q, out=out), out=out)
