@@ -82,8 +82,10 @@ class Replay:
             raise ValueError(f"{path}: not an armlab replay ({e})") from None
 
     def to_viewer(self, viewer, fps: int = 10) -> None:
-        """Load the joint trajectory as the viewer's animation and draw the objects as they end."""
-        keep = np.concatenate([[True], np.diff(self.times) > 1e-9])
+        """Load the joint trajectory as the viewer's animation (one key frame per 1/fps s, which keeps a saved page
+        small) and draw the objects as they end."""
+        grid = np.append(np.arange(0.0, self.duration, 1.0 / fps), self.duration)
+        keep = np.unique(np.clip(np.searchsorted(self.times, grid), 0, len(self.times) - 1))
         viewer.animate(self.times[keep], self.q[keep], self.gripper[keep], fps=fps)
         viewer.draw_objects(objects_from_snapshot(self.snapshots[-1][2]))
 
