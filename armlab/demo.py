@@ -10,13 +10,12 @@ recorded joint trajectory and world snapshots). Units: mm, rad, s.
 
 from __future__ import annotations
 
-import os
-import tempfile
 from pathlib import Path
 
 import cv2
 import numpy as np
 
+from armlab.files import atomic_path
 from armlab.tasks.events import columns, event_station, run_event
 from armlab.tasks.events.runner import see
 
@@ -48,16 +47,9 @@ def detection_accuracy(detected, objects, max_mm: float = 20.0) -> dict:
 
 
 def _write_png(path: Path, rgb: np.ndarray) -> None:
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".png", dir=path.parent)
-    os.close(fd)
-    try:
-        if not cv2.imwrite(tmp, cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR)):
+    with atomic_path(path) as tmp:
+        if not cv2.imwrite(str(tmp), cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR)):
             raise OSError(f"could not write {path}")
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
 
 
 def _write_html(path: Path, replay) -> None:
@@ -65,15 +57,7 @@ def _write_html(path: Path, replay) -> None:
 
     with Viewer(frames=False) as viewer:
         replay.to_viewer(viewer, fps=4)
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".html", dir=path.parent)
-        os.close(fd)
-        try:
-            viewer.save_html(tmp)
-            os.chmod(tmp, 0o644)
-            os.replace(tmp, path)
-        except BaseException:
-            Path(tmp).unlink(missing_ok=True)
-            raise
+        viewer.save_html(path)
 
 
 def _stats(name: str, v: np.ndarray, unit: str) -> str:

@@ -15,9 +15,7 @@ from __future__ import annotations
 
 import functools
 import json
-import os
 import sys
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -26,6 +24,7 @@ import numpy as np
 
 from armlab._paths import data_path
 from armlab.camera import Camera
+from armlab.files import write_bytes_atomic, write_json_atomic
 from armlab.sim.camera import true_camera
 from armlab.sim.raster import Canvas, View
 from armlab.sim.realism import CameraRealism
@@ -154,18 +153,6 @@ def checkerboard_poses(camera: Camera, n: int = 16, seed: int = 0, board: Checke
     return poses
 
 
-def _write_atomic(path: Path, data: bytes) -> None:
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
-
-
 def save_dataset(out_dir: Path | str | None = None, n: int = 16, seed: int = 0) -> Path:
     """Render and save n grayscale JPEG (quality 95) views of the checkerboard under the realistic camera of `seed`
     (the camera of SimCamera(..., realism="realistic", seed=seed)) and `checkerboard.json` (board geometry, image
@@ -182,7 +169,7 @@ def save_dataset(out_dir: Path | str | None = None, n: int = 16, seed: int = 0) 
         if not ok:
             raise RuntimeError("JPEG encoding failed")
         name = f"view_{i:02d}.jpg"
-        _write_atomic(out / name, jpg.tobytes())
+        write_bytes_atomic(out / name, jpg.tobytes())
         names.append(name)
     meta = {
         "_comment": "Simulated L515 colour views (grayscale) of a hand-held checkerboard over the lab board; "
@@ -196,7 +183,7 @@ def save_dataset(out_dir: Path | str | None = None, n: int = 16, seed: int = 0) 
         "true_K": camera.K.tolist(),
         "true_dist": camera.dist.tolist(),
     }
-    _write_atomic(out / "checkerboard.json", (json.dumps(meta, indent=1) + "\n").encode())
+    write_json_atomic(out / "checkerboard.json", meta)
     return out
 
 

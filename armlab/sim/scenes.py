@@ -18,13 +18,13 @@ from __future__ import annotations
 
 import json
 import os
-import tempfile
 from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 
 from armlab.blocks import COLORS, SHAPES, SIZES, ObjectState, block_edge
+from armlab.files import write_json_atomic
 from armlab.lab import lab_config
 from armlab.sim.geometry import polygons_overlap
 from armlab.sim.world import World
@@ -340,13 +340,4 @@ def save_scene(objects, path: str | os.PathLike) -> Path:
     path = Path(path)
     data = scene_to_dict(objects)
     objects_from_dict(data, f"scene to save as {path}")
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w") as f:
-            json.dump(data, f, indent=1)
-            f.write("\n")
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return path
+    return write_json_atomic(path, data)

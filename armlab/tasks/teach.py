@@ -15,8 +15,6 @@ load (TeachFileError names the file and the waypoint). Units: rad, s; world mm f
 from __future__ import annotations
 
 import json
-import os
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -24,6 +22,7 @@ import numpy as np
 
 from armlab import kinematics, planning
 from armlab.blocks import block_edge
+from armlab.files import write_json_atomic
 from armlab.robot import JOINT_NAMES, RobotModel, rx200
 
 __all__ = ["GRIPPER_STATES", "TeachProgram", "TeachFileError", "Recorder", "save_teach", "load_teach", "repeat",
@@ -113,16 +112,7 @@ def save_teach(program: TeachProgram, path) -> Path:
     data = {"format": _FORMAT, "name": program.name, "joint_names": list(JOINT_NAMES),
             "waypoints": [{"q": [round(float(v), 6) for v in q], "gripper": g}
                           for q, g in zip(program.q, program.gripper)]}
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name, suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w") as f:
-            json.dump(data, f, indent=1)
-            f.write("\n")
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return path
+    return write_json_atomic(path, data)
 
 
 def load_teach(path) -> TeachProgram:

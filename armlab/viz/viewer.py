@@ -25,6 +25,7 @@ with warnings.catch_warnings():  # meshcat 0.3.2 imports zmq.eventloop.ioloop, d
 from armlab import kinematics
 from armlab.blocks import LAB_RGB, ObjectState
 from armlab.camera import Camera
+from armlab.files import write_text_atomic
 from armlab.lab import LabConfig, lab_config
 from armlab.robot import rx200
 from armlab.transforms import homogeneous
@@ -346,14 +347,6 @@ class Viewer:
 
     def save_html(self, path) -> Path:
         """Write static_html() to `path` atomically (temporary file + rename); returns the path."""
-        path = Path(path)
-        if not path.parent.is_dir():
-            raise FileNotFoundError(f"save_html: folder {path.parent} does not exist")
-        html = self.static_html()
-        tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-        try:
-            tmp.write_text(html, encoding="utf-8")
-            tmp.replace(path)
-        finally:
-            tmp.unlink(missing_ok=True)
-        return path
+        if not Path(path).parent.is_dir():
+            raise FileNotFoundError(f"save_html: folder {Path(path).parent} does not exist")
+        return write_text_atomic(path, self.static_html())

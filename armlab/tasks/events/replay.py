@@ -9,14 +9,13 @@ plays in the meshcat Viewer (Viewer.animate, then the final objects). Units: s, 
 from __future__ import annotations
 
 import json
-import os
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from armlab.blocks import ObjectState
+from armlab.files import atomic_path
 
 __all__ = ["Replay", "Recorder", "snapshot_objects", "objects_from_snapshot"]
 
@@ -59,16 +58,9 @@ class Replay:
     def save(self, path) -> Path:
         """Write the replay as NPZ (arrays + the snapshots as a JSON string), atomically."""
         path = Path(path)
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".npz", dir=path.parent)
-        os.close(fd)
-        try:
+        with atomic_path(path, suffix=".npz") as tmp:
             np.savez_compressed(tmp, times=self.times, q=self.q, gripper=self.gripper,
                                 snapshots=np.array(json.dumps(self.snapshots)))
-            os.chmod(tmp, 0o644)
-            os.replace(tmp, path)
-        except BaseException:
-            Path(tmp).unlink(missing_ok=True)
-            raise
         return path
 
     @classmethod

@@ -1,0 +1,56 @@
+"""Atomic file writes: a file is either its old self or completely new, never half-written.
+
+Everything the kit saves (calibrations, scenes, teach programs, colour models, replays, images) goes through here:
+the data is written to a temporary file in the same folder, which then replaces the target in one rename.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+
+__all__ = ["atomic_path", "write_bytes_atomic", "write_text_atomic", "write_json_atomic"]
+
+
+@contextmanager
+def atomic_path(path, suffix: str | None = None, make_parents: bool = False) -> Iterator[Path]:
+    """A temporary path beside `path` to write to; when the block ends without error it replaces `path` (mode 0644),
+    otherwise it is removed and `path` is left untouched.
+
+    `suffix` (default: the target's own, e.g. ".png") lets writers that pick the format from the file name work.
+    """
+    path = Path(path)
+    if make_parents:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    elif not path.parent.is_dir():
+        raise FileNotFoundError(f"cannot write {path}: folder {path.parent} does not exist")
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=suffix or path.suffix or ".tmp")
+    os.close(fd)
+    tmp_path = Path(tmp)
+    try:
+        yield tmp_path
+        os.chmod(tmp_path, 0o644)
+        os.replace(tmp_path, path)
+    finally:
+        tmp_path.unlink(missing_ok=True)
+
+
+def write_bytes_atomic(path, data: bytes, make_parents: bool = False) -> Path:
+    """Write bytes to `path` atomically; returns the path."""
+    with atomic_path(path, make_parents=make_parents) as tmp:
+        tmp.write_bytes(data)
+    return Path(path)
+
+
+def write_text_atomic(path, text: str, make_parents: bool = False) -> Path:
+    """Write UTF-8 text to `path` atomically; returns the path."""
+    return write_bytes_atomic(path, text.encode("utf-8"), make_parents)
+
+
+def write_json_atomic(path, data, indent: int = 1, make_parents: bool = False) -> Path:
+    """Write `data` as JSON (NaN and infinity refused, trailing newline) to `path` atomically; returns the path."""
+    return write_text_atomic(path, json.dumps(data, indent=indent, allow_nan=False) + "\n", make_parents)
