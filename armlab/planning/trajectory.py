@@ -14,6 +14,7 @@ between knots, stays within `tol_mm` of the line (checked by FK at the middle of
 
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
 from dataclasses import dataclass
 
 import numpy as np
@@ -51,20 +52,20 @@ def _times(t) -> np.ndarray:
     return np.atleast_1d(t)
 
 
-class Trajectory:
+class Trajectory(ABC):
     """Base class: a joint motion from `start` to `end` (5,) rad lasting `duration` s, starting and ending at rest."""
 
     start: np.ndarray
     end: np.ndarray
     duration: float
 
+    @abstractmethod
     def sample(self, t) -> tuple[np.ndarray, np.ndarray]:
         """Joint angles (N, 5) rad and velocities (N, 5) rad/s at times t (N,) s (held at the ends outside)."""
-        raise NotImplementedError
 
+    @abstractmethod
     def waypoints(self) -> list[Waypoint]:
         """The arm commands that execute this trajectory, in order."""
-        raise NotImplementedError
 
     def peak_speed(self, samples: int = 2001) -> np.ndarray:
         """Largest sampled |qdot| per joint (5,) rad/s."""
