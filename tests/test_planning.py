@@ -182,6 +182,30 @@ def test_pitch_falls_back_at_long_reach_with_horizontal_fingers():
     assert planning.choose_grasp(np.array([0.0, 200, 19]), 0.2).top_down
 
 
+def _limit_distance(plan) -> np.ndarray:
+    """Smallest distance (5,) rad of any commanded waypoint of a plan from each joint's position limits."""
+    qs = np.vstack([wp.q for s in plan.steps if isinstance(s, planning.MoveStep) for wp in s.trajectory.waypoints()])
+    return np.minimum(qs - ROBOT.lower, ROBOT.upper - qs).min(axis=0)
+
+
+def test_plans_keep_a_margin_from_the_joint_limits_where_they_can():
+    # carrying a block from the hand-over spot onto a 6-block tower: the rise from the pick falls back to the steepest
+    # pitch, which used to sit exactly on wrist_angle's limit (sag compensation then pushed it past)
+    tower = planning.Obstacle(150.0, 150.0, 6 * 38.0, 27.0)
+    plan = planning.plan_pick_place(planning.CAMERA_CLEAR_POSE, [-200.0, 150.0, 38.0], 0.1, 38.0,
+                                    [150.0, 150.0, 6 * 38.0], obstacles=[tower])
+    assert "rise" in [s.label for s in plan.steps]
+    assert _limit_distance(plan).min() >= planning.LIMIT_MARGIN_RAD - 1e-6
+    # the tilted grasp at long reach keeps the margin too: its pitch is the steepest within the inner limits
+    p = np.array([0.0, 450.0, 19.0])
+    g = planning.choose_grasp(p, 0.0, approach_z=120.0)
+    q = kinematics.ik(p, g.pitch, g.roll)[0]
+    assert np.minimum(q - ROBOT.lower, ROBOT.upper - q).min() >= planning.LIMIT_MARGIN_RAD - 1e-6
+    # where only the limits themselves leave a pitch, it is still found (no margin then)
+    inner = planning.inner_limits()
+    assert np.allclose(inner.upper, ROBOT.upper - planning.LIMIT_MARGIN_RAD)
+
+
 def test_unreachable_block_says_why():
     with pytest.raises(Unreachable, match="out of reach"):
         planning.choose_grasp(np.array([0.0, 700.0, 19.0]), 0.0)

@@ -124,3 +124,67 @@ def test_pick_refuses_while_holding_and_place_refuses_when_empty():
     with pytest.raises(kinematics.Unreachable):
         tasks.place(st, [450.0, 400.0, 0.0])
     assert np.allclose(st.arm.joint_positions(), q, atol=0.005)   # nothing moved
+
+
+def _guarded_sim_arm(sag_params, **realism):
+    """A GuardedArm on a bare simulated arm whose realism is ideal except for the given fields."""
+    from dataclasses import replace
+
+    from armlab.sim import ArmRealism, SimArm, World
+
+    arm = SimArm(World(), realism=replace(ArmRealism.preset("ideal"), **realism))
+    return tasks.GuardedArm(arm, SagModel(np.array(sag_params, float)))
+
+
+def test_guard_clips_a_compensated_command_just_past_a_limit_and_refuses_more():
+    from armlab.station import MotionRefused
+    from armlab.tasks.guard import LIMIT_CLIP_RAD
+
+    upper = kinematics.rx200().upper[3]
+    q = np.array([0.0, -0.5, 0.5, upper, 0.0])                     # wrist_angle planned right at its limit
+    arm = _guarded_sim_arm([0, 0, 0, 0, 0, 0, 0, 0, -0.003])       # the compensation adds 3 mrad to wrist_angle
+    arm.move_to(q)                                                  # the raw arm would refuse 2.149755 rad
+    assert arm.sent[-1][1][3] == upper and abs(arm.arm.joint_positions()[3] - upper) < 1e-12
+    arm = _guarded_sim_arm([0, 0, 0, 0, 0, 0, 0, 0, -(LIMIT_CLIP_RAD + 0.005)])
+    before = arm.arm.joint_positions()
+    with pytest.raises(MotionRefused, match=r"wrist_angle: planned 2\.146755 rad, compensated 2\.161755 rad"):
+        arm.move_to(q)
+    arm = _guarded_sim_arm([0, 0, 0, 0, 0, 0, 0, 0, -0.003])
+    with pytest.raises(MotionRefused, match="planned value is outside them too"):
+        arm.move_to(q + [0, 0, 0, 0.002, 0])                       # planned past the limit: never clipped
+    assert np.array_equal(arm.arm.joint_positions(), before) and arm.sent == []
+
+
+def test_guard_stretch_passes_the_arms_rule_from_its_last_command_not_only_the_encoder_reading():
+    # quantised encoders: the reading of the start differs from where the motors (and the driver's last command) are
+    arm = _guarded_sim_arm(np.zeros(9), encoder_ticks=4096)
+    step = 2 * np.pi / 4096
+    q0 = np.array([0.0, -0.5 + 0.02 * step, 0.5, 0.0, 0.0])
+    q0[1] = (np.floor(q0[1] / step) + 0.9) * step                   # reads one tick up, towards the target
+    arm.move_to(q0)
+    assert arm.arm.joint_positions()[1] > q0[1]
+    target = q0 + [0.0, 0.05, 0.0, 0.0, 0.0]
+    T = 0.05 / arm.robot.velocity[1]                                # exactly at the shoulder's limit
+    arm.move_to(target, moving_time=T, accel_time=0.0)              # was refused: "1.00 rad/s, above its 1.00 rad/s"
+    q_from, q_cmd, T_sent, _ = arm.sent[-1]
+    assert T_sent > T and velocity_violations(q0, q_cmd, T_sent) == []
+    assert np.allclose(arm.arm.joint_positions(), target, atol=step)
+
+
+def test_look_can_return_every_object_and_the_event_runner_sees_through_it():
+    from armlab.sim.scenes import DISTRACTOR_SHAPES
+    from armlab.tasks.events.runner import see
+
+    scene = {"objects": [{"color": "red", "size": "large", "position_mm": [-120.0, 220.0]},
+                         {"color": "blue", "size": "large", "shape": DISTRACTOR_SHAPES[0],
+                          "position_mm": [120.0, 220.0]}]}
+    st = make_station("sim", seed=4, scene=scene)
+    ctx = tasks.context(st)
+    cubes = tasks.perception.look(st, ctx.calibration, ctx.arm).blocks
+    everything = tasks.perception.look(st, ctx.calibration, ctx.arm, all_objects=True).blocks
+    assert [b.color for b in cubes] == ["red"] and all(b.is_block for b in cubes)
+    assert sorted((b.color, b.is_block) for b in everything) == [("blue", False), ("red", True)]
+    far = next(b for b in everything if not b.is_block)
+    assert abs(far.position[0] - 120.0) < 10 and abs(far.position[1] - 220.0) < 10
+    seen = see(st, ctx).objects                                     # the runner's look is the same look
+    assert sorted((b.color, b.is_block) for b in seen) == [("blue", False), ("red", True)]

@@ -6,7 +6,15 @@ grasp (wrist roll and pitch for a block), transit (obstacles and clearance), pla
 pickplace (pick, place and camera-clear plans).
 """
 
-from .grasp import GraspPose, choose_grasp, face_misalignment, face_roll
+from .grasp import (
+    LIMIT_MARGIN_RAD,
+    GraspPose,
+    choose_grasp,
+    face_misalignment,
+    face_roll,
+    inner_limits,
+    steepest_pitch_inside,
+)
 from .pickplace import (
     CAMERA_CLEAR_POSE,
     default_grasp_depth,
@@ -42,7 +50,8 @@ from .trajectory import (
 from .transit import DEFAULT_CLEARANCE_MM, Clearance, Obstacle, as_obstacles, transit_clearance
 
 __all__ = [
-    "GraspPose", "choose_grasp", "face_misalignment", "face_roll",
+    "LIMIT_MARGIN_RAD", "GraspPose", "choose_grasp", "face_misalignment", "face_roll", "inner_limits",
+    "steepest_pitch_inside",
     "CAMERA_CLEAR_POSE", "default_grasp_depth", "grasp_height", "place_tool_height", "plan_camera_clear", "plan_pick",
     "plan_pick_place",
     "plan_place",

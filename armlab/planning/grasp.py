@@ -18,10 +18,16 @@ on an edge. We use roll = 0: the fingers close horizontally, perpendicular to th
 are across two faces exactly when the heading is aligned with the block's faces (h = yaw mod pi/2); otherwise they
 meet the block `misalignment` = |h - yaw| (mod pi/2, at most pi/4) off square and a closing parallel gripper turns
 the block square to its fingers. The grasp reports the misalignment so a caller can prefer another block or nudge it.
+
+Joint-limit margin: the steepest pitch sits where a joint (usually wrist_angle) reaches its position limit, and the
+task layer's sag compensation (armlab.tasks.sag, a few mrad) would push such a command past the limit. So pitches
+and IK solutions are chosen first with every limit pulled in by LIMIT_MARGIN_RAD (inner_limits), and only when
+nothing works with the margin with the limits themselves.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -30,9 +36,11 @@ from armlab import kinematics
 from armlab.kinematics import Unreachable
 from armlab.robot import RobotModel, rx200
 
-__all__ = ["GraspPose", "face_roll", "face_misalignment", "choose_grasp", "TOP_DOWN"]
+__all__ = ["GraspPose", "face_roll", "face_misalignment", "choose_grasp", "TOP_DOWN", "LIMIT_MARGIN_RAD",
+           "inner_limits", "steepest_pitch_inside"]
 
 TOP_DOWN = np.pi / 2
+LIMIT_MARGIN_RAD = 0.01         # planned poses keep this far inside the position limits where they can (module notes)
 _PITCH_STEP = np.radians(1.0)   # fallback pitches are tried from the steepest downwards in this step
 _SEGMENT_STEP_MM = 5.0          # spacing of the reachability check along the vertical approach
 
@@ -69,6 +77,24 @@ def face_misalignment(heading: float, pitch: float, roll: float, yaw: float) -> 
     return float(np.arccos(np.clip(np.abs(normals @ y_tool).max(), 0.0, 1.0)))
 
 
+def inner_limits(robot: RobotModel | None = None, margin: float = LIMIT_MARGIN_RAD) -> RobotModel:
+    """The robot with every position limit pulled in by `margin` rad (for planning with a margin from the limits)."""
+    robot = robot or rx200()
+    return dataclasses.replace(robot, lower=robot.lower + margin, upper=robot.upper - margin)
+
+
+def steepest_pitch_inside(position, roll: float = 0.0, max_pitch: float = TOP_DOWN,
+                          robot: RobotModel | None = None) -> tuple[float, RobotModel]:
+    """kinematics.steepest_pitch within inner_limits(robot) where the position is reachable so, else within the
+    limits themselves; returns (pitch rad, the model whose limits it respects). Raises Unreachable when none."""
+    robot = robot or rx200()
+    try:
+        inner = inner_limits(robot)
+        return kinematics.steepest_pitch(position, roll, max_pitch=max_pitch, robot=inner), inner
+    except Unreachable:
+        return kinematics.steepest_pitch(position, roll, max_pitch=max_pitch, robot=robot), robot
+
+
 def _vertical_ok(position: np.ndarray, top_z: float, pitch: float, roll: float, robot: RobotModel) -> bool:
     """True when every point from `position` straight up to top_z is reachable at pitch/roll on one IK branch."""
     n = max(2, int(np.ceil((top_z - position[2]) / _SEGMENT_STEP_MM)) + 1)
@@ -100,12 +126,19 @@ def choose_grasp(position, yaw: float, approach_z: float | None = None,
         raise Unreachable(f"({p[0]:.1f}, {p[1]:.1f}) mm is on the waist axis: the arm cannot grasp below itself")
     heading = float(np.arctan2(p[1], p[0]))
     roll = face_roll(heading, yaw)
-    if _vertical_ok(p, top_z, TOP_DOWN, roll, robot):
-        return GraspPose(p, heading, TOP_DOWN, roll, True, face_misalignment(heading, TOP_DOWN, roll, yaw))
-    steepest = kinematics.steepest_pitch(p, robot=robot)   # raises Unreachable (with the reason) if none
-    for pitch in np.arange(min(steepest, TOP_DOWN - _PITCH_STEP), -1e-9, -_PITCH_STEP):
-        if _vertical_ok(p, top_z, pitch, 0.0, robot):
-            return GraspPose(p, heading, float(pitch), 0.0, False, face_misalignment(heading, pitch, 0.0, yaw))
+    steepest = None
+    for model in (inner_limits(robot), robot):          # with the margin from the limits first (module notes)
+        if _vertical_ok(p, top_z, TOP_DOWN, roll, model):
+            return GraspPose(p, heading, TOP_DOWN, roll, True, face_misalignment(heading, TOP_DOWN, roll, yaw))
+        try:
+            steepest = kinematics.steepest_pitch(p, robot=model)
+        except Unreachable:
+            if model is robot:
+                raise                                   # the reason, from the limits themselves
+            continue
+        for pitch in np.arange(min(steepest, TOP_DOWN - _PITCH_STEP), -1e-9, -_PITCH_STEP):
+            if _vertical_ok(p, top_z, pitch, 0.0, model):
+                return GraspPose(p, heading, float(pitch), 0.0, False, face_misalignment(heading, pitch, 0.0, yaw))
     raise Unreachable(f"the tool reaches ({p[0]:.1f}, {p[1]:.1f}, {p[2]:.1f}) mm (pitch up to "
                       f"{np.degrees(steepest):.1f} deg) but cannot come straight down to it from z = {top_z:.1f} mm "
                       f"at any pitch")

@@ -32,7 +32,7 @@ from armlab import kinematics
 from armlab.kinematics import Unreachable
 from armlab.robot import RobotModel, rx200
 
-from .grasp import choose_grasp
+from .grasp import choose_grasp, steepest_pitch_inside
 from .plan import GripperStep, MoveStep, Plan
 from .trajectory import cartesian_line, joint_move, reverse
 from .transit import DEFAULT_CLEARANCE_MM, GRIPPER_RADIUS_MM, Obstacle, as_obstacles, transit_clearance
@@ -109,7 +109,8 @@ def _tool_pitch_roll(q: np.ndarray, robot: RobotModel) -> tuple[np.ndarray, floa
 def _rise(q0: np.ndarray, z_t: float, scaling: str, robot: RobotModel):
     """Lift the tool from q0 to height z_t above the same point: a Cartesian segment at the current pitch and roll
     when the arm can keep them all the way up, else a joint move to the steepest pitch that reaches the point above
-    (wrist_angle runs out when a top-down tool rises near the base). None when the tool is already high enough or
+    (wrist_angle runs out when a top-down tool rises near the base), kept grasp.LIMIT_MARGIN_RAD inside the joint
+    limits where it can. None when the tool is already high enough or
     q0 is not a pose the closed-form IK reproduces (e.g. the tool over the waist axis)."""
     p, pitch, roll = _tool_pitch_roll(q0, robot)
     if p[2] >= z_t or np.hypot(p[0], p[1]) < 1.0:
@@ -119,8 +120,8 @@ def _rise(q0: np.ndarray, z_t: float, scaling: str, robot: RobotModel):
         seg = cartesian_line(p, up, pitch, roll, current=q0, robot=robot)
         return seg if np.abs(seg.start - q0).max() <= 1e-6 else None
     except Unreachable:
-        steepest = kinematics.steepest_pitch(up, roll, max_pitch=min(pitch, np.pi / 2), robot=robot)
-        move = joint_move(q0, kinematics.ik(up, steepest, roll, current=q0, robot=robot)[0], scaling, robot=robot)
+        steepest, model = steepest_pitch_inside(up, roll, max_pitch=min(pitch, np.pi / 2), robot=robot)
+        move = joint_move(q0, kinematics.ik(up, steepest, roll, current=q0, robot=model)[0], scaling, robot=robot)
         q, _ = move.sample(np.linspace(0.0, move.duration, 200))
         low = kinematics.joint_positions(q)[:, 4:, 2].min(axis=0) - kinematics.joint_positions(q0)[4:, 2]
         if low.min() < -1.0:

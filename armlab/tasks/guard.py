@@ -5,8 +5,17 @@ Wraps any armlab Arm (simulated or real, armlab.station.Arm) and offers the same
   joint_positions() reports sag.physical(encoder reading), so plans made from it start where they are checked;
 - before every command it asks `should_stop()` (e.g. a state machine's emergency-stop flag): when that says True the
   arm is emergency-stopped and EmergencyStopped is raised, so nothing more is sent;
+- the compensated command is re-checked against the position limits: the planner keeps its targets
+  planning.grasp.LIMIT_MARGIN_RAD (0.01 rad) inside them where it can, but a target planned right at a limit can be
+  pushed past it by the compensation (a few mrad). Such a command is clipped back onto the limit when it overshoots
+  by at most LIMIT_CLIP_RAD and the planned value itself is within the limits (the physical joint then stops that
+  little short of the plan); anything else is refused with MotionRefused naming the joint, before anything moves;
 - the compensated command is re-checked against the joint velocity limits (armlab.profile.velocity_violations) and
-  the moving time is stretched (ramps in proportion) when the small compensation would make a joint too fast;
+  the moving time is stretched (ramps in proportion) when the small compensation would make a joint too fast. The
+  check is made from the encoder reading AND from the last command this guard sent while the arm still sits there
+  (the Interbotix driver checks from its last command, the simulator from its motors, which end exactly there; the
+  reading differs from both by the encoder's quantisation and noise), with a relative margin of _SPEED_EPS so the
+  stretched time passes the driver's rule exactly;
 - every command sent is recorded in `sent` (q_from, q_cmd, moving_time, accel_time) for checks and plots.
 Units: rad, s.
 """
@@ -17,14 +26,15 @@ from collections.abc import Callable
 
 import numpy as np
 
-from armlab.profile import velocity_violations
-from armlab.station import EmergencyStopped
+from armlab.station import EmergencyStopped, MotionRefused
 
 from .sag import SagModel
 
-__all__ = ["GuardedArm"]
+__all__ = ["GuardedArm", "LIMIT_CLIP_RAD"]
 
-_SPEED_MARGIN = 1.01    # stretch to 1 % under the limit
+LIMIT_CLIP_RAD = 0.01   # largest overshoot of a position limit by the sag compensation that is clipped (module notes)
+_SPEED_EPS = 1e-6       # stretched times are this much (relative) longer than the velocity limit needs
+_AT_COMMAND_RAD = 0.02  # the arm still sits at the last command when every joint reads within this of it
 
 
 class GuardedArm:
@@ -36,9 +46,11 @@ class GuardedArm:
         self.sag = sag or SagModel()
         self.should_stop = should_stop or (lambda: False)
         self.sent: list[tuple[np.ndarray, np.ndarray, float, float]] = []
+        self._last_cmd: np.ndarray | None = None     # the last command sent, while the arm may still sit there
 
     def _check(self, what: str) -> None:
         if self.should_stop():
+            self._last_cmd = None
             self.arm.emergency_stop()
             raise EmergencyStopped(f"{what} refused: an emergency stop was requested; reset first")
 
@@ -53,15 +65,38 @@ class GuardedArm:
         q = np.asarray(q, dtype=float)
         if q.shape != (5,) or not np.all(np.isfinite(q)):
             raise ValueError(f"move_to takes 5 finite joint angles (rad), got {q!r}")
-        q_cmd = self.sag.command(q, self.robot)
-        q_from = np.asarray(self.arm.joint_positions(), dtype=float)
-        if moving_time is not None and velocity_violations(q_from, q_cmd, moving_time, self.robot):
-            need = float(np.max(np.abs(q_cmd - q_from) / self.robot.velocity)) * _SPEED_MARGIN
-            scale = need / moving_time
-            moving_time = need
-            accel_time = None if accel_time is None else accel_time * scale
-        self.sent.append((q_from, q_cmd, moving_time, accel_time))
+        q_cmd = self._within_limits(q, self.sag.command(q, self.robot))
+        q_read = np.asarray(self.arm.joint_positions(), dtype=float)
+        starts = [q_read]
+        if self._last_cmd is not None and np.abs(q_read - self._last_cmd).max() <= _AT_COMMAND_RAD:
+            starts.append(self._last_cmd)
+        if moving_time is not None:
+            need = max(float(np.max(np.abs(q_cmd - s) / self.robot.velocity)) for s in starts) * (1 + _SPEED_EPS)
+            if need > moving_time:
+                scale = need / moving_time
+                moving_time = need
+                accel_time = None if accel_time is None else accel_time * scale
+        self.sent.append((q_read, q_cmd, moving_time, accel_time))
+        self._last_cmd = None
         self.arm.move_to(q_cmd, moving_time=moving_time, accel_time=accel_time, blocking=blocking)
+        self._last_cmd = q_cmd
+
+    def _within_limits(self, q: np.ndarray, q_cmd: np.ndarray) -> np.ndarray:
+        """The compensated command q_cmd for planned joints q, clipped onto the limits within LIMIT_CLIP_RAD when q
+        itself is within them; MotionRefused otherwise (module notes)."""
+        lo, hi = np.asarray(self.robot.lower), np.asarray(self.robot.upper)
+        over = np.maximum(lo - q_cmd, q_cmd - hi)
+        if np.all(over <= 0):
+            return q_cmd
+        planned_ok = (q >= lo - 1e-9) & (q <= hi + 1e-9)
+        bad = [f"{name}: planned {qi:.6f} rad, compensated {ci:.6f} rad is {o:.4f} rad past its limits "
+               f"[{a:.6f}, {b:.6f}]" + ("" if ok else " (the planned value is outside them too)")
+               for name, qi, ci, o, a, b, ok in zip(self.robot.joint_names, q, q_cmd, over, lo, hi, planned_ok)
+               if o > 0 and (o > LIMIT_CLIP_RAD or not ok)]
+        if bad:
+            raise MotionRefused("motion refused (joint limits after sag compensation; at most "
+                                f"{LIMIT_CLIP_RAD} rad is clipped): " + "; ".join(bad))
+        return np.clip(q_cmd, lo, hi)
 
     def open_gripper(self) -> None:
         self._check("opening the gripper")
@@ -84,10 +119,13 @@ class GuardedArm:
         self.move_to(np.asarray(self.robot.sleep, float), moving_time)
 
     def set_torque(self, enabled: bool) -> None:
+        self._last_cmd = None
         self.arm.set_torque(enabled)
 
     def emergency_stop(self) -> None:
+        self._last_cmd = None
         self.arm.emergency_stop()
 
     def reset(self) -> None:
+        self._last_cmd = None
         self.arm.reset()

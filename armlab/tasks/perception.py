@@ -6,9 +6,10 @@ camera-clear pose (armlab.planning.plan_camera_clear) one frame: AprilTag extrin
 (calibration.calibrate_extrinsics) and the planar depth correction (calibration.fit_depth_correction, arm pixels
 excluded). The result is an armlab.calibration.Calibration (save/load it with calibration.save_calibration /
 load_calibration).
-look(station, calibration): arm camera-clear, capture, correct the depth, detect the blocks (detection.detect_blocks
-with the arm masked out). surface_point(...): the world point (mm) under a pixel, from the median corrected depth in a
-small window. Units: px, mm, rad; world (board) frame.
+look(station, calibration): arm camera-clear (clear_view: with a lower clearance or a lift back first when needed),
+capture, correct the depth, detect the blocks (detection.detect_blocks with the arm masked out; or every object,
+distractors included, with all_objects=True). surface_point(...): the world point (mm) under a pixel, from the median
+corrected depth in a small window. Units: px, mm, rad; world (board) frame.
 """
 
 from __future__ import annotations
@@ -20,14 +21,20 @@ import numpy as np
 from armlab import calibration, detection, planning
 from armlab.calibration import Calibration
 from armlab.camera import Camera
+from armlab.kinematics import Unreachable
 from armlab.station import Frame
 
-__all__ = ["Observation", "calibrate_camera", "clear_view", "look", "surface_point", "checkerboard_intrinsics"]
+__all__ = ["Observation", "calibrate_camera", "clear_view", "look", "surface_point", "checkerboard_intrinsics",
+           "CLEAR_VIEW_MIN_CLEARANCE_MM"]
+
+CLEAR_VIEW_MIN_CLEARANCE_MM = 25.0   # tool point above what it passes on the way out of view: the finger tips (half a
+                                     # pad, 8 mm, beyond the tool point) keep 17 mm
 
 
 @dataclass(frozen=True)
 class Observation:
-    """One look at the board: the frame, its corrected depth (H, W) mm, the blocks detected and the arm's joints."""
+    """One look at the board: the frame, its corrected depth (H, W) mm, the detections (the blocks, or every object
+    when looked with all_objects=True) and the arm's joints."""
 
     frame: Frame
     depth: np.ndarray
@@ -47,11 +54,30 @@ def checkerboard_intrinsics(folder=None) -> tuple[np.ndarray, np.ndarray]:
 
 def clear_view(arm, obstacles=(), held_below: float = 0.0) -> None:
     """Move the arm to the camera-clear pose (planning.plan_camera_clear) unless it is already there; held_below: how
-    far a held block hangs below the tool point (mm)."""
+    far a held block hangs below the tool point (mm).
+
+    When the move from a low hover point would pass closer than the default clearance over a neighbour, a smaller
+    clearance that still keeps the finger tips above it (CLEAR_VIEW_MIN_CLEARANCE_MM) is tried, then the arm is first
+    lifted back (shoulder back by 0.3 or 0.6 rad, which raises the tool over the board; kept
+    planning.LIMIT_MARGIN_RAD inside the joint limits). Raises Unreachable when nothing works (nothing moves then).
+    """
     q = np.asarray(arm.joint_positions(), dtype=float)
     if np.abs(q - planning.CAMERA_CLEAR_POSE).max() < 0.02:
         return
-    planning.execute(planning.plan_camera_clear(q, obstacles, held_below=held_below), arm)
+    inner = planning.inner_limits(arm.robot)
+    lifts = [None] + [np.clip(q - [0.0, d, 0.0, 0.0, 0.0], inner.lower, inner.upper) for d in (0.3, 0.6)]
+    for q_up in lifts:
+        for clearance in (planning.DEFAULT_CLEARANCE_MM, CLEAR_VIEW_MIN_CLEARANCE_MM):
+            try:
+                plan = planning.plan_camera_clear(q if q_up is None else q_up, obstacles, clearance=clearance,
+                                                  held_below=held_below)
+            except Unreachable:
+                continue
+            if q_up is not None:
+                plan = planning.Plan((planning.MoveStep(planning.joint_move(q, q_up), "lift back"),)).then(plan)
+            planning.execute(plan, arm)
+            return
+    raise Unreachable("cannot move the arm out of the camera's view without passing too low over a block")
 
 
 def calibrate_camera(station, intrinsics="checkerboard", arm=None) -> Calibration:
@@ -81,17 +107,22 @@ def calibrate_camera(station, intrinsics="checkerboard", arm=None) -> Calibratio
                                                  f"residual {correction.residual_mm:.1f} mm")
 
 
-def look(station, calib: Calibration, arm=None, obstacles=(), clear: bool = True,
-         held_below: float = 0.0) -> Observation:
-    """Move the arm out of view (unless clear=False), capture a frame and detect the blocks on it."""
+def look(station, calib: Calibration, arm=None, obstacles=(), clear: bool = True, held_below: float = 0.0,
+         all_objects: bool = False, settings: detection.DetectionSettings | None = None) -> Observation:
+    """Move the arm out of view (clear_view, unless clear=False), capture a frame, correct its depth and detect.
+
+    Observation.blocks holds the cubes (detection.detect_blocks) or, with all_objects, every object's top face
+    (detection.detect_objects: distractors included, e.g. for plans that must avoid them). settings: the detector's
+    (default detection.DetectionSettings()).
+    """
     arm = arm or station.arm
     if clear:
         clear_view(arm, obstacles, held_below)
     frame = station.camera.capture()
     depth = calib.depth_correction.apply(frame.depth)
     q = np.asarray(arm.joint_positions(), dtype=float)
-    blocks = detection.detect_blocks(frame.rgb, depth, calib.camera, arm_q=q)
-    return Observation(frame, depth, blocks, q)
+    detect = detection.detect_objects if all_objects else detection.detect_blocks
+    return Observation(frame, depth, detect(frame.rgb, depth, calib.camera, arm_q=q, settings=settings), q)
 
 
 def surface_point(calib: Calibration, depth: np.ndarray, uv, radius: int = 3) -> np.ndarray:

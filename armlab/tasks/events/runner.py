@@ -17,13 +17,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from armlab import detection, planning
 from armlab.blocks import block_edge
 from armlab.detection import DetectionSettings
 from armlab.kinematics import Unreachable
-from armlab.planning import DEFAULT_CLEARANCE_MM, Obstacle
+from armlab.planning import Obstacle
 from armlab.station import MotionRefused
-from armlab.tasks import pickplace
+from armlab.tasks import perception, pickplace
 
 from .layout import Move, footprint_radius
 from .line_up import LineUp
@@ -35,7 +34,6 @@ from .sort_stack import SortStack
 __all__ = ["EventResult", "MoveLog", "Look", "run_event", "see", "make_strategy", "MAX_PICK_TRIES"]
 
 MAX_PICK_TRIES = 3
-CLEAR_VIEW_MIN_CLEARANCE_MM = 25.0                     # finger tips reach 8 mm below the tool point
 SKY_SETTINGS = DetectionSettings(max_height=500.0)     # the tower rises above the default 260 mm limit
 
 
@@ -90,28 +88,6 @@ def make_strategy(event: str, level: int):
     return {"sort_stack": SortStack, "line_up": LineUp, "sky": Sky}[event](level)
 
 
-def _clear_view(arm, obstacles, held_below: float = 0.0) -> None:
-    """The camera-clear pose (tasks.perception.clear_view's move). When the move from a hover point would pass lower
-    than the default clearance over a neighbour, try a smaller clearance that still keeps the finger tips above it,
-    then lift the arm back first (shoulder back by 0.3 or 0.6 rad, which raises the tool over the board)."""
-    q = np.asarray(arm.joint_positions(), dtype=float)
-    if np.abs(q - planning.CAMERA_CLEAR_POSE).max() < 0.02:
-        return
-    lifts = [None] + [np.clip(q - [0.0, d, 0.0, 0.0, 0.0], arm.robot.lower, arm.robot.upper) for d in (0.3, 0.6)]
-    for q_up in lifts:
-        for clearance in (DEFAULT_CLEARANCE_MM, CLEAR_VIEW_MIN_CLEARANCE_MM):
-            try:
-                plan = planning.plan_camera_clear(q if q_up is None else q_up, obstacles, clearance=clearance,
-                                                  held_below=held_below)
-            except Unreachable:
-                continue
-            if q_up is not None:
-                plan = planning.Plan((planning.MoveStep(planning.joint_move(q, q_up), "lift back"),)).then(plan)
-            planning.execute(plan, arm)
-            return
-    raise Unreachable("cannot move the arm out of the camera's view without passing too low over a block")
-
-
 @dataclass(frozen=True)
 class Look:
     """One look at the board: the frame, its corrected depth (H, W) mm and every object's top face detected."""
@@ -122,13 +98,10 @@ class Look:
 
 
 def see(station, ctx, obstacles=(), settings: DetectionSettings | None = None) -> Look:
-    """Arm out of the camera's view, one frame, corrected depth, every object's top face (detect_objects)."""
-    _clear_view(ctx.arm, obstacles)
-    frame = station.camera.capture()
-    depth = ctx.calibration.depth_correction.apply(frame.depth)
-    q = ctx.arm.joint_positions()
-    objects = detection.detect_objects(frame.rgb, depth, ctx.calibration.camera, arm_q=q, settings=settings)
-    return Look(frame, depth, objects)
+    """Arm out of the camera's view, one frame, corrected depth, every object's top face (tasks.perception.look with
+    all_objects: distractors included, which the plans avoid)."""
+    obs = perception.look(station, ctx.calibration, ctx.arm, obstacles, all_objects=True, settings=settings)
+    return Look(obs.frame, obs.depth, obs.blocks)
 
 
 def _obstacles(seen, move: Move, extra=()) -> list:
@@ -194,11 +167,7 @@ def run_event(station, event: str, level: int = 1, time_limit_s: float | None = 
             continue
         truth = list(station.arm.holding)[:1]
         try:
-            try:
-                pickplace.place(station, move.to, move.yaw, obstacles=obstacles)
-            except MotionRefused:   # refused before moving (e.g. a joint limit on the way up): retry from clear
-                _clear_view(ctx.arm, obstacles, held_below=block_edge(move.block.size) / 2)
-                pickplace.place(station, move.to, move.yaw, obstacles=obstacles)
+            pickplace.place(station, move.to, move.yaw, obstacles=obstacles)
         except (Unreachable, MotionRefused) as e:   # e.g. the tower is as high as the arm can stack: put it back
             why = f"cannot place the {key[0]} {key[1]} block ({e})"
             back = np.asarray(move.block.position, float) - [0.0, 0.0, block_edge(move.block.size)]
