@@ -412,3 +412,22 @@ def test_pick_and_place_round_trips_on_the_simulator(seed):
         assert np.abs(block.position - dest - [0, 0, block.edge / 2]).max() < 3.0     # mm, with realistic errors
         turn = np.degrees(block.yaw - 0.3) % 90
         assert min(turn, 90 - turn) < 2.0                                           # square to the requested yaw
+
+
+# ----------------------------------------------------------------------------------------- one shared geometry
+
+def test_planner_and_simulator_share_one_gripper_and_base_description(monkeypatch):
+    from dataclasses import replace
+
+    from armlab.gripper_geometry import GRIPPER
+    from armlab.sim import SimArm, World, faces
+
+    assert SimArm(World()).gripper_geometry is GRIPPER
+    assert planning.pickplace.FINGERTIP_MM == GRIPPER.fingertip_mm == GRIPPER.pad_height_mm / 2
+    # 25 mm cube: the finger tips (8 mm beyond the tool point) stay 10 mm above the board
+    assert planning.default_grasp_depth(25.0) == pytest.approx(25.0 - GRIPPER.fingertip_mm - 10.0)
+    # the renderer draws the base plate the lab config describes (data/lab.json "robot_base")
+    wide = replace(lab_config(), robot_base_half_mm=(70.0, 80.0))
+    monkeypatch.setattr(faces, "lab_config", lambda: wide)
+    base = faces.arm_faces(ROBOT.home, 40.0, GRIPPER).vertices[:6].reshape(-1, 3)
+    assert np.allclose(np.abs(base[:, :2]).max(axis=0), (70.0, 80.0))

@@ -2,10 +2,10 @@
 
 Heights (world mm):
 - grasp: the tool point (the centre of the finger pads) `grasp_depth` below the block's top face: at the block's
-  centre (edge / 2), as the lab did ("half the block height"), unless that would bring the finger tips (about 8 mm
-  beyond the tool point) within 10 mm of whatever the block stands on (real arms sag 5-15 mm at long reach): then
-  edge - 18 mm (7 mm for the 25 mm cubes; the 38 mm cubes are grasped at their centre). A held block's bottom face is
-  edge - grasp_depth below the tool point.
+  centre (edge / 2), as the lab did ("half the block height"), unless that would bring the finger tips (half a pad,
+  8 mm, beyond the tool point: armlab.gripper_geometry.GRIPPER) within 10 mm of whatever the block stands on (real
+  arms sag 5-15 mm at long reach): then edge - 18 mm (7 mm for the 25 mm cubes; the 38 mm cubes are grasped at their
+  centre). A held block's bottom face is edge - grasp_depth below the tool point.
 - place: the held block's bottom-face centre at the requested position, so the tool point goes to
   position z + edge - grasp_depth (= z + edge / 2 for a grasp at the centre).
 - transit: a straight rise from the start to height z_t (when lower), then a joint-space move to the hover point
@@ -29,6 +29,7 @@ from __future__ import annotations
 import numpy as np
 
 from armlab import kinematics
+from armlab.gripper_geometry import GRIPPER
 from armlab.kinematics import Unreachable
 from armlab.robot import RobotModel, rx200
 
@@ -41,7 +42,7 @@ __all__ = ["CAMERA_CLEAR_POSE", "default_grasp_depth", "grasp_height", "place_to
            "plan_pick_place", "plan_camera_clear"]
 
 CAMERA_CLEAR_POSE = np.array([0.0, 0.0, -np.pi / 2, 0.0, 0.0])
-FINGERTIP_MM = 8.0          # finger tips beyond the tool point along the approach (half of a 16 mm pad)
+FINGERTIP_MM = GRIPPER.fingertip_mm   # finger tips beyond the tool point along the approach (half a finger pad)
 TIP_MARGIN_MM = 10.0        # finger tips at least this far above what the grasped block stands on
 _MAX_RAISES = 8
 

@@ -16,6 +16,7 @@ from dataclasses import dataclass, fields, replace
 import numpy as np
 
 from armlab import kinematics
+from armlab.gripper_geometry import GRIPPER
 from armlab.profile import default_moving_time, trapezoid_fraction, velocity_violations
 from armlab.robot import RobotModel, rx200
 from armlab.sim.gripper import PAD_NAMES, GripperGeometry, close_on, push_with_pads
@@ -118,7 +119,7 @@ class SimArm:
     Args:
         world: the block world (its clock drives the motion).
         realism: "realistic", "ideal" or an ArmRealism.
-        gripper: finger pad geometry (GripperGeometry()).
+        gripper: finger pad geometry (default armlab.gripper_geometry.GRIPPER).
         seed: seeds the homing offsets and the encoder noise.
         real_time: blocking moves take wall-clock time too (else they return at once, in simulated time).
         gripper_time_s: simulated time an open or close takes (the manufacturer's default delay is 1 s).
@@ -132,7 +133,7 @@ class SimArm:
         self.realism = ArmRealism.preset(realism) if isinstance(realism, str) else realism
         if not isinstance(self.realism, ArmRealism):
             raise TypeError(f"realism must be 'realistic', 'ideal' or an ArmRealism, got {realism!r}")
-        self.gripper_geometry = gripper or GripperGeometry()
+        self.gripper_geometry = gripper or GRIPPER
         self.real_time = bool(real_time)
         self.gripper_time_s = float(gripper_time_s)
         offsets_rng, self._noise_rng = (np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(2))

@@ -3,8 +3,8 @@
 Faces come in a `FaceSet`: arrays of convex polygons in the world frame (mm) with their outward unit normals and base
 RGB colours (the colour a face lit like a block's top face shows; `shade` darkens faces turned away from the light).
 Everything is built with whole-array numpy operations, not face by face: a frame holds a few hundred faces. The arm
-is drawn as boxes along `armlab.kinematics.joint_positions` (links ~40 mm wide) plus the gripper housing and two
-fingers at the opening.
+is drawn as boxes along `armlab.kinematics.joint_positions` (links ~40 mm wide) on its base plate (the lab config's
+robot_base, data/lab.json) plus the gripper housing and two fingers at the opening.
 """
 
 from __future__ import annotations
@@ -15,6 +15,7 @@ import numpy as np
 
 from armlab.blocks import LAB_RGB, ObjectState
 from armlab.kinematics import joint_positions, link_frames
+from armlab.lab import lab_config
 from armlab.transforms import rot_x, rot_y
 
 __all__ = ["FaceSet", "object_faces", "objects_faces", "arm_faces", "box_faces", "shade", "LIGHT_DIR", "ARM_RGB",
@@ -26,7 +27,6 @@ ARM_RGB = (36, 36, 38)          # the RX200's black links
 FINGER_RGB = (52, 52, 54)
 
 # link cross-sections (mm): (width across the arm plane, height in the arm plane)
-BASE_HALF_MM = (55.0, 60.0)                  # the fixed base plate (x, y half extents), up to the waist top
 LINK_SECTIONS = ((60.0, 60.0), (42.0, 42.0), (38.0, 38.0), (36.0, 36.0))  # waist->shoulder .. wrist->wrist_rotate
 HOUSING_MM = (70.0, 40.0)                    # gripper housing across the fingers (tool y) and tool z
 FINGER_ROOT_MM = 27.575                      # the fingers start this far behind the tool point (rx200.md)
@@ -183,7 +183,7 @@ def arm_faces(q, gripper_opening_mm: float, gripper_geometry) -> FaceSet:
     sections = np.array(LINK_SECTIONS + (HOUSING_MM,))
     links = _segment_boxes(np.vstack([P[1:5], P[5]]), np.vstack([P[2:6], root]), np.vstack([np.tile(side, (4, 1)), y]),
                            sections[:, 0], sections[:, 1], np.tile(ARM_RGB, (5, 1)))
-    base = box_faces((0.0, 0.0, P[1, 2] / 2), np.eye(3), (*BASE_HALF_MM, P[1, 2] / 2), ARM_RGB)
+    base = box_faces((0.0, 0.0, P[1, 2] / 2), np.eye(3), (*lab_config().robot_base_half_mm, P[1, 2] / 2), ARM_RGB)
     pad_h = float(gripper_geometry.pad_height_mm)
     pad_w = float(gripper_geometry.pad_width_mm)
     thick = float(gripper_geometry.pad_thickness_mm)

@@ -1,8 +1,8 @@
-"""The simulated gripper: finger pad geometry, and grasping, holding and pushing by geometry (not magic).
+"""The simulated gripper: grasping, holding and pushing by geometry (not magic), with the finger pads of
+armlab.gripper_geometry.GripperGeometry (the description the planner shares; re-exported here).
 
 Frames: the tool frame is the manufacturer's ee_gripper_link (x = approach direction out of the gripper, y = the
-closing direction across the fingers, z completes a right-handed frame). The two finger pads are boxes centred on
-the tool point along x, on either side of it along y: the "left" pad on +y, the "right" pad on -y. Units: mm, rad.
+closing direction across the fingers, z completes a right-handed frame). Units: mm, rad.
 
 Grasp rule: closing holds a cube only when it lies between the pads, the closing direction is horizontal and across
 two opposite faces (cube yaw vs. closing direction, modulo 90 deg, within `align_tol_rad`), and the pads overlap the
@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from armlab.blocks import ObjectState
+from armlab.gripper_geometry import GripperGeometry
 from armlab.sim.geometry import boxes_overlap, convex_hull, separation_along, wrap_quarter
 from armlab.sim.world import World
 from armlab.transforms import rot_z
@@ -26,72 +27,6 @@ __all__ = ["GripperGeometry", "GraspOutcome", "close_on", "push_with_pads"]
 
 PAD_NAMES = ("left finger pad", "right finger pad")
 _PUSH_MARGIN_MM = 0.05       # pads touching a face (closed on a cube) do not count as pushing it
-
-
-@dataclass(frozen=True)
-class GripperGeometry:
-    """Finger pad geometry (mm) and grasp tolerances.
-
-    Attributes:
-        pad_width_mm: pad extent along tool z (across the fingers' faces).
-        pad_height_mm: pad extent along tool x (the approach direction), centred on the tool point, so the finger
-            tips reach pad_height_mm / 2 beyond it.
-        pad_thickness_mm: pad extent along tool y (the closing direction).
-        finger_min_mm, finger_max_mm: travel of each finger's outer face from the centre line (the manufacturer's
-            15-37 mm); the gap between the pads is 2 (finger - pad_thickness), 18-62 mm by default, so that both
-            the 25 mm and the 38 mm cubes can be held (the lab's modified fingers).
-        align_tol_rad: largest misalignment (mod 90 deg) between the closing direction and a cube's face normal
-            that still gives a grasp.
-        min_contact_mm: least overlap of the pads with the cube's sides, vertically and across, for a grasp.
-    """
-
-    pad_width_mm: float = 20.0
-    pad_height_mm: float = 16.0
-    pad_thickness_mm: float = 6.0
-    finger_min_mm: float = 15.0
-    finger_max_mm: float = 37.0
-    align_tol_rad: float = float(np.radians(10.0))
-    min_contact_mm: float = 5.0
-
-    def __post_init__(self):
-        for name in ("pad_width_mm", "pad_height_mm", "pad_thickness_mm", "min_contact_mm"):
-            value = getattr(self, name)
-            if not np.isfinite(value) or value <= 0:
-                raise ValueError(f"GripperGeometry.{name} must be a positive number of mm, got {value}")
-        if not 0 <= self.finger_min_mm - self.pad_thickness_mm < self.finger_max_mm - self.pad_thickness_mm:
-            raise ValueError(f"GripperGeometry: finger travel {self.finger_min_mm}-{self.finger_max_mm} mm with "
-                             f"{self.pad_thickness_mm} mm pads leaves no valid gap between the pads")
-        if not 0 < self.align_tol_rad < np.pi / 4:
-            raise ValueError(f"GripperGeometry.align_tol_rad must be in (0, pi/4), got {self.align_tol_rad}")
-
-    @property
-    def min_opening_mm(self) -> float:
-        """Gap between the pads when fully closed (mm)."""
-        return 2 * (self.finger_min_mm - self.pad_thickness_mm)
-
-    @property
-    def max_opening_mm(self) -> float:
-        """Gap between the pads when fully open (mm)."""
-        return 2 * (self.finger_max_mm - self.pad_thickness_mm)
-
-    @property
-    def half_extents(self) -> np.ndarray:
-        """Pad half extents (3,) along tool x, y, z (mm)."""
-        return np.array([self.pad_height_mm, self.pad_thickness_mm, self.pad_width_mm]) / 2
-
-    def pad_centres(self, T_tool, opening_mm: float) -> np.ndarray:
-        """World centres (..., 2, 3) of the left (+y) and right (-y) pads for tool pose(s) T_tool (..., 4, 4)."""
-        T = np.asarray(T_tool, dtype=float)
-        off = opening_mm / 2 + self.pad_thickness_mm / 2
-        return T[..., None, :3, 3] + np.stack([off * T[..., :3, 1], -off * T[..., :3, 1]], axis=-2)
-
-    def pad_corners(self, T_tool, opening_mm: float) -> np.ndarray:
-        """World corners (..., 2, 8, 3) of both pads for tool pose(s) T_tool (..., 4, 4) at an opening (mm)."""
-        T = np.asarray(T_tool, dtype=float)
-        signs = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)], dtype=float)
-        local = signs * self.half_extents                                     # (8, 3) in the tool axes
-        offsets = np.einsum("...ij,kj->...ki", T[..., :3, :3], local)        # (..., 8, 3)
-        return self.pad_centres(T, opening_mm)[..., :, None, :] + offsets[..., None, :, :]
 
 
 @dataclass

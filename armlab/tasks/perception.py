@@ -27,8 +27,8 @@ from armlab.station import Frame
 __all__ = ["Observation", "calibrate_camera", "clear_view", "look", "surface_point", "checkerboard_intrinsics",
            "CLEAR_VIEW_MIN_CLEARANCE_MM"]
 
-CLEAR_VIEW_MIN_CLEARANCE_MM = 25.0   # tool point above what it passes on the way out of view: the finger tips (half a
-                                     # pad, 8 mm, beyond the tool point) keep 17 mm
+CLEAR_VIEW_MIN_CLEARANCE_MM = 25.0   # tool point above what it passes on the way out of view: the finger tips
+                                     # (GRIPPER.fingertip_mm = 8 mm beyond the tool point) keep 17 mm
 
 
 @dataclass(frozen=True)
