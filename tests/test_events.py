@@ -3,10 +3,13 @@ full autonomous run on the simulator (score from the world's truth, time, replay
 
 from __future__ import annotations
 
+import base64
+import re
 from dataclasses import dataclass
 
 import numpy as np
 import pytest
+import umsgpack
 
 from armlab.blocks import COLORS, ObjectState, block_edge
 from armlab.sim import World
@@ -219,6 +222,40 @@ def test_sort_stack_level_3_runs_to_full_marks_within_the_time_limit(tmp_path):
     assert {o.id for o in r.objects_at(0.0)} == {o.id for o in station.world.objects}
     back = Replay.load(r.save(tmp_path / "replay.npz"))
     assert np.array_equal(back.q, r.q) and back.snapshots == r.snapshots
+    assert np.array_equal(back.object_poses, r.object_poses, equal_nan=True)
+    # the object tracks: the first block moved is lifted off the board while carried and ends where the truth says
+    first = result.moves[0]
+    moved = [j for j in range(len(r.object_ids)) if np.linalg.norm(r.object_poses[0, j, :2] - r.object_poses[-1, j, :2])
+             > 20.0]
+    assert moved
+    during = (r.times >= first.t_start) & (r.times <= first.t_end)
+    lifted = [j for j in moved if np.nanmax(r.object_poses[during, j, 2] - r.object_poses[0, j, 2]) > 30.0]
+    assert lifted, "no block was carried during the first move"
+    final = {o.id: o.position for o in station.world.objects}
+    for j, oid in enumerate(r.object_ids):
+        np.testing.assert_allclose(r.object_poses[-1, j, :3], final[int(oid)], atol=1e-9)
+
+
+def test_replay_shows_blocks_being_carried_in_the_viewer():
+    from armlab.viz import Viewer
+    from armlab.viz.viewer import ROOT  # meshcat path: /meshcat/<ROOT>/...
+
+    station = event_station("sort_stack", 1, seed=1)
+    r = run_event(station, "sort_stack", 1, time_limit_s=25.0).replay
+    j = int(np.argmax(np.nanmax(r.object_poses[:, :, 2], axis=0)))       # the block lifted highest
+    with Viewer() as viewer:
+        r.to_viewer(viewer, fps=5)
+        html = viewer.static_html()
+    commands = [umsgpack.unpackb(base64.b64decode(b))
+                for b in re.findall(r"data:application/octet-binary;base64,([A-Za-z0-9+/=]+)", html)]
+    anim = [c for c in commands if c["type"] == "set_animation"][-1]
+    clips = {a["path"]: a["clip"] for a in anim["animations"]}
+    clip = clips[f"/meshcat/{ROOT}/objects/{int(r.object_ids[j])}"]
+    keys = {t["name"]: t["keys"] for t in clip["tracks"]}[".position"]
+    z = np.array([k["value"][2] for k in keys])
+    assert z[0] == pytest.approx(r.object_poses[0, j, 2], abs=1e-6) and z.max() > z[0] + 30.0   # carried
+    t = np.array([k["time"] for k in keys]) / 5.0
+    np.testing.assert_allclose(z, np.interp(t, r.times, r.object_poses[:, j, 2]), atol=1e-6)
 
 
 def test_time_limit_scores_the_board_at_the_limit():

@@ -283,6 +283,33 @@ def test_animation_keyframes_follow_the_trajectory(viewer):
     assert all(a["animations"] == [] for a in anim)
 
 
+def test_animation_moves_objects_too(viewer):
+    times = np.array([0.0, 1.0, 2.0])
+    qs = np.linspace(rx200().home, rx200().sleep, 3)
+    red = [ObjectState("red", "large", 38.0, np.array([x, 200.0, z]), yaw, "cube", 7)
+           for x, z, yaw in [(-100.0, 19.0, 0.0), (0.0, 120.0, 0.2), (100.0, 19.0, 0.4)]]   # carried across
+    blue = ObjectState("blue", "small", 25.0, np.array([50.0, 300.0, 12.5]), 0.0, "cube", 8)  # handed over at 1 s
+    viewer.animate(times, qs, objects=[[red[0]], [red[1], blue], [red[2], blue]], fps=10)
+    anim = [c for c in scene_commands(viewer.static_html()) if c["type"] == "set_animation"]
+    clips = {a["path"]: a["clip"] for a in anim[-1]["animations"]}
+    tracks = {t["name"]: t for t in clips[f"{ROOT}/objects/7"]["tracks"]}
+    np.testing.assert_allclose([k["time"] for k in tracks[".position"]["keys"]], times * 10)
+    np.testing.assert_allclose([k["value"] for k in tracks[".position"]["keys"]], [o.position for o in red])
+    quats = [k["value"] for k in tracks[".quaternion"]["keys"]]      # three.js (x, y, z, w): a turn about z
+    np.testing.assert_allclose([2 * np.arctan2(qz, qw) for _, _, qz, qw in quats], [0.0, 0.2, 0.4], atol=1e-9)
+    assert ".visible" not in tracks                                    # always there: no visibility track
+    blue_tracks = {t["name"]: t for t in clips[f"{ROOT}/objects/8"]["tracks"]}
+    visible = blue_tracks[".visible"]
+    assert visible["type"] == "boolean" and [k["value"] for k in visible["keys"]] == [False, True, True]
+    # drawn where the animation ends
+    transforms = by_path(scene_commands(viewer.static_html()), "set_transform")
+    np.testing.assert_allclose(matrix(transforms[f"{ROOT}/objects/7"])[:3, 3], red[2].position)
+    with pytest.raises(ValueError, match="one list of objects per key frame"):
+        viewer.animate(times, qs, objects=[[red[0]]])
+    with pytest.raises(ValueError, match="appears twice"):
+        viewer.animate(times, qs, objects=[[red[0], red[1]], [], []])
+
+
 def test_joint_sliders_move_the_arm(viewer):
     box = viewer.joint_sliders()
     sliders = box.children

@@ -215,11 +215,15 @@ class Viewer:
             self._vis.set_animation(Animation(), play=False)
             self._animated = False
 
-    def animate(self, times_s, qs, gripper_opening_mm=None, fps: int = 30, repetitions: int = 1) -> None:
+    def animate(self, times_s, qs, gripper_opening_mm=None, fps: int = 30, repetitions: int = 1,
+                objects=None) -> None:
         """Load a joint trajectory as a meshcat animation (it plays in the browser and in saved snapshots).
 
         times_s (N,) increasing seconds from 0; qs (N, 5) rad; gripper_opening_mm one value or (N,) mm (default:
-        the current opening). The arm is left drawn at the last pose.
+        the current opening). objects (optional): N lists of armlab.blocks.ObjectState, the objects at each key frame
+        (world mm, rad): every object that appears in any of them is drawn and moves with the animation (a block
+        carried by the gripper, a tower growing), and is hidden at the key frames whose list lacks it. The arm and
+        the objects are left drawn as at the last key frame.
         """
         t = np.asarray(times_s, dtype=float)
         qs = np.asarray(qs, dtype=float)
@@ -229,6 +233,7 @@ class Viewer:
             raise ValueError("times_s must be finite, start at or after 0 s and strictly increase")
         if int(fps) < 1 or int(repetitions) < 1:
             raise ValueError("fps and repetitions must be positive integers")
+        tracks = None if objects is None else self._object_tracks(objects, len(t))
         opening = self.gripper_opening_mm if gripper_opening_mm is None else gripper_opening_mm
         parts = geo.arm_part_poses(qs, opening)
         arm = self._node("arm")
@@ -238,8 +243,47 @@ class Viewer:
                 for path, poses in parts.poses.items():
                     frame[path].set_transform(poses[k])
         self.show(qs[-1], float(np.broadcast_to(opening, len(t))[-1]))
+        if tracks is not None:
+            self._animate_objects(animation, t * fps, *tracks)
         self._vis.set_animation(animation, play=True, repetitions=int(repetitions))
         self._animated = True
+
+    @staticmethod
+    def _object_tracks(objects, n: int) -> tuple[list[ObjectState], list[dict[int, ObjectState]]]:
+        """Validate per-key-frame object lists: (every object, its latest state; per frame {id: state})."""
+        frames = list(objects)
+        if len(frames) != n:
+            raise ValueError(f"objects must hold one list of objects per key frame ({n}), got {len(frames)}")
+        per_frame, latest = [], {}
+        for k, objs in enumerate(frames):
+            by_id = {}
+            for o in objs:
+                if not isinstance(o, ObjectState):
+                    raise ValueError(f"objects[{k}] holds a {type(o).__name__}, expected armlab.blocks.ObjectState")
+                if o.id in by_id:
+                    raise ValueError(f"objects[{k}]: object id {o.id} appears twice")
+                by_id[o.id] = o
+            per_frame.append(by_id)
+            latest.update(by_id)
+        return list(latest.values()), per_frame
+
+    def _animate_objects(self, animation: Animation, frame_numbers: np.ndarray, every: list[ObjectState],
+                         per_frame: list[dict[int, ObjectState]]) -> None:
+        """Draw every object (as at the last frame it appears in) and add its pose (and, when it is missing from
+        some frames, visibility) track to the animation."""
+        self.draw_objects(every)
+        node = self._node("objects")
+        missing = {o.id for o in every if any(o.id not in f for f in per_frame)}
+        for k, frame_objs in enumerate(per_frame):
+            with animation.at_frame(node, float(frame_numbers[k])) as frame:
+                for o in every:
+                    here = frame_objs.get(o.id)
+                    if here is not None:
+                        frame[str(o.id)].set_transform(geo.object_pose(here))
+                    if o.id in missing:
+                        frame[str(o.id)].set_property("visible", "boolean", here is not None)
+        for object_id in missing:
+            node[str(object_id)].set_property("visible", object_id in per_frame[-1])
 
     def joint_sliders(self):
         """ipywidgets sliders (one per joint, rad, within the limits, plus the gripper opening in mm) that move
