@@ -263,3 +263,23 @@ def test_time_limit_scores_the_board_at_the_limit():
     result = run_event(station, "sort_stack", 1, time_limit_s=20.0)
     assert result.stopped == "time is up" and not result.within_limit
     assert result.score.points == 30                  # one block placed before 20 s; the rest came too late
+
+
+def test_sky_tower_grows_as_high_as_the_arm_reaches_over_the_best_spot():
+    from armlab.tasks import RELEASE_GAP_MM
+    from armlab.tasks.events.sky import SKY_CLEARANCE_MM, TOWER_XY, highest_tool_z
+
+    # the tower spot is where the tool reaches highest along its diagonal (within 1 mm)
+    reach = {r: highest_tool_z((r / np.sqrt(2), r / np.sqrt(2))) for r in (100, 140, 170, 200, 240)}
+    assert highest_tool_z(TOWER_XY) >= max(reach.values()) - 1.0
+    assert highest_tool_z(TOWER_XY, top_down=True) < 300.0          # levels above ~6 blocks come in tilted
+    station = event_station("sky", seed=0)
+    result = run_event(station, "sky", record=False)
+    tower = len(result.score.lines)
+    e = block_edge("large")
+    assert tower >= 12 and result.score.points == sky_points(tower)   # 11 with the default 50 mm clearance
+    assert "out of reach" in result.stopped
+    # the next level's hover (top + release gap + up to e/2 for a tilted block's lowest edge + edge + clearance) is
+    # above what the arm reaches there, the last one's was not: the tower is as tall as straight-down placing allows
+    hover = lambda level: level * e + RELEASE_GAP_MM + e / 2 + e + SKY_CLEARANCE_MM    # noqa: E731
+    assert hover(tower - 1) <= highest_tool_z(TOWER_XY) < hover(tower)

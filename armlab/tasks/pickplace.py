@@ -134,10 +134,12 @@ def _tilt_drop(position: np.ndarray, edge: float, yaw: float) -> float:
     return 0.0 if grasp.top_down else float(edge / 2 * abs(np.cos(grasp.pitch)))
 
 
-def place(station, position, yaw: float = 0.0, obstacles=None) -> bool:
+def place(station, position, yaw: float = 0.0, obstacles=None,
+          clearance: float = planning.DEFAULT_CLEARANCE_MM) -> bool:
     """Put the held block's bottom-face centre at `position` (3,) world mm with yaw (rad); True when the plan ran
-    through (the gripper opened there). Raises ValueError when nothing is held or for bad input, Unreachable when
-    the spot cannot be reached (nothing moves then)."""
+    through (the gripper opened there). clearance: how far (mm) the held block's bottom passes above the obstacles'
+    tops in transit, and the empty tool point ends above the placed block (planning.plan_place). Raises ValueError
+    when nothing is held or for bad input, Unreachable when the spot cannot be reached (nothing moves then)."""
     ctx = context(station)
     edge = ctx.held_edge
     p = np.asarray(position, dtype=float)
@@ -145,7 +147,8 @@ def place(station, position, yaw: float = 0.0, obstacles=None) -> bool:
         raise ValueError(f"place position must be 3 finite numbers (x, y, z in world mm), got {position!r}")
     obs = ctx.known if obstacles is None else list(obstacles)
     gap = RELEASE_GAP_MM + _tilt_drop(p, edge, float(yaw))
-    plan = planning.plan_place(ctx.arm.joint_positions(), p + [0.0, 0.0, gap], edge, float(yaw), obstacles=obs)
+    plan = planning.plan_place(ctx.arm.joint_positions(), p + [0.0, 0.0, gap], edge, float(yaw), obstacles=obs,
+                               clearance=clearance)
     planning.execute(plan, ctx.arm)
     ctx.held = None
     ctx.known = [*ctx.known, Obstacle(float(p[0]), float(p[1]), float(p[2] + edge), edge / np.sqrt(2))]

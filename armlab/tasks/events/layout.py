@@ -12,6 +12,7 @@ import numpy as np
 
 from armlab.blocks import block_edge
 from armlab.lab import lab_config
+from armlab.planning import DEFAULT_CLEARANCE_MM
 
 __all__ = ["Move", "footprint_radius", "occupied_by", "free_spot", "is_stacked", "covered", "REACH_MM", "GAP_MM"]
 
@@ -22,13 +23,14 @@ TAG_CLEAR_MM = 45.0           # staging spots keep this far from AprilTag centre
 
 @dataclass(frozen=True)
 class Move:
-    """One pick-and-place: the detected block to pick, where its bottom-face centre goes (3,) world mm, the yaw (rad)
-    and why (e.g. "stage", "stack", "line")."""
+    """One pick-and-place: the detected block to pick, where its bottom-face centre goes (3,) world mm, the yaw (rad),
+    why (e.g. "stage", "stack", "line") and the place's transit clearance (mm, tasks.place)."""
 
     block: object
     to: np.ndarray
     yaw: float
     why: str
+    clearance: float = DEFAULT_CLEARANCE_MM
 
     def describe(self) -> str:
         b = self.block

@@ -167,7 +167,7 @@ def run_event(station, event: str, level: int = 1, time_limit_s: float | None = 
             continue
         truth = list(station.arm.holding)[:1]
         try:
-            pickplace.place(station, move.to, move.yaw, obstacles=obstacles)
+            pickplace.place(station, move.to, move.yaw, obstacles=obstacles, clearance=move.clearance)
         except (Unreachable, MotionRefused) as e:   # e.g. the tower is as high as the arm can stack: put it back
             why = f"cannot place the {key[0]} {key[1]} block ({e})"
             back = np.asarray(move.block.position, float) - [0.0, 0.0, block_edge(move.block.size)]

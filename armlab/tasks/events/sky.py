@@ -6,24 +6,57 @@ that ends on the tower. Sky is the robot's side: it picks the block at the hand-
 TOWER_XY, the next level up, always aimed at the same (x, y) so placement errors do not add up (the detected top
 face of a tall tower drifts by a few mm per 100 mm of height, more than the arm errs); the tower's height is believed
 from what was placed and checked against the detected top while it is below the detector's height limit.
-The tower stops when the next level is out of the arm's reach: with the default 50 mm transit clearance the top-down
-or tilted approach above a 12-block tower (456 mm) needs the tool at about 530 mm, beyond the RX200's reach at that
-radius. Units: mm, rad; world (board) frame.
+The tower stops when the next level is out of the arm's reach. What limits it is the height the tool point can reach
+above the tower spot (highest_tool_z): top-down only about 260 mm (wrist_angle runs out), so every level above ~6
+blocks is placed with a tilted approach; at any pitch about 510 mm, best at 150-180 mm from the waist axis (the
+horizontal approach reaches highest). The block is carried SKY_CLEARANCE_MM over the tower top (not the default
+50 mm) and the tool hovers that far above the new top before it comes down, so the next level can be placed while
+top + edge + clearance is within that reach. TOWER_XY sits on the 45 deg diagonal at the radius where the reach is
+highest. Units: mm, rad; world (board) frame.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from armlab import kinematics
 from armlab.blocks import COLORS, ObjectState, block_edge
+from armlab.kinematics import Unreachable
+from armlab.planning import inner_limits
 
 from .layout import Move
 
-__all__ = ["Sky", "HandOver", "HANDOVER_XY", "TOWER_XY"]
+__all__ = ["Sky", "HandOver", "HANDOVER_XY", "TOWER_XY", "SKY_CLEARANCE_MM", "highest_tool_z"]
 
 HANDOVER_XY = (-200.0, 150.0)
-TOWER_XY = (150.0, 150.0)
+TOWER_XY = (120.0, 120.0)           # 170 mm from the waist axis: where the tool reaches highest (module notes)
 NEAR_MM = 40.0
+SKY_CLEARANCE_MM = 15.0             # held block over the tower top; the empty finger tips (8 mm below the tool point)
+                                    # end 7 mm above the new top after the release
+
+
+def highest_tool_z(xy, top_down: bool = False, tol_mm: float = 0.5) -> float:
+    """The highest tool point (world mm) the arm reaches over the board point xy (2,) mm with every joint
+    planning.LIMIT_MARGIN_RAD inside its limits: straight down (top_down) or at any pitch in [0, pi/2]."""
+    robot = inner_limits()
+
+    def ok(z: float) -> bool:
+        p = np.array([xy[0], xy[1], z], float)
+        if top_down:
+            return bool(kinematics.ik_batch(p[None], np.pi / 2, robot=robot).ok[0])
+        try:
+            kinematics.steepest_pitch(p, robot=robot)
+            return True
+        except Unreachable:
+            return False
+
+    good, bad = 0.0, 800.0
+    if not ok(good):
+        raise Unreachable(f"({xy[0]:.0f}, {xy[1]:.0f}) mm: the tool cannot reach the board there")
+    while bad - good > tol_mm:
+        mid = 0.5 * (good + bad)
+        good, bad = (mid, bad) if ok(mid) else (good, mid)
+    return good
 
 
 class HandOver:
@@ -79,7 +112,7 @@ class Sky:
         handed = [b for b in seen if b.is_block and np.linalg.norm(np.asarray(b.position[:2]) - HANDOVER_XY) < NEAR_MM]
         if not handed:
             return None
-        return Move(handed[0], np.array([*self.top_xy, self.height * e]), 0.0, "tower")
+        return Move(handed[0], np.array([*self.top_xy, self.height * e]), 0.0, "tower", SKY_CLEARANCE_MM)
 
     def placed(self, move: Move) -> None:
         self.height += 1
