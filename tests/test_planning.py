@@ -431,3 +431,17 @@ def test_planner_and_simulator_share_one_gripper_and_base_description(monkeypatc
     monkeypatch.setattr(faces, "lab_config", lambda: wide)
     base = faces.arm_faces(ROBOT.home, 40.0, GRIPPER).vertices[:6].reshape(-1, 3)
     assert np.allclose(np.abs(base[:, :2]).max(axis=0), (70.0, 80.0))
+
+
+def test_place_prefers_a_shorter_top_down_descent_that_keeps_the_yaw():
+    # 390 mm out the tool cannot come straight down from the 88 mm transit height, but can from a lower hover
+    plan = planning.plan_place(planning.CAMERA_CLEAR_POSE, [0.0, 390.0, 0.0], 38.0, yaw=0.3)
+    down = next(s.trajectory for s in plan.steps if s.label == "descend")
+    assert down.pitch == pytest.approx(np.pi / 2) and down.p0[2] < 88.0
+    assert down.p0[2] >= 38.0 + planning.pickplace.LOW_HOVER_MM - 1e-9
+    y_tool = kinematics.fk(down.end)[:3, 1]                    # the fingers close across faces at yaw 0.3
+    yaw_placed = np.arctan2(y_tool[1], y_tool[0])
+    assert abs((yaw_placed - 0.3 + np.pi / 4) % (np.pi / 2) - np.pi / 4) < 1e-6
+    # beyond that the place tilts (and can only keep the block square to the fingers)
+    far = planning.plan_place(planning.CAMERA_CLEAR_POSE, [0.0, 420.0, 0.0], 38.0, yaw=0.3)
+    assert next(s.trajectory for s in far.steps if s.label == "descend").pitch < np.radians(85)

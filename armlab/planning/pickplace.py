@@ -45,6 +45,9 @@ CAMERA_CLEAR_POSE = np.array([0.0, 0.0, -np.pi / 2, 0.0, 0.0])
 FINGERTIP_MM = GRIPPER.fingertip_mm   # finger tips beyond the tool point along the approach (half a finger pad)
 TIP_MARGIN_MM = 10.0        # finger tips at least this far above what the grasped block stands on
 _MAX_RAISES = 8
+LOW_HOVER_MM = GRIPPER.fingertip_mm + 7.0   # a place may hover this little above the placed block's top (finger tips
+                                            # 7 mm over it after the lift) to come straight down with the yaw
+_LOW_HOVER_STEP_MM = 5.0
 
 
 def _check_edge_depth(edge: float, grasp_depth: float | None) -> float:
@@ -132,11 +135,14 @@ def _rise(q0: np.ndarray, z_t: float, scaling: str, robot: RobotModel):
 
 
 def _approach(q_start, target: np.ndarray, yaw: float, floor_z: float, held_below: float, action: str,
-              obstacles, clearance: float, scaling: str, robot: RobotModel, what: str) -> Plan:
+              obstacles, clearance: float, scaling: str, robot: RobotModel, what: str,
+              low_hover: float | None = None) -> Plan:
     """transit to the hover point over target, [open], descend, open/close, lift back (see the module notes).
 
     floor_z: the top (mm) the empty tool must clear at the hover point when the plan ends (the picked block's top, or
     the placed block's top); held_below: how far a held block hangs below the tool point during the transit.
+    low_hover: when the straight descent from the transit height cannot be top-down, the lowest hover height (mm)
+    from which a shorter top-down descent is tried (in _LOW_HOVER_STEP_MM steps) before tilting.
     """
     if not np.isfinite(clearance) or clearance < 0:
         raise ValueError(f"clearance must be a non-negative length in mm, got {clearance}")
@@ -150,10 +156,17 @@ def _approach(q_start, target: np.ndarray, yaw: float, floor_z: float, held_belo
     near = _near_segment(obs, kinematics.fk(q0, robot)[:3, 3], target)
     if near:
         z_t = max(z_t, max(o.top for o in near) + clearance + held_below)
-    for _ in range(_MAX_RAISES):
+    lowered = False
+    for _ in range(_MAX_RAISES + 1):
         hover = np.array([target[0], target[1], z_t])
         try:
             grasp = choose_grasp(target, yaw, approach_z=z_t, robot=robot)
+            if not grasp.top_down and low_hover is not None:       # a shorter straight descent keeps the yaw
+                for z in np.arange(z_t - _LOW_HOVER_STEP_MM, low_hover - 1e-9, -_LOW_HOVER_STEP_MM):
+                    low = choose_grasp(target, yaw, approach_z=z, robot=robot)
+                    if low.top_down:
+                        grasp, hover, lowered = low, np.array([target[0], target[1], z]), True
+                        break
             down = cartesian_line(hover, target, grasp.pitch, grasp.roll, robot=robot)
             rise = _rise(q0, z_t, scaling, robot)
         except Unreachable as e:
@@ -164,6 +177,9 @@ def _approach(q_start, target: np.ndarray, yaw: float, floor_z: float, held_belo
         if c.clear:
             break
         o = c.obstacle
+        if lowered:                  # the lower hover passes too close to a neighbour: tilt from z_t instead
+            low_hover, lowered = None, False
+            continue
         z_t += c.deficit + 1.0
     else:
         raise Unreachable(f"{what}: no transit height up to {z_t:.1f} mm clears the obstacle at ({o.x:.1f}, "
@@ -198,14 +214,18 @@ def plan_place(q_start, position, edge: float, yaw: float = 0.0, obstacles=(),
 
     Steps: transit to the hover point (the held block lifted `clearance` over everything near the path), descend
     (Cartesian) until the tool point is at place_tool_height, open, lift. obstacles: everything on the board except the
-    held block. The yaw is reached exactly for top-down placing; a tilted place leaves the block square to the fingers.
+    held block. The yaw is reached exactly for top-down placing, so when the descent from the transit height cannot be
+    top-down a shorter one from a lower hover point (down to LOW_HOVER_MM above the placed block, the transit still
+    checked against every obstacle) is preferred; only when none works is the place tilted, which leaves the block
+    square to the fingers: yaw = heading (mod 90 deg), up to 45 deg from the requested yaw (grasp module notes).
     """
     robot = robot or rx200()
     position = _point(position, "place position")
     depth = _check_edge_depth(edge, grasp_depth)
     target = np.array([position[0], position[1], place_tool_height(position[2], edge, depth)])
     return _approach(q_start, target, yaw, position[2] + edge, edge - depth, "open", obstacles, clearance, scaling,
-                     robot, f"placing at ({position[0]:.1f}, {position[1]:.1f}, {position[2]:.1f}) mm")
+                     robot, f"placing at ({position[0]:.1f}, {position[1]:.1f}, {position[2]:.1f}) mm",
+                     low_hover=position[2] + edge + LOW_HOVER_MM)
 
 
 def plan_pick_place(q_start, top, yaw: float, edge: float, position, place_yaw: float = 0.0, obstacles=(),
