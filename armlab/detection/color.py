@@ -12,14 +12,31 @@ around hue 0 and is missed below 140, and dark blocks (green, blue) have weak sa
 from __future__ import annotations
 
 import json
+import os
+import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
+import cv2
 import numpy as np
 
+from armlab._paths import data_path
 from armlab.blocks import COLORS, LAB_RGB
 
-__all__ = ["ColorModel", "color_features", "white_balance_gains"]
+__all__ = ["ColorModel", "color_features", "white_balance_gains", "default_color_model", "COLOR_MODEL_FILE",
+           "LAB_HSV_TABLE", "hsv_table_classify"]
+
+COLOR_MODEL_FILE = "color_model.json"   # in data/: the calibrated model detect_blocks uses by default
+
+# The lab report's Table IV: OpenCV HSV ranges (H 0-180) per colour, checked in this order, first match wins.
+LAB_HSV_TABLE: dict[str, tuple[tuple[int, int, int], tuple[int, int, int]]] = {
+    "red": ((140, 30, 100), (180, 255, 255)),
+    "orange": ((5, 50, 100), (15, 255, 255)),
+    "yellow": ((20, 50, 100), (27, 255, 255)),
+    "green": ((39, 50, 100), (94, 255, 255)),
+    "blue": ((96, 50, 120), (130, 255, 255)),
+    "violet": ((110, 50, 100), (141, 255, 255)),
+}
 
 _BRIGHTNESS_WEIGHT = 0.08
 
@@ -83,13 +100,19 @@ class ColorModel:
         # END SOLUTION
         return best, margin
 
-    def save(self, path) -> None:
-        """Write the model as JSON (atomic)."""
+    def save(self, path, note: str = "") -> None:
+        """Write the model as JSON (atomic: a temporary file in the same folder, then replace)."""
         path = Path(path)
-        tmp = path.with_suffix(path.suffix + ".tmp")
-        tmp.write_text(json.dumps({"names": list(self.names), "means": self.means.tolist(),
-                                   "stds": self.stds.tolist()}, indent=1))
-        tmp.replace(path)
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+        try:
+            with os.fdopen(fd, "w") as f:
+                json.dump({"format": "armlab-color-model/1", "note": note, "names": list(self.names),
+                           "means": self.means.tolist(), "stds": self.stds.tolist()}, f, indent=1)
+                f.write("\n")
+            os.replace(tmp, path)
+        except BaseException:
+            Path(tmp).unlink(missing_ok=True)
+            raise
 
     @staticmethod
     def load(path) -> ColorModel:
@@ -103,6 +126,42 @@ class ColorModel:
         except (json.JSONDecodeError, KeyError, TypeError, ValueError) as e:
             raise ValueError(f"{path}: corrupt colour model ({e})") from None
         k = len(model.names)
-        if model.means.shape != (k, 3) or model.stds.shape != (k, 3) or np.any(model.stds <= 0):
-            raise ValueError(f"{path}: colour model arrays must be ({k}, 3) with positive spreads")
+        if k < 2 or len(set(model.names)) != k or not set(model.names) <= set(COLORS):
+            raise ValueError(f"{path}: colour model names must be two or more distinct colours of {COLORS}, "
+                             f"got {list(model.names)}")
+        if model.means.shape != (k, 3) or model.stds.shape != (k, 3):
+            raise ValueError(f"{path}: colour model arrays must be ({k}, 3)")
+        if not (np.all(np.isfinite(model.means)) and np.all(np.isfinite(model.stds)) and np.all(model.stds > 0)):
+            raise ValueError(f"{path}: colour model means must be finite and spreads finite and positive")
         return model
+
+
+_DEFAULT: dict[tuple, ColorModel] = {}
+
+
+def default_color_model() -> ColorModel:
+    """The calibrated model in data/color_model.json when the file exists (validated: a corrupt file raises
+    ValueError naming it), else ColorModel.from_reference(). Loaded once per file version."""
+    path = data_path(COLOR_MODEL_FILE)
+    try:
+        stamp = path.stat()
+        key = (str(path), stamp.st_mtime_ns, stamp.st_size)
+    except FileNotFoundError:
+        key = ("reference",)
+    if key not in _DEFAULT:
+        _DEFAULT.clear()
+        _DEFAULT[key] = ColorModel.from_reference() if key == ("reference",) else ColorModel.load(path)
+    return _DEFAULT[key]
+
+
+def hsv_table_classify(rgb_means, table=None) -> list[str]:
+    """The lab report's rule for mean colours (N, 3) RGB: the first colour of the HSV table whose range holds the
+    colour (OpenCV HSV, H in 0-180), or "none" when no range does."""
+    table = table or LAB_HSV_TABLE
+    rgb = np.clip(np.rint(np.asarray(rgb_means, float).reshape(-1, 1, 3)), 0, 255).astype(np.uint8)
+    hsv = cv2.cvtColor(rgb, cv2.COLOR_RGB2HSV).reshape(-1, 3).astype(int)
+    out = []
+    for px in hsv:
+        name = next((n for n, (lo, hi) in table.items() if np.all(px >= lo) and np.all(px <= hi)), "none")
+        out.append(name)
+    return out

@@ -14,14 +14,14 @@ import cv2
 import numpy as np
 
 from armlab.camera import Camera
-from armlab.detection.color import ColorModel, white_balance_gains
-from armlab.detection.heightmap import world_from_depth
+from armlab.detection.color import ColorModel, default_color_model, white_balance_gains
+from armlab.detection.heightmap import height_from_depth, pixels_to_plane, world_coefficients
 from armlab.detection.masks import arm_mask
 from armlab.detection.segment import Face, segment_faces
 from armlab.images import check_depth, check_rgb
 from armlab.lab import lab_config
 
-__all__ = ["Block", "detect_blocks", "detect_objects", "DetectionSettings"]
+__all__ = ["Block", "detect_blocks", "detect_objects", "DetectionSettings", "stack_levels"]
 
 
 @dataclass(frozen=True)
@@ -55,7 +55,9 @@ class DetectionSettings:
     """Thresholds (mm unless noted). min_height: objects rise at least this above the board (half a small cube);
     max_height: higher pixels are the arm or a hand; size_split: edges above are "large" (25 vs 38 mm cubes);
     cube_edge_range: plausible cube edges; min_rectangularity: face area / its minimum rectangle (a square is 1,
-    a disc 0.79, a triangle 0.5); max_aspect: longest / shortest side of a cube face."""
+    a disc 0.79, a triangle 0.5); max_aspect: longest / shortest side of a cube face; board_margin: ignore this
+    much of the board's border; min_face_pixels: fewest full-resolution pixels of a face; step: segmentation works
+    on every step-th pixel (each face is then measured at full resolution)."""
 
     min_height: float = 10.0
     max_height: float = 260.0
@@ -64,6 +66,15 @@ class DetectionSettings:
     min_rectangularity: float = 0.8
     max_aspect: float = 1.3
     board_margin: float = 5.0
+    min_face_pixels: int = 120
+    step: int = 2
+
+    def __post_init__(self):
+        if not isinstance(self.step, int) or self.step < 1:
+            raise ValueError(f"DetectionSettings.step must be a positive integer, got {self.step!r}")
+        if not 0 < self.min_height < self.max_height:
+            raise ValueError(f"DetectionSettings needs 0 < min_height < max_height, got {self.min_height}, "
+                             f"{self.max_height}")
 
 
 def _wrap_yaw(angle: float) -> float:
@@ -71,62 +82,189 @@ def _wrap_yaw(angle: float) -> float:
     return float((angle + np.pi / 4) % (np.pi / 2) - np.pi / 4)
 
 
-def _board_white_balance(rgb: np.ndarray, height: np.ndarray, valid: np.ndarray) -> np.ndarray:
+def stack_levels(top_z: float, edge_mm: float, edges=None, max_levels: int = 6) -> int:
+    """How many blocks high a stack is whose top block (edge `edge_mm`) has its top face at `top_z` (mm).
+
+    The stack is the top block over blocks at least as large (the lab stacks larger blocks below): the count of
+    large and small blocks whose heights add up closest to top_z, the fewer blocks on a near tie (< 1.5 mm)."""
+    edges = sorted((edges or lab_config().block_edges_mm).values(), reverse=True)
+    below = top_z - edge_mm
+    best = (np.inf, 1)
+    for n_big in range(max_levels):
+        for n_small in range(max_levels - n_big):
+            if n_small and edge_mm > edges[-1] + 0.5 * (edges[0] - edges[-1]):
+                continue  # a large block does not sit on a small one
+            err = abs(below - n_big * edges[0] - n_small * edges[-1])
+            levels = 1 + n_big + n_small
+            if err < best[0] - 1.5 or (abs(err - best[0]) <= 1.5 and levels < best[1]):
+                best = (err, levels)
+    return best[1]
+
+
+class _Frame:
+    """Per-frame data shared by the faces: images, the camera's per-pixel world rays, the arm mask (reduced
+    resolution) and the reduction step."""
+
+    def __init__(self, rgb, depth, camera, arm_small, step):
+        self.rgb, self.depth, self.camera, self.arm_small, self.step = rgb, depth, camera, arm_small, step
+        self.kz = world_coefficients(camera)[2]
+        self.tz = np.float32(camera.T_world_cam[2, 3])
+
+
+ARM_MAX_LEVEL = 110    # the RX200 is black: its pixels are dark (max channel below this, 8-bit) ...
+ARM_MAX_CHROMA = 22    # ... and grey (max - min channel below this), unlike every block colour's top face
+
+
+def _arm_coloured(rgb: np.ndarray) -> np.ndarray:
+    """(H, W) bool: pixels dark and grey enough to be the arm (used only inside the arm's projected mask)."""
+    hi, lo = rgb.max(axis=-1), rgb.min(axis=-1)
+    return (hi < ARM_MAX_LEVEL) & (hi - lo < ARM_MAX_CHROMA)
+
+
+def _board_white_balance(rgb: np.ndarray, height_small: np.ndarray, valid: np.ndarray, step: int) -> np.ndarray:
     """Gains from the board's own pixels (flat, near z = 0), sampled sparsely."""
-    sample = (valid & (np.abs(height) < 4.0))[::8, ::8]
-    pixels = rgb[::8, ::8][sample]
+    sample = (valid & (np.abs(height_small) < 4.0))[::4, ::4]
+    pixels = rgb[::4 * step, ::4 * step][sample[:(rgb.shape[0] + 4 * step - 1) // (4 * step)]]
     if len(pixels) < 100:
         return np.ones(3)
     # the printed grid and tags are dark: use the bright majority of the board
-    bright = pixels[pixels.sum(1) > np.percentile(pixels.sum(1), 40)]
+    total = pixels.sum(1)
+    bright = pixels[total > np.percentile(total, 40)]
     return white_balance_gains(bright.mean(axis=0))
 
 
-def _refine_by_colour(face: Face, rgb: np.ndarray, height: np.ndarray, min_height: float, pad: int = 8):
-    """The face's pixels by colour: the top face is evenly lit and brighter than the shaded sides, so pixels near the
-    depth-seeded face whose colour matches the face's core colour (and that stand above the board) form the face.
-    Returns the refined mask (uint8) over the padded box, the box origin (x0, y0) and the core's mean colour."""
-    x, y, w, h = face.bbox
-    H, W = height.shape
+def _refine_by_colour(face: Face, f: _Frame, pad: int = 6):
+    """The face's full-resolution pixels by colour. The top face is evenly lit and brighter than the shaded sides, so
+    pixels near the depth-seeded face whose colour matches the face's core colour, and that are not clearly below
+    the face, form the face. Returns the refined mask (uint8), the patch origin (x0, y0), the core's mean colour,
+    and the occluders of the patch (bool): pixels clearly above the face (what stands on it, or the arm)."""
+    s = f.step
+    x, y, w, h = (v * s for v in face.bbox)
+    H, W = f.depth.shape
     x0, y0, x1, y1 = max(0, x - pad), max(0, y - pad), min(W, x + w + pad), min(H, y + h + pad)
     seed = np.zeros((y1 - y0, x1 - x0), np.uint8)
-    seed[y - y0:y - y0 + h, x - x0:x - x0 + w] = face.mask
+    big = np.repeat(np.repeat(face.mask, s, axis=0), s, axis=1).astype(np.uint8)
+    seed[y - y0:y - y0 + big.shape[0], x - x0:x - x0 + big.shape[1]] = big[:y1 - y, :x1 - x]
     core = cv2.erode(seed, np.ones((7, 7), np.uint8)).astype(bool)
     if core.sum() < 20:
         core = seed.astype(bool)
-    patch = rgb[y0:y1, x0:x1].astype(np.float32)
+    patch = f.rgb[y0:y1, x0:x1].astype(np.float32)
     colours = patch[core]
     mean = colours.mean(axis=0)
     spread = np.maximum(colours.std(axis=0), 4.0)
     distance = np.sqrt((((patch - mean) / spread) ** 2).sum(-1))
-    raised = np.nan_to_num(height[y0:y1, x0:x1], nan=0.0) > min_height
-    candidate = ((distance < 3.5) & raised).astype(np.uint8)
-    n, labels, stats, _ = cv2.connectedComponentsWithStats(candidate, connectivity=4)
+    height = f.depth[y0:y1, x0:x1] * f.kz[y0:y1, x0:x1] + f.tz
+    height = cv2.medianBlur(np.nan_to_num(height, nan=face.height_mm), 5)   # no return: neither below nor above
+    not_below = height > face.height_mm - 10.0
+    occluder = height > face.height_mm + 8.0
+    if f.arm_small is not None:
+        arm = f.arm_small[(y0 // s):(y1 + s - 1) // s, (x0 // s):(x1 + s - 1) // s]
+        arm = np.repeat(np.repeat(arm, s, axis=0), s, axis=1)[y0 % s:, x0 % s:][:y1 - y0, :x1 - x0]
+        arm &= _arm_coloured(f.rgb[y0:y1, x0:x1])
+        occluder |= arm
+        not_below &= ~arm
+    candidate = ((distance < 3.5) & not_below).astype(np.uint8)
+    n, labels = cv2.connectedComponents(candidate, connectivity=4)
     if n <= 1:
-        return seed, (x0, y0), mean
+        return seed, (x0, y0), mean, occluder
     overlap = np.bincount(labels[seed.astype(bool)], minlength=n)
     overlap[0] = 0
     mask = (labels == int(np.argmax(overlap))).astype(np.uint8)
-    return cv2.morphologyEx(mask, cv2.MORPH_CLOSE, np.ones((3, 3), np.uint8)), (x0, y0), mean
+    return cv2.morphologyEx(mask, cv2.MORPH_CLOSE, np.ones((3, 3), np.uint8)), (x0, y0), mean, occluder
 
 
-def _describe(face: Face, camera: Camera, rgb: np.ndarray, height: np.ndarray, min_height: float):
-    """Geometry and colour of one face. The face's outline (image) is intersected with the horizontal plane at the
-    face's height, which gives its world footprint without the per-pixel depth noise."""
-    mask_u8, origin, mean_rgb = _refine_by_colour(face, rgb, height, min_height)
-    contours, _ = cv2.findContours(mask_u8, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
-    contour = max(contours, key=cv2.contourArea).reshape(-1, 2) + np.array(origin)
-    outline = camera.pixel_to_plane(contour.astype(float), face.height_mm)[:, :2].astype(np.float32)
-    (cx, cy), (w, h), angle = cv2.minAreaRect(outline)
+def _fit_square(points: np.ndarray, blocked: np.ndarray, pixel_mm: float, edge_hint: float):
+    """Centre (2,), side lengths (2,) mm and angle (rad) of the rectangle of a face's world outline (N, 2) mm.
+
+    Outline points next to an occluder (`blocked`) are not the face's edge: when there are any, the rectangle's
+    orientation comes from the free points, and along each side direction the centre is set from the edges the
+    free points show (both: their middle; one: half an edge, `edge_hint`, inside it)."""
+    if blocked.sum() > 0.8 * len(points) or len(points) - blocked.sum() < 12:
+        blocked = np.zeros(len(points), bool)   # too little free outline to tell: measure the whole outline
+    free = points[~blocked] if blocked.any() else points
+    (cx, cy), (w, h), angle = cv2.minAreaRect(free.astype(np.float32))
     # The outline runs through the centres of the boundary pixels: half a pixel inside the true edge on each side.
-    pixel_mm = float(camera.depth_of(np.array([[cx, cy, face.height_mm]]))[0] / camera.K[0, 0])
-    area = cv2.contourArea(outline) + 0.5 * pixel_mm * cv2.arcLength(outline, True)
-    w, h = w + pixel_mm, h + pixel_mm
-    rectangularity = float(area / (w * h)) if w * h > 0 else 0.0
+    sides = np.array([w, h]) + pixel_mm
+    theta = np.radians(angle)
+    if not blocked.any() or blocked.mean() < 0.02:
+        return np.array([cx, cy]), sides, theta, True
+    axes = np.array([[np.cos(theta), np.sin(theta)], [-np.sin(theta), np.cos(theta)]])
+    local = (free - [cx, cy]) @ axes.T
+    centre_local = np.zeros(2)
+    complete = True
+    for i in range(2):
+        c = local[:, i]
+        lo, hi = c.min(), c.max()
+        n_lo, n_hi = np.sum(c < lo + 1.5), np.sum(c > hi - 1.5)
+        both = min(n_lo, n_hi) >= 0.4 * max(n_lo, n_hi) and hi - lo > 0.85 * edge_hint
+        if both:
+            centre_local[i] = (lo + hi) / 2
+        else:
+            complete = False
+            centre_local[i] = lo + (edge_hint - pixel_mm) / 2 if n_lo >= n_hi else hi - (edge_hint - pixel_mm) / 2
+            sides[i] = edge_hint
+    return np.array([cx, cy]) + centre_local @ axes, sides, theta, complete
+
+
+def _describe(face: Face, f: _Frame, settings: DetectionSettings, color_model: ColorModel, gains: np.ndarray):
+    """The Block of one face. The face's outline (image) is intersected with the horizontal plane at the face's
+    height, which gives its world footprint without the per-pixel depth noise."""
+    mask_u8, origin, mean_rgb, occluder = _refine_by_colour(face, f)
+    contours, _ = cv2.findContours(mask_u8, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
+    contour = max(contours, key=cv2.contourArea).reshape(-1, 2)
+    near = cv2.dilate(occluder.astype(np.uint8), np.ones((5, 5), np.uint8)).astype(bool)
+    blocked = near[contour[:, 1], contour[:, 0]]
+    contour = contour + np.array(origin)
+    outline = pixels_to_plane(f.camera, contour, face.height_mm)[:, :2]
+    cam = f.camera
+    centre_guess = outline.mean(axis=0)
+    pixel_mm = float(cam.depth_of(np.array([[*centre_guess, face.height_mm]]))[0] / cam.K[0, 0])
+    edges = lab_config().block_edges_mm
+    # a hint for the edge when part of the face is hidden: the size whose stacks reach this height best
+    hint = min(edges.values(), key=lambda e: min(abs(face.height_mm - e - k * 25.0 - j * 38.0)
+                                                 for k in range(4) for j in range(4)))
+    centre_xy, sides, theta, complete = _fit_square(outline, blocked, pixel_mm, hint)
+    w, h = sides
+    edge = float(np.sqrt(w * h))
+    if complete:
+        o32 = outline.astype(np.float32)
+        area = cv2.contourArea(o32) + 0.5 * pixel_mm * cv2.arcLength(o32, True)
+        rectangularity = float(area / (w * h)) if w * h > 0 else 0.0
+    else:   # the free outline's distance to the fitted square's sides
+        axes = np.array([[np.cos(theta), np.sin(theta)], [-np.sin(theta), np.cos(theta)]])
+        local = np.abs((outline[~blocked] - centre_xy) @ axes.T)
+        off = np.min(np.abs(local - (np.array([w, h]) - pixel_mm) / 2), axis=1)
+        rectangularity = float(np.mean(off < 1.5))
     aspect = float(max(w, h) / max(min(w, h), 1e-6))
-    centre = np.array([cx, cy, face.height_mm])
-    u, v = camera.project(centre[None])[0]
-    return centre, float(np.sqrt(w * h)), np.radians(angle), rectangularity, aspect, mean_rgb, contour, (u, v)
+    lo, hi = settings.cube_edge_range
+    is_cube = lo <= edge <= hi and rectangularity >= settings.min_rectangularity and aspect <= settings.max_aspect
+    size = "large" if edge > settings.size_split else "small"
+    names, margin = color_model.classify((mean_rgb * gains)[None])
+    centre = np.array([centre_xy[0], centre_xy[1], face.height_mm])
+    u, v = cam.project(centre[None])[0]
+    return Block(color=names[0], size=size, position=centre, yaw=_wrap_yaw(theta), pixel=(float(u), float(v)),
+                 edge_mm=edge, shape="cube" if is_cube else "distractor",
+                 levels=stack_levels(face.height_mm, edges[size]), color_margin=float(margin[0]), contour=contour)
+
+
+def _on_board(height_small: np.ndarray, valid: np.ndarray, f: _Frame, settings: DetectionSettings) -> np.ndarray:
+    """`valid` without the raised pixels whose world (x, y) is off the board (margin) or over the robot's base.
+    Only raised pixels are turned into world points: a fraction of the image."""
+    rows, cols = np.nonzero(valid & (height_small > settings.min_height))
+    if len(rows) == 0:
+        return valid
+    s = f.step
+    k = world_coefficients(f.camera)
+    z = f.depth[rows * s, cols * s]
+    t = f.camera.T_world_cam[:3, 3]
+    xy = np.stack([k[0, rows * s, cols * s] * z + t[0], k[1, rows * s, cols * s] * z + t[1]], axis=-1)
+    cfg = lab_config()
+    m = settings.board_margin
+    bad = ((xy[:, 0] < cfg.board_x[0] + m) | (xy[:, 0] > cfg.board_x[1] - m) | (xy[:, 1] < cfg.board_y[0] + m)
+           | (xy[:, 1] > cfg.board_y[1] - m) | cfg.on_robot_base(xy, margin_mm=15.0))
+    out = valid.copy()
+    out[rows[bad], cols[bad]] = False
+    return out
 
 
 def detect_objects(rgb, depth_mm, camera: Camera, arm_q=None, color_model: ColorModel | None = None,
@@ -139,41 +277,29 @@ def detect_objects(rgb, depth_mm, camera: Camera, arm_q=None, color_model: Color
             correction (calibration.DepthCorrection.apply).
         camera: the calibrated camera (intrinsics, distortion and T_cam_world).
         arm_q: the arm's joint angles (5,) rad, to mask the arm out (None: no arm masking).
-        color_model: colour classes (default: the lab's reference colours).
+        color_model: colour classes (default: data/color_model.json if present, else the lab's reference colours).
+    Returns [] when the depth image holds no return at all. Raises ValueError for images of the wrong type or size.
     """
     rgb = check_rgb(rgb)
     depth = check_depth(depth_mm, rgb.shape[:2])
     if rgb.shape[:2] != camera.image_shape:
         raise ValueError(f"image is {rgb.shape[1]}x{rgb.shape[0]} but the camera is {camera.width}x{camera.height}")
     settings = settings or DetectionSettings()
-    color_model = color_model or ColorModel.from_reference()
+    color_model = color_model or default_color_model()
+    arm_small = None if arm_q is None else arm_mask(camera, arm_q, step=settings.step)
     if not np.isfinite(depth).any():
         return []
-    world = world_from_depth(depth, camera)
-    cfg = lab_config()
-    m = settings.board_margin
-    valid = ((world[0] > cfg.board_x[0] + m) & (world[0] < cfg.board_x[1] - m)
-             & (world[1] > cfg.board_y[0] + m) & (world[1] < cfg.board_y[1] - m)
-             & (world[2] < settings.max_height)
-             & ~cfg.on_robot_base(np.moveaxis(world[:2], 0, -1), margin_mm=15.0))
-    if arm_q is not None:
-        valid &= ~arm_mask(camera, arm_q)
-    gains = _board_white_balance(rgb, world[2], valid)
-    faces = segment_faces(world[2], valid, settings.min_height)
-    found: list[Block] = []
-    for face in faces:
-        described = _describe(face, camera, rgb, world[2], settings.min_height)
-        centre, edge, angle, rectangularity, aspect, mean_rgb, contour, (u, v) = described
-        lo, hi = settings.cube_edge_range
-        is_cube = lo <= edge <= hi and rectangularity >= settings.min_rectangularity and aspect <= settings.max_aspect
-        size = "large" if edge > settings.size_split else "small"
-        names, margin = color_model.classify((mean_rgb * gains)[None])
-        nominal = cfg.block_edges_mm[size]
-        found.append(Block(color=names[0], size=size, position=centre,
-                           yaw=_wrap_yaw(angle), pixel=(float(u), float(v)), edge_mm=edge,
-                           shape="cube" if is_cube else "distractor",
-                           levels=max(1, int(round(face.height_mm / nominal))), color_margin=float(margin[0]),
-                           contour=contour))
+    f = _Frame(rgb, depth, camera, arm_small, settings.step)
+    height = height_from_depth(depth, camera, settings.step)
+    valid = np.isfinite(height) & (height < settings.max_height)
+    if arm_small is not None:   # inside the arm's reach in the image, only the arm's own dark grey is masked
+        arm_small = arm_small & _arm_coloured(rgb[::settings.step, ::settings.step])
+        valid &= ~arm_small
+    valid = _on_board(height, valid, f, settings)
+    gains = _board_white_balance(rgb, height, valid, settings.step)
+    faces = segment_faces(height, valid, settings.min_height,
+                          min_face_pixels=max(8, settings.min_face_pixels // settings.step ** 2))
+    found = [_describe(face, f, settings, color_model, gains) for face in faces]
     found.sort(key=lambda b: float(np.hypot(*b.position[:2])))
     return found
 

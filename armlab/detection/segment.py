@@ -2,8 +2,10 @@
 
 Objects are pixels higher than `min_height_mm` above the board. Inside each connected object region, top faces are
 flat plateaus: the heights of a horizontal face pile up in one histogram peak, while vertical side faces spread
-evenly. Each peak's connected pixels form one candidate face — so a stack shows its top block's face, and a
-lower block's face where it is still visible.
+evenly. For each peak, the region's pixels at or above that height split into silhouettes; each silhouette with
+enough pixels on the peak is one face. So a stack shows its top block's face, and a lower block's face where it is
+still visible (the ring of a large block around a small one on top of it), and the face's silhouette includes what
+stands on it.
 """
 
 from __future__ import annotations
@@ -15,14 +17,18 @@ import numpy as np
 
 __all__ = ["Face", "segment_faces"]
 
+_KERNEL = np.ones((3, 3), np.uint8)
+
 
 @dataclass(frozen=True)
 class Face:
-    """A flat top face: its pixel mask's bounding box (x, y, w, h), the mask inside it, and its height (mm)."""
+    """A flat top face: the bounding box (x, y, w, h) of its silhouette, its visible pixels (mask over the box),
+    its height (mm), and the silhouette (mask over the box: the face plus whatever stands on it)."""
 
     bbox: tuple[int, int, int, int]
     mask: np.ndarray
     height_mm: float
+    silhouette: np.ndarray | None = None
 
     def pixels(self) -> tuple[np.ndarray, np.ndarray]:
         """Row and column indices (in the full image) of the face's pixels."""
@@ -36,16 +42,17 @@ def _plateau_levels(heights: np.ndarray, bin_mm: float, min_pixels: int) -> list
     edges = np.arange(lo - bin_mm, hi + 2 * bin_mm, bin_mm)
     hist, edges = np.histogram(heights, edges)
     smooth = np.convolve(hist, [1, 2, 3, 2, 1], mode="same")
-    levels = []
-    for i in range(1, len(smooth) - 1):
-        if smooth[i] >= smooth[i - 1] and smooth[i] > smooth[i + 1] and hist[max(0, i - 1):i + 2].sum() >= min_pixels:
-            levels.append(0.5 * (edges[i] + edges[i + 1]))
-    return levels
+    inner = smooth[1:-1]
+    peaks = np.flatnonzero((inner >= smooth[:-2]) & (inner > smooth[2:])) + 1
+    window = np.convolve(hist, [1, 1, 1], mode="same")
+    return [float(0.5 * (edges[i] + edges[i + 1])) for i in peaks if window[i] >= min_pixels]
 
 
 def segment_faces(height_mm: np.ndarray, valid: np.ndarray, min_height_mm: float = 10.0,
                   face_tolerance_mm: float = 6.0, min_face_pixels: int = 120) -> list[Face]:
-    """Top faces in a height map (H, W) mm (NaN allowed) restricted to `valid` (H, W) bool pixels."""
+    """Top faces in a height map (H, W) mm (NaN allowed) restricted to `valid` (H, W) bool pixels.
+
+    min_face_pixels: fewest pixels of a face on its plateau (scale it with the map's resolution)."""
     h = np.where(valid & np.isfinite(height_mm), height_mm, 0.0).astype(np.float32)
     h = cv2.medianBlur(h, 5)
     objects = (h > min_height_mm).astype(np.uint8)
@@ -55,17 +62,20 @@ def segment_faces(height_mm: np.ndarray, valid: np.ndarray, min_height_mm: float
         x, y, w, hh, area = stats[k]
         if area < min_face_pixels:
             continue
-        sub_labels = labels[y:y + hh, x:x + w] == k
+        region = labels[y:y + hh, x:x + w] == k
         sub_h = h[y:y + hh, x:x + w]
-        for level in _plateau_levels(sub_h[sub_labels], 2.0, min_face_pixels // 2):
-            on_level = (sub_labels & (np.abs(sub_h - level) < face_tolerance_mm)).astype(np.uint8)
-            on_level = cv2.morphologyEx(on_level, cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
-            m, face_labels, face_stats, _ = cv2.connectedComponentsWithStats(on_level, connectivity=4)
-            for j in range(1, m):
-                if face_stats[j, 4] < min_face_pixels:
+        for level in _plateau_levels(sub_h[region], 2.0, min_face_pixels // 2):
+            on_level = (region & (np.abs(sub_h - level) < face_tolerance_mm)).astype(np.uint8)
+            on_level = cv2.morphologyEx(on_level, cv2.MORPH_OPEN, _KERNEL).astype(bool)   # no thin side bands
+            above = (region & (sub_h > level - face_tolerance_mm)).astype(np.uint8)
+            m, parts, part_stats, _ = cv2.connectedComponentsWithStats(above, connectivity=4)
+            counts = np.bincount(parts[on_level], minlength=m)
+            for j in np.flatnonzero(counts >= min_face_pixels):
+                if j == 0:
                     continue
-                fx, fy, fw, fh, _ = face_stats[j]
-                mask = face_labels[fy:fy + fh, fx:fx + fw] == j
-                face_heights = sub_h[fy:fy + fh, fx:fx + fw][mask]
-                faces.append(Face((x + fx, y + fy, fw, fh), mask, float(np.median(face_heights))))
+                fx, fy, fw, fh, _ = part_stats[j]
+                sil = parts[fy:fy + fh, fx:fx + fw] == j
+                mask = sil & on_level[fy:fy + fh, fx:fx + fw]
+                face_h = float(np.median(sub_h[fy:fy + fh, fx:fx + fw][mask]))
+                faces.append(Face((int(x + fx), int(y + fy), int(fw), int(fh)), mask, face_h, sil))
     return faces
