@@ -19,7 +19,12 @@ import numpy as np
 
 from armlab.camera import Camera
 
-__all__ = ["TruthFace", "FrameScore", "Score", "truth_faces", "score_frame", "yaw_error", "sim_case", "Case"]
+__all__ = ["TruthFace", "FrameScore", "Score", "truth_faces", "score_frame", "yaw_error", "sim_case", "Case",
+           "SCENES", "case_specs", "labelled_faces", "fit_color_model", "TRAIN_SEEDS"]
+
+# The scenes of the evaluation sets: singles, stacks 2-3 high, the events' levels 2-3 (stacks and distractors).
+SCENES = ("random", "stacks", "sort_stack_3", "line_up_3", "sky", "line_up_2", "sort_stack_2")
+TRAIN_SEEDS = range(1000, 1024)    # the colour model's training frames: disjoint from every test set's seeds
 
 
 @dataclass(frozen=True)
@@ -196,3 +201,53 @@ def sim_case(scene: str, seed: int, arm_over_board: bool = False) -> Case:
     _, exact = render_exact(cam.truth, list(world.objects), arm.q_true, arm.gripper_opening_mm, arm.gripper_geometry)
     return Case(frame.rgb, frame.depth, cam.truth, arm.joint_positions(),
                 truth_faces(world.objects, cam.truth, exact), scene, seed)
+
+
+def case_specs(n: int, first_seed: int) -> list[tuple[str, int, bool]]:
+    """n (scene, seed, arm_over_board) triples cycling through SCENES, seeds first_seed..., every other frame with
+    the arm over the board."""
+    return [(SCENES[k % len(SCENES)], first_seed + k, k % 2 == 1) for k in range(n)]
+
+
+def corrected_depth(case: Case, camera: Camera | None = None) -> np.ndarray:
+    """The case's depth with the planar bias fitted on its own board pixels removed (the arm left out)."""
+    from armlab.calibration import fit_depth_correction
+    from armlab.detection.masks import arm_mask
+
+    camera = camera or case.camera
+    return fit_depth_correction(case.depth, camera, exclude=arm_mask(camera, case.arm_q)).apply(case.depth)
+
+
+def labelled_faces(cases) -> tuple[np.ndarray, list[str]]:
+    """White-balanced mean colours (N, 3) of the detected block faces matched to true blocks, and their true
+    colours: training data for ColorModel.fit."""
+    from armlab.detection.detect import detect_objects
+
+    colours, labels = [], []
+    for case in cases:
+        found = detect_objects(case.rgb, corrected_depth(case), case.camera, case.arm_q)
+        for d, t in score_frame(found, case.truth).pairs:
+            if t.is_block and t.visible >= 0.5:
+                colours.append(d.mean_rgb * d.white_balance)
+                labels.append(t.obj.color)
+    return np.array(colours), labels
+
+
+def fit_color_model(seeds=TRAIN_SEEDS):
+    """A ColorModel fitted on the block faces of simulated frames with these seeds (scenes cycling as in
+    case_specs)."""
+    from armlab.detection.color import ColorModel
+
+    specs = [(SCENES[k % len(SCENES)], seed, k % 3 == 1) for k, seed in enumerate(seeds)]
+    colours, labels = labelled_faces([sim_case(*s) for s in specs])
+    return ColorModel.fit(colours, labels), len(labels)
+
+
+if __name__ == "__main__":   # python -m armlab.detection.evaluate: refit data/color_model.json
+    from armlab._paths import data_path
+    from armlab.detection.color import COLOR_MODEL_FILE
+
+    model, n = fit_color_model()
+    model.save(data_path(COLOR_MODEL_FILE), note=f"fitted on {n} simulated block faces, seeds "
+                                                 f"{TRAIN_SEEDS.start}-{TRAIN_SEEDS.stop - 1}")
+    print(f"wrote {data_path(COLOR_MODEL_FILE)} from {n} faces")
