@@ -62,6 +62,7 @@ class DetectionSettings:
     a disc 0.79, a triangle 0.5); max_aspect: longest / shortest side of a cube face; board_margin: ignore this
     much of the board's border; level_tolerance: a face's height must be within this of a stack of the lab's
     pieces (sums of the block edges), which rejects the oblique side faces near the image border;
+    edge_tolerance: a cube's measured edge is within this of one of the lab's block edges;
     min_face_pixels: fewest full-resolution pixels of a face; step: segmentation works on every step-th pixel
     (each face is then measured at full resolution)."""
 
@@ -70,11 +71,12 @@ class DetectionSettings:
     size_split: float = 31.5
     cube_edge_range: tuple[float, float] = (19.0, 46.0)
     min_rectangularity: float = 0.8
-    max_aspect: float = 1.3
+    max_aspect: float = 1.15
     board_margin: float = 5.0
     min_face_pixels: int = 120
     step: int = 2
     level_tolerance: float = 4.0
+    edge_tolerance: float = 4.0
 
     def __post_init__(self):
         if not isinstance(self.step, int) or self.step < 1:
@@ -189,6 +191,20 @@ def _refine_by_colour(face: Face, f: _Frame, pad: int = 6):
     return cv2.morphologyEx(mask, cv2.MORPH_CLOSE, np.ones((3, 3), np.uint8)), (x0, y0), mean, occluder
 
 
+def _edge_direction(points: np.ndarray, theta: float, span: int = 4) -> float:
+    """The square's yaw (rad) from its whole outline (N, 2) mm: the mean of the outline's chord directions with the
+    angles multiplied by four (a square's four sides then agree), weighted by chord length; chords around the
+    corners (more than 20 deg off `theta`, the minimum-area rectangle's angle) are left out."""
+    if len(points) < 4 * span:
+        return theta
+    d = np.roll(points, -span, axis=0) - points
+    a = 4 * np.arctan2(d[:, 1], d[:, 0])
+    w = np.hypot(d[:, 0], d[:, 1]) * (np.cos(a - 4 * theta) > np.cos(np.radians(80)))
+    if w.sum() <= 0:
+        return theta
+    return float(np.arctan2((w * np.sin(a)).sum(), (w * np.cos(a)).sum()) / 4)
+
+
 def _fit_square(points: np.ndarray, blocked: np.ndarray, pixel_mm: float, edge_hint: float):
     """Centre (2,), side lengths (2,) mm and angle (rad) of the rectangle of a face's world outline (N, 2) mm.
 
@@ -203,7 +219,7 @@ def _fit_square(points: np.ndarray, blocked: np.ndarray, pixel_mm: float, edge_h
     sides = np.array([w, h]) + pixel_mm
     theta = np.radians(angle)
     if not blocked.any() or blocked.mean() < 0.02:
-        return np.array([cx, cy]), sides, theta, True
+        return np.array([cx, cy]), sides, _edge_direction(points, theta), True
     axes = np.array([[np.cos(theta), np.sin(theta)], [-np.sin(theta), np.cos(theta)]])
     local = (free - [cx, cy]) @ axes.T
     centre_local = np.zeros(2)
@@ -253,7 +269,9 @@ def _describe(face: Face, f: _Frame, settings: DetectionSettings, color_model: C
         rectangularity = float(np.mean(off < 2.5))
     aspect = float(max(w, h) / max(min(w, h), 1e-6))
     lo, hi = settings.cube_edge_range
-    is_cube = lo <= edge <= hi and rectangularity >= settings.min_rectangularity and aspect <= settings.max_aspect
+    nominal = min(abs(edge - e) for e in edges.values())
+    is_cube = (lo <= edge <= hi and nominal <= settings.edge_tolerance and aspect <= settings.max_aspect
+               and rectangularity >= settings.min_rectangularity)
     size = "large" if edge > settings.size_split else "small"
     names, margin = color_model.classify((mean_rgb * gains)[None])
     centre = np.array([centre_xy[0], centre_xy[1], face.height_mm])
