@@ -138,8 +138,10 @@ class Score:
 
     def metrics(self) -> dict[str, float]:
         """recall and precision of blocks; distractor recall (reported as distractors); colour, size and levels
-        accuracy over matched blocks; position error (mm) mean and max; yaw error (deg) mean and max; counts."""
-        pairs = self.block_pairs()
+        accuracy over the matched blocks whose faces are at least min_visible visible (as the errors); position error
+        (mm) mean and max; yaw error (deg) mean and max; counts."""
+        matched = self.block_pairs()
+        pairs = [(d, t) for d, t in matched if t.visible >= self.min_visible]     # the faces that must be found
         required = sum(1 for f in self.frames for _, t in f.pairs if t.is_block and t.visible >= self.min_visible)
         required += sum(1 for f in self.frames for t in f.missed if t.is_block)
         found = sum(1 for d, t in pairs if t.visible >= self.min_visible)
@@ -151,7 +153,7 @@ class Score:
         yaw = np.degrees([yaw_error(d.yaw, t.obj.yaw) for d, t in pairs]) if pairs else np.zeros(1)
         n = max(len(pairs), 1)
         return {
-            "blocks": required, "recall": found / max(required, 1), "precision": len(pairs) / max(reported, 1),
+            "blocks": required, "recall": found / max(required, 1), "precision": len(matched) / max(reported, 1),
             "distractor_recall": sum(d.shape != "cube" for d, _ in distractors) / max(distractors_required, 1),
             "color_acc": sum(d.color == t.obj.color for d, t in pairs) / n,
             "size_acc": sum(d.size == t.obj.size for d, t in pairs) / n,
