@@ -180,6 +180,14 @@ def test_no_tags_or_bad_frames_are_named(intrinsics):
         cal.detect_tags(np.zeros((50, 50), np.uint8), family="tag99h99")
 
 
+def test_tag_detectors_are_shared_for_the_life_of_the_process():
+    # pupil-apriltags' Detector.__del__ crashes the interpreter now and then: one detector per setting, freed at exit
+    from armlab.calibration.tags import pupil_detector
+
+    assert pupil_detector("tag36h11", 2.0) is pupil_detector("tag36h11", 2.0)
+    assert pupil_detector("tag36h11", 1.0) is not pupil_detector("tag36h11", 2.0)
+
+
 # -- top-down views -----------------------------------------------------------------------------------------------
 def test_board_view_puts_the_tags_where_they_are_on_the_board(station, frame):
     view = cal.BoardView(station.camera.truth, mm_per_px=1.0)

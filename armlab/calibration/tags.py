@@ -17,7 +17,7 @@ import numpy as np
 
 from armlab.images import check_gray_or_rgb
 
-__all__ = ["TagDetection", "detect_tags", "PUPIL_PIXEL_OFFSET"]
+__all__ = ["TagDetection", "detect_tags", "pupil_detector", "PUPIL_PIXEL_OFFSET"]
 
 PUPIL_PIXEL_OFFSET = 0.5  # pupil-apriltags puts pixel centres at +0.5; OpenCV at 0
 
@@ -37,8 +37,13 @@ class TagDetection:
 _DETECTORS: dict[tuple[str, float], object] = {}
 
 
-def _detector(family: str, quad_decimate: float):
-    """One pupil-apriltags Detector per (family, decimation), kept for the life of the process."""
+def pupil_detector(family: str = "tag36h11", quad_decimate: float = 1.0):
+    """The process-wide pupil-apriltags Detector for (family, decimation), kept for the life of the process.
+
+    Use this rather than creating Detectors yourself: pupil-apriltags' Detector.__del__ crashes the interpreter
+    (segfault or abort) now and then when a detector is garbage-collected; these are freed safely at exit.
+    Its raw detections use pupil's pixel convention (centres at +0.5); detect_tags converts them.
+    """
     key = (family, quad_decimate)
     if key not in _DETECTORS:
         from pupil_apriltags import Detector
@@ -81,7 +86,7 @@ def detect_tags(image, family: str = "tag36h11", quad_decimate: float = 1.0,
     gray = np.ascontiguousarray(check_gray_or_rgb(image))
     if quad_decimate < 1:
         raise ValueError(f"quad_decimate must be >= 1, got {quad_decimate}")
-    found = _detector(family, float(quad_decimate)).detect(gray)
+    found = pupil_detector(family, float(quad_decimate)).detect(gray)
     out = [TagDetection(int(d.tag_id), np.asarray(d.corners, float) - PUPIL_PIXEL_OFFSET,
                         np.asarray(d.center, float) - PUPIL_PIXEL_OFFSET, float(d.decision_margin), int(d.hamming))
            for d in found if d.decision_margin >= min_margin and d.hamming <= max_hamming]
