@@ -35,7 +35,7 @@ from armlab.robot import RobotModel, rx200
 
 from .grasp import choose_grasp, steepest_pitch_inside
 from .plan import GripperStep, MoveStep, Plan
-from .trajectory import cartesian_line, joint_move, reverse
+from .trajectory import cartesian_line, check_point, joint_move, reverse
 from .transit import DEFAULT_CLEARANCE_MM, GRIPPER_RADIUS_MM, Obstacle, as_obstacles, transit_clearance
 
 __all__ = ["CAMERA_CLEAR_POSE", "default_grasp_depth", "grasp_height", "place_tool_height", "plan_pick", "plan_place",
@@ -65,15 +65,6 @@ def default_grasp_depth(edge: float) -> float:
     # BEGIN SOLUTION
     return float(min(edge / 2, edge - FINGERTIP_MM - TIP_MARGIN_MM))
     # END SOLUTION
-
-
-def _point(p, name: str) -> np.ndarray:
-    a = np.asarray(p, dtype=float)
-    if a.shape != (3,):
-        raise ValueError(f"{name} must have shape (3,) (x, y, z in world mm), got shape {a.shape}")
-    if not np.all(np.isfinite(a)):
-        raise ValueError(f"{name} contains NaN or infinity: {a}")
-    return a
 
 
 def grasp_height(top_z: float, edge: float, grasp_depth: float | None = None) -> float:
@@ -201,7 +192,7 @@ def plan_pick(q_start, top, yaw: float, edge: float, obstacles=(), clearance: fl
     (Cartesian) back to the hover point. obstacles: everything standing on the board (the target may be included).
     """
     robot = robot or rx200()
-    top = _point(top, "block top")
+    top = check_point(top, "block top")
     target = np.array([top[0], top[1], grasp_height(top[2], edge, grasp_depth)])
     return _approach(q_start, target, yaw, top[2], 0.0, "close", obstacles, clearance, scaling, robot,
                      f"picking the block at ({top[0]:.1f}, {top[1]:.1f}, {top[2]:.1f}) mm")
@@ -220,7 +211,7 @@ def plan_place(q_start, position, edge: float, yaw: float = 0.0, obstacles=(),
     square to the fingers: yaw = heading (mod 90 deg), up to 45 deg from the requested yaw (grasp module notes).
     """
     robot = robot or rx200()
-    position = _point(position, "place position")
+    position = check_point(position, "place position")
     depth = _check_edge_depth(edge, grasp_depth)
     target = np.array([position[0], position[1], place_tool_height(position[2], edge, depth)])
     return _approach(q_start, target, yaw, position[2] + edge, edge - depth, "open", obstacles, clearance, scaling,

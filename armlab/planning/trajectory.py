@@ -175,7 +175,8 @@ def joint_move(q_from, q_to, scaling: str = "trapezoid", duration: float | None 
     return JointTrajectory(q0, q1, duration, scaling, accel_time)
 
 
-def _check_point(p, name: str) -> np.ndarray:
+def check_point(p, name: str) -> np.ndarray:
+    """p as a float (3,) array (x, y, z in world mm); ValueError naming `name` for a wrong shape, NaN or infinity."""
     p = np.asarray(p, dtype=float)
     if p.shape != (3,):
         raise ValueError(f"{name} must have shape (3,) (x, y, z in world mm), got shape {p.shape}")
@@ -249,7 +250,7 @@ def cartesian_line(p0, p1, pitch: float, roll: float = 0.0, current=None, scalin
     """
     robot = robot or rx200()
     check_scaling(scaling)
-    P0, P1 = _check_point(p0, "p0"), _check_point(p1, "p1")
+    P0, P1 = check_point(p0, "p0"), check_point(p1, "p1")
     for name, v in (("pitch", pitch), ("roll", roll), ("speed", speed), ("tol_mm", tol_mm)):
         if not np.isfinite(v):
             raise ValueError(f"{name} must be finite, got {v}")
