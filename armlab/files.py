@@ -1,4 +1,5 @@
-"""Atomic file writes: a file is either its old self or completely new, never half-written.
+"""Atomic file writes (a file is either its old self or completely new, never half-written) and JSON reads that
+fail with one clear error naming the file.
 
 Everything the kit saves (calibrations, scenes, teach programs, colour models, replays, images) goes through here:
 the data is written to a temporary file in the same folder, which then replaces the target in one rename.
@@ -13,7 +14,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
-__all__ = ["atomic_path", "write_bytes_atomic", "write_text_atomic", "write_json_atomic"]
+__all__ = ["atomic_path", "write_bytes_atomic", "write_text_atomic", "write_json_atomic", "read_json"]
 
 
 @contextmanager
@@ -54,3 +55,17 @@ def write_text_atomic(path, text: str, make_parents: bool = False) -> Path:
 def write_json_atomic(path, data, indent: int = 1, make_parents: bool = False) -> Path:
     """Write `data` as JSON (NaN and infinity refused, trailing newline) to `path` atomically; returns the path."""
     return write_text_atomic(path, json.dumps(data, indent=indent, allow_nan=False) + "\n", make_parents)
+
+
+def read_json(path, kind: str, error: type[Exception] = ValueError):
+    """Parse the JSON file at `path`; a missing, unreadable or corrupt file raises `error` with a message naming the
+    file and `kind` (e.g. "scene": "<path>: scene file not found"). Validating the content is the caller's job."""
+    path = Path(path)
+    try:
+        return json.loads(path.read_bytes().decode("utf-8"))
+    except FileNotFoundError:
+        raise error(f"{path}: {kind} file not found") from None
+    except IsADirectoryError:
+        raise error(f"{path}: is a folder, not a {kind} file") from None
+    except (json.JSONDecodeError, UnicodeDecodeError) as e:
+        raise error(f"{path}: not valid JSON, a corrupt {kind} file? ({e})") from None

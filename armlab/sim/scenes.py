@@ -16,7 +16,6 @@ placed in file order).
 
 from __future__ import annotations
 
-import json
 import os
 from collections.abc import Callable
 from pathlib import Path
@@ -24,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from armlab.blocks import COLORS, SHAPES, SIZES, ObjectState, block_edge
-from armlab.files import write_json_atomic
+from armlab.files import read_json, write_json_atomic
 from armlab.lab import lab_config
 from armlab.sim.geometry import polygons_overlap
 from armlab.sim.world import World
@@ -323,14 +322,7 @@ def objects_from_dict(data, source: str = "scene") -> list[ObjectState]:
 
 def load_scene(path: str | os.PathLike) -> list[ObjectState]:
     """Read and validate a JSON scene file; SceneError names the file and the problem."""
-    path = Path(path)
-    try:
-        data = json.loads(path.read_text())
-    except FileNotFoundError:
-        raise SceneError(f"{path}: scene file not found") from None
-    except json.JSONDecodeError as e:
-        raise SceneError(f"{path}: not valid JSON ({e})") from None
-    return objects_from_dict(data, str(path))
+    return objects_from_dict(read_json(path, "scene", SceneError), str(path))
 
 
 def save_scene(objects, path: str | os.PathLike) -> Path:

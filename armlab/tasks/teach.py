@@ -14,7 +14,6 @@ load (TeachFileError names the file and the waypoint). Units: rad, s; world mm f
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -22,7 +21,7 @@ import numpy as np
 
 from armlab import kinematics, planning
 from armlab.blocks import block_edge
-from armlab.files import write_json_atomic
+from armlab.files import read_json, write_json_atomic
 from armlab.robot import JOINT_NAMES, RobotModel, rx200
 
 __all__ = ["GRIPPER_STATES", "TeachProgram", "TeachFileError", "Recorder", "save_teach", "load_teach", "repeat",
@@ -119,12 +118,7 @@ def load_teach(path) -> TeachProgram:
     """Read and validate a teach file; TeachFileError names the file and what is wrong (format, shapes, joint
     limits, gripper values)."""
     path = Path(path)
-    try:
-        raw = json.loads(path.read_text())
-    except FileNotFoundError:
-        raise TeachFileError(f"{path}: teach file not found") from None
-    except (json.JSONDecodeError, UnicodeDecodeError) as e:
-        raise TeachFileError(f"{path}: not valid JSON ({e})") from None
+    raw = read_json(path, "teach", TeachFileError)
     if not isinstance(raw, dict) or raw.get("format") != _FORMAT:
         raise TeachFileError(f"{path}: not an armlab teach file (format must be {_FORMAT!r})")
     if raw.get("joint_names", list(JOINT_NAMES)) != list(JOINT_NAMES):
