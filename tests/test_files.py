@@ -24,7 +24,7 @@ def test_a_failed_write_leaves_the_old_file_untouched(tmp_path):
         raise RuntimeError("the writer crashed")
     assert target.read_text() == "old"
     assert [p.name for p in tmp_path.iterdir()] == ["notes.txt"]
-    with pytest.raises(ValueError, match="NaN"):
+    with pytest.raises(ValueError, match="not JSON compliant"):
         write_json_atomic(target, {"x": float("nan")})
     assert target.read_text() == "old"
 
