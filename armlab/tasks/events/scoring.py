@@ -158,11 +158,7 @@ def _sort_area_ok(o: ObjectState) -> bool:
 def score_sort_stack(objects: Iterable[ObjectState], level: int, held: Iterable[int] = (),
                      clicked: bool = False) -> Score:
     """Sort 'n stack (module notes): +30 per block in its area (and, at levels 2-3, in its rainbow stack)."""
-    _check_level("sort_stack", level)
-    objects = list(objects)
-    held = set(held)
-    sup = _supports(objects, held)
-    blocks = [o for o in objects if o.is_block]
+    objects, held, sup, blocks = _board_state("sort_stack", level, objects, held)
     cols = columns(objects, held)
     main: dict[str, list[ObjectState]] = {}
     for size in ("large", "small"):
@@ -229,11 +225,7 @@ def _best_line(xy: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 def score_line_up(objects: Iterable[ObjectState], level: int, held: Iterable[int] = (),
                   clicked: bool = False) -> Score:
     """Line 'em up (module notes): +30 per block in its size's rainbow line, +20 per neat line."""
-    _check_level("line_up", level)
-    objects = list(objects)
-    held = set(held)
-    sup = _supports(objects, held)
-    blocks = [o for o in objects if o.is_block]
+    objects, held, sup, blocks = _board_state("line_up", level, objects, held)
     lines: list[ScoreLine] = []
     sizes = [s for s in ("large", "small") if any(b.size == s for b in blocks)]
     for size in sizes:
@@ -334,6 +326,13 @@ def _check_level(event: str, level: int) -> None:
         raise ValueError(f"unknown event {event!r}: expected one of {EVENTS}")
     if isinstance(level, bool) or level not in LEVELS[event]:
         raise ValueError(f"{event} has levels {LEVELS[event]}, got {level!r}")
+
+
+def _board_state(event: str, level: int, objects: Iterable[ObjectState], held: Iterable[int]):
+    """Check the level; return (objects as a list, held ids as a set, what each object rests on, the blocks)."""
+    _check_level(event, level)
+    objects, held = list(objects), set(held)
+    return objects, held, _supports(objects, held), [o for o in objects if o.is_block]
 
 
 def _total(event: str, level: int, lines: list[ScoreLine], most: int, clicked: bool) -> Score:
