@@ -3,7 +3,7 @@ PY      := .venv/bin/python
 STAMP   := .venv/.installed
 NBVAL   := --nbval --nbval-sanitize-with tests/nbval_sanitize.cfg --nbval-cell-timeout=600
 
-.PHONY: demo test lint unit notebooks lab bench browser clean
+.PHONY: demo test lint unit notebooks lab bench browser student clean
 
 $(STAMP): requirements.txt pyproject.toml
 	test -x $(PY) || python3 -m venv .venv
@@ -21,7 +21,7 @@ test: $(STAMP) browser lint
 	$(PY) -m pytest -q tests notebooks $(NBVAL)
 
 lint: $(STAMP)
-	$(PY) -m ruff check armlab tests benchmarks notebooks tools/build-notebook
+	$(PY) -m ruff check armlab tests benchmarks notebooks tools/build-notebook tools/student-release
 
 unit: $(STAMP)
 	MPLBACKEND=Agg $(PY) -m pytest -q tests
@@ -40,5 +40,10 @@ lab: $(STAMP)
 bench: $(STAMP)
 	MPLBACKEND=Agg $(PY) benchmarks/run_all.py
 
+## make student: the student release (exercise regions stubbed, notebook outputs cleared) in dist/student
+student: $(STAMP)
+	rm -rf dist/student
+	$(PY) tools/student-release dist/student
+
 clean:
-	rm -rf .venv out
+	rm -rf .venv out dist

@@ -42,6 +42,7 @@ class RobotModel:
         dh: (5, 4) standard DH rows (theta_offset rad, d mm, a mm, alpha rad) from the world frame.
         screws: (5, 6) space-frame screw axes (w, v), v in mm, world frame.
         M: (4, 4) tool frame ee_gripper_link in the world at q = 0 (mm).
+        frames_home: (5, 4, 4) link frames 1..5 (the poses of DH frames 1..5) in the world at q = 0 (mm).
     """
 
     joint_names: tuple[str, ...]
@@ -53,6 +54,7 @@ class RobotModel:
     dh: np.ndarray
     screws: np.ndarray
     M: np.ndarray
+    frames_home: np.ndarray
 
     def limit_violations(self, q, tol: float = 1e-9) -> list[str]:
         """Human-readable list of the joints of q (5,) outside their limits (empty when all are within)."""
@@ -139,7 +141,9 @@ def load_robot(joints_csv: Path | str | None = None, dh_csv: Path | str | None =
 
     dh, _ = _named_table(dh_path, ["joint", "theta_offset_rad", "d_mm", "a_mm", "alpha_rad"], JOINT_NAMES)
 
-    pox, pox_lines = _named_table(pox_path, ["name", "wx", "wy", "wz", "vx", "vy", "vz"], JOINT_NAMES + ("ee_home",))
+    frame_rows = tuple(f"frame{i}_home" for i in range(1, 6))
+    pox, pox_lines = _named_table(pox_path, ["name", "wx", "wy", "wz", "vx", "vy", "vz"],
+                                  JOINT_NAMES + ("ee_home",) + frame_rows)
     screws = pox[:5]
     norms = np.linalg.norm(screws[:, :3], axis=1)
     for name, norm, lineno in zip(JOINT_NAMES, norms, pox_lines):
@@ -147,11 +151,12 @@ def load_robot(joints_csv: Path | str | None = None, dh_csv: Path | str | None =
             raise RobotDataError(f"{pox_path}, line {lineno}: joint {name}: rotation axis has length {norm}, "
                                  "expected 1")
     M = homogeneous(rotvec_to_matrix(pox[5, :3]), pox[5, 3:])
+    frames_home = np.array([homogeneous(rotvec_to_matrix(row[:3]), row[3:]) for row in pox[6:]])
 
     arrays = [np.array(a, dtype=float) for a in (lower, upper, velocity, home, sleep)]
-    for a in arrays + [dh, screws, M]:
+    for a in arrays + [dh, screws, M, frames_home]:
         a.setflags(write=False)
-    return RobotModel(JOINT_NAMES, *arrays, dh=dh, screws=screws, M=M)
+    return RobotModel(JOINT_NAMES, *arrays, dh=dh, screws=screws, M=M, frames_home=frames_home)
 
 
 @functools.lru_cache(maxsize=1)

@@ -128,7 +128,10 @@ def test_link_frames_and_joint_positions():
     np.testing.assert_allclose(np.linalg.det(R), 1, atol=1e-12)
     np.testing.assert_array_equal(F[:, 0], np.broadcast_to(np.eye(4), (200, 4, 4)))
     np.testing.assert_allclose(F[:, 1, :3, 3], np.broadcast_to(SHOULDER, (200, 3)), atol=1e-12)
-    np.testing.assert_array_equal(F[:, 6], k.fk(q))
+    np.testing.assert_array_equal(F[:, 6], k.fk_pox(q))
+    # the physical model (product of exponentials) and the DH exercise pose every link frame alike
+    np.testing.assert_allclose(F, k.dh_frames(q), atol=1e-9)
+    np.testing.assert_allclose(k.link_frames(q[0]), k.dh_frames(q[0]), atol=1e-9)
     np.testing.assert_allclose(F[:, 4, :3, 2], F[:, 6, :3, 0], atol=1e-12)    # wrist_rotate axis = approach
     heading = q[:, 0] + np.pi / 2                                              # the arm's plane
     across = np.stack([-np.sin(heading), np.cos(heading), 0 * heading], -1)

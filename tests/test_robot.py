@@ -107,8 +107,8 @@ def test_malformed_files_name_file_line_and_problem(tmp_path, which, old, new, l
 def test_missing_extra_and_empty_files(tmp_path):
     paths = copy_data(tmp_path)
     text = paths["pox"].read_text()
-    paths["pox"].write_text("\n".join(line for line in text.splitlines() if not line.startswith("ee_home")))
-    with pytest.raises(RobotDataError, match="row 'ee_home' is missing"):
+    paths["pox"].write_text("\n".join(line for line in text.splitlines() if not line.startswith("frame5_home")))
+    with pytest.raises(RobotDataError, match="row 'frame5_home' is missing"):
         load(paths)
     paths["pox"].write_text(text + "gripper,0,0,1,0,0,0\n")
     with pytest.raises(RobotDataError, match=rf"line {len(text.splitlines()) + 1}: unexpected extra row 'gripper'"):

@@ -169,7 +169,7 @@ class SimArm:
 
     def tool_pose_true(self) -> np.ndarray:
         """The physical tool pose (4, 4) in the world (ground truth, mm)."""
-        return kinematics.fk(self.q_true, self.robot, check_limits=False)
+        return kinematics.fk_pox(self.q_true, self.robot, check_limits=False)
 
     @property
     def holding(self) -> list:
@@ -188,7 +188,7 @@ class SimArm:
     def _refresh(self) -> None:
         """Recompute the physical pose, carry held objects, and let the pads push what they run into."""
         self._q_true = self._physical(self._motor)
-        T = kinematics.fk(self._q_true, self.robot, check_limits=False)
+        T = kinematics.fk_pox(self._q_true, self.robot, check_limits=False)
         for obj, T_rel in self._held:
             T_obj = T @ T_rel
             obj.position = T_obj[:3, 3].copy()
@@ -344,7 +344,7 @@ class SimArm:
         self._check_ready("closing the gripper")
         if self._held:
             return True
-        T = kinematics.fk(self._q_true, self.robot, check_limits=False)
+        T = kinematics.fk_pox(self._q_true, self.robot, check_limits=False)
         outcome = close_on(self.world, T, self.gripper_geometry, self.gripper_opening_mm)
         self.gripper_opening_mm = outcome.opening_mm
         self.last_grasp = outcome.reason
