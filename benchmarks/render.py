@@ -29,9 +29,9 @@ import cv2  # noqa: E402
 import numpy as np  # noqa: E402
 
 from armlab.blocks import COLORS, ObjectState  # noqa: E402
+from armlab.gripper_geometry import GRIPPER  # noqa: E402
 from armlab.sim.camera import CameraRealism, SimCamera  # noqa: E402
 
-GRIPPER = SimpleNamespace(pad_width_mm=20.0, pad_height_mm=16.0, pad_thickness_mm=6.0)
 REPO = Path(__file__).resolve().parents[1]
 BEFORE_REV = "321f6f7"
 OWN_MODULES = ("render", "raster", "faces", "sensor", "camera")     # the renderer's modules that changed

@@ -12,6 +12,7 @@ import pytest
 from armlab.blocks import LAB_RGB, ObjectState
 from armlab.calibration.tags import pupil_detector
 from armlab.camera import Camera
+from armlab.gripper_geometry import GRIPPER
 from armlab.kinematics import joint_positions
 from armlab.lab import lab_config
 from armlab.sim.board_texture import BOARD_RGB
@@ -19,7 +20,6 @@ from armlab.sim.camera import CameraRealism, SimCamera, true_camera
 from armlab.sim.faces import ARM_RGB, shade
 from armlab.sim.render import render
 
-GRIPPER = SimpleNamespace(pad_width_mm=20.0, pad_height_mm=16.0, pad_thickness_mm=6.0)
 SLEEP = np.array([0.0, -1.80, 1.55, 0.8, 0.0])
 # the realistic camera's geometry (intrinsics, distortion, mount error) without any image or depth noise
 EXACT_DISTORTED = replace(CameraRealism.ideal(), **{k: getattr(CameraRealism(), k) for k in (
