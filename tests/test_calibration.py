@@ -117,6 +117,41 @@ def test_too_few_views_or_the_wrong_pattern_say_so(dataset):
         cal.calibrate_intrinsics(images[:3], (10, 7), 25.0)
 
 
+# -- a station's own intrinsics -----------------------------------------------------------------------------------
+def test_a_station_is_calibrated_with_its_own_cameras_checkerboard_set():
+    from armlab.tasks import perception
+
+    station = make_station("sim", seed=2, scene="empty")
+    truth = station.camera.truth
+    own = perception.calibrate_camera(station)
+    K, dist = perception.station_intrinsics(station)
+    assert np.array_equal(own.camera.K, K) and np.array_equal(own.camera.dist, dist)
+    assert abs(cal.compare_intrinsics(K, truth.K)["focal_rel_pct"]) < 0.1
+    good = cal.compare_extrinsics(own.camera.T_cam_world, truth.T_cam_world)
+    # the saved seed-0 set's K (another camera's) puts this camera's centre more than 5 mm off
+    other = perception.calibrate_camera(station, perception.checkerboard_intrinsics())
+    bad = cal.compare_extrinsics(other.camera.T_cam_world, truth.T_cam_world)
+    assert good["position_mm"] < 1.5 and good["angle_deg"] < 0.1 and bad["position_mm"] > 5.0, (good, bad)
+
+
+def test_a_real_station_reads_the_set_saved_from_its_camera(tmp_path, monkeypatch, dataset):
+    from types import SimpleNamespace
+
+    from armlab.tasks import perception
+
+    monkeypatch.setenv("ARMLAB_DATA", str(tmp_path))
+    real = SimpleNamespace(kind="real", camera=SimpleNamespace(width=1280, height=720))
+    with pytest.raises(ValueError, match=f"{tmp_path / 'checkerboard_real'}: no checkerboard set for this camera"):
+        perception.station_intrinsics(real)
+    images, _ = dataset
+    cal.save_checkerboard_set(images[:8], tmp_path / "checkerboard_real")
+    K, dist = perception.station_intrinsics(real)
+    assert np.allclose(K, cal.calibrate_intrinsics(images[:8], (9, 6), 25.0).K, atol=0.5) and dist.shape == (5,)
+    small = SimpleNamespace(kind="real", camera=SimpleNamespace(width=640, height=480))
+    with pytest.raises(ValueError, match="1280x720 px, the camera's images 640x480"):
+        perception.station_intrinsics(small)
+
+
 # -- AprilTags and extrinsics -------------------------------------------------------------------------------------
 def test_tag_corners_are_where_the_true_camera_projects_them(station, tags):
     truth = station.camera.truth

@@ -6,8 +6,17 @@ import cv2
 import numpy as np
 import pytest
 
+from armlab import calibration as cal
+from armlab import make_station
 from armlab.sim.camera import CameraRealism, true_camera
-from armlab.sim.checkerboard import Checkerboard, checkerboard_poses, load_dataset, render_checkerboard
+from armlab.sim.checkerboard import (
+    Checkerboard,
+    capture_checkerboard_set,
+    checkerboard_poses,
+    load_dataset,
+    render_checkerboard,
+    sim_camera_intrinsics,
+)
 
 FLAGS = cv2.CALIB_CB_ADAPTIVE_THRESH | cv2.CALIB_CB_NORMALIZE_IMAGE
 SUBPIX = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_MAX_ITER, 50, 1e-4)
@@ -85,3 +94,78 @@ def test_bad_pose_is_refused():
     camera = true_camera(CameraRealism.ideal())
     with pytest.raises(ValueError, match="T_cam_target"):
         render_checkerboard(camera, np.eye(3))
+
+
+# -- a station's own set ------------------------------------------------------------------------------------------
+def test_each_camera_photographs_its_own_set_and_calibrates_to_its_own_truth():
+    a = make_station("sim", seed=2, scene="empty").camera
+    b = make_station("sim", seed=5, scene="empty").camera
+    assert not np.allclose(a.truth.K, b.truth.K)
+    views = capture_checkerboard_set(a, n=3)
+    assert len(views) == 3 and views[0].shape == (720, 1280, 3) and views[0].dtype == np.uint8
+    assert all(np.array_equal(x, y) for x, y in zip(views, capture_checkerboard_set(a, n=3)))   # same camera, same set
+    assert not np.array_equal(views[0], capture_checkerboard_set(b, n=1)[0])
+    for camera in (a, b):
+        result = sim_camera_intrinsics(camera)
+        diff = cal.compare_intrinsics(result.K, camera.truth.K)
+        assert abs(diff["focal_rel_pct"]) < 0.1 and max(abs(diff["dcx_px"]), abs(diff["dcy_px"])) < 1.5, diff
+        assert result.used_views == list(range(16)) and result.rms < 0.3
+    # cached per camera: a second station with the same camera gets the same result without rendering again
+    assert sim_camera_intrinsics(make_station("sim", seed=2, scene="random").camera) is sim_camera_intrinsics(a)
+    # the saved seed-0 set is another camera's: the principal point of camera a is several px away from it
+    images, meta = load_dataset()
+    other = cal.calibrate_intrinsics(images, (9, 6), 25.0)
+    assert np.abs(other.K[:2, 2] - a.truth.K[:2, 2]).max() > 4.0
+
+
+def test_capture_needs_a_simulated_camera():
+    with pytest.raises(TypeError, match="simulated camera"):
+        capture_checkerboard_set(object())
+    with pytest.raises(ValueError, match="at least 3 views"):
+        sim_camera_intrinsics(make_station("sim", seed=0, scene="empty").camera, n=2)
+
+
+# -- set files ----------------------------------------------------------------------------------------------------
+def test_a_saved_set_loads_back_and_calibrates_alike(tmp_path):
+    images, meta = load_dataset()
+    rgb = [np.repeat(g[..., None], 3, axis=2) for g in images[:6]]        # a camera's RGB frames
+    folder = cal.save_checkerboard_set(rgb, tmp_path / "mine", (9, 6), 25.0, notes={"camera": "L515 f0123"})
+    again, meta2 = cal.load_checkerboard_set(folder)
+    assert meta2["camera"] == "L515 f0123" and meta2["image_size"] == [1280, 720] and len(again) == 6
+    assert meta2["pattern_size"] == [9, 6] and meta2["square_mm"] == 25.0
+    assert all(np.abs(a.astype(int) - b).max() < 12 for a, b in zip(again, images))    # JPEG 95 of a JPEG 95
+    K1 = cal.calibrate_intrinsics(again, (9, 6), 25.0).K
+    K0 = cal.calibrate_intrinsics(images[:6], (9, 6), 25.0).K
+    assert np.abs(K1 - K0).max() < 0.5
+    assert sorted(p.name for p in folder.iterdir()) == ["checkerboard.json"] + [f"view_{i:02d}.jpg" for i in range(6)]
+
+
+@pytest.mark.parametrize("images, kwargs, match", [
+    ([], {}, "at least one image"),
+    (np.zeros((720, 1280), np.uint8), {}, "list of images"),
+    ([np.zeros((72, 128), np.uint8), np.zeros((48, 64), np.uint8)], {}, "the first is 128x72"),
+    ([np.zeros((72, 128), np.float32)], {}, "uint8"),
+    ([np.zeros((72, 128), np.uint8)], {"pattern_size": (1, 6)}, "INNER corners"),
+    ([np.zeros((72, 128), np.uint8)], {"notes": {"images": []}}, "notes may not set"),
+])
+def test_bad_sets_are_refused_before_anything_is_written(tmp_path, images, kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        cal.save_checkerboard_set(images, tmp_path / "set", **kwargs)
+    assert not (tmp_path / "set").exists()
+
+
+def test_missing_or_corrupt_sets_are_named(tmp_path):
+    with pytest.raises(ValueError, match="folder not found"):
+        cal.load_checkerboard_set(tmp_path / "nowhere")
+    folder = cal.save_checkerboard_set([np.full((72, 128), 200, np.uint8)] * 2, tmp_path / "set")
+    (folder / "view_01.jpg").unlink()
+    with pytest.raises(ValueError, match="view_01.jpg: missing"):
+        cal.load_checkerboard_set(folder)
+    (folder / "view_01.jpg").write_bytes((folder / "view_00.jpg").read_bytes())
+    meta = (folder / "checkerboard.json").read_text()
+    (folder / "checkerboard.json").write_text(meta.replace("128", "64"))
+    with pytest.raises(ValueError, match="128x72 image in a 64x72 set"):
+        cal.load_checkerboard_set(folder)
+    (folder / "checkerboard.json").write_text(meta[:40])
+    with pytest.raises(ValueError, match="malformed checkerboard metadata"):
+        cal.load_checkerboard_set(folder)

@@ -1,5 +1,5 @@
 """Camera calibration: checkerboard intrinsics, AprilTag extrinsics, board homography, depth-plane correction,
-grid validation, and calibration files. Units: px for images, mm for the world (board frame)."""
+grid validation, calibration files and checkerboard photo sets. Units: px for images, mm for the world (board frame)."""
 
 from armlab.calibration.depth import DepthCorrection, board_depth, fit_depth_correction
 from armlab.calibration.extrinsics import (
@@ -20,11 +20,12 @@ from armlab.calibration.intrinsics import (
 from armlab.calibration.storage import Calibration, CalibrationFileError, load_calibration, save_calibration
 from armlab.calibration.tags import TagDetection, detect_tags
 from armlab.calibration.validation import GridError, grid_world_error, visible_grid_points
+from armlab.calibration.views import load_checkerboard_set, save_checkerboard_set
 
 __all__ = [
     "BoardView", "Calibration", "CalibrationFileError", "DepthCorrection", "ExtrinsicsResult", "GridError",
     "IntrinsicsResult", "TagDetection", "board_depth", "calibrate_extrinsics", "calibrate_intrinsics",
     "checkerboard_points", "compare_extrinsics", "compare_intrinsics", "detect_tags", "extrinsics_from_detections",
     "find_checkerboard", "fit_depth_correction", "grid_world_error", "hand_measured_extrinsic", "load_calibration",
-    "save_calibration", "tag_homography", "visible_grid_points",
+    "load_checkerboard_set", "save_calibration", "save_checkerboard_set", "tag_homography", "visible_grid_points",
 ]

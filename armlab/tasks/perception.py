@@ -1,8 +1,8 @@
 """Perception for the task layer: calibrate a station's camera and see the board with the arm out of the way.
 
-calibrate_camera(station): intrinsics (the saved checkerboard views, data/checkerboard, through
-armlab.calibration.calibrate_intrinsics; or the device's factory values; or given K, dist), then with the arm in the
-camera-clear pose (armlab.planning.plan_camera_clear) one frame: AprilTag extrinsics
+calibrate_camera(station): intrinsics (station_intrinsics: a checkerboard set captured with THIS station's camera,
+through armlab.calibration.calibrate_intrinsics; or the device's factory values; or given K, dist), then with the arm
+in the camera-clear pose (armlab.planning.plan_camera_clear) one frame: AprilTag extrinsics
 (calibration.calibrate_extrinsics) and the planar depth correction (calibration.fit_depth_correction, arm pixels
 excluded). The result is an armlab.calibration.Calibration (save/load it with calibration.save_calibration /
 load_calibration).
@@ -15,20 +15,23 @@ corrected depth in a small window. Units: px, mm, rad; world (board) frame.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
 from armlab import calibration, detection, planning
+from armlab._paths import data_path
 from armlab.calibration import Calibration
 from armlab.camera import Camera
 from armlab.kinematics import Unreachable
 from armlab.station import Frame
 
 __all__ = ["Observation", "calibrate_camera", "clear_view", "look", "surface_point", "checkerboard_intrinsics",
-           "CLEAR_VIEW_MIN_CLEARANCE_MM"]
+           "station_intrinsics", "CLEAR_VIEW_MIN_CLEARANCE_MM", "REAL_CHECKERBOARD_FOLDER"]
 
 CLEAR_VIEW_MIN_CLEARANCE_MM = 25.0   # tool point above what it passes on the way out of view: the finger tips
                                      # (GRIPPER.fingertip_mm = 8 mm beyond the tool point) keep 17 mm
+REAL_CHECKERBOARD_FOLDER = "checkerboard_real"   # the real camera's checkerboard set, in the data folder
 
 
 @dataclass(frozen=True)
@@ -42,14 +45,38 @@ class Observation:
     arm_q: np.ndarray
 
 
-def checkerboard_intrinsics(folder=None) -> tuple[np.ndarray, np.ndarray]:
-    """K (3, 3) and dist (5,) calibrated from a folder of checkerboard views (default: data/checkerboard)."""
-    from armlab.sim.checkerboard import load_dataset  # reads the saved views (no simulation involved)
-
-    images, meta = load_dataset(folder)
-    result = calibration.calibrate_intrinsics(images, tuple(meta.get("pattern_size", (9, 6))),
-                                              float(meta.get("square_mm", 25.0)))
+def checkerboard_intrinsics(folder=None, image_size: tuple[int, int] | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """K (3, 3) and dist (5,) calibrated from a saved checkerboard set (calibration.load_checkerboard_set; default
+    data/checkerboard, the simulated seed-0 camera's set). image_size: the (width, height) px the set must have."""
+    folder = Path(folder) if folder is not None else data_path("checkerboard")
+    images, meta = calibration.load_checkerboard_set(folder)
+    if image_size is not None and tuple(meta["image_size"]) != tuple(image_size):
+        raise ValueError(f"{folder}: the checkerboard views are {meta['image_size'][0]}x{meta['image_size'][1]} px, "
+                         f"the camera's images {image_size[0]}x{image_size[1]}: this set is from another camera mode")
+    result = calibration.calibrate_intrinsics(images, tuple(meta["pattern_size"]), float(meta["square_mm"]))
     return result.K, result.dist
+
+
+def station_intrinsics(station, folder=None) -> tuple[np.ndarray, np.ndarray]:
+    """K (3, 3) and dist (5,) of the station's own camera, from a checkerboard set captured with THAT camera (cameras
+    differ by ~0.3 % in focal length and ~4 px in principal point: another camera's K misplaces the camera by mm).
+
+    folder: a saved set (calibration.save_checkerboard_set) to use. Without it, a simulated station's camera
+    photographs the board itself (armlab.sim.checkerboard.sim_camera_intrinsics: ~1.5 s once per camera, cached),
+    and a real station reads data/checkerboard_real/ ($ARMLAB_DATA/checkerboard_real when set), the set saved from
+    its camera. Raises ValueError naming the folder when the set is missing or is not of the camera's image size.
+    """
+    size = (station.camera.width, station.camera.height)
+    if folder is None and station.kind == "sim":
+        from armlab.sim.checkerboard import sim_camera_intrinsics  # renders the views: simulation only
+
+        result = sim_camera_intrinsics(station.camera)
+        return result.K.copy(), result.dist.copy()
+    path = Path(folder) if folder is not None else data_path(REAL_CHECKERBOARD_FOLDER)
+    if not path.is_dir():
+        raise ValueError(f"{path}: no checkerboard set for this camera. Photograph a checkerboard in ~16 poses with it "
+                         f"and save them there with armlab.calibration.save_checkerboard_set (see its module notes)")
+    return checkerboard_intrinsics(path, size)
 
 
 def clear_view(arm, obstacles=(), held_below: float = 0.0) -> None:
@@ -83,13 +110,14 @@ def clear_view(arm, obstacles=(), held_below: float = 0.0) -> None:
 def calibrate_camera(station, intrinsics="checkerboard", arm=None) -> Calibration:
     """Calibrate the station's camera (see the module notes).
 
-    intrinsics: "checkerboard" (data/checkerboard views), "factory" (station.camera.K, dist) or a (K, dist) pair.
+    intrinsics: "checkerboard" (station_intrinsics: the station camera's own checkerboard set), "factory"
+        (station.camera.K, dist) or a (K, dist) pair.
     arm: the arm to move out of view (default station.arm; pass a tasks GuardedArm to keep its guards).
     Raises ValueError when the tags are not seen or the board has too little depth.
     """
     if isinstance(intrinsics, str):
         if intrinsics == "checkerboard":
-            K, dist = checkerboard_intrinsics()
+            K, dist = station_intrinsics(station)
         elif intrinsics == "factory":
             K, dist = station.camera.K, station.camera.dist
         else:
