@@ -17,6 +17,8 @@ from armlab._paths import data_path
 
 __all__ = ["LabConfig", "TagLayout", "load_lab", "lab_config"]
 
+_ROBOT_BASE_HALF_MM = (55.0, 60.0)   # the arm's base plate when data/lab.json does not say (x, y half sizes, mm)
+
 
 @dataclass(frozen=True)
 class TagLayout:
@@ -50,7 +52,7 @@ class LabConfig:
     factory_K: np.ndarray                # (3, 3)
     factory_dist: np.ndarray             # (5,) Brown-Conrady k1, k2, p1, p2, k3
     block_edges_mm: dict[str, float]     # {"large": 38, "small": 25}
-    robot_base_half_mm: tuple[float, float] = (55.0, 60.0)  # the arm's base plate (x, y half sizes) at the origin
+    robot_base_half_mm: tuple[float, float] = _ROBOT_BASE_HALF_MM  # the arm's base plate (x, y half sizes) at 0
 
     def grid_points(self) -> np.ndarray:
         """World points (N, 3) of the printed grid (every grid_mm from grid_x/grid_y's first to last line, z = 0)."""
@@ -97,7 +99,8 @@ def load_lab(path: Path | str | None = None) -> LabConfig:
             factory_K=np.array(cam["factory_K"], float),
             factory_dist=np.array(cam["factory_dist"], float),
             block_edges_mm={"large": float(blocks["large_mm"]), "small": float(blocks["small_mm"])},
-            robot_base_half_mm=tuple(float(v) for v in raw.get("robot_base", {}).get("half_extent_mm", (55.0, 60.0))),
+            robot_base_half_mm=tuple(float(v) for v in
+                                     raw.get("robot_base", {}).get("half_extent_mm", _ROBOT_BASE_HALF_MM)),
         )
     except KeyError as e:
         raise ValueError(f"{path}: missing key {e}") from None

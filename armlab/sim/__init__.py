@@ -36,7 +36,8 @@ def make_sim_station(seed: int = 0, scene: str | os.PathLike | dict = "random",
         realism: "realistic" or "ideal" for arm and camera, or an ArmRealism for the arm (camera: "realistic").
         real_time: blocking moves also take wall-clock time.
         gripper: finger pad geometry (default GripperGeometry()).
-        camera_realism: the camera's realism when it should differ from the arm's.
+        camera_realism: the camera's realism when it should differ from the arm's: "realistic", "ideal" or a
+            CameraRealism (armlab.sim.realism: e.g. CameraRealism.realistic(0), the camera of data/checkerboard).
     The arm starts at the sleep pose with the gripper open, as the real lab's arm does.
     """
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
