@@ -1,0 +1,271 @@
+"""Click on the camera image to grab a block (first click) and drop it (second click): the live notebook panel.
+
+The panel shows the current camera frame (tasks.context(station).last.frame, the last look at the board) as an
+ipywidgets.Image, downscaled by `scale` and JPEG-encoded, and listens to its clicks with ipyevents.Event. A click
+event is turned into a camera pixel (event_pixel: ipyevents reports the click in the image's own pixels, dataX/dataY,
+whatever size the browser draws it at; relativeX/relativeY over the drawn size is the fallback) and handed to
+ClickToGrab.click((u, v)) -- the same call a headless notebook or a test makes. A click grabs when the gripper is
+empty (tasks.click_grab) and drops the held block when it is not (tasks.click_drop); every click returns a
+ClickResult whose message says the world point, what the arm did (its commands and motion time) or why the click
+was refused (nothing moved then). The view is refreshed after each action (click_grab/click_drop look again).
+
+Pixels: OpenCV convention (u right, v down, integer = pixel centre) in the camera's full-resolution frame.
+Units: mm, rad, s; world (board) frame. ipywidgets and ipyevents are imported only by ClickToGrab.widget().
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+import cv2
+import numpy as np
+
+from armlab.station import EmergencyStopped, MotionRefused
+
+from .click import ClickRefused, _current, click_drop, click_grab, click_world
+from .pickplace import context
+
+__all__ = ["ClickResult", "ClickToGrab", "event_pixel", "encode_view", "scaled_size"]
+
+MARKER_RGB = (255, 0, 255)     # the last click, drawn on the shown frame
+
+
+def event_pixel(event: Mapping, frame_size: tuple[int, int], image_size: tuple[int, int]) -> tuple[float, float]:
+    """Camera pixel (u, v) of an ipyevents mouse event on an image of image_size = (w, h) px (the encoded image)
+    that shows a camera frame of frame_size = (W, H) px.
+
+    ipyevents puts the click in the image's natural pixels in dataX/dataY (it divides the offset inside the image by
+    the drawn width and multiplies by the natural width, so the drawn size does not matter); without them the click
+    is relativeX/relativeY over the drawn boundingRectWidth/Height (no border or padding assumed). The browser
+    measures from the image's top-left corner, OpenCV from the centre of the top-left pixel: u = x * W / w - 0.5.
+    Raises ClickRefused when the event has no position or lies outside the image.
+    """
+    W, H = (int(s) for s in frame_size)
+    w, h = (int(s) for s in image_size)
+    if min(W, H, w, h) <= 0:
+        raise ValueError(f"frame_size {frame_size} and image_size {image_size} must be positive (width, height) px")
+    if "dataX" in event and "dataY" in event:
+        x, y = float(event["dataX"]) / w, float(event["dataY"]) / h
+    elif {"relativeX", "relativeY", "boundingRectWidth", "boundingRectHeight"} <= event.keys():
+        bw, bh = float(event["boundingRectWidth"]), float(event["boundingRectHeight"])
+        if bw <= 0 or bh <= 0:
+            raise ClickRefused(f"the image is drawn {bw:g} x {bh:g} px: no click position")
+        x, y = float(event["relativeX"]) / bw, float(event["relativeY"]) / bh
+    else:
+        raise ClickRefused(f"the {event.get('type', 'unknown')!r} event carries no position (need dataX/dataY or "
+                           f"relativeX/relativeY with boundingRectWidth/Height), keys: {sorted(event)}")
+    if not (np.isfinite(x) and np.isfinite(y)) or not (0.0 <= x <= 1.0 and 0.0 <= y <= 1.0):
+        raise ClickRefused(f"the click at ({x:.3f}, {y:.3f}) of the image's width/height is outside the image")
+    return float(np.clip(x * W - 0.5, 0.0, W - 1.0)), float(np.clip(y * H - 0.5, 0.0, H - 1.0))
+
+
+def scaled_size(frame_size: tuple[int, int], scale: float) -> tuple[int, int]:
+    """(w, h) px of a frame of frame_size = (W, H) px shown downscaled by `scale`."""
+    return max(1, round(frame_size[0] * scale)), max(1, round(frame_size[1] * scale))
+
+
+def encode_view(rgb: np.ndarray, scale: float = 0.5, marker: tuple[float, float] | None = None,
+                quality: int = 85) -> tuple[bytes, tuple[int, int]]:
+    """JPEG bytes of an RGB frame (H, W, 3) uint8 downscaled by `scale`, with a ring at camera pixel `marker`;
+    returns (bytes, (w, h)) of the encoded image."""
+    rgb = np.asarray(rgb)
+    if rgb.ndim != 3 or rgb.shape[2] != 3 or rgb.dtype != np.uint8:
+        raise ValueError(f"the frame must be RGB (H, W, 3) uint8, got {rgb.dtype} with shape {rgb.shape}")
+    if not 0.05 <= scale <= 1.0:
+        raise ValueError(f"scale must lie in [0.05, 1], got {scale}")
+    H, W = rgb.shape[:2]
+    w, h = scaled_size((W, H), scale)
+    bgr = cv2.resize(np.ascontiguousarray(rgb[..., ::-1]), (w, h), interpolation=cv2.INTER_AREA)
+    if marker is not None:
+        centre = (round((marker[0] + 0.5) * w / W - 0.5), round((marker[1] + 0.5) * h / H - 0.5))
+        cv2.circle(bgr, centre, 8, MARKER_RGB[::-1], 2, cv2.LINE_AA)
+    ok, buf = cv2.imencode(".jpg", bgr, [cv2.IMWRITE_JPEG_QUALITY, int(quality)])
+    if not ok:
+        raise RuntimeError("OpenCV could not JPEG-encode the frame")
+    return buf.tobytes(), (w, h)
+
+
+@dataclass(frozen=True)
+class ClickResult:
+    """What one click did. action: "grab" or "drop"; uv: camera pixel; ok: the block is held (grab) or was put down
+    (drop); world: the clicked surface point (3,) mm, None when the click was refused before that; commands: the
+    arm commands sent, in order (("move", q (5,) rad, moving_time s), ("open",), ("close", held)); message: one line
+    for the user."""
+
+    action: str
+    uv: tuple[float, float]
+    ok: bool
+    world: np.ndarray | None
+    message: str
+    commands: tuple = field(default=(), repr=False)
+
+    @property
+    def moved(self) -> bool:
+        """True when any command reached the arm."""
+        return bool(self.commands)
+
+
+class _Recorder:
+    """Stands in for the task context's arm during one click: forwards everything, records the commands."""
+
+    def __init__(self, arm):
+        self._arm, self.log = arm, []
+
+    def move_to(self, q, moving_time=None, accel_time=None, blocking=True):
+        self._arm.move_to(q, moving_time, accel_time, blocking)
+        self.log.append(("move", np.asarray(q, float).copy(), moving_time))
+
+    def open_gripper(self):
+        self._arm.open_gripper()
+        self.log.append(("open",))
+
+    def close_gripper(self):
+        held = self._arm.close_gripper()
+        self.log.append(("close", bool(held)))
+        return held
+
+    def __getattr__(self, name):
+        return getattr(self._arm, name)
+
+
+def _fmt(p) -> str:
+    return "(" + ", ".join(f"{x:.0f}" for x in p) + ")"
+
+
+def _summary(log: list) -> str:
+    moves = [c for c in log if c[0] == "move"]
+    seconds = sum(c[2] or 0.0 for c in moves)
+    grip = ", ".join("open" if c[0] == "open" else f"close ({'holding' if c[1] else 'empty'})"
+                     for c in log if c[0] != "move")
+    return f"{len(moves)} arm moves ({seconds:.1f} s of motion)" + (f", gripper {grip}" if grip else "")
+
+
+class ClickToGrab:
+    """Grab on the first click, drop on the next, from pixels of the current camera frame.
+
+    Args:
+        station: a make_station(...) station (sim or real); its task context is created on first use.
+        scale: the shown image is the camera frame downscaled by this factor (clicks are mapped back).
+        yaw: the yaw (rad) the dropped block is put down with.
+        display_width: CSS width of the shown image in px (default: its encoded width); the browser may draw it at
+            any size, the click mapping does not depend on it.
+    """
+
+    def __init__(self, station, scale: float = 0.5, yaw: float = 0.0, display_width: int | None = None):
+        if not 0.05 <= scale <= 1.0:
+            raise ValueError(f"scale must lie in [0.05, 1], got {scale}")
+        self.station, self.scale, self.yaw = station, float(scale), float(yaw)
+        self.display_width = display_width
+        self.history: list[ClickResult] = []
+        self._image = self._out = None
+        self._marker: tuple[float, float] | None = None
+
+    @property
+    def holding(self):
+        """The detected Block in the gripper, or None."""
+        return context(self.station).held
+
+    @property
+    def next_action(self) -> str:
+        """What the next click does: "grab" or "drop"."""
+        return "grab" if self.holding is None else "drop"
+
+    def frame_size(self) -> tuple[int, int]:
+        """(W, H) px of the camera frame the clicks refer to."""
+        H, W = _current(self.station).frame.rgb.shape[:2]
+        return W, H
+
+    def image_size(self) -> tuple[int, int]:
+        """(w, h) px of the shown (encoded) image; click events refer to it."""
+        return scaled_size(self.frame_size(), self.scale)
+
+    def view(self) -> tuple[bytes, tuple[int, int]]:
+        """The shown image: (JPEG bytes, (w, h) px) of the current frame with the last click marked."""
+        return encode_view(_current(self.station).frame.rgb, self.scale, self._marker)
+
+    def click(self, uv) -> ClickResult:
+        """Act on a click at camera pixel uv = (u, v): grab when the gripper is empty, else drop. Never raises for
+        a refused click or a refused/stopped motion: the result says why (and records what was sent, if anything)."""
+        uv = tuple(float(c) for c in np.asarray(uv, dtype=float).reshape(-1))
+        action = self.next_action
+        ctx = context(self.station)
+        recorder = _Recorder(ctx.arm)
+        world, ok = None, False
+        where = f"{action} at pixel ({uv[0]:.0f}, {uv[1]:.0f})" if len(uv) == 2 else f"{action} at {uv}"
+        try:
+            if len(uv) != 2 or not np.all(np.isfinite(uv)):
+                raise ClickRefused(f"a click is a pixel (u, v) of 2 finite numbers, got {uv}")
+            world = click_world(self.station, uv, _current(self.station).frame)
+            where += f" -> world {_fmt(world)} mm"
+            ctx.arm = recorder
+            try:
+                if action == "grab":
+                    ok = click_grab(self.station, uv)
+                    block = ctx.held
+                    did = (f"holding the {block.color} {block.size} block (top face {_fmt(block.position)} mm, "
+                           f"yaw {np.degrees(block.yaw):.0f} deg)" if ok else "the gripper closed empty (missed)")
+                else:
+                    held = ctx.held
+                    ok = click_drop(self.station, uv, self.yaw)
+                    did = f"put the {held.color} block down there"
+            finally:
+                ctx.arm = recorder._arm
+            message = f"{where}: {did}; {_summary(recorder.log)}"
+        except ClickRefused as e:
+            message = f"{where}: refused, nothing moved: {e}"
+        except (MotionRefused, EmergencyStopped) as e:
+            message = (f"{where}: stopped by the arm after {_summary(recorder.log)}: "
+                       f"{type(e).__name__}: {str(e).splitlines()[0]}")
+        result = ClickResult(action, uv[:2], bool(ok), world, message, tuple(recorder.log))
+        self.history.append(result)
+        if len(uv) == 2 and np.all(np.isfinite(uv)):
+            self._marker = uv
+        self._refresh()
+        return result
+
+    def handle_event(self, event: Mapping) -> ClickResult | None:
+        """The ipyevents callback: a "click" event dict -> click(pixel); other event types are ignored (None).
+        The result's message is printed into the panel's output area when the panel exists."""
+        if event.get("type") != "click":
+            return None
+        try:
+            uv = event_pixel(event, self.frame_size(), self.image_size())
+        except ClickRefused as e:
+            result = ClickResult(self.next_action, (np.nan, np.nan), False, None, f"refused, nothing moved: {e}")
+            self.history.append(result)
+        else:
+            result = self.click(uv)
+        if self._out is not None:
+            with self._out:
+                print(result.message)
+        return result
+
+    def _refresh(self) -> None:
+        if self._image is not None:
+            self._image.value = self.view()[0]
+
+    def widget(self):
+        """The live panel: the clickable image, a status line and an output area (an ipywidgets.VBox whose text
+        form is one deterministic line). Needs ipywidgets and ipyevents."""
+        try:
+            import ipywidgets as w
+            from ipyevents import Event
+        except ImportError as e:
+            raise ImportError(f"the click panel needs ipywidgets and ipyevents (pip install -r requirements.txt): "
+                              f"{e}") from e
+        data, (iw, ih) = self.view()
+        width = self.display_width or iw
+        self._image = w.Image(value=data, format="jpeg", layout=w.Layout(width=f"{width}px", height="auto"))
+        self._out = w.Output()
+        self._events = Event(source=self._image, watched_events=["click"], prevent_default_action=True)
+        self._events.on_dom_event(self.handle_event)
+        W, H = self.frame_size()
+        label = (f"click-to-grab panel: {W}x{H} camera frame shown at {iw}x{ih} "
+                 f"px; click a block to grab it, then a spot to drop it")
+
+        class ClickPanel(w.VBox):
+            def __repr__(self) -> str:      # the text form nbval compares: no image bytes, no widget ids
+                return label
+
+        return ClickPanel([w.HTML(f"<b>{label}</b>"), self._image, self._out])
