@@ -309,6 +309,105 @@ def test_depth_correction_refuses_unusable_depth(station):
         cal.fit_depth_correction(np.zeros((720, 1280), np.uint16), truth)
 
 
+# -- extrinsic refinement from depth ------------------------------------------------------------------------------
+def _tilted(T_cam_world, axis_world, angle_deg, shift_world):
+    """T_cam_world with the board turned by angle_deg about a world axis through the origin, then shifted (mm)."""
+    from armlab.transforms import exp_so3, homogeneous
+
+    R = exp_so3(np.asarray(axis_world, float) / np.linalg.norm(axis_world), np.radians(angle_deg))
+    return T_cam_world @ homogeneous(R, shift_world)
+
+
+def test_refinement_puts_the_board_plane_where_exact_depth_sees_it(station):
+    truth = station.camera.truth
+    depth, on_board = cal.board_depth(truth)
+    depth = depth.astype(np.float32)
+    depth[300:340, 600:660] -= 38.0                     # a block: an outlier
+    depth[:, :40] = np.nan                              # no return along one edge
+    wrong = truth.with_pose(_tilted(truth.T_cam_world, [1.0, 0.4, 0.0], 0.8, [0.0, 0.0, -9.0]))
+    ref = cal.refine_extrinsic_from_depth(depth, wrong)
+    wrong_height = abs(wrong.T_cam_world[:3, 2] @ wrong.T_cam_world[:3, 3])    # camera to the board plane it thinks
+    assert ref.tilt_deg == pytest.approx(0.8, abs=1e-4)
+    assert ref.height_change_mm == pytest.approx(truth.position[2] - wrong_height, abs=1e-3)
+    assert abs(ref.height_change_mm) > 3.0
+    assert ref.residual_mm < 1e-3 and ref.inliers > 20000
+    refined = truth.with_pose(ref.T_cam_world)
+    # the refined camera predicts the depth image of the true one (depth fixes the plane: tilt and height) ...
+    assert np.nanmax(np.abs(cal.board_depth(refined)[0] - cal.board_depth(truth)[0])[on_board]) < 1e-3
+    assert np.degrees(np.arccos(refined.T_cam_world[:3, 2] @ truth.T_cam_world[:3, 2])) < 1e-4
+    # ... and its plane, as fitted: unit normal towards the camera, distance = the camera's height over the board
+    assert ref.normal @ truth.T_cam_world[:3, 2] == pytest.approx(1.0, abs=1e-9)
+    assert ref.distance_mm == pytest.approx(truth.position[2], abs=1e-3)
+    # the exact extrinsic is left alone
+    same = cal.refine_extrinsic_from_depth(depth, truth)
+    assert same.tilt_deg < 1e-5 and abs(same.height_change_mm) < 1e-3
+    assert np.abs(same.T_cam_world - truth.T_cam_world).max() < 1e-3
+
+
+def test_refinement_cannot_see_along_the_board(station):
+    truth = station.camera.truth
+    depth = cal.board_depth(truth)[0].astype(np.float32)
+    slid = truth.T_cam_world @ _tilted(np.eye(4), [0, 0, 1], 1.5, [6.0, -4.0, 0.0])     # yaw and shift in the plane
+    ref = cal.refine_extrinsic_from_depth(depth, truth.with_pose(slid))
+    assert ref.tilt_deg < 1e-5 and abs(ref.height_change_mm) < 1e-3
+    assert np.abs(ref.T_cam_world - slid).max() < 1e-3          # nothing to correct that depth can see
+
+
+def test_a_planar_depth_bias_is_read_as_a_tilt(station, frame, tags, intrinsics):
+    # the realistic L515 depth is tilted ~20 mm across the image: the refinement turns the board by about a degree
+    # and the grid error after depth correction grows (the refinement does not help on biased depth)
+    truth = station.camera.truth
+    camera = Camera(intrinsics.K, intrinsics.dist, cal.extrinsics_from_detections(tags, intrinsics.K,
+                                                                                  intrinsics.dist).T_cam_world)
+    ref = cal.refine_extrinsic_from_depth(frame.depth, camera)
+    assert 0.5 < ref.tilt_deg < 3.0
+    grid = LAB.grid_points()
+    uv = truth.project(grid)
+    visible = cal.visible_grid_points(truth, frame.depth, grid, uv)
+    errors = []
+    for cam in (camera, camera.with_pose(ref.T_cam_world)):
+        corrected = cal.fit_depth_correction(frame.depth, cam).apply(frame.depth)
+        errors.append(cal.grid_world_error(cam, corrected, grid[visible], uv[visible]).mean_mm)
+    assert errors[1] > 1.5 * errors[0], errors
+
+
+def test_refinement_fixes_the_height_of_a_factory_k_extrinsic_on_unbiased_depth():
+    from dataclasses import replace
+
+    realism = replace(CameraRealism.realistic(2), depth_bias_mm=(0.0, 0.0, 0.0))
+    station = make_station("sim", seed=2, scene="empty", camera_realism=realism)
+    truth, frame = station.camera.truth, station.camera.capture()
+    K, dist = station.camera.K, station.camera.dist                  # factory: ~1 % off in focal length
+    camera = Camera(K, dist, cal.calibrate_extrinsics(frame.rgb, K, dist).T_cam_world)
+    refined = camera.with_pose(cal.refine_extrinsic_from_depth(frame.depth, camera).T_cam_world)
+    grid = LAB.grid_points()
+    uv = truth.project(grid)
+    visible = cal.visible_grid_points(truth, frame.depth, grid, uv)
+    before, after = (cal.grid_world_error(c, frame.depth, grid[visible], uv[visible]) for c in (camera, refined))
+    assert before.mean_mm > 4.0 and after.mean_mm < 0.5 * before.mean_mm, (before.summary(), after.summary())
+    z = [abs(np.nanmean(g.error[:, 2])) for g in (before, after)]
+    assert z[1] < 1.0 < z[0]                                          # the board's height is right again
+
+
+def test_bad_refinement_input_is_named(station):
+    truth = station.camera.truth
+    with pytest.raises(ValueError, match="board pixels"):
+        cal.refine_extrinsic_from_depth(np.full((720, 1280), np.nan, np.float32), truth)
+    with pytest.raises(ValueError, match="align depth"):
+        cal.refine_extrinsic_from_depth(np.zeros((480, 640), np.float32), truth)
+    with pytest.raises(ValueError, match="exclude"):
+        cal.refine_extrinsic_from_depth(cal.board_depth(truth)[0], truth, exclude=np.zeros((10, 10), bool))
+    far = truth.with_pose(_tilted(truth.T_cam_world, [1, 0, 0], 12.0, [0, 0, 0]))
+    with pytest.raises(ValueError, match="deg from the extrinsic"):
+        cal.refine_extrinsic_from_depth(cal.board_depth(truth)[0], far)
+    with pytest.raises(ValueError, match="collinear"):
+        cal.fit_plane(np.outer(np.arange(10.0), [1, 2, 3]))
+    with pytest.raises(ValueError, match="at least 3"):
+        cal.fit_plane(np.array([[0, 0, 1.0], [1, 0, 1], [np.nan, 0, 0]]))
+    with pytest.raises(ValueError, match=r"\(N, 3\)"):
+        cal.fit_plane(np.zeros((5, 2)))
+
+
 # -- validation on the 50 mm grid ---------------------------------------------------------------------------------
 def test_grid_error_before_and_after_calibration(station, frame, tags, intrinsics):
     truth = station.camera.truth

@@ -16,7 +16,7 @@ from armlab.camera import Camera
 from armlab.images import check_depth
 from armlab.lab import lab_config
 
-__all__ = ["DepthCorrection", "fit_depth_correction", "board_depth"]
+__all__ = ["DepthCorrection", "fit_depth_correction", "board_depth", "board_samples"]
 
 
 @dataclass(frozen=True)
@@ -57,6 +57,29 @@ def board_depth(camera: Camera, step: int = 1) -> tuple[np.ndarray, np.ndarray]:
     return depth, on_board
 
 
+def board_samples(depth_mm, camera: Camera, step: int = 4, exclude=None) -> tuple[np.ndarray, ...]:
+    """The board's pixels in a depth image, on a grid of `step` px: u, v (H', W') px, measured and expected (the
+    plane z = 0 through `camera`) depth (H', W') mm, usable (on the board, with a return, not excluded) and a first
+    guess of the inliers (usable and within 30 mm of the median measured - expected: objects on the board read
+    nearer). exclude: optional (H, W) bool mask of pixels to ignore. Raises ValueError when fewer than 50 pixels
+    are left, or the depth image is not (H, W) float of the camera's size."""
+    depth = check_depth(depth_mm, camera.image_shape)
+    if exclude is not None and np.shape(exclude) != camera.image_shape:
+        raise ValueError(f"exclude must be a (H, W) = {camera.image_shape} mask, got shape {np.shape(exclude)}")
+    expected, on_board = board_depth(camera, step)
+    measured = depth[::step, ::step]
+    v, u = np.mgrid[0:camera.height:step, 0:camera.width:step]
+    usable = on_board & np.isfinite(measured)
+    if exclude is not None:
+        usable &= ~np.asarray(exclude, bool)[::step, ::step]
+    residual = measured - expected
+    keep = usable & (np.abs(residual - np.nanmedian(residual[usable]) if usable.any() else 0) < 30.0)
+    if keep.sum() < 50:
+        raise ValueError(f"only {int(keep.sum())} board pixels have usable depth: is the board in view and the "
+                         f"extrinsic right?")
+    return u, v, measured, expected, usable, keep
+
+
 def fit_depth_correction(depth_mm, camera: Camera, step: int = 4, inlier_mm: float = 6.0,
                          iterations: int = 6, exclude=None) -> DepthCorrection:
     """Fit the planar depth bias over the board.
@@ -70,19 +93,8 @@ def fit_depth_correction(depth_mm, camera: Camera, step: int = 4, inlier_mm: flo
         exclude: optional (H, W) bool mask of pixels to ignore (e.g. the arm).
     Raises ValueError when too few board pixels have depth.
     """
-    depth = check_depth(depth_mm, camera.image_shape)
-    expected, on_board = board_depth(camera, step)
-    measured = depth[::step, ::step]
-    v, u = np.mgrid[0:camera.height:step, 0:camera.width:step]
-    usable = on_board & np.isfinite(measured)
-    if exclude is not None:
-        usable &= ~np.asarray(exclude, bool)[::step, ::step]
-    # Objects on the board read nearer than the board: start from the pixels within 30 mm of the expected plane.
+    u, v, measured, expected, usable, keep = board_samples(depth_mm, camera, step, exclude)
     residual = measured - expected
-    keep = usable & (np.abs(residual - np.nanmedian(residual[usable]) if usable.any() else 0) < 30.0)
-    if keep.sum() < 50:
-        raise ValueError(f"only {int(keep.sum())} board pixels have usable depth: is the board in view and the "
-                         f"extrinsic right?")
     A_all = np.column_stack([u.ravel(), v.ravel(), np.ones(u.size)]).astype(float)
     r_all = residual.ravel()
     coef = np.zeros(3)
