@@ -129,8 +129,12 @@ class _Recorder:
         return getattr(self._arm, name)
 
 
+def _num(x: float) -> str:
+    return str(int(round(float(x))))           # whole numbers, no "-0"
+
+
 def _fmt(p) -> str:
-    return "(" + ", ".join(f"{x:.0f}" for x in p) + ")"
+    return "(" + ", ".join(_num(x) for x in p) + ")"
 
 
 def _summary(log: list) -> str:
@@ -192,9 +196,10 @@ class ClickToGrab:
         ctx = context(self.station)
         recorder = _Recorder(ctx.arm)
         world, ok = None, False
-        where = f"{action} at pixel ({uv[0]:.0f}, {uv[1]:.0f})" if len(uv) == 2 else f"{action} at {uv}"
+        valid = len(uv) == 2 and bool(np.all(np.isfinite(uv)))
+        where = f"{action} at pixel {_fmt(uv)}" if valid else f"{action} at {uv}"
         try:
-            if len(uv) != 2 or not np.all(np.isfinite(uv)):
+            if not valid:
                 raise ClickRefused(f"a click is a pixel (u, v) of 2 finite numbers, got {uv}")
             world = click_world(self.station, uv, _current(self.station).frame)
             where += f" -> world {_fmt(world)} mm"
@@ -204,7 +209,7 @@ class ClickToGrab:
                     ok = click_grab(self.station, uv)
                     block = ctx.held
                     did = (f"holding the {block.color} {block.size} block (top face {_fmt(block.position)} mm, "
-                           f"yaw {np.degrees(block.yaw):.0f} deg)" if ok else "the gripper closed empty (missed)")
+                           f"yaw {_num(np.degrees(block.yaw))} deg)" if ok else "the gripper closed empty (missed)")
                 else:
                     held = ctx.held
                     ok = click_drop(self.station, uv, self.yaw)
@@ -219,14 +224,14 @@ class ClickToGrab:
                        f"{type(e).__name__}: {str(e).splitlines()[0]}")
         result = ClickResult(action, uv[:2], bool(ok), world, message, tuple(recorder.log))
         self.history.append(result)
-        if len(uv) == 2 and np.all(np.isfinite(uv)):
+        if valid:
             self._marker = uv
         self._refresh()
         return result
 
     def handle_event(self, event: Mapping) -> ClickResult | None:
         """The ipyevents callback: a "click" event dict -> click(pixel); other event types are ignored (None).
-        The result's message is printed into the panel's output area when the panel exists."""
+        The result's message is appended to the panel's output area when the panel exists."""
         if event.get("type") != "click":
             return None
         try:
@@ -236,9 +241,8 @@ class ClickToGrab:
             self.history.append(result)
         else:
             result = self.click(uv)
-        if self._out is not None:
-            with self._out:
-                print(result.message)
+        if self._out is not None:       # straight into the panel, never the cell's own output
+            self._out.append_stdout(result.message + "\n")
         return result
 
     def _refresh(self) -> None:
@@ -246,8 +250,9 @@ class ClickToGrab:
             self._image.value = self.view()[0]
 
     def widget(self):
-        """The live panel: the clickable image, a status line and an output area (an ipywidgets.VBox whose text
-        form is one deterministic line). Needs ipywidgets and ipyevents."""
+        """The live panel: a title, the clickable image and an output area for the messages (an ipywidgets.VBox whose
+        text form is one deterministic line under 110 characters, which nbval compares). Needs ipywidgets and
+        ipyevents."""
         try:
             import ipywidgets as w
             from ipyevents import Event
@@ -261,8 +266,7 @@ class ClickToGrab:
         self._events = Event(source=self._image, watched_events=["click"], prevent_default_action=True)
         self._events.on_dom_event(self.handle_event)
         W, H = self.frame_size()
-        label = (f"click-to-grab panel: {W}x{H} camera frame shown at {iw}x{ih} "
-                 f"px; click a block to grab it, then a spot to drop it")
+        label = f"click-to-grab: {W}x{H} frame shown at {iw}x{ih} px; click a block to grab it, then a spot to drop it"
 
         class ClickPanel(w.VBox):
             def __repr__(self) -> str:      # the text form nbval compares: no image bytes, no widget ids

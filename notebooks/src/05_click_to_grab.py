@@ -195,42 +195,54 @@ print("misaligned wrist OK: roll 0 fails or shoves the block; the roll from the 
 #
 # `tasks.click_grab(station, (u, v))` and `tasks.click_drop(station, (u, v))` do all of the above from a pixel of the
 # current frame (`tasks.context(station).last.frame`). Clicks off the board, on the robot, on bare board or out of
-# reach raise `tasks.ClickRefused` and nothing moves. (In a live notebook, `click_panel()` below gives u/v boxes and
-# Grab/Drop buttons; clicking on the image itself needs the `ipyevents` package.)
+# reach raise `tasks.ClickRefused` and nothing moves.
+#
+# In a live notebook you click the image itself: `ClickToGrab(station).widget()` shows the current frame
+# (downscaled to $w \times h = 640 \times 360$ px to keep it light) and listens to its clicks with `ipyevents`. The
+# browser reports a click at $(x, y)$ pixels of the *shown* image, measured from its top-left corner, whatever size
+# the page draws it at; the camera pixel (OpenCV: integer = pixel centre) of a $W \times H = 1280 \times 720$ frame is
+# $$u = x\,\frac{W}{w} - \tfrac12,\qquad v = y\,\frac{H}{h} - \tfrac12 .$$
+# The first click grabs the block under it, the next one drops it there; each click prints the world point and what
+# the arm did, or why it refused. Headless (here, and in the checks) the same handler is a plain call with $(u, v)$,
+# or with the event dictionary the browser would send.
+
+# %%
+from armlab.tasks.click_widget import ClickToGrab
+
+panel = ClickToGrab(station)
+panel.widget()
 
 # %%
 target_uv = station.camera.truth.project(np.array([[-200.0, 80.0, 0.0]]))[0]     # a free spot on the board
-dropped = tasks.click_drop(station, target_uv)
-print("dropped the green block at the clicked spot:", dropped, "-> bottom-face centre",
-      green_truth.position - [0, 0, green_truth.edge / 2], "mm")
-try:
-    tasks.click_grab(station, station.camera.truth.project(np.array([[0.0, 20.0, 0.0]]))[0])
-except tasks.ClickRefused as e:
-    print("refused:", e)
+print("the gripper holds the", tasks.context(station).held.color, "block; the next click will", panel.next_action)
+drop = panel.click(target_uv)
+print(drop.message)
+refused = panel.click(station.camera.truth.project(np.array([[0.0, 20.0, 0.0]]))[0])
+print(refused.message)
 
-
-def click_panel(station):
-    """u/v boxes and Grab/Drop buttons for a live session (returns the widget)."""
-    import ipywidgets as w
-
-    u, v = w.BoundedIntText(640, min=0, max=1279, description="u"), w.BoundedIntText(360, min=0, max=719,
-                                                                                     description="v")
-    out = w.Output()
-
-    def run(fn):
-        with out:
-            try:
-                print(fn(station, (u.value, v.value)))
-            except ValueError as e:
-                print("refused:", e)
-
-    grab, drop = w.Button(description="Grab"), w.Button(description="Drop")
-    grab.on_click(lambda _: run(tasks.click_grab))
-    drop.on_click(lambda _: run(tasks.click_drop))
-    return w.VBox([w.HBox([u, v, grab, drop]), out])
-
+# %% [markdown]
+# A click as the browser sends it: `ipyevents` gives the click in the shown image's own pixels (`dataX`, `dataY`)
+# together with where it fell on the page. Here we click the red block's centre, then a spot next to the green one.
 
 # %%
-err = np.abs(green_truth.position - [0, 0, green_truth.edge / 2] - [-200.0, 80.0, 0.0])
-assert dropped and err.max() < 3.0
-print(f"click to drop OK: the block landed {err.max():.1f} mm from the clicked spot")
+red = next(b for b in tasks.look(station).blocks if b.color == "red")
+(W, H), (w, h) = panel.frame_size(), panel.image_size()
+x, y = (np.asarray(red.pixel) + 0.5) * [w / W, h / H]
+event = {"type": "click", "dataX": int(round(x)), "dataY": int(round(y)), "relativeX": round(x, 1),
+         "relativeY": round(y, 1), "boundingRectWidth": w, "boundingRectHeight": h}
+print("event", event)
+grab_event = panel.handle_event(event)
+print(grab_event.message)
+spot = np.array([-120.0, 60.0, 0.0])
+x, y = (station.camera.truth.project(spot[None])[0] + 0.5) * [w / W, h / H]
+drop_event = panel.handle_event({"type": "click", "dataX": int(round(x)), "dataY": int(round(y))})
+print(drop_event.message)
+
+# %%
+green_err = np.abs(green_truth.position - [0, 0, green_truth.edge / 2] - [-200.0, 80.0, 0.0])
+red_truth = next(o for o in station.world.blocks if o.color == "red")
+red_err = np.abs(red_truth.position - [0, 0, red_truth.edge / 2] - spot)
+assert drop.ok and green_err.max() < 3.0 and not refused.ok and not refused.moved
+assert grab_event.ok and drop_event.ok and red_err.max() < 3.0 and panel.next_action == "grab"
+print(f"click to grab/drop OK: the blocks landed {green_err.max():.1f} and {red_err.max():.1f} mm from the clicked "
+      f"spots; the refused click moved nothing")
