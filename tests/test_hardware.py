@@ -10,10 +10,15 @@ from __future__ import annotations
 
 import importlib.machinery
 import importlib.util
+import inspect
+import json
+import os
+import signal
 import subprocess
 import sys
 import types
 import warnings
+from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
@@ -34,6 +39,47 @@ VENDOR_MODULES = ("interbotix_xs_modules", "interbotix_xs_modules.xs_robot", "in
 MOTION_CALLS = ("set_trajectory_time", "set_joint_positions", "robot_write_commands", "go_to_home_pose",
                 "go_to_sleep_pose", "grasp", "release")
 FINGER_LOWER_M, FINGER_UPPER_M = 0.015, 0.037
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# The real Interbotix ROS 2 API: the signatures the fakes must have (copied from Interbotix/interbotix_ros_toolboxes,
+# interbotix_xs_modules/xs_robot/{arm,gripper,core}.py and interbotix_common_modules/common_robot/robot.py)
+# ---------------------------------------------------------------------------------------------------------------
+
+class UpstreamArm:
+    """InterbotixArmXSInterface: the public methods that exist (there is no get_joint_positions)."""
+
+    def set_trajectory_time(self, moving_time=None, accel_time=None): ...
+    def set_joint_positions(self, joint_positions, moving_time=None, accel_time=None, blocking=True): ...
+    def go_to_home_pose(self, moving_time=None, accel_time=None, blocking=True): ...
+    def go_to_sleep_pose(self, moving_time=None, accel_time=None, blocking=True): ...
+    def capture_joint_positions(self): ...
+    def get_joint_commands(self): ...
+
+
+class UpstreamGripper:
+    """InterbotixGripperXSInterface."""
+
+    def grasp(self, delay=1.0): ...
+    def release(self, delay=1.0): ...
+    def set_pressure(self, pressure): ...
+
+
+class UpstreamCore:
+    """InterbotixRobotXSCore."""
+
+    def robot_get_joint_states(self): ...
+    def robot_torque_enable(self, cmd_type, name, enable): ...
+    def robot_reboot_motors(self, cmd_type, name, enable, smart_reboot=False): ...
+    def robot_write_commands(self, group_name, commands): ...
+
+
+def upstream_manipulator(robot_model, group_name="arm", gripper_name="gripper", robot_name=None, moving_time=2.0,
+                         accel_time=0.3, gripper_pressure=0.5, gripper_pressure_lower_limit=150,
+                         gripper_pressure_upper_limit=350, logging_level=None, node_name="robot_manipulation",
+                         args=None): ...
+def upstream_robot_startup(node=None, node_name="interbotix_robot_manipulation", namespace=None): ...
+def upstream_robot_shutdown(node=None): ...
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -65,6 +111,9 @@ class FakeCore:
     def robot_torque_enable(self, cmd_type, name, enable):
         self.world.log.append(("robot_torque_enable", cmd_type, name, bool(enable)))
         self.world.torque = bool(enable)
+
+    def robot_reboot_motors(self, cmd_type, name, enable, smart_reboot=False):
+        self.world.log.append(("robot_reboot_motors", cmd_type, name, bool(enable), bool(smart_reboot)))
 
     def robot_write_commands(self, group_name, commands):
         self.world.log.append(("robot_write_commands", group_name, list(commands)))
@@ -108,10 +157,10 @@ class FakeArmInterface:
             self.world.q = np.array(joint_positions, float)
         return True
 
-    def go_to_home_pose(self, *args, **kwargs):
+    def go_to_home_pose(self, moving_time=None, accel_time=None, blocking=True):
         self.world.log.append(("go_to_home_pose",))
 
-    def go_to_sleep_pose(self, *args, **kwargs):
+    def go_to_sleep_pose(self, moving_time=None, accel_time=None, blocking=True):
         self.world.log.append(("go_to_sleep_pose",))
 
     def capture_joint_positions(self):
@@ -139,9 +188,25 @@ class FakeGripper:
         self.world.log.append(("release", delay))
         self.world.finger_m = FINGER_UPPER_M
 
+    def set_pressure(self, pressure):
+        self.world.log.append(("set_pressure", pressure))
+
+
+class SwappedGripper(FakeGripper):
+    """A 2022 release of xs_robot/gripper.py: grasp() drives the fingers open, release() closes them."""
+
+    def grasp(self, delay=1.0):
+        self.world.log.append(("grasp", delay))
+        self.world.finger_m = FINGER_UPPER_M
+
+    def release(self, delay=1.0):
+        self.world.log.append(("release", delay))
+        self.world.finger_m = FINGER_LOWER_M - 0.0004
+
 
 class FakeManipulator:
     def __init__(self, world: FakeWorld, **kwargs):
+        inspect.signature(upstream_manipulator).bind(**kwargs)      # TypeError for an argument the API lacks
         world.log.append(("InterbotixManipulatorXS", kwargs))
         self.core = FakeCore(world)
         self.arm = FakeArmInterface(world, kwargs.get("moving_time", 2.0), kwargs.get("accel_time", 0.3))
@@ -253,23 +318,37 @@ def _module(name: str, **attrs) -> types.ModuleType:
     return module
 
 
-@pytest.fixture
-def vendors(monkeypatch):
-    """Fake vendor modules in sys.modules; returns (log, world)."""
-    log: list = []
+def install_fakes(setitem, log: list) -> SimpleNamespace:
+    """Put fake vendor modules into sys.modules through setitem(name, module); returns (log, world)."""
     world = FakeWorld(log)
-    robot_module = _module("interbotix_common_modules.common_robot.robot",
-                           robot_startup=lambda *a, **k: log.append(("robot_startup",)),
-                           robot_shutdown=lambda *a, **k: log.append(("robot_shutdown",)))
+
+    def robot_startup(node=None, node_name="interbotix_robot_manipulation", namespace=None):
+        log.append(("robot_startup",))
+
+    def robot_shutdown(node=None):
+        log.append(("robot_shutdown",))
+
+    robot_module = _module("interbotix_common_modules.common_robot.robot", robot_startup=robot_startup,
+                           robot_shutdown=robot_shutdown)
     arm_module = _module("interbotix_xs_modules.xs_robot.arm",
                          InterbotixManipulatorXS=lambda **kwargs: FakeManipulator(world, **kwargs))
     for module in (_module("interbotix_xs_modules"), _module("interbotix_xs_modules.xs_robot"), arm_module,
                    _module("interbotix_common_modules"), _module("interbotix_common_modules.common_robot"),
                    robot_module, make_fake_rs(log)):
-        monkeypatch.setitem(sys.modules, module.__name__, module)
+        setitem(module.__name__, module)
+    return SimpleNamespace(log=log, world=world)
+
+
+@pytest.fixture
+def vendors(monkeypatch):
+    """Fake vendor modules in sys.modules; returns (log, world). A station a test leaves open does not leave its
+    SIGTERM handler behind."""
+    fakes = install_fakes(lambda name, module: monkeypatch.setitem(sys.modules, name, module), [])
     monkeypatch.setattr(armlab.hardware, "atexit", SimpleNamespace(register=lambda f: None,
                                                                    unregister=lambda f: None))
-    return SimpleNamespace(log=log, world=world)
+    sigterm = signal.getsignal(signal.SIGTERM)
+    yield fakes
+    signal.signal(signal.SIGTERM, sigterm)
 
 
 def calls(log, *names):
@@ -350,6 +429,36 @@ def test_ros1_layout_is_refused_with_its_own_message(monkeypatch):
     monkeypatch.setitem(sys.modules, "interbotix_common_modules", None)
     with pytest.raises(HardwareUnavailable, match="ROS 1"):
         interbotix.import_interbotix()
+
+
+def test_an_old_ros2_toolbox_without_robot_startup_is_refused_with_its_own_message(monkeypatch):
+    for name in ("interbotix_xs_modules", "interbotix_xs_modules.xs_robot", "interbotix_xs_modules.xs_robot.arm"):
+        monkeypatch.setitem(sys.modules, name, _module(name))
+    monkeypatch.setitem(sys.modules, "interbotix_xs_modules.arm", None)
+    monkeypatch.setitem(sys.modules, "interbotix_common_modules", None)
+    with pytest.raises(HardwareUnavailable, match="robot_startup/robot_shutdown, added to interbotix_ros_toolboxes"):
+        interbotix.import_interbotix()
+
+
+def _public_methods(cls) -> dict:
+    return {name: inspect.signature(f) for name, f in inspect.getmembers(cls, inspect.isfunction)
+            if not name.startswith("_")}
+
+
+@pytest.mark.parametrize("fake, upstream", [(FakeArmInterface, UpstreamArm), (FakeGripper, UpstreamGripper),
+                                            (SwappedGripper, UpstreamGripper), (FakeCore, UpstreamCore)])
+def test_fakes_have_exactly_the_upstream_methods_and_signatures(fake, upstream):
+    # the backend only ever talks to these fakes, so a call to a method the ROS 2 API lacks (get_joint_positions)
+    # or with an argument it does not take fails in the tests
+    assert _public_methods(fake) == _public_methods(upstream)
+
+
+def test_module_functions_have_the_upstream_signatures(vendors):
+    robot = sys.modules["interbotix_common_modules.common_robot.robot"]
+    assert inspect.signature(robot.robot_startup) == inspect.signature(upstream_robot_startup)
+    assert inspect.signature(robot.robot_shutdown) == inspect.signature(upstream_robot_shutdown)
+    with pytest.raises(TypeError, match="get_joint_positions"):
+        FakeManipulator(vendors.world, robot_model="rx200", get_joint_positions=True)
 
 
 def test_connect_passes_the_manufacturer_arguments_and_starts_up(vendors):
@@ -503,6 +612,29 @@ def test_close_gripper_reports_holding_from_the_finger_position(arm, vendors, wi
     assert arm.finger_position_mm() == pytest.approx(37.0)
 
 
+def test_a_gripper_that_does_not_close_is_an_error_not_a_held_block(arm, vendors):
+    arm._bot.gripper = SwappedGripper(vendors.world)          # grasp() opens: the fingers stay fully open
+    vendors.world.object_width_mm = 38.0
+    with pytest.raises(RuntimeError, match=r"did not close the gripper.*grasp\(\) and release\(\) swapped"):
+        arm.close_gripper()
+    assert calls(vendors.log, "grasp") == [("grasp", 1.0)]
+
+
+def test_reboot_motors_reboots_the_faulty_arm_servos_and_holds(arm, vendors):
+    arm.move_to(Q_READY)
+    vendors.log.clear()
+    arm.reboot_motors()
+    assert calls(vendors.log, "robot_reboot_motors", "robot_write_commands") == [
+        ("robot_reboot_motors", "group", "arm", True, True), ("robot_write_commands", "arm", list(Q_READY))]
+    arm.reboot_motors(gripper=True)
+    assert ("robot_reboot_motors", "single", "gripper", True, False) in vendors.log
+    arm.emergency_stop()
+    vendors.log.clear()
+    with pytest.raises(EmergencyStopped):
+        arm.reboot_motors()
+    assert vendors.log == []
+
+
 # ---------------------------------------------------------------------------------------------------------------
 # Emergency stop, teaching
 # ---------------------------------------------------------------------------------------------------------------
@@ -616,6 +748,84 @@ def test_a_refused_sleep_still_shuts_down_and_says_so(vendors):
     with pytest.raises(RuntimeError, match="could not go to its sleep pose"):
         st.close()
     assert calls(vendors.log, "robot_shutdown") == [("robot_shutdown",)]
+
+
+SIGTERM_CHILD = r'''
+import json, sys, time
+import numpy as np
+sys.path.insert(0, sys.argv[2])
+import test_hardware as th
+
+
+class FileLog(list):
+    """Every recorded call also goes to a file at once: the process is killed before it could write it later."""
+
+    def __init__(self, path):
+        super().__init__()
+        self.file = open(path, "w")
+
+    def append(self, call):
+        super().append(call)
+        self.file.write(json.dumps(call, default=lambda o: np.asarray(o).tolist()) + "\n")
+        self.file.flush()
+
+
+th.install_fakes(sys.modules.__setitem__, FileLog(sys.argv[1]))
+from armlab import make_station
+station = make_station("real", warmup_frames=0)
+station.arm.move_to(th.Q_READY)
+print("ready", flush=True)
+while True:
+    time.sleep(0.05)
+'''
+
+
+def test_sigterm_puts_the_arm_to_sleep_before_shutdown_then_ends_the_process(tmp_path):
+    log_file = tmp_path / "calls.jsonl"
+    proc = subprocess.Popen([sys.executable, "-c", SIGTERM_CHILD, str(log_file), str(Path(__file__).parent)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        ready = proc.stdout.readline()
+        assert ready == "ready\n", proc.stderr.read() if proc.poll() is not None else ready
+        proc.send_signal(signal.SIGTERM)                  # `kill <pid>`
+        proc.wait(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    assert proc.returncode == -signal.SIGTERM, proc.stderr.read()       # it still ends as a killed process
+    log = [tuple(c) for c in map(json.loads, log_file.read_text().splitlines())]
+    names = [c[0] for c in log]
+    assert names.count("robot_shutdown") == 1 and names.count("pipeline.stop") == 1 and "driver_refused" not in names
+    _sleep_then_shutdown(log)
+    assert names[-2:] == ["robot_shutdown", "pipeline.stop"]
+    np.testing.assert_allclose(log[names.index("set_joint_positions")][1], Q_READY)   # the move before the kill
+
+
+def test_sigterm_handler_chains_to_the_previous_one_and_is_restored_on_close(vendors):
+    seen = []
+
+    def previous_handler(signum, frame):
+        seen.append(signum)
+
+    before = signal.signal(signal.SIGTERM, previous_handler)
+    try:
+        with make_station("real", warmup_frames=0) as st:
+            assert signal.getsignal(signal.SIGTERM) is not previous_handler
+            st.arm.move_to(Q_READY)
+            os.kill(os.getpid(), signal.SIGTERM)
+            assert seen == [signal.SIGTERM]               # after the station closed: sleep, shutdown, camera off
+            _sleep_then_shutdown(vendors.log)
+            assert signal.getsignal(signal.SIGTERM) is previous_handler
+        assert len(calls(vendors.log, "robot_shutdown")) == 1               # leaving the block adds nothing
+
+        st = make_station("real", camera=False)
+        st.close()                                        # a normal close restores the previous handler too
+        assert signal.getsignal(signal.SIGTERM) is previous_handler
+        with make_station("real", arm=False, warmup_frames=0):
+            assert signal.getsignal(signal.SIGTERM) is previous_handler     # no arm: nothing to put to sleep
+    finally:
+        signal.signal(signal.SIGTERM, before)
 
 
 # ---------------------------------------------------------------------------------------------------------------

@@ -4,8 +4,9 @@ Nothing here imports a vendor package at import time: `import armlab.hardware` w
 modules (interbotix_xs_modules, interbotix_common_modules, pyrealsense2) are imported only when
 `make_station("real")` connects, and a missing one raises HardwareUnavailable saying what to install.
 
-Closing the station (Station.close(), leaving a `with` block, normally or by an exception, or interpreter exit
-through atexit) puts the arm in its sleep pose BEFORE robot_shutdown(), then stops the camera.
+Closing the station (Station.close(), leaving a `with` block, normally or by an exception, interpreter exit
+through atexit, or a SIGTERM to the process: armlab.hardware.sigterm) puts the arm in its sleep pose BEFORE
+robot_shutdown(), then stops the camera. The SIGTERM handler exists only while a real station with an arm is open.
 """
 
 from __future__ import annotations
@@ -40,6 +41,7 @@ def make_real_station(arm: bool = True, camera: bool = True, robot_model: str = 
     anything is connected.
     """
     from armlab.hardware import interbotix, realsense
+    from armlab.hardware.sigterm import install_sigterm
 
     if robot_model != "rx200":
         raise ValueError(f"robot_model {robot_model!r} is not supported: armlab models the 'rx200' only")
@@ -71,9 +73,11 @@ def make_real_station(arm: bool = True, camera: bool = True, robot_model: str = 
             raise
 
     station = Station("real", real_arm, cam)
+    restore_sigterm = install_sigterm(station.close) if real_arm is not None else (lambda: None)
 
     def close() -> None:
         atexit.unregister(station.close)
+        restore_sigterm()
         try:
             if arm_closer is not None:
                 arm_closer()          # sleep pose, then robot_shutdown()

@@ -20,10 +20,26 @@ Safety, in the order a move is handled:
 Holding detection: after grasp(), the measured left finger position (the gripper's joint state 'left_finger',
 metres from the gripper centre) is compared with the driver's fully-closed limit (gripper.left_finger_lower_limit):
 the fingers stopped more than HELD_THRESHOLD_MM before fully closed means something is held. The driver stops the
-motor when the finger reaches that limit, so an empty close reads at (or, by overshoot, just below) it.
+motor when the finger reaches that limit, so an empty close reads at (or, by overshoot, just below) it. Fingers still
+within HELD_THRESHOLD_MM of fully open (gripper.left_finger_upper_limit) after grasp() mean the gripper did not close
+at all (no power, wrong operating mode, or a 2022 release of xs_robot/gripper.py, whose grasp() and release() are
+swapped): close_gripper() raises RuntimeError saying so rather than report a block that is not there.
 
-Joint states are read with core.robot_get_joint_states() (by joint name), which every ROS 2 release of the toolbox
-has. Only ROS 2 is supported: the ROS 1 API (bot.dxl, no robot_startup) is detected and refused with a clear message.
+The vendor calls, checked against Interbotix/interbotix_ros_toolboxes (ROS 2: xs_robot/arm.py, core.py, gripper.py,
+interbotix_common_modules/common_robot/robot.py); tests/test_hardware.py holds their signatures and checks every
+call against them:
+    InterbotixManipulatorXS(robot_model, group_name, gripper_name, robot_name, moving_time, accel_time,
+                            gripper_pressure); robot_startup(); robot_shutdown()
+    bot.arm.set_trajectory_time(moving_time, accel_time); bot.arm.set_joint_positions(joint_positions, moving_time,
+        accel_time, blocking) -> bool; bot.arm.capture_joint_positions(); bot.arm.get_joint_commands();
+        bot.arm.group_info.joint_names
+    bot.gripper.grasp(delay); bot.gripper.release(delay); bot.gripper.left_finger_lower_limit / _upper_limit (m)
+    bot.core.robot_get_joint_states() -> JointState; bot.core.robot_torque_enable(cmd_type, name, enable);
+        bot.core.robot_write_commands(group_name, commands); bot.core.robot_reboot_motors(cmd_type, name, enable,
+        smart_reboot)
+There is no arm.get_joint_positions() in the ROS 2 API: measured joints come from core.robot_get_joint_states()
+(by joint name). Only ROS 2 is supported: the ROS 1 API (bot.dxl, no robot_startup) is detected and refused with a
+clear message, and so is a ROS 2 toolbox older than robot_startup()/robot_shutdown() (2024).
 Units: rad, s, mm in every public method.
 """
 
@@ -57,6 +73,9 @@ INSTALL_HINT = ("the Interbotix ROS 2 Python API (interbotix_xs_modules.xs_robot
                 "-d humble), then `source /opt/ros/humble/setup.bash && source ~/interbotix_ws/install/setup.bash` "
                 "in the shell that starts Python, and launch the driver: `ros2 launch interbotix_xsarm_control "
                 "xsarm_control.launch.py robot_model:=rx200`")
+OLD_ROS2_HINT = ("found interbotix_xs_modules.xs_robot but not interbotix_common_modules.common_robot.robot "
+                 "(robot_startup/robot_shutdown, added to interbotix_ros_toolboxes in 2024): update the toolbox "
+                 "(git pull in ~/interbotix_ws/src/interbotix_ros_toolboxes, then colcon build)")
 ROS1_HINT = ("found the ROS 1 Interbotix API (interbotix_xs_modules.arm, bot.dxl, no robot_startup), which armlab "
              "does not support: install the ROS 2 packages (Humble or later) and source their setup.bash instead")
 
@@ -79,6 +98,8 @@ def import_interbotix() -> tuple[Any, Callable[..., None], Callable[..., None]]:
     except ImportError as e:
         if _has_module("interbotix_xs_modules.arm"):
             raise HardwareUnavailable(ROS1_HINT) from e
+        if _has_module("interbotix_xs_modules.xs_robot.arm"):
+            raise HardwareUnavailable(f"{OLD_ROS2_HINT} ({e})") from e
         raise HardwareUnavailable(f"{INSTALL_HINT} ({e})") from e
     return InterbotixManipulatorXS, robot_startup, robot_shutdown
 
@@ -109,6 +130,7 @@ class RealArm:
         self.grasp_delay_s = float(grasp_delay_s)
         self.held_threshold_mm = float(held_threshold_mm)
         self.finger_closed_mm = 1000.0 * float(bot.gripper.left_finger_lower_limit)
+        self.finger_open_mm = 1000.0 * float(bot.gripper.left_finger_upper_limit)
         self._clock, self._sleep = clock, sleep
         self._move_ends = clock()
         self._estopped = False
@@ -202,11 +224,21 @@ class RealArm:
         self._bot.gripper.release(self.grasp_delay_s)
 
     def close_gripper(self) -> bool:
-        """Close the gripper; True when the fingers stopped more than held_threshold_mm before fully closed."""
+        """Close the gripper; True when the fingers stopped more than held_threshold_mm before fully closed.
+
+        Raises RuntimeError when the fingers are still (nearly) fully open afterwards: the gripper did not close.
+        """
         if self._estopped:
             raise EmergencyStopped("the arm is emergency-stopped: call reset() before using the gripper")
         self._bot.gripper.grasp(self.grasp_delay_s)
-        return self.finger_position_mm() > self.finger_closed_mm + self.held_threshold_mm
+        finger = self.finger_position_mm()
+        if finger >= self.finger_open_mm - self.held_threshold_mm:
+            raise RuntimeError(f"gripper.grasp() did not close the gripper: the left finger is at {finger:.1f} mm, "
+                               f"fully open is {self.finger_open_mm:.1f} mm. Check that the gripper is powered and "
+                               "in 'pwm' or 'current' mode; 2022 releases of interbotix_xs_modules "
+                               "(xs_robot/gripper.py) have grasp() and release() swapped: update "
+                               "interbotix_ros_toolboxes")
+        return finger > self.finger_closed_mm + self.held_threshold_mm
 
     # --- torque, stop, reset -------------------------------------------------------------------------------------
     def _hold(self) -> None:
@@ -236,6 +268,20 @@ class RealArm:
         if self._torque_on:
             self._hold()
         self._move_ends = self._clock()
+
+    def reboot_motors(self, gripper: bool = False) -> None:
+        """Reboot the arm's servos that are in an error state (e.g. an overload after a collision: their LEDs blink
+        and they stop answering), torque them on again and hold the measured position. gripper=True also reboots
+        the gripper's servo (it lets go of a held block while it restarts).
+
+        Refused while emergency-stopped (reset() first) or torqued off for teaching.
+        """
+        self._require_motion_allowed()
+        core = self._bot.core
+        core.robot_reboot_motors("group", GROUP, True, smart_reboot=True)
+        if gripper:
+            core.robot_reboot_motors("single", "gripper", True)
+        self._hold()
 
     def reset(self) -> None:
         """Leave the emergency stop: the arm stays where it is, torque on, the driver's command re-synchronised."""
