@@ -25,9 +25,9 @@ import numpy as np  # noqa: E402
 from armlab import calibration, make_station  # noqa: E402
 from armlab.camera import Camera  # noqa: E402
 from armlab.detection import detect_objects, hsv_table_classify  # noqa: E402
-from armlab.detection.evaluate import Score, case_specs, corrected_depth, score_frame, sim_case  # noqa: E402
 from armlab.lab import lab_config  # noqa: E402
 from armlab.sim.checkerboard import load_dataset  # noqa: E402
+from armlab.sim.scoring import Score, case_specs, corrected_depth, score_frame, sim_case  # noqa: E402
 
 cv2.setNumThreads(1)
 

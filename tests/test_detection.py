@@ -21,8 +21,8 @@ from armlab.detection import (
     hsv_table_classify,
     stack_levels,
 )
-from armlab.detection.evaluate import Score, corrected_depth, score_frame, sim_case, truth_faces, yaw_error
 from armlab.detection.heightmap import pixels_to_plane
+from armlab.sim.scoring import Score, corrected_depth, score_frame, sim_case, truth_faces, yaw_error
 
 
 @pytest.fixture(scope="module")

@@ -110,11 +110,12 @@ def stack_levels(top_z: float, edge_mm: float, edges=None, max_levels: int = 6) 
     return best[1]
 
 
-def _stack_heights(max_levels: int = 6) -> np.ndarray:
-    """Every height (mm) a top face can have: sums of 1..max_levels of the lab's block edges."""
+def _stack_heights(max_levels: int = 6, include_zero: bool = False) -> np.ndarray:
+    """Every height (mm) a top face can have: sums of 1..max_levels of the lab's block edges (and 0 if asked: the
+    heights a block can stand on)."""
     a, b = lab_config().block_edges_mm.values()
     return np.array(sorted({i * a + j * b for i in range(max_levels + 1) for j in range(max_levels + 1 - i)
-                            if i + j > 0}))
+                            if i + j > 0 or include_zero}))
 
 
 class _Frame:
@@ -147,7 +148,7 @@ def _board_white_balance(rgb: np.ndarray, height_small: np.ndarray, valid: np.nd
         return np.ones(3)
     # the printed grid and tags are dark: use the bright majority of the board
     total = pixels.sum(1)
-    bright = pixels[total > np.percentile(total, 40)]
+    bright = pixels[total >= np.percentile(total, 40)]
     return white_balance_gains(bright.mean(axis=0))
 
 
@@ -155,7 +156,8 @@ def _refine_by_colour(face: Face, f: _Frame, pad: int = 6):
     """The face's full-resolution pixels by colour. The top face is evenly lit and brighter than the shaded sides, so
     pixels near the depth-seeded face whose colour matches the face's core colour, and that are not clearly below
     the face, form the face. Returns the refined mask (uint8), the patch origin (x0, y0), the core's mean colour,
-    and the occluders of the patch (bool): pixels clearly above the face (what stands on it, or the arm)."""
+    the occluders of the patch (bool): pixels clearly above the face (what stands on it, or the arm), and the
+    patch's colour distance to the core colour (float32, in core spreads: small on the face, large off it)."""
     s = f.step
     x, y, w, h = (v * s for v in face.bbox)
     H, W = f.depth.shape
@@ -170,47 +172,55 @@ def _refine_by_colour(face: Face, f: _Frame, pad: int = 6):
     colours = patch[core]
     mean = colours.mean(axis=0)
     spread = np.maximum(colours.std(axis=0), 4.0)
-    distance = np.sqrt((((patch - mean) / spread) ** 2).sum(-1))
+    distance = np.sqrt((((patch - mean) / spread) ** 2).sum(-1)).astype(np.float32)
     height = f.depth[y0:y1, x0:x1] * f.kz[y0:y1, x0:x1] + f.tz
+    no_return = ~np.isfinite(height)
     height = cv2.medianBlur(np.nan_to_num(height, nan=face.height_mm), 5)   # no return: neither below nor above
     not_below = height > face.height_mm - 10.0
     occluder = height > face.height_mm + 8.0
     if f.arm_small is not None:
         arm = f.arm_small[(y0 // s):(y1 + s - 1) // s, (x0 // s):(x1 + s - 1) // s]
         arm = np.repeat(np.repeat(arm, s, axis=0), s, axis=1)[y0 % s:, x0 % s:][:y1 - y0, :x1 - x0]
+        # the arm's dark grey is never the face; it hides the face where it is above it (occluder, from the
+        # heights) or where it gave no return (unless the pixel has the face's colour: a dark face's dropouts)
         arm &= _arm_coloured(f.rgb[y0:y1, x0:x1])
-        occluder |= arm
         not_below &= ~arm
+        occluder |= arm & no_return & (distance >= 3.5)
     candidate = ((distance < 3.5) & not_below).astype(np.uint8)
     n, labels = cv2.connectedComponents(candidate, connectivity=4)
     if n <= 1:
-        return seed, (x0, y0), mean, occluder
+        return seed, (x0, y0), mean, occluder, distance
     overlap = np.bincount(labels[seed.astype(bool)], minlength=n)
     overlap[0] = 0
     mask = (labels == int(np.argmax(overlap))).astype(np.uint8)
-    return cv2.morphologyEx(mask, cv2.MORPH_CLOSE, np.ones((3, 3), np.uint8)), (x0, y0), mean, occluder
+    return cv2.morphologyEx(mask, cv2.MORPH_CLOSE, np.ones((3, 3), np.uint8)), (x0, y0), mean, occluder, distance
 
 
-def _edge_direction(points: np.ndarray, theta: float, span: int = 4) -> float:
-    """The square's yaw (rad) from its whole outline (N, 2) mm: the mean of the outline's chord directions with the
+def _edge_direction(points: np.ndarray, theta: float, span: int = 4, free: np.ndarray | None = None) -> float:
+    """The square's yaw (rad) from its outline (N, 2) mm: the mean of the outline's chord directions with the
     angles multiplied by four (a square's four sides then agree), weighted by chord length; chords around the
-    corners (more than 20 deg off `theta`, the minimum-area rectangle's angle) are left out."""
+    corners (more than 20 deg off `theta`, the minimum-area rectangle's angle) are left out, and so are chords with
+    an end that is not `free` (N,) bool (next to an occluder), when given."""
     if len(points) < 4 * span:
         return theta
     d = np.roll(points, -span, axis=0) - points
     a = 4 * np.arctan2(d[:, 1], d[:, 0])
     w = np.hypot(d[:, 0], d[:, 1]) * (np.cos(a - 4 * theta) > np.cos(np.radians(80)))
+    if free is not None:
+        w = w * (free & np.roll(free, -span))
     if w.sum() <= 0:
         return theta
     return float(np.arctan2((w * np.sin(a)).sum(), (w * np.cos(a)).sum()) / 4)
 
 
-def _fit_square(points: np.ndarray, blocked: np.ndarray, pixel_mm: float, edge_hint: float):
+def _fit_square(points: np.ndarray, blocked: np.ndarray, pixel_mm: float, edge_hint: float | None,
+                edges=(25.0, 38.0)):
     """Centre (2,), side lengths (2,) mm and angle (rad) of the rectangle of a face's world outline (N, 2) mm.
 
     Outline points next to an occluder (`blocked`) are not the face's edge: when there are any, the rectangle's
     orientation comes from the free points, and along each side direction the centre is set from the edges the
-    free points show (both: their middle; one: half an edge, `edge_hint`, inside it)."""
+    free points show (both: their middle; one: half an edge, `edge_hint`, inside it). With no hint (None), the edge
+    is the lab edge (`edges`, mm) nearest to a side length the free points show whole (else the largest)."""
     if blocked.sum() > 0.8 * len(points) or len(points) - blocked.sum() < 12:
         blocked = np.zeros(len(points), bool)   # too little free outline to tell: measure the whole outline
     free = points[~blocked] if blocked.any() else points
@@ -224,24 +234,153 @@ def _fit_square(points: np.ndarray, blocked: np.ndarray, pixel_mm: float, edge_h
     local = (free - [cx, cy]) @ axes.T
     centre_local = np.zeros(2)
     complete = True
+    lo, hi = local.min(axis=0), local.max(axis=0)
+    n_lo, n_hi = np.sum(local < lo + 1.5, axis=0), np.sum(local > hi - 1.5, axis=0)
+    both = (np.minimum(n_lo, n_hi) >= 0.4 * np.maximum(n_lo, n_hi)) & (hi - lo > 0.85 * min(edges))
+    if edge_hint is None and both.any():   # a side seen whole: the face's edge is the lab edge nearest to it
+        seen = float(np.max((hi - lo)[both])) + pixel_mm
+        edge_hint = min(edges, key=lambda e: abs(e - seen))
+    elif edge_hint is None:
+        edge_hint = max(edges)
     for i in range(2):
-        c = local[:, i]
-        lo, hi = c.min(), c.max()
-        n_lo, n_hi = np.sum(c < lo + 1.5), np.sum(c > hi - 1.5)
-        both = min(n_lo, n_hi) >= 0.4 * max(n_lo, n_hi) and hi - lo > 0.85 * edge_hint
-        if both:
-            centre_local[i] = (lo + hi) / 2
+        if both[i] and hi[i] - lo[i] > 0.85 * edge_hint:
+            centre_local[i] = (lo[i] + hi[i]) / 2
         else:
             complete = False
-            centre_local[i] = lo + (edge_hint - pixel_mm) / 2 if n_lo >= n_hi else hi - (edge_hint - pixel_mm) / 2
+            centre_local[i] = (lo[i] + (edge_hint - pixel_mm) / 2 if n_lo[i] >= n_hi[i]
+                               else hi[i] - (edge_hint - pixel_mm) / 2)
             sides[i] = edge_hint
     return np.array([cx, cy]) + centre_local @ axes, sides, theta, complete
+
+
+EDGE_SEARCH_MM = 3.5    # the side refinement looks this far inside and outside each fitted side
+EDGE_STEP_MM = 0.5      # sampling step across a side
+EDGE_SAMPLES = 21       # profiles along each side (its middle 80 %: corners are rounded by blur)
+EDGE_FIT_TOL = 0.6      # edge points farther than this (mm) from a side's first line fit are left out of the refit
+EDGE_LEVEL = 3.5        # the face ends where the colour distance to its core colour first reaches this (core spreads)
+_PROFILE_T = np.linspace(-0.8, 0.8, EDGE_SAMPLES)
+_PROFILE_S = np.arange(-EDGE_SEARCH_MM, EDGE_SEARCH_MM + 1e-9, EDGE_STEP_MM)
+
+
+def _plane_homography(camera: Camera, centre, z: float, reach: float) -> np.ndarray:
+    """3x3 homography from world (x, y) on the plane z (mm) to pixels, exact at four points `reach` mm around
+    `centre`: the pinhole part of a plane's image is a homography, and the lens distortion over a block's few
+    centimetres is smooth enough that the four-point fit stays within a hundredth of a pixel. One projection of four
+    points instead of one per sample."""
+    square = np.asarray(centre, float) + reach * np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]], float)
+    uv = camera.project(np.column_stack([square, np.full(4, z)]))
+    return cv2.getPerspectiveTransform(square.astype(np.float32), uv.astype(np.float32))
+
+
+def _side_profiles(f: _Frame, z: float, centre, theta: float, sides, feature, blocked, origin):
+    """Colour-distance profiles across the four sides of a fitted square on the plane z (mm).
+
+    Side k has the outward normal at angle theta + k pi/2 and the tangent that normal turned +90 deg; profiles are
+    taken at EDGE_SAMPLES positions t (mm, along the tangent from the side's middle) and offsets s (mm, along the
+    normal from the fitted side). Returns t (4, M), s (K,), profiles (4, M, K) (NaN where a sample is off the patch
+    or next to an occluder)."""
+    half = np.asarray(sides, float) / 2
+    ang = theta + np.arange(4) * (np.pi / 2)
+    normal = np.stack([np.cos(ang), np.sin(ang)], axis=1)
+    tangent = np.stack([-normal[:, 1], normal[:, 0]], axis=1)
+    t = _PROFILE_T[None] * half[[1, 0, 1, 0]][:, None]
+    s = _PROFILE_S
+    xy = (np.asarray(centre)[None, None, None] + (half[[0, 1, 0, 1]][:, None, None, None] + s[None, None, :, None])
+          * normal[:, None, None] + t[:, :, None, None] * tangent[:, None, None])
+    H = _plane_homography(f.camera, centre, z, float(half.max()) + EDGE_SEARCH_MM)
+    H[:2] -= np.outer(origin, H[2])                       # pixels relative to the patch origin
+    w = xy @ H[:2, :2].T + H[:2, 2]
+    d = xy @ H[2, :2] + H[2, 2]
+    mx = (w[..., 0] / d).astype(np.float32).reshape(-1, len(s))
+    my = (w[..., 1] / d).astype(np.float32).reshape(-1, len(s))
+    prof = cv2.remap(feature, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=np.nan)
+    hidden = cv2.remap(blocked.astype(np.uint8), mx, my, cv2.INTER_NEAREST, borderMode=cv2.BORDER_CONSTANT,
+                       borderValue=1)
+    prof[hidden > 0] = np.nan
+    return t, s, prof.reshape(4, len(t[0]), len(s))
+
+
+def _line_fits(t: np.ndarray, y: np.ndarray, w: np.ndarray):
+    """Least-squares lines y = a + b t through the rows of t, y (S, M) using the points where w (S, M) bool: slopes b
+    (S,), intercepts a (S,), point counts n (S,), spread of the used t (S,) and sum of squared t deviations (S,)."""
+    n = w.sum(axis=1)
+    nz = np.maximum(n, 1)
+    tm = np.where(w, t, 0.0).sum(axis=1) / nz
+    ym = np.where(w, y, 0.0).sum(axis=1) / nz
+    dt = np.where(w, t - tm[:, None], 0.0)
+    sxx = (dt * dt).sum(axis=1)
+    b = (dt * np.where(w, y - ym[:, None], 0.0)).sum(axis=1) / np.maximum(sxx, 1e-9)
+    spread = np.where(w, t, -np.inf).max(axis=1) - np.where(w, t, np.inf).min(axis=1)
+    return b, ym - b * tm, n, np.where(n > 0, spread, 0.0), sxx
+
+
+def _edge_offsets(prof: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Where the face ends along each profile (..., K) sampled at offsets s (K,) mm: the first sample whose colour
+    distance reaches EDGE_LEVEL finds the edge, which is then placed half-way between the face's level (inside) and
+    the level just beyond (within 1.5 mm), linearly interpolated: the middle of a blurred step, whatever lies beyond
+    it (board, grid line, the face's own shaded side). Returns the offsets (...) mm and whether each was found."""
+    finite = np.isfinite(prof).all(axis=-1)
+    p = np.where(finite[..., None], prof, 0.0)
+    above = p >= EDGE_LEVEL
+    k = above.argmax(axis=-1)
+    ok = finite & (k > 0)
+    j = np.arange(p.shape[-1])
+    reach = int(round(1.5 / EDGE_STEP_MM))
+    inside = np.where(j < k[..., None], p, np.inf).min(axis=-1)
+    beyond = np.where((j >= k[..., None]) & (j <= k[..., None] + reach), p, -np.inf).max(axis=-1)
+    with np.errstate(invalid="ignore"):
+        half = np.where(ok, 0.5 * (inside + beyond), EDGE_LEVEL)
+    m = np.maximum((p >= half[..., None]).argmax(axis=-1), 1)
+    p0 = np.take_along_axis(p, (m - 1)[..., None], axis=-1)[..., 0]
+    p1 = np.take_along_axis(p, m[..., None], axis=-1)[..., 0]
+    frac = np.clip((half - p0) / np.where(p1 > p0, p1 - p0, 1.0), 0.0, 1.0)
+    return s[0] + EDGE_STEP_MM * (m - 1 + frac), ok
+
+
+def _refine_yaw(f: _Frame, z: float, centre, theta: float, sides, feature, blocked, origin,
+                iterations: int = 2) -> float:
+    """The square's yaw (rad) refined on the full-resolution image edges of its top face.
+
+    Across each side the edge is found by _edge_offsets; each side's edge points get a line fit s = a + b t (points
+    more than EDGE_FIT_TOL off the first fit dropped, then refitted), whose slope says how far the side is turned: a
+    square turned by d (counterclockwise) puts its side at s = -d t. The sides' turns are averaged with the inverse
+    variance of their slopes, so sharp, long, unhidden sides count most and sides hidden by occluders (`blocked`) not
+    at all. Keeps `theta` when no side shows a usable edge, or only one side whose own side face is in view beyond
+    it (a softer edge than a silhouette against the board: alone it is not trusted)."""
+    for _ in range(iterations):
+        t, s, prof = _side_profiles(f, z, centre, theta, sides, feature, blocked, origin)
+        edge, ok = _edge_offsets(prof, s)
+        ang = theta + np.arange(4) * (np.pi / 2)
+        normal = np.stack([np.cos(ang), np.sin(ang)], axis=1)
+        mid = np.asarray(centre) + normal * np.asarray(sides, float)[[0, 1, 0, 1], None] / 2
+        sees_side = np.einsum("ij,ij->i", normal, f.camera.position[:2] - mid) > 0
+        b, a, _, _, _ = _line_fits(t, edge, ok)
+        r = edge - (a[:, None] + b[:, None] * t)
+        use = ok & (np.abs(r) <= EDGE_FIT_TOL)
+        b, a, n, spread, sxx = _line_fits(t, edge, use)
+        good = (n >= 5) & (spread >= 4.0)
+        if not good.any() or (good.sum() == 1 and (sees_side[good][0] or n[good][0] < 8)):
+            return theta
+        r = np.where(use, edge - (a[:, None] + b[:, None] * t), 0.0)
+        sigma = np.maximum(np.sqrt((r * r).sum(axis=1) / np.maximum(n - 2, 1)), 0.1)
+        turns, weights = -np.arctan(b[good]), (sxx / sigma ** 2)[good]
+        if len(turns) > 2:
+            order = np.sort(turns)
+            agree = np.abs(turns - 0.5 * (order[(len(order) - 1) // 2] + order[len(order) // 2])) < np.radians(3.0)
+            turns, weights = turns[agree], weights[agree]
+        if not len(turns):
+            return theta
+        turn = float(np.sum(turns * weights) / np.sum(weights))
+        theta += turn
+        if abs(turn) < np.radians(0.5):   # small enough for the sides' linear model: no need to look again
+            break
+    return theta
 
 
 def _describe(face: Face, f: _Frame, settings: DetectionSettings, color_model: ColorModel, gains: np.ndarray):
     """The Block of one face. The face's outline (image) is intersected with the horizontal plane at the face's
     height, which gives its world footprint without the per-pixel depth noise."""
-    mask_u8, origin, mean_rgb, occluder = _refine_by_colour(face, f)
+    mask_u8, origin, mean_rgb, occluder, feature = _refine_by_colour(face, f)
     contours, _ = cv2.findContours(mask_u8, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
     contour = max(contours, key=cv2.contourArea).reshape(-1, 2)
     near = cv2.dilate(occluder.astype(np.uint8), np.ones((5, 5), np.uint8)).astype(bool)
@@ -252,10 +391,14 @@ def _describe(face: Face, f: _Frame, settings: DetectionSettings, color_model: C
     centre_guess = outline.mean(axis=0)
     pixel_mm = float(cam.depth_of(np.array([[*centre_guess, face.height_mm]]))[0] / cam.K[0, 0])
     edges = lab_config().block_edges_mm
-    # a hint for the edge when part of the face is hidden: the size whose stacks reach this height best
-    hint = min(edges.values(), key=lambda e: min(abs(face.height_mm - e - k * 25.0 - j * 38.0)
-                                                 for k in range(4) for j in range(4)))
-    centre_xy, sides, theta, complete = _fit_square(outline, blocked, pixel_mm, hint)
+    # a hint for the edge when part of the face is hidden: the size whose stacks reach this height best (None when
+    # both sizes' stacks reach it within 1.5 mm, as 3 x 25 and 2 x 38 do: then the free outline decides)
+    misfit = {e: float(np.min(np.abs(face.height_mm - e - _stack_heights(include_zero=True)))) for e in edges.values()}
+    hint = min(misfit, key=misfit.get)
+    if max(misfit.values()) - min(misfit.values()) < 1.5:
+        hint = None
+    centre_xy, sides, theta, complete = _fit_square(outline, blocked, pixel_mm, hint, tuple(edges.values()))
+    theta = _refine_yaw(f, face.height_mm, centre_xy, theta, sides, feature, near, origin)
     w, h = sides
     edge = float(np.sqrt(w * h))
     if complete:
@@ -337,7 +480,8 @@ def detect_objects(rgb, depth_mm, camera: Camera, arm_q=None, color_model: Color
     valid = _on_board(height, valid, f, settings)
     gains = _board_white_balance(rgb, height, valid, settings.step)
     faces = segment_faces(height, valid, settings.min_height,
-                          min_face_pixels=max(8, settings.min_face_pixels // settings.step ** 2))
+                          min_face_pixels=max(8, settings.min_face_pixels // settings.step ** 2),
+                          median_px=5 if settings.step == 1 else 3)
     heights = _stack_heights()
     faces = [face for face in faces if np.min(np.abs(heights - face.height_mm)) <= settings.level_tolerance]
     found = [_describe(face, f, settings, color_model, gains) for face in faces]

@@ -49,12 +49,14 @@ def _plateau_levels(heights: np.ndarray, bin_mm: float, min_pixels: int) -> list
 
 
 def segment_faces(height_mm: np.ndarray, valid: np.ndarray, min_height_mm: float = 10.0,
-                  face_tolerance_mm: float = 6.0, min_face_pixels: int = 120) -> list[Face]:
+                  face_tolerance_mm: float = 6.0, min_face_pixels: int = 120, median_px: int = 5) -> list[Face]:
     """Top faces in a height map (H, W) mm (NaN allowed) restricted to `valid` (H, W) bool pixels.
 
-    min_face_pixels: fewest pixels of a face on its plateau (scale it with the map's resolution)."""
+    min_face_pixels: fewest pixels of a face on its plateau (scale it with the map's resolution); median_px: the
+    median filter's size (3 or 5) that removes the depth's speckle: it also erases parts of objects thinner than about
+    half of it, so use 3 on a reduced map (an arch's legs are 3-4 samples wide at half resolution)."""
     h = np.where(valid & np.isfinite(height_mm), height_mm, 0.0).astype(np.float32)
-    h = cv2.medianBlur(h, 5)
+    h = cv2.medianBlur(h, median_px)
     objects = (h > min_height_mm).astype(np.uint8)
     n, labels, stats, _ = cv2.connectedComponentsWithStats(objects, connectivity=4)
     faces: list[Face] = []

@@ -8,6 +8,8 @@ point's own depth. A face at least `min_visible` visible must be found; a face l
 size, or mostly under the arm) is neither required nor a false positive when reported.
 
 `sim_case` builds one seeded simulated test frame (through the public station API) for benchmarks and notebooks.
+This lives with the simulator because only the simulator has ground truth: armlab.detection itself never imports the
+simulator (DESIGN.md: detection does not know whether the station is simulated or real).
 Units: mm and rad, world (board) frame.
 """
 
@@ -245,7 +247,7 @@ def fit_color_model(seeds=TRAIN_SEEDS):
     return ColorModel.fit(colours, labels), len(labels)
 
 
-if __name__ == "__main__":   # python -m armlab.detection.evaluate: refit data/color_model.json
+if __name__ == "__main__":   # python -m armlab.sim.scoring: refit data/color_model.json
     from armlab._paths import data_path
     from armlab.detection.color import COLOR_MODEL_FILE
 

@@ -20,7 +20,7 @@ from armlab.blocks import COLORS
 from armlab.detection import default_color_model, detect_objects, draw_detections, height_from_depth
 from armlab.detection import hsv_table_classify
 from armlab.detection.color import LAB_HSV_TABLE
-from armlab.detection.evaluate import Score, corrected_depth, score_frame, sim_case
+from armlab.sim.scoring import Score, corrected_depth, score_frame, sim_case
 
 plt.rcParams["figure.dpi"] = 60
 case = sim_case("line_up_3", 300, arm_over_board=True)      # seeded: the same frame every run
