@@ -6,6 +6,7 @@ import cv2
 import numpy as np
 
 from armlab.camera import Camera
+from armlab.gripper_geometry import GRIPPER
 from armlab.kinematics import joint_positions
 
 __all__ = ["arm_mask", "ARM_RADIUS_MM"]
@@ -18,8 +19,9 @@ def arm_mask(camera: Camera, q, radius_mm: float = ARM_RADIUS_MM, samples_per_li
     """(H, W) bool mask of the pixels the arm at joint angles q (5,) rad may cover; with step > 1, the mask of
     every step-th pixel ((H + step - 1) // step, (W + step - 1) // step), drawn directly at that resolution.
 
-    Each link (between consecutive points of kinematics.joint_positions, plus the fingers beyond the tool point)
-    is swept as a capsule of `radius_mm`: points along it are projected and drawn as discs of the projected radius.
+    Each link (between consecutive points of kinematics.joint_positions, plus the fingers: GRIPPER.fingertip_mm
+    beyond the tool point along the approach) is swept as a capsule of `radius_mm`: points along it are projected and
+    drawn as discs of the projected radius.
     """
     q = np.asarray(q, float)
     if q.shape != (5,) or not np.all(np.isfinite(q)):
@@ -29,7 +31,7 @@ def arm_mask(camera: Camera, q, radius_mm: float = ARM_RADIUS_MM, samples_per_li
     points = joint_positions(q)
     approach = points[-1] - points[-2]
     approach /= np.linalg.norm(approach)
-    points = np.vstack([points, points[-1] + 20.0 * approach])  # finger tips beyond the tool point
+    points = np.vstack([points, points[-1] + GRIPPER.fingertip_mm * approach])  # the finger tips
     t = np.linspace(0, 1, samples_per_link)[:, None, None]
     seg = points[:-1][None] * (1 - t) + points[1:][None] * t      # (S, L, 3)
     seg = seg.reshape(-1, 3)
