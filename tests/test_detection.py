@@ -64,7 +64,7 @@ def test_realistic_frames_meet_the_goals(case):
     assert m["recall"] == 1.0 and m["precision"] == 1.0, (case.scene, case.seed, m)
     assert m["color_acc"] == 1.0 and m["size_acc"] == 1.0 and m["levels_acc"] == 1.0
     assert m["pos_mean_mm"] < 2.0 and m["pos_max_mm"] < 5.0
-    assert m["yaw_max_deg"] < 3.0
+    assert m["yaw_max_deg"] < 2.0
 
 
 def test_stacks_report_their_height_and_not_the_hidden_faces():
@@ -88,6 +88,74 @@ def test_distractors_are_reported_as_distractors():
     distractors = [s for s in shapes if s[1] != "cube"]
     assert len(distractors) >= 2
     assert all((d == "cube") == (t == "cube") for d, t in shapes)
+
+
+def test_thin_distractors_are_found_and_not_called_blocks():
+    # an arch's legs are 3-4 samples wide at half resolution: a 5x5 height median erased this one entirely
+    case = sim_case("line_up_3", 124)
+    found = detect_objects(case.rgb, corrected_depth(case), case.camera, case.arm_q)
+    score = score_frame(found, case.truth)
+    arches = [t for t in case.truth if t.obj.shape == "arch" and t.visible > 0.9]
+    assert arches and not [t for t in score.missed if not t.is_block]
+    assert all(d.shape == "distractor" for d, t in score.pairs if not t.is_block)
+
+
+def test_yaw_refinement_recovers_a_turned_start():
+    """The edge refinement alone turns a square started 4 deg off back onto the block (exact frame)."""
+    from armlab.detection import detect as D
+
+    station = make_station("sim", seed=11, scene="random", realism="ideal")
+    frame = station.camera.capture()
+    cam = station.camera.truth
+    seen = []
+    real = D._refine_yaw
+
+    def spy(f, z, centre, theta, sides, feature, blocked, origin, iterations=2):
+        seen.append((f, z, centre, sides, feature, blocked, origin))
+        return real(f, z, centre, theta, sides, feature, blocked, origin, iterations)
+
+    D._refine_yaw = spy
+    try:
+        found = D.detect_blocks(frame.rgb, frame.depth, cam, station.arm.joint_positions())
+    finally:
+        D._refine_yaw = real
+    assert len(seen) == len(found) == 6
+    for f, z, centre, sides, feature, blocked, origin in seen:
+        truth = min(station.world.blocks, key=lambda t: np.hypot(*(t.position[:2] - centre)))
+        assert np.hypot(*(truth.position[:2] - centre)) < 2.0
+        for start in (truth.yaw + np.radians(4.0), truth.yaw - np.radians(4.0)):
+            yaw = real(f, z, centre, start, sides, feature, blocked, origin, iterations=3)
+            assert np.degrees(yaw_error(yaw, truth.yaw)) < 0.8
+
+
+def test_plane_homography_matches_the_lens_model(ideal):
+    from armlab.detection.detect import _plane_homography
+
+    station, _ = ideal
+    cam = station.camera.truth
+    for centre, z in [((0.0, 150.0), 25.0), ((-320.0, -100.0), 38.0), ((300.0, 280.0), 114.0)]:
+        H = _plane_homography(cam, centre, z, 25.0)
+        xy = np.asarray(centre) + np.random.default_rng(0).uniform(-25, 25, (50, 2))
+        uv = cam.project(np.column_stack([xy, np.full(50, z)]))
+        h = np.column_stack([xy, np.ones(50)]) @ H.T
+        assert np.abs(h[:, :2] / h[:, 2:] - uv).max() < 0.02
+
+
+def test_arm_mask_covers_the_finger_tips():
+    from armlab.detection import arm_mask
+    from armlab.gripper_geometry import GRIPPER
+    from armlab.kinematics import joint_positions
+
+    station = make_station("sim", seed=3, scene="empty", realism="ideal")
+    cam = station.camera.truth
+    q = np.array([0.3, 0.2, 0.3, 1.0, 0.0])
+    points = joint_positions(q)
+    approach = (points[-1] - points[-2]) / np.linalg.norm(points[-1] - points[-2])
+    tip = points[-1] + GRIPPER.fingertip_mm * approach
+    u, v = np.rint(cam.project(tip[None])[0]).astype(int)
+    assert arm_mask(cam, q)[v, u]
+    # the mask follows the arm: a different pose covers different pixels
+    assert (arm_mask(cam, q) != arm_mask(cam, q + [0.6, 0, 0, 0, 0])).sum() > 1000
 
 
 def test_arm_over_the_board_is_not_a_block():

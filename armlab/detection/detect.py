@@ -8,6 +8,7 @@ Positions: world mm of the top-face centre; yaw in [-pi/4, pi/4) rad about world
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 
 import cv2
@@ -110,6 +111,7 @@ def stack_levels(top_z: float, edge_mm: float, edges=None, max_levels: int = 6) 
     return best[1]
 
 
+@functools.lru_cache(maxsize=4)
 def _stack_heights(max_levels: int = 6, include_zero: bool = False) -> np.ndarray:
     """Every height (mm) a top face can have: sums of 1..max_levels of the lab's block edges (and 0 if asked: the
     heights a block can stand on)."""
@@ -142,12 +144,14 @@ def _arm_coloured(rgb: np.ndarray) -> np.ndarray:
 
 def _board_white_balance(rgb: np.ndarray, height_small: np.ndarray, valid: np.ndarray, step: int) -> np.ndarray:
     """Gains from the board's own pixels (flat, near z = 0), sampled sparsely."""
-    sample = (valid & (np.abs(height_small) < 4.0))[::4, ::4]
-    pixels = rgb[::4 * step, ::4 * step][sample[:(rgb.shape[0] + 4 * step - 1) // (4 * step)]]
+    h = height_small[::4, ::4]
+    with np.errstate(invalid="ignore"):
+        sample = valid[::4, ::4] & (h < 4.0) & (h > -4.0)
+    pixels = rgb[::4 * step, ::4 * step][sample]
     if len(pixels) < 100:
         return np.ones(3)
     # the printed grid and tags are dark: use the bright majority of the board
-    total = pixels.sum(1)
+    total = pixels.sum(1, dtype=np.int32)
     bright = pixels[total >= np.percentile(total, 40)]
     return white_balance_gains(bright.mean(axis=0))
 
@@ -272,8 +276,9 @@ def _plane_homography(camera: Camera, centre, z: float, reach: float) -> np.ndar
     return cv2.getPerspectiveTransform(square.astype(np.float32), uv.astype(np.float32))
 
 
-def _side_profiles(f: _Frame, z: float, centre, theta: float, sides, feature, blocked, origin):
-    """Colour-distance profiles across the four sides of a fitted square on the plane z (mm).
+def _side_profiles(H: np.ndarray, centre, theta: float, sides, feature, blocked):
+    """Colour-distance profiles across the four sides of a fitted square on the face's plane (H: homography from
+    world (x, y) mm on that plane to the patch's pixels).
 
     Side k has the outward normal at angle theta + k pi/2 and the tangent that normal turned +90 deg; profiles are
     taken at EDGE_SAMPLES positions t (mm, along the tangent from the side's middle) and offsets s (mm, along the
@@ -287,8 +292,6 @@ def _side_profiles(f: _Frame, z: float, centre, theta: float, sides, feature, bl
     s = _PROFILE_S
     xy = (np.asarray(centre)[None, None, None] + (half[[0, 1, 0, 1]][:, None, None, None] + s[None, None, :, None])
           * normal[:, None, None] + t[:, :, None, None] * tangent[:, None, None])
-    H = _plane_homography(f.camera, centre, z, float(half.max()) + EDGE_SEARCH_MM)
-    H[:2] -= np.outer(origin, H[2])                       # pixels relative to the patch origin
     w = xy @ H[:2, :2].T + H[:2, 2]
     d = xy @ H[2, :2] + H[2, 2]
     mx = (w[..., 0] / d).astype(np.float32).reshape(-1, len(s))
@@ -347,8 +350,10 @@ def _refine_yaw(f: _Frame, z: float, centre, theta: float, sides, feature, block
     variance of their slopes, so sharp, long, unhidden sides count most and sides hidden by occluders (`blocked`) not
     at all. Keeps `theta` when no side shows a usable edge, or only one side whose own side face is in view beyond
     it (a softer edge than a silhouette against the board: alone it is not trusted)."""
+    H = _plane_homography(f.camera, centre, z, float(np.max(sides)) / 2 + EDGE_SEARCH_MM)
+    H[:2] -= np.outer(origin, H[2])                       # pixels relative to the patch origin
     for _ in range(iterations):
-        t, s, prof = _side_profiles(f, z, centre, theta, sides, feature, blocked, origin)
+        t, s, prof = _side_profiles(H, centre, theta, sides, feature, blocked)
         edge, ok = _edge_offsets(prof, s)
         ang = theta + np.arange(4) * (np.pi / 2)
         normal = np.stack([np.cos(ang), np.sin(ang)], axis=1)
@@ -398,9 +403,14 @@ def _describe(face: Face, f: _Frame, settings: DetectionSettings, color_model: C
     if max(misfit.values()) - min(misfit.values()) < 1.5:
         hint = None
     centre_xy, sides, theta, complete = _fit_square(outline, blocked, pixel_mm, hint, tuple(edges.values()))
-    theta = _refine_yaw(f, face.height_mm, centre_xy, theta, sides, feature, near, origin)
     w, h = sides
     edge = float(np.sqrt(w * h))
+    aspect = float(max(w, h) / max(min(w, h), 1e-6))
+    lo, hi = settings.cube_edge_range
+    nominal = min(abs(edge - e) for e in edges.values())
+    cube_sized = lo <= edge <= hi and nominal <= settings.edge_tolerance and aspect <= settings.max_aspect
+    if cube_sized:   # the yaw of what cannot be a cube is not worth the refinement
+        theta = _refine_yaw(f, face.height_mm, centre_xy, theta, sides, feature, near, origin)
     if complete:
         o32 = outline.astype(np.float32)
         area = cv2.contourArea(o32) + 0.5 * pixel_mm * cv2.arcLength(o32, True)
@@ -410,11 +420,7 @@ def _describe(face: Face, f: _Frame, settings: DetectionSettings, color_model: C
         local = np.abs((outline[~blocked] - centre_xy) @ axes.T)
         off = np.min(np.abs(local - (np.array([w, h]) - pixel_mm) / 2), axis=1)
         rectangularity = float(np.mean(off < 2.5))
-    aspect = float(max(w, h) / max(min(w, h), 1e-6))
-    lo, hi = settings.cube_edge_range
-    nominal = min(abs(edge - e) for e in edges.values())
-    is_cube = (lo <= edge <= hi and nominal <= settings.edge_tolerance and aspect <= settings.max_aspect
-               and rectangularity >= settings.min_rectangularity)
+    is_cube = cube_sized and rectangularity >= settings.min_rectangularity
     size = "large" if edge > settings.size_split else "small"
     names, margin = color_model.classify((mean_rgb * gains)[None])
     centre = np.array([centre_xy[0], centre_xy[1], face.height_mm])
