@@ -101,31 +101,33 @@ def test_thin_distractors_are_found_and_not_called_blocks():
 
 
 def test_yaw_refinement_recovers_a_turned_start():
-    """The edge refinement alone turns a square started 4 deg off back onto the block (exact frame)."""
+    """The edge refinement alone turns squares started 4 deg off back onto the blocks (exact frame)."""
     from armlab.detection import detect as D
 
     station = make_station("sim", seed=11, scene="random", realism="ideal")
     frame = station.camera.capture()
     cam = station.camera.truth
     seen = []
-    real = D._refine_yaw
+    real = D._refine_yaws
 
-    def spy(f, z, centre, theta, sides, feature, blocked, origin, iterations=2):
-        seen.append((f, z, centre, sides, feature, blocked, origin))
-        return real(f, z, centre, theta, sides, feature, blocked, origin, iterations)
+    def spy(camera, faces, iterations=2):
+        seen.extend(faces)
+        return real(camera, faces, iterations)
 
-    D._refine_yaw = spy
+    D._refine_yaws = spy
     try:
         found = D.detect_blocks(frame.rgb, frame.depth, cam, station.arm.joint_positions())
     finally:
-        D._refine_yaw = real
+        D._refine_yaws = real
     assert len(seen) == len(found) == 6
-    for f, z, centre, sides, feature, blocked, origin in seen:
-        truth = min(station.world.blocks, key=lambda t: np.hypot(*(t.position[:2] - centre)))
-        assert np.hypot(*(truth.position[:2] - centre)) < 2.0
-        for start in (truth.yaw + np.radians(4.0), truth.yaw - np.radians(4.0)):
-            yaw = real(f, z, centre, start, sides, feature, blocked, origin, iterations=3)
-            assert np.degrees(yaw_error(yaw, truth.yaw)) < 0.8
+    truth = [min(station.world.blocks, key=lambda t: np.hypot(*(t.position[:2] - m.centre))) for m in seen]
+    assert all(np.hypot(*(t.position[:2] - m.centre)) < 2.0 for t, m in zip(truth, seen))
+    for turn in (4.0, -4.0):
+        for m, t in zip(seen, truth):
+            m.theta = t.yaw + np.radians(turn)
+        yaws = real(cam, seen, iterations=3)
+        assert max(np.degrees(yaw_error(y, t.yaw)) for y, t in zip(yaws, truth)) < 0.8
+    assert len(real(cam, [])) == 0
 
 
 def test_plane_homography_matches_the_lens_model(ideal):

@@ -276,33 +276,6 @@ def _plane_homography(camera: Camera, centre, z: float, reach: float) -> np.ndar
     return cv2.getPerspectiveTransform(square.astype(np.float32), uv.astype(np.float32))
 
 
-def _side_profiles(H: np.ndarray, centre, theta: float, sides, feature, blocked):
-    """Colour-distance profiles across the four sides of a fitted square on the face's plane (H: homography from
-    world (x, y) mm on that plane to the patch's pixels).
-
-    Side k has the outward normal at angle theta + k pi/2 and the tangent that normal turned +90 deg; profiles are
-    taken at EDGE_SAMPLES positions t (mm, along the tangent from the side's middle) and offsets s (mm, along the
-    normal from the fitted side). Returns t (4, M), s (K,), profiles (4, M, K) (NaN where a sample is off the patch
-    or next to an occluder)."""
-    half = np.asarray(sides, float) / 2
-    ang = theta + np.arange(4) * (np.pi / 2)
-    normal = np.stack([np.cos(ang), np.sin(ang)], axis=1)
-    tangent = np.stack([-normal[:, 1], normal[:, 0]], axis=1)
-    t = _PROFILE_T[None] * half[[1, 0, 1, 0]][:, None]
-    s = _PROFILE_S
-    xy = (np.asarray(centre)[None, None, None] + (half[[0, 1, 0, 1]][:, None, None, None] + s[None, None, :, None])
-          * normal[:, None, None] + t[:, :, None, None] * tangent[:, None, None])
-    w = xy @ H[:2, :2].T + H[:2, 2]
-    d = xy @ H[2, :2] + H[2, 2]
-    mx = (w[..., 0] / d).astype(np.float32).reshape(-1, len(s))
-    my = (w[..., 1] / d).astype(np.float32).reshape(-1, len(s))
-    prof = cv2.remap(feature, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=np.nan)
-    hidden = cv2.remap(blocked.astype(np.uint8), mx, my, cv2.INTER_NEAREST, borderMode=cv2.BORDER_CONSTANT,
-                       borderValue=1)
-    prof[hidden > 0] = np.nan
-    return t, s, prof.reshape(4, len(t[0]), len(s))
-
-
 def _line_fits(t: np.ndarray, y: np.ndarray, w: np.ndarray):
     """Least-squares lines y = a + b t through the rows of t, y (S, M) using the points where w (S, M) bool: slopes b
     (S,), intercepts a (S,), point counts n (S,), spread of the used t (S,) and sum of squared t deviations (S,)."""
@@ -340,56 +313,102 @@ def _edge_offsets(prof: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, np.ndarr
     return s[0] + EDGE_STEP_MM * (m - 1 + frac), ok
 
 
-def _refine_yaw(f: _Frame, z: float, centre, theta: float, sides, feature, blocked, origin,
-                iterations: int = 2) -> float:
-    """The square's yaw (rad) refined on the full-resolution image edges of its top face.
+@dataclass
+class _Measured:
+    """One face measured on its own (before the batched yaw refinement): the fitted square (centre (2,) mm, sides
+    (2,) mm, theta rad), whether the outline was complete and the face cube-sized, and what the refinement and the
+    Block need."""
 
-    Across each side the edge is found by _edge_offsets; each side's edge points get a line fit s = a + b t (points
-    more than EDGE_FIT_TOL off the first fit dropped, then refitted), whose slope says how far the side is turned: a
-    square turned by d (counterclockwise) puts its side at s = -d t. The sides' turns are averaged with the inverse
-    variance of their slopes, so sharp, long, unhidden sides count most and sides hidden by occluders (`blocked`) not
-    at all. Keeps `theta` when no side shows a usable edge, or only one side whose own side face is in view beyond
-    it (a softer edge than a silhouette against the board: alone it is not trusted)."""
-    H = _plane_homography(f.camera, centre, z, float(np.max(sides)) / 2 + EDGE_SEARCH_MM)
-    H[:2] -= np.outer(origin, H[2])                       # pixels relative to the patch origin
+    face: Face
+    centre: np.ndarray
+    sides: np.ndarray
+    theta: float
+    complete: bool
+    cube_sized: bool
+    outline: np.ndarray
+    blocked: np.ndarray
+    pixel_mm: float
+    contour: np.ndarray
+    mean_rgb: np.ndarray
+    feature: np.ndarray
+    near: np.ndarray
+    origin: tuple[int, int]
+
+
+def _refine_yaws(camera: Camera, faces: list[_Measured], iterations: int = 2) -> np.ndarray:
+    """The faces' yaws (F,) rad refined on the full-resolution image edges of their top faces, all faces at once.
+
+    Across each side of a face's fitted square, profiles of the colour distance to the face's colour (EDGE_SAMPLES
+    positions t along the side, offsets s across it) give edge points (_edge_offsets); each side's points get a line
+    fit s = a + b t (points more than EDGE_FIT_TOL off the first fit dropped, then refitted), whose slope says how far
+    the side is turned: a square turned by d (counterclockwise) puts its side at s = -d t. A face's turn is the mean
+    of its sides' turns weighted by the inverse variance of their slopes, so sharp, long, unhidden sides count most
+    and sides next to occluders not at all. A face keeps its yaw when no side shows a usable edge, or only one side
+    whose own side face is in view beyond it (a softer edge than a silhouette against the board)."""
+    n_faces = len(faces)
+    if n_faces == 0:
+        return np.zeros(0)
+    centre = np.array([m.centre for m in faces], float)
+    theta = np.array([m.theta for m in faces], float)
+    half = np.array([m.sides for m in faces], float) / 2
+    dist = half[:, [0, 1, 0, 1]]                                           # (F, 4) centre to side
+    t = _PROFILE_T[None, None] * half[:, [1, 0, 1, 0], None]               # (F, 4, M) along each side
+    s = _PROFILE_S
+    homographies = []
+    for m in faces:
+        H = _plane_homography(camera, m.centre, m.face.height_mm, float(np.max(m.sides)) / 2 + EDGE_SEARCH_MM)
+        H[:2] -= np.outer(m.origin, H[2])                                  # pixels of the face's patch
+        homographies.append(H)
+    prof = np.empty((n_faces, 4, len(_PROFILE_T), len(s)), np.float32)
     for _ in range(iterations):
-        t, s, prof = _side_profiles(H, centre, theta, sides, feature, blocked)
+        ang = theta[:, None] + np.arange(4) * (np.pi / 2)
+        normal = np.stack([np.cos(ang), np.sin(ang)], axis=-1)            # (F, 4, 2) outward
+        tangent = np.stack([-normal[..., 1], normal[..., 0]], axis=-1)
+        xy = (centre[:, None, None, None] + (dist[:, :, None, None, None] + s[:, None]) * normal[:, :, None, None]
+              + t[..., None, None] * tangent[:, :, None, None])          # (F, 4, M, K, 2) world mm
+        for i, (m, H) in enumerate(zip(faces, homographies)):
+            w = xy[i] @ H[:2, :2].T + H[:2, 2]
+            d = xy[i] @ H[2, :2] + H[2, 2]
+            mx = (w[..., 0] / d).astype(np.float32).reshape(-1, len(s))
+            my = (w[..., 1] / d).astype(np.float32).reshape(-1, len(s))
+            p = cv2.remap(m.feature, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=np.nan)
+            hidden = cv2.remap(m.near, mx, my, cv2.INTER_NEAREST, borderMode=cv2.BORDER_CONSTANT, borderValue=1)
+            p[hidden > 0] = np.nan
+            prof[i] = p.reshape(prof.shape[1:])
         edge, ok = _edge_offsets(prof, s)
-        ang = theta + np.arange(4) * (np.pi / 2)
-        normal = np.stack([np.cos(ang), np.sin(ang)], axis=1)
-        mid = np.asarray(centre) + normal * np.asarray(sides, float)[[0, 1, 0, 1], None] / 2
-        sees_side = np.einsum("ij,ij->i", normal, f.camera.position[:2] - mid) > 0
-        b, a, _, _, _ = _line_fits(t, edge, ok)
-        r = edge - (a[:, None] + b[:, None] * t)
-        use = ok & (np.abs(r) <= EDGE_FIT_TOL)
-        b, a, n, spread, sxx = _line_fits(t, edge, use)
-        good = (n >= 5) & (spread >= 4.0)
-        if not good.any() or (good.sum() == 1 and (sees_side[good][0] or n[good][0] < 8)):
-            return theta
-        r = np.where(use, edge - (a[:, None] + b[:, None] * t), 0.0)
+        mid = centre[:, None] + normal * dist[..., None]
+        sees_side = np.einsum("fij,fij->fi", normal, camera.position[:2] - mid) > 0
+        tt, ee, okk = (x.reshape(-1, t.shape[-1]) for x in (t, edge, ok))
+        b, a, _, _, _ = _line_fits(tt, ee, okk)
+        use = okk & (np.abs(ee - (a[:, None] + b[:, None] * tt)) <= EDGE_FIT_TOL)
+        b, a, n, spread, sxx = _line_fits(tt, ee, use)
+        r = np.where(use, ee - (a[:, None] + b[:, None] * tt), 0.0)
         sigma = np.maximum(np.sqrt((r * r).sum(axis=1) / np.maximum(n - 2, 1)), 0.1)
-        turns, weights = -np.arctan(b[good]), (sxx / sigma ** 2)[good]
-        if len(turns) > 2:
-            order = np.sort(turns)
-            agree = np.abs(turns - 0.5 * (order[(len(order) - 1) // 2] + order[len(order) // 2])) < np.radians(3.0)
-            turns, weights = turns[agree], weights[agree]
-        if not len(turns):
-            return theta
-        turn = float(np.sum(turns * weights) / np.sum(weights))
-        theta += turn
-        if abs(turn) < np.radians(0.5):   # small enough for the sides' linear model: no need to look again
-            break
+        good = ((n >= 5) & (spread >= 4.0)).reshape(n_faces, 4)
+        turns = -np.arctan(b).reshape(n_faces, 4)
+        weights = (sxx / sigma ** 2).reshape(n_faces, 4)
+        n_good = good.sum(axis=1)
+        fewest = np.where(good, n.reshape(n_faces, 4), 99).min(axis=1)
+        lone = (n_good == 1) & ((good & sees_side).any(axis=1) | (fewest < 8))
+        ordered = np.sort(np.where(good, turns, np.inf), axis=1)           # the good turns first
+        lo_i, hi_i = np.maximum(n_good - 1, 0) // 2, np.maximum(n_good, 1) // 2
+        rows = np.arange(n_faces)
+        median = 0.5 * (np.where(n_good > 0, ordered[rows, lo_i], 0) + np.where(n_good > 0, ordered[rows, hi_i], 0))
+        agree = good & ((n_good[:, None] <= 2) | (np.abs(turns - median[:, None]) < np.radians(3.0)))
+        total = (weights * agree).sum(axis=1)
+        turn = (np.where(agree, turns, 0.0) * weights).sum(axis=1) / np.maximum(total, 1e-12)
+        theta = theta + np.where((n_good > 0) & ~lone & (total > 0), turn, 0.0)
     return theta
 
 
-def _describe(face: Face, f: _Frame, settings: DetectionSettings, color_model: ColorModel, gains: np.ndarray):
-    """The Block of one face. The face's outline (image) is intersected with the horizontal plane at the face's
-    height, which gives its world footprint without the per-pixel depth noise."""
+def _measure(face: Face, f: _Frame, settings: DetectionSettings) -> _Measured:
+    """A face's outline, intersected with the horizontal plane at the face's height (its world footprint without the
+    per-pixel depth noise), and the square fitted to it."""
     mask_u8, origin, mean_rgb, occluder, feature = _refine_by_colour(face, f)
     contours, _ = cv2.findContours(mask_u8, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
     contour = max(contours, key=cv2.contourArea).reshape(-1, 2)
-    near = cv2.dilate(occluder.astype(np.uint8), np.ones((5, 5), np.uint8)).astype(bool)
-    blocked = near[contour[:, 1], contour[:, 0]]
+    near = cv2.dilate(occluder.astype(np.uint8), np.ones((5, 5), np.uint8))
+    blocked = near[contour[:, 1], contour[:, 0]] > 0
     contour = contour + np.array(origin)
     outline = pixels_to_plane(f.camera, contour, face.height_mm)[:, :2]
     cam = f.camera
@@ -409,26 +428,33 @@ def _describe(face: Face, f: _Frame, settings: DetectionSettings, color_model: C
     lo, hi = settings.cube_edge_range
     nominal = min(abs(edge - e) for e in edges.values())
     cube_sized = lo <= edge <= hi and nominal <= settings.edge_tolerance and aspect <= settings.max_aspect
-    if cube_sized:   # the yaw of what cannot be a cube is not worth the refinement
-        theta = _refine_yaw(f, face.height_mm, centre_xy, theta, sides, feature, near, origin)
-    if complete:
-        o32 = outline.astype(np.float32)
+    return _Measured(face, np.asarray(centre_xy, float), np.asarray(sides, float), float(theta), bool(complete),
+                     bool(cube_sized), outline, blocked, pixel_mm, contour, mean_rgb, feature, near, origin)
+
+
+def _describe(m: _Measured, f: _Frame, settings: DetectionSettings, color_model: ColorModel,
+              gains: np.ndarray) -> Block:
+    """The Block of a measured face (its yaw refined when it is cube-sized): shape check, size, colour, stack."""
+    (w, h), theta, centre_xy, pixel_mm = m.sides, m.theta, m.centre, m.pixel_mm
+    edge = float(np.sqrt(w * h))
+    if m.complete:
+        o32 = m.outline.astype(np.float32)
         area = cv2.contourArea(o32) + 0.5 * pixel_mm * cv2.arcLength(o32, True)
         rectangularity = float(area / (w * h)) if w * h > 0 else 0.0
     else:   # the free outline's distance to the fitted square's sides
         axes = np.array([[np.cos(theta), np.sin(theta)], [-np.sin(theta), np.cos(theta)]])
-        local = np.abs((outline[~blocked] - centre_xy) @ axes.T)
+        local = np.abs((m.outline[~m.blocked] - centre_xy) @ axes.T)
         off = np.min(np.abs(local - (np.array([w, h]) - pixel_mm) / 2), axis=1)
         rectangularity = float(np.mean(off < 2.5))
-    is_cube = cube_sized and rectangularity >= settings.min_rectangularity
+    is_cube = m.cube_sized and rectangularity >= settings.min_rectangularity
     size = "large" if edge > settings.size_split else "small"
-    names, margin = color_model.classify((mean_rgb * gains)[None])
-    centre = np.array([centre_xy[0], centre_xy[1], face.height_mm])
-    u, v = cam.project(centre[None])[0]
+    names, margin = color_model.classify((m.mean_rgb * gains)[None])
+    centre = np.array([centre_xy[0], centre_xy[1], m.face.height_mm])
+    u, v = f.camera.project(centre[None])[0]
     return Block(color=names[0], size=size, position=centre, yaw=_wrap_yaw(theta), pixel=(float(u), float(v)),
                  edge_mm=edge, shape="cube" if is_cube else "distractor",
-                 levels=stack_levels(face.height_mm, edges[size]), color_margin=float(margin[0]), contour=contour,
-                 mean_rgb=mean_rgb, white_balance=gains)
+                 levels=stack_levels(m.face.height_mm, lab_config().block_edges_mm[size]),
+                 color_margin=float(margin[0]), contour=m.contour, mean_rgb=m.mean_rgb, white_balance=gains)
 
 
 def _on_board(height_small: np.ndarray, valid: np.ndarray, f: _Frame, settings: DetectionSettings) -> np.ndarray:
@@ -490,7 +516,11 @@ def detect_objects(rgb, depth_mm, camera: Camera, arm_q=None, color_model: Color
                           median_px=5 if settings.step == 1 else 3)
     heights = _stack_heights()
     faces = [face for face in faces if np.min(np.abs(heights - face.height_mm)) <= settings.level_tolerance]
-    found = [_describe(face, f, settings, color_model, gains) for face in faces]
+    measured = [_measure(face, f, settings) for face in faces]
+    cubes = [m for m in measured if m.cube_sized]      # the yaw of what cannot be a cube is not worth refining
+    for m, theta in zip(cubes, _refine_yaws(camera, cubes)):
+        m.theta = float(theta)
+    found = [_describe(m, f, settings, color_model, gains) for m in measured]
     found.sort(key=lambda b: float(np.hypot(*b.position[:2])))
     return found
 

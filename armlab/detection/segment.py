@@ -38,9 +38,10 @@ class Face:
 
 def _plateau_levels(heights: np.ndarray, bin_mm: float, min_pixels: int) -> list[float]:
     """Heights (mm) of the histogram peaks that hold at least `min_pixels` pixels within +-1.5 bins."""
-    lo, hi = float(heights.min()), float(heights.max())
-    edges = np.arange(lo - bin_mm, hi + 2 * bin_mm, bin_mm)
-    hist, edges = np.histogram(heights, edges)
+    lo = float(heights.min()) - bin_mm
+    hist = np.bincount(((heights - lo) / bin_mm).astype(np.intp))      # bins [lo + i bin, lo + (i + 1) bin)
+    hist = np.append(hist, [0, 0])
+    edges = lo + bin_mm * np.arange(len(hist) + 1)
     smooth = np.convolve(hist, [1, 2, 3, 2, 1], mode="same")
     inner = smooth[1:-1]
     peaks = np.flatnonzero((inner >= smooth[:-2]) & (inner > smooth[2:])) + 1
