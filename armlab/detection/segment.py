@@ -14,6 +14,7 @@ from dataclasses import dataclass
 
 import cv2
 import numpy as np
+from scipy import ndimage
 
 __all__ = ["Face", "segment_faces"]
 
@@ -59,12 +60,15 @@ def segment_faces(height_mm: np.ndarray, valid: np.ndarray, min_height_mm: float
     h = np.where(valid & np.isfinite(height_mm), height_mm, 0.0).astype(np.float32)
     h = cv2.medianBlur(h, median_px)
     objects = (h > min_height_mm).astype(np.uint8)
-    n, labels, stats, _ = cv2.connectedComponentsWithStats(objects, connectivity=4)
+    # labels without OpenCV's statistics (which cost 5x the labelling): boxes and areas from scipy
+    n, labels = cv2.connectedComponents(objects, connectivity=4)
+    areas = np.bincount(labels.ravel(), minlength=n)
     faces: list[Face] = []
-    for k in range(1, n):
-        x, y, w, hh, area = stats[k]
-        if area < min_face_pixels:
+    for k, box in enumerate(ndimage.find_objects(labels), start=1):
+        if box is None or areas[k] < min_face_pixels:
             continue
+        y, x = box[0].start, box[1].start
+        hh, w = box[0].stop - y, box[1].stop - x
         region = labels[y:y + hh, x:x + w] == k
         sub_h = h[y:y + hh, x:x + w]
         for level in _plateau_levels(sub_h[region], 2.0, min_face_pixels // 2):
