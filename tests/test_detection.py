@@ -110,7 +110,7 @@ def test_yaw_refinement_recovers_a_turned_start():
     seen = []
     real = D._refine_yaws
 
-    def spy(camera, faces, iterations=2):
+    def spy(camera, faces, iterations=3):
         seen.extend(faces)
         return real(camera, faces, iterations)
 

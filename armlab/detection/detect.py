@@ -335,7 +335,7 @@ class _Measured:
     origin: tuple[int, int]
 
 
-def _refine_yaws(camera: Camera, faces: list[_Measured], iterations: int = 2) -> np.ndarray:
+def _refine_yaws(camera: Camera, faces: list[_Measured], iterations: int = 3) -> np.ndarray:
     """The faces' yaws (F,) rad refined on the full-resolution image edges of their top faces, all faces at once.
 
     Across each side of a face's fitted square, profiles of the colour distance to the face's colour (EDGE_SAMPLES
@@ -344,7 +344,8 @@ def _refine_yaws(camera: Camera, faces: list[_Measured], iterations: int = 2) ->
     the side is turned: a square turned by d (counterclockwise) puts its side at s = -d t. A face's turn is the mean
     of its sides' turns weighted by the inverse variance of their slopes, so sharp, long, unhidden sides count most
     and sides next to occluders not at all. A face keeps its yaw when no side shows a usable edge, or only one side
-    whose own side face is in view beyond it (a softer edge than a silhouette against the board)."""
+    whose own side face is in view beyond it (a softer edge than a silhouette against the board). The result is the
+    middle of the last two iterations' yaws."""
     n_faces = len(faces)
     if n_faces == 0:
         return np.zeros(0)
@@ -397,8 +398,9 @@ def _refine_yaws(camera: Camera, faces: list[_Measured], iterations: int = 2) ->
         agree = good & ((n_good[:, None] <= 2) | (np.abs(turns - median[:, None]) < np.radians(3.0)))
         total = (weights * agree).sum(axis=1)
         turn = (np.where(agree, turns, 0.0) * weights).sum(axis=1) / np.maximum(total, 1e-12)
-        theta = theta + np.where((n_good > 0) & ~lone & (total > 0), turn, 0.0)
-    return theta
+        previous, theta = theta, theta + np.where((n_good > 0) & ~lone & (total > 0), turn, 0.0)
+    # the last step can swing between two readings of a jagged side: take the middle of the last two
+    return 0.5 * (previous + theta) if iterations > 1 else theta
 
 
 def _measure(face: Face, f: _Frame, settings: DetectionSettings) -> _Measured:
