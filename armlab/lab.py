@@ -7,13 +7,13 @@ side of the board, +x to the right looking along +y, +z up. Millimetres.
 from __future__ import annotations
 
 import functools
-import json
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from armlab._paths import data_path
+from armlab.files import read_json
 
 __all__ = ["LabConfig", "TagLayout", "load_lab", "lab_config"]
 
@@ -77,12 +77,7 @@ class LabConfig:
 def load_lab(path: Path | str | None = None) -> LabConfig:
     """Read and validate a lab config (JSON); the default is `data/lab.json`. Errors name the file and the key."""
     path = Path(path or data_path("lab.json"))
-    try:
-        raw = json.loads(path.read_text())
-    except FileNotFoundError:
-        raise ValueError(f"{path}: lab config file not found") from None
-    except json.JSONDecodeError as e:
-        raise ValueError(f"{path}: not valid JSON ({e})") from None
+    raw = read_json(path, "lab config")
     try:
         board, tags, cam, blocks = raw["board"], raw["tags"], raw["camera"], raw["blocks"]
         cfg = LabConfig(

@@ -1,5 +1,6 @@
 """Block detection accuracy and speed on a seeded simulated set, with the true camera and with the camera a student
-calibrates (checkerboard intrinsics from data/checkerboard + AprilTag extrinsics + depth-plane correction).
+calibrates (checkerboard intrinsics from the frame's own camera, tasks.perception.station_intrinsics, + AprilTag
+extrinsics + depth-plane correction).
 
     .venv/bin/python benchmarks/perception.py [n_frames]
 
@@ -30,6 +31,7 @@ from armlab.lab import lab_config  # noqa: E402
 from armlab.sim.camera import CameraRealism  # noqa: E402
 from armlab.sim.checkerboard import load_dataset  # noqa: E402
 from armlab.sim.scoring import Score, case_specs, corrected_depth, score_frame, sim_case  # noqa: E402
+from armlab.tasks.perception import station_intrinsics  # noqa: E402
 
 cv2.setNumThreads(1)
 W = 78          # the metric column's width
@@ -93,8 +95,9 @@ def main(n_frames: int = 32) -> None:
     cases = [sim_case(*spec) for spec in case_specs(n_frames, 100)]
     scores = {"true camera": Score(), "calibrated": Score()}
     det_ms, tag_ms, hsv_hits, hsv_none, n_hsv = [], [], 0, 0, 0
-    for case in cases:
-        cam, ms = student_camera(case.rgb, K, dist)
+    for case in cases:   # each seed is another camera: calibrate its intrinsics from its own checkerboard set
+        case_K, case_dist = station_intrinsics(make_station("sim", seed=case.seed, scene=case.scene))
+        cam, ms = student_camera(case.rgb, case_K, case_dist)
         tag_ms.append(ms)
         for name, camera in (("true camera", case.camera), ("calibrated", cam)):
             depth = corrected_depth(case, camera)

@@ -167,5 +167,8 @@ def test_missing_or_corrupt_sets_are_named(tmp_path):
     with pytest.raises(ValueError, match="128x72 image in a 64x72 set"):
         cal.load_checkerboard_set(folder)
     (folder / "checkerboard.json").write_text(meta[:40])
+    with pytest.raises(ValueError, match=r"checkerboard\.json: not valid JSON, a corrupt checkerboard metadata file"):
+        cal.load_checkerboard_set(folder)
+    (folder / "checkerboard.json").write_text(meta.replace('"square_mm"', '"square"'))
     with pytest.raises(ValueError, match="malformed checkerboard metadata"):
         cal.load_checkerboard_set(folder)

@@ -2,9 +2,6 @@
 
 from __future__ import annotations
 
-import json
-import os
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -12,6 +9,7 @@ import numpy as np
 
 from armlab.calibration.depth import DepthCorrection
 from armlab.camera import Camera
+from armlab.files import read_json, write_json_atomic
 from armlab.images import check_depth, sample_depth
 
 __all__ = ["Calibration", "save_calibration", "load_calibration", "CalibrationFileError"]
@@ -79,28 +77,10 @@ def save_calibration(calibration: Calibration, path) -> Path:
     leaves any previous file untouched. Raises ValueError for non-finite values (JSON has no NaN)."""
     if not isinstance(calibration, Calibration):
         raise TypeError(f"save_calibration takes a Calibration, got {type(calibration).__name__}")
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name, suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w") as f:
-            json.dump(calibration.to_dict(), f, indent=2, allow_nan=False)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return path
+    return write_json_atomic(path, calibration.to_dict(), indent=2, make_parents=True)
 
 
 def load_calibration(path) -> Calibration:
     """Read and validate a calibration file; raises CalibrationFileError naming the file and the problem."""
     path = Path(path)
-    if path.is_dir():
-        raise CalibrationFileError(f"{path}: is a folder, not a calibration file")
-    if not path.is_file():
-        raise CalibrationFileError(f"{path}: calibration file not found")
-    try:
-        raw = json.loads(path.read_text())
-    except (json.JSONDecodeError, UnicodeDecodeError) as e:
-        raise CalibrationFileError(f"{path}: corrupt calibration file (not valid JSON: {e})") from None
-    return Calibration.from_dict(raw, str(path))
+    return Calibration.from_dict(read_json(path, "calibration", CalibrationFileError), str(path))

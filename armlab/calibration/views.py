@@ -17,14 +17,13 @@ lossless files ~450 KB per view against ~200 KB. Units: px (image size), mm (squ
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import cv2
 import numpy as np
 
 from armlab.calibration.intrinsics import _check_pattern
-from armlab.files import write_bytes_atomic, write_json_atomic
+from armlab.files import read_json, write_bytes_atomic, write_json_atomic
 from armlab.images import check_gray_or_rgb, to_gray
 
 __all__ = ["save_checkerboard_set", "load_checkerboard_set", "METADATA_FILE", "JPEG_QUALITY"]
@@ -76,14 +75,12 @@ def load_checkerboard_set(folder) -> tuple[list[np.ndarray], dict]:
     meta_path = folder / METADATA_FILE
     if not folder.is_dir():
         raise ValueError(f"{folder}: no checkerboard set here (folder not found)")
+    meta = read_json(meta_path, "checkerboard metadata")
     try:
-        meta = json.loads(meta_path.read_text())
         names = [str(n) for n in meta["images"]]
         pattern_size, square_mm = _check_pattern(tuple(meta["pattern_size"]), float(meta["square_mm"]))
         width, height = (int(n) for n in meta["image_size"])
-    except FileNotFoundError:
-        raise ValueError(f"{meta_path}: checkerboard metadata not found") from None
-    except (json.JSONDecodeError, UnicodeDecodeError, KeyError, TypeError, ValueError) as e:
+    except (KeyError, TypeError, ValueError) as e:
         raise ValueError(f"{meta_path}: malformed checkerboard metadata ({e})") from None
     images = []
     for name in names:

@@ -11,9 +11,6 @@ around hue 0 and is missed below 140, and dark blocks (green, blue) have weak sa
 
 from __future__ import annotations
 
-import json
-import os
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -22,6 +19,7 @@ import numpy as np
 
 from armlab._paths import data_path
 from armlab.blocks import COLORS, LAB_RGB
+from armlab.files import read_json, write_json_atomic
 
 __all__ = ["ColorModel", "color_features", "white_balance_gains", "default_color_model", "COLOR_MODEL_FILE",
            "LAB_HSV_TABLE", "hsv_table_classify"]
@@ -102,28 +100,17 @@ class ColorModel:
 
     def save(self, path, note: str = "") -> None:
         """Write the model as JSON (atomic: a temporary file in the same folder, then replace)."""
-        path = Path(path)
-        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-        try:
-            with os.fdopen(fd, "w") as f:
-                json.dump({"format": "armlab-color-model/1", "note": note, "names": list(self.names),
-                           "means": self.means.tolist(), "stds": self.stds.tolist()}, f, indent=1)
-                f.write("\n")
-            os.replace(tmp, path)
-        except BaseException:
-            Path(tmp).unlink(missing_ok=True)
-            raise
+        write_json_atomic(path, {"format": "armlab-color-model/1", "note": note, "names": list(self.names),
+                                 "means": self.means.tolist(), "stds": self.stds.tolist()})
 
     @staticmethod
     def load(path) -> ColorModel:
         """Read a model saved by save(); raises ValueError naming the file and problem."""
         path = Path(path)
+        raw = read_json(path, "colour model")
         try:
-            raw = json.loads(path.read_text())
             model = ColorModel(tuple(raw["names"]), np.array(raw["means"], float), np.array(raw["stds"], float))
-        except FileNotFoundError:
-            raise ValueError(f"{path}: colour model file not found") from None
-        except (json.JSONDecodeError, KeyError, TypeError, ValueError) as e:
+        except (KeyError, TypeError, ValueError) as e:
             raise ValueError(f"{path}: corrupt colour model ({e})") from None
         k = len(model.names)
         if k < 2 or len(set(model.names)) != k or not set(model.names) <= set(COLORS):

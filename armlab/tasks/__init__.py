@@ -2,7 +2,8 @@
 and repeat. Everything works the same on make_station("sim") and make_station("real"). Units: mm, rad, s."""
 
 from . import teach
-from .click import ClickRefused, click_drop, click_grab, click_world
+from .click import ClickRefused, click_drop, click_grab, click_world, current_view
+from .click_widget import ClickResult, ClickToGrab
 from .guard import GuardedArm
 from .machine import STATES, MachineBusy, TaskMachine
 from .perception import Observation, calibrate_camera, clear_view, surface_point
@@ -10,7 +11,8 @@ from .pickplace import RELEASE_GAP_MM, TaskContext, calibrate_sag, context, look
 from .sag import LAB_BASELINE, SagModel, calibration_poses, fit_sag
 from .teach import TeachFileError, TeachProgram, load_teach, plot_teach, repeat, save_teach
 
-__all__ = ["teach", "ClickRefused", "click_drop", "click_grab", "click_world", "STATES", "MachineBusy", "TaskMachine",
+__all__ = ["teach", "ClickRefused", "click_drop", "click_grab", "click_world", "current_view",
+           "ClickResult", "ClickToGrab", "STATES", "MachineBusy", "TaskMachine",
            "GuardedArm", "Observation", "calibrate_camera", "clear_view", "surface_point", "RELEASE_GAP_MM",
            "TaskContext", "calibrate_sag", "context", "look", "pick", "place", "LAB_BASELINE", "SagModel",
            "calibration_poses", "fit_sag", "TeachProgram", "TeachFileError", "load_teach", "save_teach",

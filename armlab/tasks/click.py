@@ -21,7 +21,7 @@ from armlab.lab import lab_config
 from . import perception
 from .pickplace import context, look, pick, place
 
-__all__ = ["ClickRefused", "click_grab", "click_drop", "click_world"]
+__all__ = ["ClickRefused", "click_grab", "click_drop", "click_world", "current_view"]
 
 
 class ClickRefused(ValueError):
@@ -47,7 +47,7 @@ def click_world(station, uv, frame=None) -> np.ndarray:
     return p
 
 
-def _current(station):
+def current_view(station):
     """The frame the user sees: the last look (taken now, arm out of view, when there is none yet)."""
     ctx = context(station)
     return ctx.last if ctx.last is not None else look(station)
@@ -59,7 +59,7 @@ def click_grab(station, uv) -> bool:
     ctx = context(station)
     if ctx.held is not None:
         raise ClickRefused(f"the gripper already holds the {ctx.held.color} block: drop it first")
-    obs = _current(station)
+    obs = current_view(station)
     p = click_world(station, uv, obs.frame)
     if not obs.blocks:
         raise ClickRefused(f"no block on the board to grab (click at ({p[0]:.0f}, {p[1]:.0f}) mm)")
@@ -83,7 +83,7 @@ def click_drop(station, uv, yaw: float = 0.0) -> bool:
     ctx = context(station)
     if ctx.held is None:
         raise ClickRefused("the gripper holds no block: grab one first")
-    p = click_world(station, uv, _current(station).frame)
+    p = click_world(station, uv, current_view(station).frame)
     held = ctx.held
     if np.hypot(*(p[:2] - held.position[:2])) < held.edge_mm / 2 and p[2] > held.position[2] - held.edge_mm / 2:
         p[2] = held.position[2] - block_edge(held.size)      # the frame still shows the block the arm now holds

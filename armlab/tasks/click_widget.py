@@ -23,7 +23,7 @@ import numpy as np
 
 from armlab.station import EmergencyStopped, MotionRefused
 
-from .click import ClickRefused, _current, click_drop, click_grab, click_world
+from .click import ClickRefused, click_drop, click_grab, click_world, current_view
 from .pickplace import context
 
 __all__ = ["ClickResult", "ClickToGrab", "event_pixel", "encode_view", "scaled_size"]
@@ -177,7 +177,7 @@ class ClickToGrab:
 
     def frame_size(self) -> tuple[int, int]:
         """(W, H) px of the camera frame the clicks refer to."""
-        H, W = _current(self.station).frame.rgb.shape[:2]
+        H, W = current_view(self.station).frame.rgb.shape[:2]
         return W, H
 
     def image_size(self) -> tuple[int, int]:
@@ -186,7 +186,7 @@ class ClickToGrab:
 
     def view(self) -> tuple[bytes, tuple[int, int]]:
         """The shown image: (JPEG bytes, (w, h) px) of the current frame with the last click marked."""
-        return encode_view(_current(self.station).frame.rgb, self.scale, self._marker)
+        return encode_view(current_view(self.station).frame.rgb, self.scale, self._marker)
 
     def click(self, uv) -> ClickResult:
         """Act on a click at camera pixel uv = (u, v): grab when the gripper is empty, else drop. Never raises for
@@ -201,7 +201,7 @@ class ClickToGrab:
         try:
             if not valid:
                 raise ClickRefused(f"a click is a pixel (u, v) of 2 finite numbers, got {uv}")
-            world = click_world(self.station, uv, _current(self.station).frame)
+            world = click_world(self.station, uv, current_view(self.station).frame)
             where += f" -> world {_fmt(world)} mm"
             ctx.arm = recorder
             try:
