@@ -207,7 +207,7 @@ print("misaligned wrist OK: roll 0 fails or shoves the block; the roll from the 
 # or with the event dictionary the browser would send.
 
 # %%
-from armlab.tasks.click_widget import ClickToGrab
+from armlab.tasks import ClickToGrab
 
 panel = ClickToGrab(station)
 panel.widget()
