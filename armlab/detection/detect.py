@@ -16,7 +16,7 @@ import numpy as np
 
 from armlab.camera import Camera
 from armlab.detection.color import ColorModel, default_color_model, white_balance_gains
-from armlab.detection.heightmap import height_from_depth, pixels_to_plane, world_coefficients
+from armlab.detection.heightmap import height_from_depth, pixels_to_plane, reduced_coefficients, world_coefficients
 from armlab.detection.masks import arm_mask
 from armlab.detection.segment import Face, segment_faces
 from armlab.images import check_depth, check_rgb
@@ -97,18 +97,24 @@ def stack_levels(top_z: float, edge_mm: float, edges=None, max_levels: int = 6) 
 
     The stack is the top block over blocks at least as large (the lab stacks larger blocks below): the count of
     large and small blocks whose heights add up closest to top_z, the fewer blocks on a near tie (< 1.5 mm)."""
-    edges = sorted((edges or lab_config().block_edges_mm).values(), reverse=True)
+    edges = tuple(sorted((edges or lab_config().block_edges_mm).values(), reverse=True))
     below = top_z - edge_mm
-    best = (np.inf, 1)
-    for n_big in range(max_levels):
-        for n_small in range(max_levels - n_big):
-            if n_small and edge_mm > edges[-1] + 0.5 * (edges[0] - edges[-1]):
-                continue  # a large block does not sit on a small one
-            err = abs(below - n_big * edges[0] - n_small * edges[-1])
-            levels = 1 + n_big + n_small
-            if err < best[0] - 1.5 or (abs(err - best[0]) <= 1.5 and levels < best[1]):
-                best = (err, levels)
-    return best[1]
+    large_top = edge_mm > edges[-1] + 0.5 * (edges[0] - edges[-1])
+    best_err, best_levels = np.inf, 1
+    for height, levels in _stack_candidates(edges, max_levels, large_top):
+        err = abs(below - height)
+        if err < best_err - 1.5 or (abs(err - best_err) <= 1.5 and levels < best_levels):
+            best_err, best_levels = err, levels
+    return best_levels
+
+
+@functools.lru_cache(maxsize=16)
+def _stack_candidates(edges: tuple, max_levels: int, large_top: bool) -> tuple[tuple[float, int], ...]:
+    """The (height below the top block, levels) of every stack stack_levels weighs, in its order of trial: large
+    edges[0] and small edges[-1] blocks under the top one (no small one under a large top)."""
+    return tuple((n_big * edges[0] + n_small * edges[-1], 1 + n_big + n_small)
+                 for n_big in range(max_levels) for n_small in range(max_levels - n_big)
+                 if not (n_small and large_top))
 
 
 @functools.lru_cache(maxsize=4)
@@ -167,34 +173,41 @@ def _refine_by_colour(face: Face, f: _Frame, pad: int = 6):
     H, W = f.depth.shape
     x0, y0, x1, y1 = max(0, x - pad), max(0, y - pad), min(W, x + w + pad), min(H, y + h + pad)
     seed = np.zeros((y1 - y0, x1 - x0), np.uint8)
-    big = np.repeat(np.repeat(face.mask, s, axis=0), s, axis=1).astype(np.uint8)
+    big = face.mask.view(np.uint8)
+    if s > 1:
+        big = cv2.resize(big, None, fx=s, fy=s, interpolation=cv2.INTER_NEAREST)   # each sample becomes s x s
     seed[y - y0:y - y0 + big.shape[0], x - x0:x - x0 + big.shape[1]] = big[:y1 - y, :x1 - x]
-    core = cv2.erode(seed, np.ones((7, 7), np.uint8)).astype(bool)
-    if core.sum() < 20:
-        core = seed.astype(bool)
-    patch = f.rgb[y0:y1, x0:x1].astype(np.float32)
-    colours = patch[core]
-    mean = colours.mean(axis=0)
-    spread = np.maximum(colours.std(axis=0), 4.0)
-    distance = np.sqrt((((patch - mean) / spread) ** 2).sum(-1)).astype(np.float32)
+    core = cv2.erode(seed, np.ones((7, 7), np.uint8))
+    if cv2.countNonZero(core) < 20:
+        core = seed
+    rgb = f.rgb[y0:y1, x0:x1]
+    mean, spread = (v.ravel() for v in cv2.meanStdDev(rgb, mask=core))
+    spread = np.maximum(spread, 4.0)
+    # the colour distance in core spreads: one affine transform per channel, then the root of the squares' sum
+    scaled = cv2.transform(rgb.astype(np.float32), np.column_stack([np.diag(1 / spread), -mean / spread]))
+    distance = cv2.sqrt(cv2.transform(scaled * scaled, np.ones((1, 3))))
     height = f.depth[y0:y1, x0:x1] * f.kz[y0:y1, x0:x1] + f.tz
-    no_return = ~np.isfinite(height)
-    height = cv2.medianBlur(np.nan_to_num(height, nan=face.height_mm), 5)   # no return: neither below nor above
+    no_return = np.isnan(height)
+    cv2.patchNaNs(height, face.height_mm)        # no return: neither below nor above
+    height = cv2.medianBlur(height, 5)
     not_below = height > face.height_mm - 10.0
     occluder = height > face.height_mm + 8.0
     if f.arm_small is not None:
         arm = f.arm_small[(y0 // s):(y1 + s - 1) // s, (x0 // s):(x1 + s - 1) // s]
-        arm = np.repeat(np.repeat(arm, s, axis=0), s, axis=1)[y0 % s:, x0 % s:][:y1 - y0, :x1 - x0]
-        # the arm's dark grey is never the face; it hides the face where it is above it (occluder, from the
-        # heights) or where it gave no return (unless the pixel has the face's colour: a dark face's dropouts)
-        arm &= _arm_coloured(f.rgb[y0:y1, x0:x1])
-        not_below &= ~arm
-        occluder |= arm & no_return & (distance >= 3.5)
+        if arm.any():
+            if s > 1:
+                arm = cv2.resize(arm.view(np.uint8), None, fx=s, fy=s, interpolation=cv2.INTER_NEAREST)
+            arm = arm.view(bool)[y0 % s:, x0 % s:][:y1 - y0, :x1 - x0]
+            # the arm's dark grey is never the face; it hides the face where it is above it (occluder, from the
+            # heights) or where it gave no return (unless the pixel has the face's colour: a dark face's dropouts)
+            arm = arm & _arm_coloured(rgb)
+            not_below &= ~arm
+            occluder |= arm & no_return & (distance >= 3.5)
     candidate = ((distance < 3.5) & not_below).astype(np.uint8)
     n, labels = cv2.connectedComponents(candidate, connectivity=4)
     if n <= 1:
         return seed, (x0, y0), mean, occluder, distance
-    overlap = np.bincount(labels[seed.astype(bool)], minlength=n)
+    overlap = np.bincount(labels[seed.view(bool)], minlength=n)
     overlap[0] = 0
     mask = (labels == int(np.argmax(overlap))).astype(np.uint8)
     return cv2.morphologyEx(mask, cv2.MORPH_CLOSE, np.ones((3, 3), np.uint8)), (x0, y0), mean, occluder, distance
@@ -434,48 +447,56 @@ def _measure(face: Face, f: _Frame, settings: DetectionSettings) -> _Measured:
                      bool(cube_sized), outline, blocked, pixel_mm, contour, mean_rgb, feature, near, origin)
 
 
-def _describe(m: _Measured, f: _Frame, settings: DetectionSettings, color_model: ColorModel,
-              gains: np.ndarray) -> Block:
-    """The Block of a measured face (its yaw refined when it is cube-sized): shape check, size, colour, stack."""
-    (w, h), theta, centre_xy, pixel_mm = m.sides, m.theta, m.centre, m.pixel_mm
-    edge = float(np.sqrt(w * h))
-    if m.complete:
-        o32 = m.outline.astype(np.float32)
-        area = cv2.contourArea(o32) + 0.5 * pixel_mm * cv2.arcLength(o32, True)
-        rectangularity = float(area / (w * h)) if w * h > 0 else 0.0
-    else:   # the free outline's distance to the fitted square's sides
-        axes = np.array([[np.cos(theta), np.sin(theta)], [-np.sin(theta), np.cos(theta)]])
-        local = np.abs((m.outline[~m.blocked] - centre_xy) @ axes.T)
-        off = np.min(np.abs(local - (np.array([w, h]) - pixel_mm) / 2), axis=1)
-        rectangularity = float(np.mean(off < 2.5))
-    is_cube = m.cube_sized and rectangularity >= settings.min_rectangularity
-    size = "large" if edge > settings.size_split else "small"
-    names, margin = color_model.classify((m.mean_rgb * gains)[None])
-    centre = np.array([centre_xy[0], centre_xy[1], m.face.height_mm])
-    u, v = f.camera.project(centre[None])[0]
-    return Block(color=names[0], size=size, position=centre, yaw=_wrap_yaw(theta), pixel=(float(u), float(v)),
-                 edge_mm=edge, shape="cube" if is_cube else "distractor",
-                 levels=stack_levels(m.face.height_mm, lab_config().block_edges_mm[size]),
-                 color_margin=float(margin[0]), contour=m.contour, mean_rgb=m.mean_rgb, white_balance=gains)
+def _describe(measured: list[_Measured], f: _Frame, settings: DetectionSettings, color_model: ColorModel,
+              gains: np.ndarray) -> list[Block]:
+    """The Blocks of the measured faces (yaws already refined): shape check, size, colour, stack. The colours and
+    pixels of all faces in one call each."""
+    if not measured:
+        return []
+    names, margins = color_model.classify(np.array([m.mean_rgb * gains for m in measured]))
+    centres = np.array([[m.centre[0], m.centre[1], m.face.height_mm] for m in measured], float)
+    pixels = f.camera.project(centres)
+    block_edges = lab_config().block_edges_mm
+    out = []
+    for m, name, margin, centre, (u, v) in zip(measured, names, margins, centres, pixels):
+        (w, h), theta, centre_xy, pixel_mm = m.sides, m.theta, m.centre, m.pixel_mm
+        edge = float(np.sqrt(w * h))
+        if m.complete:
+            o32 = m.outline.astype(np.float32)
+            area = cv2.contourArea(o32) + 0.5 * pixel_mm * cv2.arcLength(o32, True)
+            rectangularity = float(area / (w * h)) if w * h > 0 else 0.0
+        else:   # the free outline's distance to the fitted square's sides
+            axes = np.array([[np.cos(theta), np.sin(theta)], [-np.sin(theta), np.cos(theta)]])
+            local = np.abs((m.outline[~m.blocked] - centre_xy) @ axes.T)
+            off = np.min(np.abs(local - (np.array([w, h]) - pixel_mm) / 2), axis=1)
+            rectangularity = float(np.mean(off < 2.5))
+        is_cube = m.cube_sized and rectangularity >= settings.min_rectangularity
+        size = "large" if edge > settings.size_split else "small"
+        out.append(Block(color=name, size=size, position=centre, yaw=_wrap_yaw(theta), pixel=(float(u), float(v)),
+                         edge_mm=edge, shape="cube" if is_cube else "distractor",
+                         levels=stack_levels(m.face.height_mm, block_edges[size]),
+                         color_margin=float(margin), contour=m.contour, mean_rgb=m.mean_rgb, white_balance=gains))
+    return out
 
 
 def _on_board(height_small: np.ndarray, valid: np.ndarray, f: _Frame, settings: DetectionSettings) -> np.ndarray:
     """`valid` without the raised pixels whose world (x, y) is off the board (margin) or over the robot's base.
     Only raised pixels are turned into world points: a fraction of the image."""
-    rows, cols = np.nonzero(valid & (height_small > settings.min_height))
-    if len(rows) == 0:
+    idx = np.flatnonzero(valid & (height_small > settings.min_height))
+    if len(idx) == 0:
         return valid
     s = f.step
-    k = world_coefficients(f.camera)
+    rows, cols = np.divmod(idx, valid.shape[1])
+    k = reduced_coefficients(f.camera, s).reshape(3, -1) if s > 1 else world_coefficients(f.camera).reshape(3, -1)
     z = f.depth[rows * s, cols * s]
     t = f.camera.T_world_cam[:3, 3]
-    xy = np.stack([k[0, rows * s, cols * s] * z + t[0], k[1, rows * s, cols * s] * z + t[1]], axis=-1)
+    xy = np.stack([k[0, idx] * z + t[0], k[1, idx] * z + t[1]], axis=-1)
     cfg = lab_config()
     m = settings.board_margin
     bad = ((xy[:, 0] < cfg.board_x[0] + m) | (xy[:, 0] > cfg.board_x[1] - m) | (xy[:, 1] < cfg.board_y[0] + m)
            | (xy[:, 1] > cfg.board_y[1] - m) | cfg.on_robot_base(xy, margin_mm=15.0))
     out = valid.copy()
-    out[rows[bad], cols[bad]] = False
+    out.ravel()[idx[bad]] = False
     return out
 
 
@@ -499,11 +520,11 @@ def detect_objects(rgb, depth_mm, camera: Camera, arm_q=None, color_model: Color
     settings = settings or DetectionSettings()
     color_model = color_model or default_color_model()
     arm_small = None if arm_q is None else arm_mask(camera, arm_q, step=settings.step)
-    if not np.isfinite(depth).any():
-        return []
     f = _Frame(rgb, depth, camera, arm_small, settings.step)
     height = height_from_depth(depth, camera, settings.step)
-    valid = np.isfinite(height) & (height < settings.max_height)
+    valid = height < settings.max_height            # False where there is no return (NaN)
+    if not valid.any():      # no return (or nothing below max_height) among the sampled pixels: nothing to find
+        return []
     if arm_small is not None:   # inside the arm's reach in the image, only the arm's own dark grey is masked
         rows, cols = np.flatnonzero(arm_small.any(axis=1)), np.flatnonzero(arm_small.any(axis=0))
         if len(rows):
@@ -522,7 +543,7 @@ def detect_objects(rgb, depth_mm, camera: Camera, arm_q=None, color_model: Color
     cubes = [m for m in measured if m.cube_sized]      # the yaw of what cannot be a cube is not worth refining
     for m, theta in zip(cubes, _refine_yaws(camera, cubes)):
         m.theta = float(theta)
-    found = [_describe(m, f, settings, color_model, gains) for m in measured]
+    found = _describe(measured, f, settings, color_model, gains)
     found.sort(key=lambda b: float(np.hypot(*b.position[:2])))
     return found
 
