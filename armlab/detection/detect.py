@@ -153,13 +153,21 @@ def _board_white_balance(rgb: np.ndarray, height_small: np.ndarray, valid: np.nd
     h = height_small[::4, ::4]
     with np.errstate(invalid="ignore"):
         sample = valid[::4, ::4] & (h < 4.0) & (h > -4.0)
-    pixels = rgb[::4 * step, ::4 * step][sample]
-    if len(pixels) < 100:
+    n = int(np.count_nonzero(sample))
+    if n < 100:
         return np.ones(3)
-    # the printed grid and tags are dark: use the bright majority of the board
-    total = pixels.sum(1, dtype=np.int32)
-    bright = pixels[total >= np.percentile(total, 40)]
-    return white_balance_gains(bright.mean(axis=0))
+    # the printed grid and tags are dark: use the bright majority of the board (brightness R + G + B at or above
+    # its 40th percentile, linearly interpolated as numpy's percentile)
+    sub = rgb[::4 * step, ::4 * step].astype(np.float32)
+    total = cv2.transform(sub, np.ones((1, 3)))
+    values = total[sample]
+    q = 0.4 * (n - 1)
+    lo = int(q)
+    hi = min(lo + 1, n - 1)
+    part = np.partition(values, [lo, hi])
+    threshold = part[lo] + (q - lo) * (part[hi] - part[lo])
+    bright = (sample & (total >= threshold)).view(np.uint8)
+    return white_balance_gains(np.array(cv2.mean(sub, mask=bright)[:3]))
 
 
 def _refine_by_colour(face: Face, f: _Frame, pad: int = 6):
@@ -368,27 +376,50 @@ def _refine_yaws(camera: Camera, faces: list[_Measured], iterations: int = 3) ->
     dist = half[:, [0, 1, 0, 1]]                                           # (F, 4) centre to side
     t = _PROFILE_T[None, None] * half[:, [1, 0, 1, 0], None]               # (F, 4, M) along each side
     s = _PROFILE_S
-    homographies = []
-    for m in faces:
-        H = _plane_homography(camera, m.centre, m.face.height_mm, float(np.max(m.sides)) / 2 + EDGE_SEARCH_MM)
+    # one plane homography per face (world (x, y) at the face's height -> pixels), from one projection of all faces'
+    # corner points; then into an atlas that stacks the faces' patches (feature and occluder masks) with gaps, so
+    # that each iteration samples every face in one remap
+    reach = half.max(axis=1) + EDGE_SEARCH_MM
+    square = centre[:, None] + reach[:, None, None] * np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]], float)
+    z = np.repeat([m.face.height_mm for m in faces], 4)
+    uv = camera.project(np.column_stack([square.reshape(-1, 2), z])).reshape(n_faces, 4, 2)
+    gap = 4                                                                # >= 3 px
+    shapes = np.array([m.feature.shape for m in faces])
+    top = gap + np.concatenate([[0], np.cumsum(shapes[:, 0] + gap)[:-1]])
+    feature = np.full((int(top[-1] + shapes[-1, 0] + gap), int(shapes[:, 1].max() + 2 * gap)), np.nan, np.float32)
+    near = np.ones(feature.shape, np.uint8)
+    homographies = np.empty((n_faces, 3, 3))
+    for i, m in enumerate(faces):
+        h, w = m.feature.shape
+        feature[top[i]:top[i] + h, gap:gap + w] = m.feature
+        near[top[i]:top[i] + h, gap:gap + w] = m.near
+        H = cv2.getPerspectiveTransform(square[i].astype(np.float32), uv[i].astype(np.float32))
         H[:2] -= np.outer(m.origin, H[2])                                  # pixels of the face's patch
-        homographies.append(H)
+        homographies[i] = H
+    size = shapes[:, ::-1].astype(float)                                   # (F, 2) patch width, height
+    shift = np.column_stack([np.full(n_faces, gap), top]).astype(float)   # (F, 2) patch origin in the atlas
     prof = np.empty((n_faces, 4, len(_PROFILE_T), len(s)), np.float32)
     for _ in range(iterations):
         ang = theta[:, None] + np.arange(4) * (np.pi / 2)
         normal = np.stack([np.cos(ang), np.sin(ang)], axis=-1)            # (F, 4, 2) outward
         tangent = np.stack([-normal[..., 1], normal[..., 0]], axis=-1)
-        xy = (centre[:, None, None, None] + (dist[:, :, None, None, None] + s[:, None]) * normal[:, :, None, None]
-              + t[..., None, None] * tangent[:, :, None, None])          # (F, 4, M, K, 2) world mm
-        for i, (m, H) in enumerate(zip(faces, homographies)):
-            w = xy[i] @ H[:2, :2].T + H[:2, 2]
-            d = xy[i] @ H[2, :2] + H[2, 2]
-            mx = (w[..., 0] / d).astype(np.float32).reshape(-1, len(s))
-            my = (w[..., 1] / d).astype(np.float32).reshape(-1, len(s))
-            p = cv2.remap(m.feature, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=np.nan)
-            hidden = cv2.remap(m.near, mx, my, cv2.INTER_NEAREST, borderMode=cv2.BORDER_CONSTANT, borderValue=1)
-            p[hidden > 0] = np.nan
-            prof[i] = p.reshape(prof.shape[1:])
+        # the samples' world points c + (dist + s) n + t tangent are affine in (s, t): so are their homogeneous
+        # pixels, H [c + dist n, 1] + s H [n, 0] + t H [tangent, 0]
+        base = np.concatenate([centre[:, None] + dist[..., None] * normal, np.ones((n_faces, 4, 1))], axis=-1)
+        hb = np.einsum("fij,faj->fai", homographies, base)                 # (F, 4, 3)
+        hn = np.einsum("fij,faj->fai", homographies[:, :, :2], normal)
+        ht = np.einsum("fij,faj->fai", homographies[:, :, :2], tangent)
+        hom = (hb[:, :, None, None] + s[:, None] * hn[:, :, None, None]
+               + t[..., None, None] * ht[:, :, None, None])               # (F, 4, M, K, 3)
+        px = hom[..., :2] / hom[..., 2:]                                   # patch pixels
+        # a sample off its patch reads the atlas's gap around the patch, NaN (feature) and 1 (occluded), as the
+        # border of a remap of the patch alone would: clipped to 1.5 px (linear) / 1 px (nearest) off the patch
+        px = (np.clip(px, -1.5, size[:, None, None, None] + 0.5) + shift[:, None, None, None]).astype(np.float32)
+        px = px.reshape(-1, len(s), 2)
+        p = cv2.remap(feature, px, None, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=np.nan)
+        hidden = cv2.remap(near, px, None, cv2.INTER_NEAREST, borderMode=cv2.BORDER_CONSTANT, borderValue=1)
+        p[hidden > 0] = np.nan
+        prof[:] = p.reshape(prof.shape)
         edge, ok = _edge_offsets(prof, s)
         mid = centre[:, None] + normal * dist[..., None]
         sees_side = np.einsum("fij,fij->fi", normal, camera.position[:2] - mid) > 0

@@ -36,11 +36,20 @@ class Face:
         return r + self.bbox[1], c + self.bbox[0]
 
 
+def _median(values: np.ndarray) -> float:
+    """np.median of a non-empty 1-d array without NaN (the same value, a fraction of the call's overhead)."""
+    k = len(values) // 2
+    if len(values) % 2:
+        return float(np.partition(values, k)[k])
+    part = np.partition(values, [k - 1, k])
+    return float((part[k - 1] + part[k]) / 2)
+
+
 def _plateau_levels(heights: np.ndarray, bin_mm: float, min_pixels: int) -> list[float]:
     """Heights (mm) of the histogram peaks that hold at least `min_pixels` pixels within +-1.5 bins."""
     lo = float(heights.min()) - bin_mm
-    hist = np.bincount(((heights - lo) / bin_mm).astype(np.intp))      # bins [lo + i bin, lo + (i + 1) bin)
-    hist = np.append(hist, [0, 0])
+    bins = ((heights - lo) / bin_mm).astype(np.intp)                   # bins [lo + i bin, lo + (i + 1) bin)
+    hist = np.bincount(bins, minlength=int(bins.max()) + 3)             # and two empty bins above
     edges = lo + bin_mm * np.arange(len(hist) + 1)
     smooth = np.convolve(hist, [1, 2, 3, 2, 1], mode="same")
     inner = smooth[1:-1]
@@ -93,6 +102,6 @@ def segment_faces(height_mm: np.ndarray, valid: np.ndarray, min_height_mm: float
                 fx, fy, fw, fh, _ = part_stats[j]
                 sil = parts[fy:fy + fh, fx:fx + fw] == j
                 mask = sil & on_level[fy:fy + fh, fx:fx + fw]
-                face_h = float(np.median(sub_h[fy:fy + fh, fx:fx + fw][mask]))
+                face_h = _median(sub_h[fy:fy + fh, fx:fx + fw][mask])
                 faces.append(Face((int(x + fx), int(y + fy), int(fw), int(fh)), mask, face_h, sil))
     return faces
