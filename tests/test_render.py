@@ -222,15 +222,26 @@ def test_bad_input_is_refused():
         render(true_camera(CameraRealism.ideal()), [], SLEEP)
 
 
-def test_partial_lens_update_matches_the_whole_image():
+@pytest.mark.parametrize("crowded", [False, True])
+def test_partial_lens_update_matches_the_whole_image(crowded):
     from armlab.sim.raster import view_for
     from armlab.sim.render import board_canvas, draw_faces, scene_faces
     camera = true_camera(EXACT_DISTORTED)
     view = view_for(camera)
-    objs = [cube("red", -300, 100, id=1), cube("blue", 200, 380, 25, id=2)]
+    if crowded:     # 30 blocks, some at the image border, and the arm reaching across: groups split into bands
+        rng = np.random.default_rng(5)
+        objs = [cube(("red", "blue", "green")[i % 3], rng.uniform(-560, 560), rng.uniform(-180, 500),
+                     38.0 if i % 2 else 25.0, yaw=rng.uniform(0, 1.5), id=i) for i in range(30)]
+        q = np.array([0.3, -0.2, 0.3, 0.9, 0.2])
+    else:
+        objs = [cube("red", -300, 100, id=1), cube("blue", 200, 380, 25, id=2)]
+        q = SLEEP
     canvas = board_canvas(view).copy()
-    draw_faces(view, canvas, scene_faces(objs, SLEEP, 40.0, GRIPPER))
-    assert canvas.dirty and len(view._dirty_runs(canvas.dirty)) > 0
+    draw_faces(view, canvas, scene_faces(objs, q, 40.0, GRIPPER))
+    groups = view._dirty_groups(canvas.dirty)
+    rects = view._dirty_runs(canvas.dirty)
+    assert len(groups) > 0 and len(rects) == len(groups)
+    assert sum((u1 - u0) * (v1 - v0) for u0, v0, u1, v1 in rects) < 0.5 * camera.width * camera.height
     part = view.finish(canvas)
     canvas.dirty = None                                     # unknown changes: the lens over the whole image
     whole = view.finish(canvas)

@@ -7,9 +7,10 @@ depth 1/Z (1/mm; 0 = nothing). For a plane, 1/Z is an affine function of undisto
 exact per pixel and interpolates exactly. `View.finish` applies the lens distortion with `cv2.remap` through maps
 computed once per camera and returns the image the camera records: RGB uint8, depth float32 mm (camera-frame Z).
 
-Speed (a 1280x720 frame in ~10-25 ms on one core): the board is drawn once per camera into a frozen canvas whose
-camera image is cached too; a frame copies it, draws its few hundred faces (one masked z-test per face box, OpenCV
-fills and copies), and redoes the lens only in the image tiles whose source pixels a face box touched.
+Speed: the board is drawn once per camera into a frozen canvas whose camera image (and surface-edge mask) is cached
+too; a frame copies it, draws its few hundred faces (one masked z-test per face box, OpenCV fills and copies), and
+redoes the lens only in the image rectangles whose source pixels a face box reaches (face boxes grouped by the
+8 px cells they touch, the lens model mapping each group's box into the image).
 
 Units: mm; pixels in OpenCV's convention (integer = pixel centre). Camera frame: x right, y down, z forward.
 """
@@ -21,7 +22,7 @@ import functools
 import cv2
 import numpy as np
 
-from armlab.camera import Camera
+from armlab.camera import Camera, distort_normalized
 
 __all__ = ["View", "Canvas", "view_for", "NEAR_MM"]
 
@@ -43,6 +44,7 @@ class Canvas:
         self.base: Canvas | None = None
         self.dirty: list[tuple[int, int, int, int]] | None = None
         self.finished = None         # a frozen canvas caches View.finish's result here
+        self.edges = None            # ... and its surface-edge mask (uint8, canvas size)
 
     @property
     def frozen(self) -> bool:
@@ -58,7 +60,7 @@ class Canvas:
         """A writable copy (of a frozen canvas: with it as base and nothing dirty yet)."""
         c = Canvas.__new__(Canvas)
         c.rgb, c.inv_depth, c.surface = self.rgb.copy(), self.inv_depth.copy(), self.surface.copy()
-        c.base, c.dirty, c.finished = (self, [], None) if self.frozen else (None, None, None)
+        c.base, c.dirty, c.finished, c.edges = (self, [], None, None) if self.frozen else (None, None, None, None)
         return c
 
     def mark_dirty(self, rect: tuple[int, int, int, int] | None) -> None:
@@ -108,11 +110,20 @@ class View:
             # fixed-point maps: faster remaps; the nearest maps pick the canvas pixel whose centre is closest
             self._fixed = cv2.convertMaps(map_x, map_y, cv2.CV_16SC2)
             self._nearest = cv2.convertMaps(np.rint(map_x), np.rint(map_y), cv2.CV_16SC2, nninterpolation=True)[0]
-            self._tiles = _tile_sources(map_x, map_y)
         self._u = np.arange(self.width, dtype=np.float32)
         self._v = np.arange(self.height, dtype=np.float32)
+        self._grid_cache: tuple[np.ndarray, np.ndarray] | None = None
         R, t = camera.T_cam_world[:3, :3], camera.T_cam_world[:3, 3]
         self._H_world = self.K @ np.column_stack([R[:, 0], R[:, 1], t])   # board plane (x, y, 1) -> canvas pixel
+
+    @property
+    def _grid(self) -> tuple[np.ndarray, np.ndarray]:
+        """Canvas pixel coordinates u, v as two (H, W) float32 grids (made on first use, read-only)."""
+        if self._grid_cache is None:
+            U, V = np.meshgrid(self._u, self._v)
+            U.flags.writeable = V.flags.writeable = False
+            self._grid_cache = (U, V)
+        return self._grid_cache
 
     # -- geometry helpers -------------------------------------------------------------------------------------------
     def inverse_depth_plane(self, normal, offset: float) -> tuple[float, float, float]:
@@ -210,11 +221,11 @@ class View:
         box = np.clip(box, 0, [Wc, Hc, Wc, Hc]).astype(np.int64)
         corners = np.rint((uv_s - box[:, None, :2]) * 256).astype(np.int32)
         boxes = box.tolist()
-        palette = np.clip(np.rint(colors), 0, 255).astype(np.uint8)
+        palette = np.clip(np.rint(colors), 0, 255).astype(int).tolist()
         mask_buf = np.empty((Hc, Wc), np.uint8)
         surface_buf = np.empty((Hc, Wc), np.uint16)
         color_buf = np.empty((Hc, Wc, 3), np.uint8)
-        u, v = self._u, self._v
+        grid_u, grid_v = self._grid
         for i in np.flatnonzero(front).tolist():
             if needs_clip[i]:
                 P = _clip_near(V[i], NEAR_MM)
@@ -235,16 +246,15 @@ class View:
             mask.fill(0)
             cv2.fillConvexPoly(mask, pts, 1, cv2.LINE_8, 8)
             # float32 inverse depth of the face's plane over the box; the winners: inside and nearer
-            w = np.add.outer(B[i] * v[y0:y1] + C[i], A[i] * u[x0:x1])
+            w = cv2.addWeighted(grid_u[y0:y1, x0:x1], A[i], grid_v[y0:y1, x0:x1], B[i], C[i])
             zb = canvas.inv_depth[y0:y1, x0:x1]
             win = cv2.bitwise_and(cv2.compare(w, zb, cv2.CMP_GT), mask)
             cv2.copyTo(w, win, zb)
             tile = surface_buf[y0:y1, x0:x1]
             tile.fill(surfaces[i])
             cv2.copyTo(tile, win, canvas.surface[y0:y1, x0:x1])
-            tile = color_buf[y0:y1, x0:x1]
-            tile[:] = palette[i]
-            cv2.copyTo(tile, win, canvas.rgb[y0:y1, x0:x1])
+            cv2.rectangle(color_buf, (x0, y0), (x1 - 1, y1 - 1), palette[i], -1)
+            cv2.copyTo(color_buf[y0:y1, x0:x1], win, canvas.rgb[y0:y1, x0:x1])
             canvas.mark_dirty((x0, y0, x1, y1))
 
     # -- the lens ----------------------------------------------------------------------------------------------------
@@ -253,35 +263,49 @@ class View:
         drawn) and a boolean (h, w) mask of pixels next to a surface change (a depth edge or a crease).
 
         With distortion, a copy of a frozen canvas reuses its base's image and redoes the lens only in the image
-        tiles whose source pixels lie near a dirty rectangle (same result, pixel for pixel, as the whole image)."""
+        rectangles whose source pixels lie near a dirty rectangle (same result, pixel for pixel, as the whole
+        image)."""
         if self.identity:
             rgb, inv, edge = canvas.rgb, canvas.inv_depth, _surface_edges(canvas.surface).view(bool)
             depth = cv2.divide(1.0, inv)           # 0 where inv is 0
             depth[inv <= 0] = np.nan
             return rgb, depth, edge
         base = canvas.base
+        W, H = self.camera.width, self.camera.height
         if base is None or canvas.dirty is None:
-            rgb = np.empty((self.camera.height, self.camera.width, 3), np.uint8)
-            depth = np.empty((self.camera.height, self.camera.width), np.float32)
-            edge = np.empty((self.camera.height, self.camera.width), np.uint8)
-            self._lens(canvas, rgb, depth, edge, [(0, 0, self.camera.width, self.camera.height)])
+            rgb = np.empty((H, W, 3), np.uint8)
+            depth = np.empty((H, W), np.float32)
+            edge = np.empty((H, W), np.uint8)
+            edge_canvas = _surface_edges(canvas.surface)
+            self._lens(canvas, edge_canvas, rgb, depth, edge, [(0, 0, W, H)])
         else:
             if base.finished is None:
                 self.finish(base)                  # caches it
             rgb, depth, edge = (a.copy() for a in base.finished)
-            self._lens(canvas, rgb, depth, edge, self._dirty_runs(canvas.dirty))
+            groups = self._dirty_groups(canvas.dirty)
+            if len(groups):
+                # the surface-edge mask of the canvas: the base's, redone where the surface ids may have changed
+                edge_canvas = base.edges.copy()
+                Hc, Wc = self.height, self.width
+                for x0, y0, x1, y1 in groups.tolist():
+                    X0, Y0, X1, Y1 = max(x0 - 1, 0), max(y0 - 1, 0), min(x1 + 1, Wc), min(y1 + 1, Hc)
+                    part = _surface_edges(canvas.surface[Y0:Y1, X0:X1])
+                    edge_canvas[y0:y1, x0:x1] = part[y0 - Y0:y1 - Y0, x0 - X0:x1 - X0]
+                self._lens(canvas, edge_canvas, rgb, depth, edge, self._group_images(groups))
         edge = edge.view(bool)
         if canvas.frozen:
             canvas.finished = (rgb, depth, edge.view(np.uint8))
             for a in canvas.finished:
                 a.flags.writeable = False
+            if base is None and canvas.dirty is None:
+                edge_canvas.flags.writeable = False
+                canvas.edges = edge_canvas
         return rgb, depth, edge
 
-    def _lens(self, canvas: Canvas, rgb: np.ndarray, depth: np.ndarray, edge: np.ndarray, rects) -> None:
-        """Write the distorted image of `canvas` into the image rectangles (u0, v0, u1, v1) of rgb, depth, edge."""
-        if not rects:
-            return
-        edge_canvas = _surface_edges(canvas.surface)
+    def _lens(self, canvas: Canvas, edge_canvas: np.ndarray, rgb: np.ndarray, depth: np.ndarray, edge: np.ndarray,
+              rects) -> None:
+        """Write the distorted image of `canvas` (whose surface-edge mask is `edge_canvas`) into the image
+        rectangles (u0, v0, u1, v1) of rgb, depth, edge."""
         m1, m2 = self._fixed
         for u0, v0, u1, v1 in rects:
             f1, f2, near = m1[v0:v1, u0:u1], m2[v0:v1, u0:u1], self._nearest[v0:v1, u0:u1]
@@ -294,46 +318,86 @@ class View:
             d[inv <= 0] = np.nan
 
     def _dirty_runs(self, dirty: list[tuple[int, int, int, int]]) -> list[tuple[int, int, int, int]]:
-        """Image rectangles covering every tile whose source pixels (with the bilinear and 3x3 edge neighbours) meet a
-        dirty canvas rectangle: per tile row, runs of such tiles (gaps of one clean tile bridged)."""
+        """Image rectangles (u0, v0, u1, v1), end exclusive, covering every image pixel whose lens output can depend
+        on a dirty canvas rectangle (through its bilinear neighbours and the 3x3 surface-edge test): the canvas
+        groups of `_dirty_groups` mapped through the lens (their borders, sampled)."""
+        return self._group_images(self._dirty_groups(dirty))
+
+    def _dirty_groups(self, dirty: list[tuple[int, int, int, int]]) -> np.ndarray:
+        """Canvas rectangles (G, 4) (x0, y0, x1, y1), end exclusive, covering the dirty rectangles grown by the reach
+        of the lens (4 px before, 3 after): rectangles that touch the same LENS_CELL_PX cells (8-connected) form a
+        group, which gives its bounding box, or, when it fills less than three quarters of that (the arm's
+        diagonal), one box per band of LENS_BAND_CELLS cell rows."""
         if not dirty:
+            return np.empty((0, 4), np.int64)
+        W, H = self.width, self.height
+        box = np.clip(np.asarray(dirty, np.int64) + (-4, -4, 3, 3), 0, [W, H, W, H])
+        box = box[(box[:, 0] < box[:, 2]) & (box[:, 1] < box[:, 3])]
+        if not len(box):
+            return np.empty((0, 4), np.int64)
+        c, band = LENS_CELL_PX, LENS_BAND_CELLS
+        rows, cols = -(-H // c), -(-W // c)
+        cells = np.zeros((rows, cols), np.uint8)
+        cb = np.column_stack([box[:, :2] // c, -(-box[:, 2:] // c)])
+        for cx0, cy0, cx1, cy1 in cb.tolist():
+            cells[cy0:cy1, cx0:cx1] = 1
+        n, labels, stats, _ = cv2.connectedComponentsWithStats(cells, connectivity=8)
+        owner = labels[cb[:, 1], cb[:, 0]]
+        ext = np.empty((n, 4), np.int64)
+        ext[:, :2], ext[:, 2:] = np.iinfo(np.int64).max, np.iinfo(np.int64).min
+        for j, fn in enumerate((np.minimum, np.minimum, np.maximum, np.maximum)):
+            fn.at(ext[:, j], owner, box[:, j])
+        sparse = (4 * stats[:, cv2.CC_STAT_AREA] < 3 * stats[:, cv2.CC_STAT_WIDTH] * stats[:, cv2.CC_STAT_HEIGHT]) \
+            & (stats[:, cv2.CC_STAT_HEIGHT] > band)
+        sparse[0] = False
+        out = [ext[1:][~sparse[1:]]]
+        if sparse.any():
+            # per band of cell rows and sparse group: the first and last cell column it covers
+            r, q = np.nonzero(sparse[labels])
+            k = labels[r, q]
+            nb = -(-rows // band)
+            first = np.full((nb, n), cols, np.int64)
+            last = np.full((nb, n), -1, np.int64)
+            np.minimum.at(first, (r // band, k), q)
+            np.maximum.at(last, (r // band, k), q)
+            bi, ki = np.nonzero(last >= 0)
+            e = ext[ki]
+            out.append(np.column_stack([np.maximum(e[:, 0], first[bi, ki] * c), np.maximum(e[:, 1], bi * band * c),
+                                        np.minimum(e[:, 2], (last[bi, ki] + 1) * c),
+                                        np.minimum(e[:, 3], (bi + 1) * band * c)]))
+        return np.concatenate(out)
+
+    def _group_images(self, groups: np.ndarray) -> list[tuple[int, int, int, int]]:
+        """Image rectangles (u0, v0, u1, v1), end exclusive, holding every image pixel whose lens source lies in one
+        of the canvas rectangles `groups` (G, 4)."""
+        if not len(groups):
             return []
-        src, tile = self._tiles
-        r = np.asarray(dirty)
-        hit = ((src[:, :, 0, None] < r[:, 2]) & (src[:, :, 2, None] > r[:, 0])
-               & (src[:, :, 1, None] < r[:, 3]) & (src[:, :, 3, None] > r[:, 1])).any(axis=2)
         W, H = self.camera.width, self.camera.height
-        rects = []
-        for ty, row in enumerate(hit.tolist()):
-            tx = 0
-            while tx < len(row):
-                if not row[tx]:
-                    tx += 1
-                    continue
-                start = tx
-                while tx < len(row) and (row[tx] or (tx + 1 < len(row) and row[tx + 1])):
-                    tx += 1
-                rects.append((start * tile, ty * tile, min(tx * tile, W), min((ty + 1) * tile, H)))
-        return rects
+        r = groups.astype(float)
+        t = np.linspace(0.0, 1.0, 6)
+        x0, y0, x1, y1 = (r[:, i, None] for i in range(4))
+        ones = np.ones_like(t)
+        xs = np.concatenate([x0 + (x1 - x0) * t, x0 + (x1 - x0) * t, x0 * ones, x1 * ones], axis=1)
+        ys = np.concatenate([y0 * ones, y1 * ones, y0 + (y1 - y0) * t, y0 + (y1 - y0) * t], axis=1)
+        img = self._canvas_to_image(np.stack([xs, ys], axis=-1))
+        box = np.column_stack([np.floor(img.min(axis=1)) - 1, np.ceil(img.max(axis=1)) + 2])
+        box = np.clip(box, 0, [W, H, W, H]).astype(np.int64)
+        return [tuple(b) for b in box[(box[:, 0] < box[:, 2]) & (box[:, 1] < box[:, 3])].tolist()]
+
+    def _canvas_to_image(self, uv: np.ndarray) -> np.ndarray:
+        """Image pixels (..., 2) of canvas pixels (..., 2): the lens model forward (inverse of the remap maps)."""
+        fx, s, cx = self.K[0]
+        fy, cy = self.K[1, 1], self.K[1, 2]
+        y = (uv[..., 1] - cy) / fy
+        x = (uv[..., 0] - cx - s * y) / fx
+        xd = distort_normalized(np.stack([x, y], axis=-1), np.asarray(self.camera.dist, float).ravel())
+        K = self.camera.K
+        return np.stack([K[0, 0] * xd[..., 0] + K[0, 1] * xd[..., 1] + K[0, 2], K[1, 1] * xd[..., 1] + K[1, 2]],
+                        axis=-1)
 
 
-TILE_PX = 48                 # image tiles of the partial lens update
-
-
-def _tile_sources(map_x: np.ndarray, map_y: np.ndarray) -> tuple[np.ndarray, int]:
-    """For each TILE_PX image tile: the canvas box (x0, y0, x1, y1), end exclusive, of every canvas pixel its lens
-    output can depend on (bilinear neighbours, and the 3x3 neighbourhoods behind the surface-edge mask):
-    (rows, cols, 4) int, and the tile size."""
-    H, W = map_x.shape
-    rows, cols = -(-H // TILE_PX), -(-W // TILE_PX)
-    src = np.empty((rows, cols, 4), np.int64)
-    for ty in range(rows):
-        for tx in range(cols):
-            mx = map_x[ty * TILE_PX:(ty + 1) * TILE_PX, tx * TILE_PX:(tx + 1) * TILE_PX]
-            my = map_y[ty * TILE_PX:(ty + 1) * TILE_PX, tx * TILE_PX:(tx + 1) * TILE_PX]
-            src[ty, tx] = (np.floor(mx.min()) - 2, np.floor(my.min()) - 2, np.floor(mx.max()) + 3,
-                           np.floor(my.max()) + 3)
-    return src, TILE_PX
+LENS_CELL_PX = 8             # cells grouping the image rectangles of the partial lens update
+LENS_BAND_CELLS = 4          # band height (cells) of a sparse group's boxes
 
 
 def _surface_edges(surface: np.ndarray) -> np.ndarray:
