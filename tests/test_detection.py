@@ -101,7 +101,10 @@ def test_thin_distractors_are_found_and_not_called_blocks():
 
 
 def test_yaw_refinement_recovers_a_turned_start():
-    """The edge refinement alone turns squares started 4 deg off back onto the blocks (exact frame)."""
+    """The edge refinement alone turns squares started 4 deg off back onto the blocks (exact frame): to the yaws the
+    detector finds from its own start (within 0.2 deg), which are within 1 deg of the truth. (An exact frame has no
+    blur: its edges are hard one-pixel staircases, and a small block's sides can lean up to about a degree from the
+    truth whatever the start.)"""
     from armlab.detection import detect as D
 
     station = make_station("sim", seed=11, scene="random", realism="ideal")
@@ -122,12 +125,40 @@ def test_yaw_refinement_recovers_a_turned_start():
     assert len(seen) == len(found) == 6
     truth = [min(station.world.blocks, key=lambda t: np.hypot(*(t.position[:2] - m.centre))) for m in seen]
     assert all(np.hypot(*(t.position[:2] - m.centre)) < 2.0 for t, m in zip(truth, seen))
+    own = [min(found, key=lambda b: np.hypot(*(b.position[:2] - m.centre))).yaw for m in seen]
     for turn in (4.0, -4.0):
         for m, t in zip(seen, truth):
             m.theta = t.yaw + np.radians(turn)
         yaws = real(cam, seen, iterations=3)
-        assert max(np.degrees(yaw_error(y, t.yaw)) for y, t in zip(yaws, truth)) < 0.8
+        assert max(np.degrees(yaw_error(y, o)) for y, o in zip(yaws, own)) < 0.2
+        assert max(np.degrees(yaw_error(y, t.yaw)) for y, t in zip(yaws, truth)) < 1.0
     assert len(real(cam, [])) == 0
+
+
+@pytest.mark.parametrize("spec", [("line_up_2", 105, True), ("line_up_3", 117, True)])
+def test_yaw_of_small_blocks_whose_sides_render_nearly_straight(spec):
+    """Small blocks turned about a degree off the image axes: their sides render as straight lines with at most one
+    pixel step, so an edge's fit residuals understate its slope's error. With the pixel grid's variance added (and
+    sides beside a visible side face counting less) these blocks' yaws stay within 1.5 deg (2.1 and 2.0 deg before,
+    when the straight-looking sides outweighed the rest)."""
+    case = sim_case(*spec)
+    found = detect_objects(case.rgb, corrected_depth(case), case.camera, case.arm_q)
+    pairs = [(d, t) for d, t in score_frame(found, case.truth).pairs
+             if d.shape == "cube" and t.is_block and t.visible >= 0.5]
+    assert sum(t.obj.size == "small" for _, t in pairs) >= 2
+    worst = max(np.degrees(yaw_error(d.yaw, t.obj.yaw)) for d, t in pairs)
+    assert worst < 1.5, (spec, worst)
+
+
+def test_plane_homographies_of_many_faces_match_one_at_a_time(ideal):
+    from armlab.detection.detect import _plane_homographies, _plane_homography
+
+    cam = ideal[0].camera.truth
+    centres, z, reach = np.array([[0.0, 150.0], [-320.0, -100.0]]), np.array([25.0, 38.0]), np.array([20.0, 30.0])
+    many = _plane_homographies(cam, centres, z, reach)
+    assert many.shape == (2, 3, 3)
+    for k in range(2):
+        assert np.allclose(many[k], _plane_homography(cam, centres[k], z[k], reach[k]))
 
 
 def test_plane_homography_matches_the_lens_model(ideal):
@@ -224,6 +255,52 @@ def test_height_map_and_plane_rays_agree_with_the_camera(ideal):
     assert height_from_depth(depth.astype(np.float32), cam, step=2).shape == (360, 640)
     uv = np.array([[0, 0], [640, 360], [1279, 719], [100, 600]])
     assert np.allclose(pixels_to_plane(cam, uv, 38.0), cam.pixel_to_plane(uv.astype(float), 38.0), atol=1e-3)
+
+
+def test_reduced_height_map_is_the_full_one_subsampled(ideal):
+    station, frame = ideal
+    cam = station.camera.truth
+    full = height_from_depth(frame.depth, cam)
+    for step in (2, 3):
+        assert np.array_equal(height_from_depth(frame.depth, cam, step=step), full[::step, ::step], equal_nan=True)
+
+
+def test_segment_faces_boxes_heights_and_valid_mask():
+    from armlab.detection.segment import _median, segment_faces
+
+    h = np.zeros((60, 80), np.float32)
+    h[10:20, 5:15] = 25.0                       # a block
+    h[30:50, 40:60] = 38.0                      # a larger block with a small one on it
+    h[35:42, 45:52] = 63.0
+    h[5:15, 60:70] = 25.0                       # a block outside the valid area
+    h[0, 0] = np.nan
+    valid = np.ones(h.shape, bool)
+    valid[:, 58:] = False
+    faces = segment_faces(h, valid, min_height_mm=10.0, min_face_pixels=20, median_px=3)
+    got = sorted((f.bbox, round(f.height_mm, 3)) for f in faces)
+    assert got == [((5, 10, 10, 10), 25.0), ((40, 30, 18, 20), 38.0), ((45, 35, 7, 7), 63.0)]
+    assert segment_faces(np.zeros((20, 20), np.float32), np.ones((20, 20), bool)) == []
+    rng = np.random.default_rng(3)
+    for n in (1, 2, 7, 10):
+        v = rng.normal(30, 2, n).astype(np.float32)
+        assert _median(v) == float(np.median(v))
+
+
+def test_board_white_balance_uses_the_bright_board_pixels():
+    from armlab.detection.detect import _board_white_balance
+
+    rng = np.random.default_rng(5)
+    rgb = np.empty((720, 1280, 3), np.uint8)
+    rgb[:] = (200, 180, 150)
+    dark = rng.random((720, 1280)) < 0.2          # grid lines: dark, outside the bright majority
+    rgb[dark] = (40, 40, 40)
+    height = np.zeros((360, 640), np.float32)
+    height[:100] = 50.0                              # raised pixels are not board
+    rgb[:200] = (0, 0, 255)
+    gains = _board_white_balance(rgb, height, np.ones((360, 640), bool), 2)
+    assert np.allclose(gains * (200, 180, 150), np.mean((200, 180, 150)))
+    assert np.array_equal(_board_white_balance(rgb, np.full((360, 640), 50.0, np.float32), np.ones((360, 640), bool),
+                                               2), np.ones(3))
 
 
 @pytest.mark.parametrize("top, edge, levels", [(25, 25, 1), (38, 38, 1), (50, 25, 2), (63, 25, 2), (76, 38, 2),

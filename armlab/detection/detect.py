@@ -282,19 +282,31 @@ EDGE_SEARCH_MM = 3.5    # the side refinement looks this far inside and outside 
 EDGE_STEP_MM = 0.5      # sampling step across a side
 EDGE_SAMPLES = 21       # profiles along each side (its middle 80 %: corners are rounded by blur)
 EDGE_FIT_TOL = 0.6      # edge points farther than this (mm) from a side's first line fit are left out of the refit
+EDGE_QUANT_PX = 12 ** -0.5   # an edge's position error from the pixel grid (px, a uniform one-pixel step's spread)
+SEEN_SIDE_VAR = 4.0         # a side whose own side face is in view beyond it: its slope's variance counts 4 times
 EDGE_LEVEL = 3.5        # the face ends where the colour distance to its core colour first reaches this (core spreads)
 _PROFILE_T = np.linspace(-0.8, 0.8, EDGE_SAMPLES)
 _PROFILE_S = np.arange(-EDGE_SEARCH_MM, EDGE_SEARCH_MM + 1e-9, EDGE_STEP_MM)
 
 
+def _plane_homographies(camera: Camera, centres, z, reach) -> np.ndarray:
+    """(F, 3, 3) homographies from world (x, y) on the planes z (F,) mm to pixels, each exact at four points `reach`
+    (F,) mm around its centre (F, 2): the pinhole part of a plane's image is a homography, and the lens distortion
+    over a block's few centimetres is smooth enough that the four-point fit stays within a hundredth of a pixel. One
+    projection of four points per plane instead of one per sample."""
+    centres = np.asarray(centres, float).reshape(-1, 2)
+    n = len(centres)
+    z, reach = np.broadcast_to(np.asarray(z, float), (n,)), np.broadcast_to(np.asarray(reach, float), (n,))
+    square = centres[:, None] + reach[:, None, None] * np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]], float)
+    uv = camera.project(np.column_stack([square.reshape(-1, 2), np.repeat(z, 4)])).reshape(n, 4, 2)
+    return np.array([cv2.getPerspectiveTransform(sq.astype(np.float32), p.astype(np.float32))
+                     for sq, p in zip(square, uv)]).reshape(n, 3, 3)
+
+
 def _plane_homography(camera: Camera, centre, z: float, reach: float) -> np.ndarray:
     """3x3 homography from world (x, y) on the plane z (mm) to pixels, exact at four points `reach` mm around
-    `centre`: the pinhole part of a plane's image is a homography, and the lens distortion over a block's few
-    centimetres is smooth enough that the four-point fit stays within a hundredth of a pixel. One projection of four
-    points instead of one per sample."""
-    square = np.asarray(centre, float) + reach * np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]], float)
-    uv = camera.project(np.column_stack([square, np.full(4, z)]))
-    return cv2.getPerspectiveTransform(square.astype(np.float32), uv.astype(np.float32))
+    `centre` (see _plane_homographies)."""
+    return _plane_homographies(camera, centre, z, reach)[0]
 
 
 def _line_fits(t: np.ndarray, y: np.ndarray, w: np.ndarray):
@@ -363,10 +375,14 @@ def _refine_yaws(camera: Camera, faces: list[_Measured], iterations: int = 3) ->
     positions t along the side, offsets s across it) give edge points (_edge_offsets); each side's points get a line
     fit s = a + b t (points more than EDGE_FIT_TOL off the first fit dropped, then refitted), whose slope says how far
     the side is turned: a square turned by d (counterclockwise) puts its side at s = -d t. A face's turn is the mean
-    of its sides' turns weighted by the inverse variance of their slopes, so sharp, long, unhidden sides count most
-    and sides next to occluders not at all. A face keeps its yaw when no side shows a usable edge, or only one side
-    whose own side face is in view beyond it (a softer edge than a silhouette against the board). The result is the
-    middle of the last two iterations' yaws."""
+    of its sides' turns weighted by the inverse variance of their slopes: the fit's own variance plus the pixel grid's
+    (EDGE_QUANT_PX px over the side's length: the renderer and the sensor draw edges on whole pixels, so a side turned
+    by less than a pixel over its length looks straight and its residuals say nothing of it), and SEEN_SIDE_VAR times
+    that for a side whose own side face is in view beyond it (a softer edge against a face of the same colour, seen
+    to err twice as much as a silhouette against the board). Sharp, long, unhidden silhouettes count most and sides
+    next to occluders not at all. A face keeps its yaw when no side shows a usable edge, or only one side whose own
+    side face is in view beyond it or with fewer than 8 edge points. The result is the middle of the last two
+    iterations' yaws."""
     n_faces = len(faces)
     if n_faces == 0:
         return np.zeros(0)
@@ -379,26 +395,22 @@ def _refine_yaws(camera: Camera, faces: list[_Measured], iterations: int = 3) ->
     # one plane homography per face (world (x, y) at the face's height -> pixels), from one projection of all faces'
     # corner points; then into an atlas that stacks the faces' patches (feature and occluder masks) with gaps, so
     # that each iteration samples every face in one remap
-    reach = half.max(axis=1) + EDGE_SEARCH_MM
-    square = centre[:, None] + reach[:, None, None] * np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]], float)
-    z = np.repeat([m.face.height_mm for m in faces], 4)
-    uv = camera.project(np.column_stack([square.reshape(-1, 2), z])).reshape(n_faces, 4, 2)
+    homographies = _plane_homographies(camera, centre, [m.face.height_mm for m in faces],
+                                       half.max(axis=1) + EDGE_SEARCH_MM)
     gap = 4                                                                # >= 3 px
     shapes = np.array([m.feature.shape for m in faces])
     top = gap + np.concatenate([[0], np.cumsum(shapes[:, 0] + gap)[:-1]])
     feature = np.full((int(top[-1] + shapes[-1, 0] + gap), int(shapes[:, 1].max() + 2 * gap)), np.nan, np.float32)
     near = np.ones(feature.shape, np.uint8)
-    homographies = np.empty((n_faces, 3, 3))
     for i, m in enumerate(faces):
         h, w = m.feature.shape
         feature[top[i]:top[i] + h, gap:gap + w] = m.feature
         near[top[i]:top[i] + h, gap:gap + w] = m.near
-        H = cv2.getPerspectiveTransform(square[i].astype(np.float32), uv[i].astype(np.float32))
-        H[:2] -= np.outer(m.origin, H[2])                                  # pixels of the face's patch
-        homographies[i] = H
+        homographies[i, :2] -= np.outer(m.origin, homographies[i, 2])     # pixels of the face's patch
     size = shapes[:, ::-1].astype(float)                                   # (F, 2) patch width, height
     shift = np.column_stack([np.full(n_faces, gap), top]).astype(float)   # (F, 2) patch origin in the atlas
     prof = np.empty((n_faces, 4, len(_PROFILE_T), len(s)), np.float32)
+    pixel_mm = np.repeat([m.pixel_mm for m in faces], 4)
     for _ in range(iterations):
         ang = theta[:, None] + np.arange(4) * (np.pi / 2)
         normal = np.stack([np.cos(ang), np.sin(ang)], axis=-1)            # (F, 4, 2) outward
@@ -431,17 +443,15 @@ def _refine_yaws(camera: Camera, faces: list[_Measured], iterations: int = 3) ->
         sigma = np.maximum(np.sqrt((r * r).sum(axis=1) / np.maximum(n - 2, 1)), 0.1)
         good = ((n >= 5) & (spread >= 4.0)).reshape(n_faces, 4)
         turns = -np.arctan(b).reshape(n_faces, 4)
-        weights = (sxx / sigma ** 2).reshape(n_faces, 4)
+        # each side's slope variance: the fit's own (its residuals) plus the pixel grid's, which a straight-looking
+        # staircase hides (a side turned less than a pixel over its length renders as a straight edge)
+        var = sigma ** 2 / np.maximum(sxx, 1e-9) + (EDGE_QUANT_PX * pixel_mm / np.maximum(spread, 1e-9)) ** 2
+        weights = np.where(good, 1.0 / (var.reshape(n_faces, 4) * np.where(sees_side, SEEN_SIDE_VAR, 1.0)), 0.0)
         n_good = good.sum(axis=1)
         fewest = np.where(good, n.reshape(n_faces, 4), 99).min(axis=1)
         lone = (n_good == 1) & ((good & sees_side).any(axis=1) | (fewest < 8))
-        ordered = np.sort(np.where(good, turns, np.inf), axis=1)           # the good turns first
-        lo_i, hi_i = np.maximum(n_good - 1, 0) // 2, np.maximum(n_good, 1) // 2
-        rows = np.arange(n_faces)
-        median = 0.5 * (np.where(n_good > 0, ordered[rows, lo_i], 0) + np.where(n_good > 0, ordered[rows, hi_i], 0))
-        agree = good & ((n_good[:, None] <= 2) | (np.abs(turns - median[:, None]) < np.radians(3.0)))
-        total = (weights * agree).sum(axis=1)
-        turn = (np.where(agree, turns, 0.0) * weights).sum(axis=1) / np.maximum(total, 1e-12)
+        total = weights.sum(axis=1)
+        turn = (np.where(good, turns, 0.0) * weights).sum(axis=1) / np.maximum(total, 1e-12)
         previous, theta = theta, theta + np.where((n_good > 0) & ~lone & (total > 0), turn, 0.0)
     # the last step can swing between two readings of a jagged side: take the middle of the last two
     return 0.5 * (previous + theta) if iterations > 1 else theta
