@@ -310,3 +310,46 @@ def test_fill_polygons_refuses_bad_arrays():
     with pytest.raises(ValueError, match="surface"):
         view.fill_polygons(canvas, np.zeros((2, 4, 3)), np.zeros((2, 3)), np.zeros((2, 3)), np.zeros(2))
     assert not canvas.inv_depth.any()                          # nothing was drawn
+
+
+@pytest.mark.parametrize("realism", [CameraRealism(), replace(CameraRealism(), depth_edge_dropout=1.0, pixel_noise=0.0,
+                                                               depth_noise_mm=0.0, blur_sigma_px=1.3)])
+def test_sensor_effects_reusing_the_board_products_match_the_whole_image(realism):
+    from armlab.sim.render import _render_exact
+    from armlab.sim.sensor import apply_color_effects, apply_depth_effects
+    camera = true_camera(realism)
+    rng = np.random.default_rng(5)
+    objs = [cube(("red", "blue", "violet")[i % 3], rng.uniform(-560, 560), rng.uniform(-180, 500),
+                 38.0 if i % 2 else 25.0, yaw=rng.uniform(0, 1.5), id=i) for i in range(30)]
+    rgb, depth, reuse = _render_exact(camera, objs, np.array([0.3, -0.2, 0.3, 0.9, 0.2]), 40.0, GRIPPER, ())
+    assert reuse is not None and len(reuse.rects) > 0
+    pp = (camera.K[0, 2], camera.K[1, 2])
+    for _ in range(2):              # the first call fills the cache, the second uses it
+        a_rgb = apply_color_effects(rgb, pp, realism, np.random.default_rng(9), reuse)
+        a_depth = apply_depth_effects(depth, rgb, realism, np.random.default_rng(9), reuse)
+        b_rgb = apply_color_effects(rgb, pp, realism, np.random.default_rng(9))
+        b_depth = apply_depth_effects(depth, rgb, realism, np.random.default_rng(9))
+        assert np.array_equal(a_rgb, b_rgb)
+        assert np.array_equal(a_depth, b_depth, equal_nan=True)
+    assert {key[0] for key in reuse.cache if realism in key} == {"colour", "depth"}
+    if realism.depth_edge_dropout == 1.0:       # certain dropout at every depth step: the blocks' outlines
+        assert np.isnan(depth).sum() < np.isnan(a_depth).sum()
+
+
+def test_sensor_caches_are_per_camera():
+    from armlab.sim.raster import view_for
+    from armlab.sim.render import board_canvas
+    a, b = CameraRealism.realistic(0), CameraRealism.realistic(1)
+    cam_a, cam_b = true_camera(a), true_camera(b)
+    objs = [cube("red", -300, 100, id=1)]
+    first = render(cam_a, objs, realism=a, rng=np.random.default_rng(3))
+    render(cam_b, objs, realism=b, rng=np.random.default_rng(3))
+    cache_a, cache_b = board_canvas(view_for(cam_a)).sensor_cache, board_canvas(view_for(cam_b)).sensor_cache
+    assert cache_a is not cache_b
+    assert {k[0] for k in cache_a if a in k} == {k[0] for k in cache_b if b in k} == {"colour", "depth"}
+    assert all(not (x is y or np.shares_memory(x[0], y[0])) for x in cache_a.values() for y in cache_b.values())
+    # camera a's frame again, after camera b filled its own cache: the same image
+    again = render(cam_a, objs, realism=a, rng=np.random.default_rng(3))
+    assert np.array_equal(first[0], again[0]) and np.array_equal(first[1], again[1], equal_nan=True)
+    other = render(cam_b, objs, realism=b, rng=np.random.default_rng(3))
+    assert not np.array_equal(first[0], other[0])

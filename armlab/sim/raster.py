@@ -45,6 +45,8 @@ class Canvas:
         self.dirty: list[tuple[int, int, int, int]] | None = None
         self.finished = None         # a frozen canvas caches View.finish's result here
         self.edges = None            # ... and its surface-edge mask (uint8, canvas size)
+        self.lens_rects: list[tuple[int, int, int, int]] | None = None   # image rectangles finish redid (None: all)
+        self.sensor_cache: dict = {}  # noise-free sensor products of a frozen canvas's image (armlab.sim.sensor)
 
     @property
     def frozen(self) -> bool:
@@ -61,6 +63,7 @@ class Canvas:
         c = Canvas.__new__(Canvas)
         c.rgb, c.inv_depth, c.surface = self.rgb.copy(), self.inv_depth.copy(), self.surface.copy()
         c.base, c.dirty, c.finished, c.edges = (self, [], None, None) if self.frozen else (None, None, None, None)
+        c.lens_rects, c.sensor_cache = None, {}
         return c
 
     def mark_dirty(self, rect: tuple[int, int, int, int] | None) -> None:
@@ -273,6 +276,7 @@ class View:
         base = canvas.base
         W, H = self.camera.width, self.camera.height
         if base is None or canvas.dirty is None:
+            canvas.lens_rects = None
             rgb = np.empty((H, W, 3), np.uint8)
             depth = np.empty((H, W), np.float32)
             edge = np.empty((H, W), np.uint8)
@@ -283,6 +287,7 @@ class View:
                 self.finish(base)                  # caches it
             rgb, depth, edge = (a.copy() for a in base.finished)
             groups = self._dirty_groups(canvas.dirty)
+            canvas.lens_rects = self._group_images(groups)
             if len(groups):
                 # the surface-edge mask of the canvas: the base's, redone where the surface ids may have changed
                 edge_canvas = base.edges.copy()
@@ -291,7 +296,7 @@ class View:
                     X0, Y0, X1, Y1 = max(x0 - 1, 0), max(y0 - 1, 0), min(x1 + 1, Wc), min(y1 + 1, Hc)
                     part = _surface_edges(canvas.surface[Y0:Y1, X0:X1])
                     edge_canvas[y0:y1, x0:x1] = part[y0 - Y0:y1 - Y0, x0 - X0:x1 - X0]
-                self._lens(canvas, edge_canvas, rgb, depth, edge, self._group_images(groups))
+                self._lens(canvas, edge_canvas, rgb, depth, edge, canvas.lens_rects)
         edge = edge.view(bool)
         if canvas.frozen:
             canvas.finished = (rgb, depth, edge.view(np.uint8))

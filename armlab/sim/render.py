@@ -23,7 +23,7 @@ from armlab.sim.board_texture import board_texture
 from armlab.sim.faces import FaceSet, arm_faces, objects_faces
 from armlab.sim.raster import Canvas, View, view_for
 from armlab.sim.realism import CameraRealism
-from armlab.sim.sensor import apply_color_effects, apply_depth_effects
+from armlab.sim.sensor import Reuse, apply_color_effects, apply_depth_effects
 
 __all__ = ["render", "render_exact", "scene_faces", "board_canvas", "BOARD_SURFACE", "FIRST_FACE_SURFACE"]
 
@@ -66,13 +66,25 @@ def render_exact(camera: Camera, objects, q=None, gripper_opening_mm: float = 0.
                  planes=()) -> tuple[np.ndarray, np.ndarray]:
     """The exact image of the scene through the camera (no sensor effects): rgb (H, W, 3) uint8, depth (H, W)
     float32 mm. `planes`: extra callables drawing into the canvas, each called as plane(view, canvas)."""
+    rgb, depth, _ = _render_exact(camera, objects, q, gripper_opening_mm, gripper_geometry, planes)
+    return rgb, depth
+
+
+def _render_exact(camera: Camera, objects, q, gripper_opening_mm: float, gripper_geometry,
+                  planes) -> tuple[np.ndarray, np.ndarray, Reuse | None]:
+    """render_exact, and (when the lens was redone only in parts of the image) what the frame shares with the
+    camera's cached board image, for the sensor effects."""
     view = view_for(camera)
-    canvas = board_canvas(view).copy()
+    base = board_canvas(view)
+    canvas = base.copy()
     for draw in planes:
         draw(view, canvas)
     draw_faces(view, canvas, scene_faces(objects, q, gripper_opening_mm, gripper_geometry))
     rgb, depth, _ = view.finish(canvas)
-    return rgb, depth
+    reuse = None
+    if canvas.base is base and canvas.lens_rects is not None and base.finished is not None:
+        reuse = Reuse(base.finished[0], base.finished[1], canvas.lens_rects, base.sensor_cache)
+    return rgb, depth, reuse
 
 
 def _check_camera(camera) -> None:
@@ -88,11 +100,11 @@ def render(camera: Camera, objects, q=None, gripper_opening_mm: float = 0.0, gri
     `gripper_opening_mm` apart. `realism` (default ideal) adds the sensor effects, drawn from `rng` (per frame)."""
     _check_camera(camera)
     realism = realism if realism is not None else CameraRealism.ideal()
-    rgb, depth = render_exact(camera, objects, q, gripper_opening_mm, gripper_geometry, planes)
+    if not realism.is_ideal and rng is None:
+        raise ValueError("a numpy Generator `rng` is needed for a realism with noise")
+    rgb, depth, reuse = _render_exact(camera, objects, q, gripper_opening_mm, gripper_geometry, planes)
     if realism.is_ideal:
         return rgb, depth
-    if rng is None:
-        raise ValueError("a numpy Generator `rng` is needed for a realism with noise")
-    rgb_out = apply_color_effects(rgb, (camera.K[0, 2], camera.K[1, 2]), realism, rng)
-    depth_out = apply_depth_effects(depth, rgb, realism, rng)
+    rgb_out = apply_color_effects(rgb, (camera.K[0, 2], camera.K[1, 2]), realism, rng, reuse)
+    depth_out = apply_depth_effects(depth, rgb, realism, rng, reuse)
     return rgb_out, depth_out

@@ -14,13 +14,14 @@ Units: colour in 8-bit levels (DN), depth in mm (camera-frame Z), pixels in Open
 from __future__ import annotations
 
 import functools
+from dataclasses import dataclass
 
 import cv2
 import numpy as np
 
 from armlab.sim.realism import CameraRealism
 
-__all__ = ["apply_color_effects", "apply_depth_effects", "normal_field", "uniform_bytes", "POOL_MARGIN"]
+__all__ = ["apply_color_effects", "apply_depth_effects", "normal_field", "uniform_bytes", "Reuse", "POOL_MARGIN"]
 
 POOL_MARGIN = 128          # pool size beyond the image (px, each axis): (POOL_MARGIN + 1)^2 windows per pool
 _POOL_SEED = 0x5EED_F1E1D
@@ -82,44 +83,161 @@ def _dark_lut(dark_depth_noise: float, scale: float) -> np.ndarray:
     return (scale * (1 + dark_depth_noise * np.clip(1 - lum, 0, 1))).astype(np.float32)
 
 
+FIXED = 64.0               # fixed-point scale of the int16 colour signal (1/64 DN)
+
+
+@functools.lru_cache(maxsize=2)
+def _scaled_pool(shape: tuple[int, ...], sigma: float) -> np.ndarray:
+    """The normal pool of `shape` times sigma, in FIXED-point int16 (read-only)."""
+    scaled = np.clip(np.rint(_pool(shape, "normal") * (sigma * FIXED)), -32767, 32767).astype(np.int16)
+    scaled.flags.writeable = False
+    return scaled
+
+
+@dataclass
+class Reuse:
+    """What a frame shares with a cached one: the exact images equal `rgb`, `depth` (read-only, e.g. a camera's
+    board image) except inside the image rectangles `rects` (u0, v0, u1, v1), end exclusive; `cache` is a dict owned
+    by the cached frame (one per camera) in which the sensor keeps that frame's noise-free products per realism."""
+
+    rgb: np.ndarray
+    depth: np.ndarray
+    rects: list[tuple[int, int, int, int]]
+    cache: dict
+
+
+def _grown(rect, by: int, W: int, H: int) -> tuple[int, int, int, int]:
+    u0, v0, u1, v1 = rect
+    return max(u0 - by, 0), max(v0 - by, 0), min(u1 + by, W), min(v1 + by, H)
+
+
+def _products(reuse: Reuse | None, key, make, compute, src: tuple, base_src: tuple, reach: int, W: int, H: int):
+    """Noise-free per-pixel products of a frame: outputs `make()` filled by compute(src, outs, rect) over the whole
+    image; with `reuse`, those of the cached frame (made once from `base_src`, kept read-only in reuse.cache under
+    `key`) copied and redone in the changed rectangles grown by `reach` px (the same values)."""
+    if reuse is None:
+        outs = make()
+        compute(src, outs, (0, 0, W, H))
+        return outs
+    cached = reuse.cache.get(key)
+    if cached is None:
+        cached = make()
+        compute(base_src, cached, (0, 0, W, H))
+        for a in cached:
+            a.flags.writeable = False
+        reuse.cache[key] = cached
+    outs = tuple(a.copy() for a in cached)
+    for rect in reuse.rects:
+        compute(src, outs, _grown(rect, reach, W, H))
+    return outs
+
+
+def _blur_ksize(sigma: float) -> int:
+    """OpenCV's Gaussian kernel size for 8-bit images (what GaussianBlur picks for ksize (0, 0))."""
+    return int(np.rint(sigma * 6 + 1)) | 1
+
+
 def apply_color_effects(rgb: np.ndarray, principal_point: tuple[float, float], realism: CameraRealism,
-                        rng: np.random.Generator) -> np.ndarray:
-    """The recorded colour image (H, W, 3) uint8 of an exact rendering `rgb` (H, W, 3) uint8."""
-    if realism.blur_sigma_px > 0:
-        rgb = cv2.GaussianBlur(rgb, (0, 0), realism.blur_sigma_px)
+                        rng: np.random.Generator, reuse: Reuse | None = None) -> np.ndarray:
+    """The recorded colour image (H, W, 3) uint8 of an exact rendering `rgb` (H, W, 3) uint8.
+
+    The noise-free signal (blur, then lighting, white balance and vignetting) is kept in 1/64 DN (int16) and the
+    noise added in one pass; with `reuse`, the signal of the cached frame is made once and redone only around the
+    changed rectangles."""
     H, W = rgb.shape[:2]
     gain = _gain_map(H, W, float(principal_point[0]), float(principal_point[1]), realism)
+    sigma = realism.blur_sigma_px
+    k = _blur_ksize(sigma) if sigma > 0 else 1
+
+    def compute(src, outs, rect):
+        u0, v0, u1, v1 = rect
+        if sigma > 0:
+            U0, V0, U1, V1 = _grown(rect, k // 2, W, H)
+            part = cv2.GaussianBlur(src[0][V0:V1, U0:U1], (k, k), sigma)[v0 - V0:v1 - V0, u0 - U0:u1 - U0]
+        else:
+            part = src[0][v0:v1, u0:u1]
+        cv2.multiply(part, gain[v0:v1, u0:u1], dst=outs[0][v0:v1, u0:u1], scale=FIXED, dtype=cv2.CV_16S)
+
+    (signal,) = _products(reuse, ("colour", realism, float(principal_point[0]), float(principal_point[1])),
+                          lambda: (np.empty((H, W, 3), np.int16),), compute, (rgb,),
+                          None if reuse is None else (reuse.rgb,), k // 2, W, H)
     flicker = 1.0 + realism.flicker * float(rng.standard_normal()) if realism.flicker > 0 else 1.0
     if realism.pixel_noise <= 0:
-        return cv2.multiply(rgb, gain, scale=flicker, dtype=cv2.CV_8U)      # rounds to nearest and saturates
-    lit = cv2.multiply(rgb, gain, scale=flicker, dtype=cv2.CV_32F)
-    noise, sign = normal_field(rng, (H, W, 3))
-    return cv2.addWeighted(lit, 1.0, noise, sign * realism.pixel_noise, 0.0, dtype=cv2.CV_8U)
+        return cv2.convertScaleAbs(signal, alpha=flicker / FIXED)        # (the signal is >= 0) rounds, saturates
+    oy, ox = rng.integers(0, POOL_MARGIN + 1, 2).tolist()
+    noise = _scaled_pool((H, W, 3), float(realism.pixel_noise))[oy:oy + H, ox:ox + W]
+    sign = float(rng.integers(0, 2) * 2 - 1)
+    return cv2.addWeighted(signal, flicker / FIXED, noise, sign / FIXED, 0.0, dtype=cv2.CV_8U)
+
+
+def _thresholds(p: float) -> int:
+    """Dropout with probability p on a uniform byte u: u < threshold (256 = always)."""
+    return int(np.ceil(256 * p))
 
 
 def apply_depth_effects(depth: np.ndarray, rgb_exact: np.ndarray, realism: CameraRealism,
-                        rng: np.random.Generator) -> np.ndarray:
+                        rng: np.random.Generator, reuse: Reuse | None = None) -> np.ndarray:
     """The recorded depth (H, W) float32 mm of exact depth `depth` (NaN = nothing) whose surfaces have the exact
-    colours `rgb_exact` (darker surfaces are noisier)."""
+    colours `rgb_exact` (darker surfaces are noisier).
+
+    Noise-free products first (depth + bias with NaN where there is certainly no return, the noise sigma x Z^2, the
+    per-pixel dropout threshold: higher next to a depth step); with `reuse`, those of the cached frame are made once
+    and redone only around the changed rectangles. Then one pass each for noise, quantisation and dropouts."""
     H, W = depth.shape
-    out = cv2.add(depth, _bias_map(H, W, realism)) if any(realism.depth_bias_mm) else depth.copy()
-    if realism.depth_noise_mm > 0:
-        gray = cv2.cvtColor(rgb_exact, cv2.COLOR_RGB2GRAY)
-        sigma = cv2.LUT(gray, _dark_lut(realism.dark_depth_noise, realism.depth_noise_mm * 1e-6))
+    noisy = realism.depth_noise_mm > 0
+    t_edge = _thresholds(max(realism.depth_edge_dropout, realism.depth_dropout))
+    t_all = _thresholds(realism.depth_dropout)
+    drops = t_edge > 0
+    bias = _bias_map(H, W, realism) if any(realism.depth_bias_mm) else None
+    lut = _dark_lut(realism.dark_depth_noise, realism.depth_noise_mm * 1e-6)
+    kernel = np.ones((3, 3), np.uint8)
+
+    def make():
+        outs = [np.empty((H, W), np.float32)]
+        if noisy:
+            outs.append(np.empty((H, W), np.float32))
+        if drops:
+            outs.append(np.empty((H, W), np.uint8))
+        return tuple(outs)
+
+    def compute(src, outs, rect):
+        d_all, rgb = src
+        u0, v0, u1, v1 = rect
+        d = d_all[v0:v1, u0:u1]
+        mean = outs[0][v0:v1, u0:u1]
+        if bias is not None:
+            cv2.add(d, bias[v0:v1, u0:u1], dst=mean)
+        else:
+            mean[:] = d
+        gone = ~(d >= realism.min_range_mm)
+        if noisy:
+            # sigma_1m * darkness * (Z / 1 m)^2
+            sigma = cv2.LUT(cv2.cvtColor(rgb[v0:v1, u0:u1], cv2.COLOR_RGB2GRAY), lut)
+            cv2.multiply(sigma, cv2.multiply(d, d), dst=outs[1][v0:v1, u0:u1])
+        if drops:
+            U0, V0, U1, V1 = _grown(rect, 1, W, H)
+            filled = cv2.patchNaNs(d_all[V0:V1, U0:U1].copy(), 0.0)
+            grad = cv2.morphologyEx(filled, cv2.MORPH_GRADIENT, kernel)[v0 - V0:v1 - V0, u0 - U0:u1 - U0]
+            step = cv2.compare(grad, 8.0, cv2.CMP_GT)                       # 255 next to a depth step, else 0
+            lo, hi = min(t_all, 255), min(t_edge, 255)
+            cv2.addWeighted(step, (hi - lo) / 255, step, 0.0, lo, dst=outs[-1][v0:v1, u0:u1])
+            if t_edge > 255:                # certain dropout next to steps
+                gone |= step > 0
+            if t_all > 255:
+                gone[:] = True
+        np.copyto(mean, np.float32(np.nan), where=gone)
+
+    outs = _products(reuse, ("depth", realism), make, compute, (depth, rgb_exact),
+                     None if reuse is None else (reuse.depth, reuse.rgb), 1, W, H)
+    out = outs[0]
+    if noisy:
         noise, sign = normal_field(rng, (H, W))
-        # out += sigma_1m * darkness * (Z / 1 m)^2 * noise
-        cv2.accumulateProduct(cv2.multiply(sigma, noise, scale=sign), cv2.multiply(depth, depth), out)
+        cv2.add(out, cv2.multiply(outs[1], noise, scale=sign), dst=out)
     if realism.depth_quantum_mm > 0:
         q = np.float32(realism.depth_quantum_mm)
         np.rint(np.divide(out, q, out=out), out=out)
         out *= q
-    drop = ~(depth >= realism.min_range_mm)
-    if realism.depth_edge_dropout > 0 or realism.depth_dropout > 0:
+    if drops:
         u = uniform_bytes(rng, (H, W))
-        filled = cv2.patchNaNs(depth.copy(), 0.0)
-        kernel = np.ones((3, 3), np.uint8)
-        step = cv2.subtract(cv2.dilate(filled, kernel), cv2.erode(filled, kernel)) > 8.0
-        drop |= step & (u < 256 * realism.depth_edge_dropout)
-        drop |= u < 256 * realism.depth_dropout
-    out[drop] = np.nan
+        np.copyto(out, np.float32(np.nan), where=cv2.compare(u, outs[-1], cv2.CMP_LT).view(bool))
     return out
