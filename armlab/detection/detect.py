@@ -228,11 +228,11 @@ def _edge_direction(points: np.ndarray, theta: float, span: int = 4, free: np.nd
     an end that is not `free` (N,) bool (next to an occluder), when given."""
     if len(points) < 4 * span:
         return theta
-    d = np.roll(points, -span, axis=0) - points
+    d = np.concatenate([points[span:], points[:span]]) - points      # chords to the point `span` ahead
     a = 4 * np.arctan2(d[:, 1], d[:, 0])
     w = np.hypot(d[:, 0], d[:, 1]) * (np.cos(a - 4 * theta) > np.cos(np.radians(80)))
     if free is not None:
-        w = w * (free & np.roll(free, -span))
+        w = w * (free & np.concatenate([free[span:], free[:span]]))
     if w.sum() <= 0:
         return theta
     return float(np.arctan2((w * np.sin(a)).sum(), (w * np.cos(a)).sum()) / 4)
@@ -328,22 +328,27 @@ def _edge_offsets(prof: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, np.ndarr
     distance reaches EDGE_LEVEL finds the edge, which is then placed half-way between the face's level (inside) and
     the level just beyond (within 1.5 mm), linearly interpolated: the middle of a blurred step, whatever lies beyond
     it (board, grid line, the face's own shaded side). Returns the offsets (...) mm and whether each was found."""
-    finite = np.isfinite(prof).all(axis=-1)
-    p = np.where(finite[..., None], prof, 0.0)
-    above = p >= EDGE_LEVEL
-    k = above.argmax(axis=-1)
+    shape, K = prof.shape[:-1], prof.shape[-1]
+    p = prof.reshape(-1, K)
+    finite = np.isfinite(p).all(axis=-1)
+    p = np.where(finite[:, None], p, 0.0)
+    k = (p >= EDGE_LEVEL).argmax(axis=-1)
     ok = finite & (k > 0)
-    j = np.arange(p.shape[-1])
+    rows = np.arange(len(p))
     reach = int(round(1.5 / EDGE_STEP_MM))
-    inside = np.where(j < k[..., None], p, np.inf).min(axis=-1)
-    beyond = np.where((j >= k[..., None]) & (j <= k[..., None] + reach), p, -np.inf).max(axis=-1)
+    # inside: the least level before sample k (a running minimum); beyond: the greatest within reach from k on
+    inside = np.where(k > 0, np.minimum.accumulate(p, axis=-1)[rows, np.maximum(k - 1, 0)], np.inf)
+    padded = np.concatenate([p, np.full((len(p), reach), -np.inf, p.dtype)], axis=-1)
+    window = padded[:, :K].copy()
+    for d in range(1, reach + 1):
+        np.maximum(window, padded[:, d:d + K], out=window)
+    beyond = window[rows, k]
     with np.errstate(invalid="ignore"):
         half = np.where(ok, 0.5 * (inside + beyond), EDGE_LEVEL)
-    m = np.maximum((p >= half[..., None]).argmax(axis=-1), 1)
-    p0 = np.take_along_axis(p, (m - 1)[..., None], axis=-1)[..., 0]
-    p1 = np.take_along_axis(p, m[..., None], axis=-1)[..., 0]
+    m = np.maximum((p >= half[:, None]).argmax(axis=-1), 1)
+    p0, p1 = p[rows, m - 1], p[rows, m]
     frac = np.clip((half - p0) / np.where(p1 > p0, p1 - p0, 1.0), 0.0, 1.0)
-    return s[0] + EDGE_STEP_MM * (m - 1 + frac), ok
+    return (s[0] + EDGE_STEP_MM * (m - 1 + frac)).reshape(shape), ok.reshape(shape)
 
 
 @dataclass
