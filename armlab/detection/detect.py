@@ -192,7 +192,10 @@ def _refine_by_colour(face: Face, f: _Frame, pad: int = 6):
     mean, spread = (v.ravel() for v in cv2.meanStdDev(rgb, mask=core))
     spread = np.maximum(spread, 4.0)
     # the colour distance in core spreads: one affine transform per channel, then the root of the squares' sum
-    scaled = cv2.transform(rgb.astype(np.float32), np.column_stack([np.diag(1 / spread), -mean / spread]))
+    affine = np.zeros((3, 4))
+    affine[[0, 1, 2], [0, 1, 2]] = 1 / spread
+    affine[:, 3] = -mean / spread
+    scaled = cv2.transform(rgb.astype(np.float32), affine)
     distance = cv2.sqrt(cv2.transform(scaled * scaled, np.ones((1, 3))))
     height = f.depth[y0:y1, x0:x1] * f.kz[y0:y1, x0:x1] + f.tz
     no_return = np.isnan(height)
@@ -229,13 +232,15 @@ def _edge_direction(points: np.ndarray, theta: float, span: int = 4, free: np.nd
     if len(points) < 4 * span:
         return theta
     d = np.concatenate([points[span:], points[:span]]) - points      # chords to the point `span` ahead
-    a = 4 * np.arctan2(d[:, 1], d[:, 0])
-    w = np.hypot(d[:, 0], d[:, 1]) * (np.cos(a - 4 * theta) > np.cos(np.radians(80)))
+    z = d[:, 0] + 1j * d[:, 1]
+    length = np.abs(z)
+    quad = (z / np.where(length > 0, length, 1.0)) ** 4              # unit vectors at four times the chord angles
+    w = length * ((quad * np.exp(-4j * theta)).real > np.cos(np.radians(80)))
     if free is not None:
         w = w * (free & np.concatenate([free[span:], free[:span]]))
     if w.sum() <= 0:
         return theta
-    return float(np.arctan2((w * np.sin(a)).sum(), (w * np.cos(a)).sum()) / 4)
+    return float(np.angle((w * quad).sum()) / 4)
 
 
 def _fit_square(points: np.ndarray, blocked: np.ndarray, pixel_mm: float, edge_hint: float | None,
@@ -412,8 +417,9 @@ def _refine_yaws(camera: Camera, faces: list[_Measured], iterations: int = 3) ->
         feature[top[i]:top[i] + h, gap:gap + w] = m.feature
         near[top[i]:top[i] + h, gap:gap + w] = m.near
         homographies[i, :2] -= np.outer(m.origin, homographies[i, 2])     # pixels of the face's patch
-    size = shapes[:, ::-1].astype(float)                                   # (F, 2) patch width, height
-    shift = np.column_stack([np.full(n_faces, gap), top]).astype(float)   # (F, 2) patch origin in the atlas
+    size = (shapes[:, ::-1] + 0.5).astype(np.float32)                      # (F, 2) patch width, height + 0.5
+    shift = np.column_stack([np.full(n_faces, gap), top]).astype(np.float32)   # (F, 2) patch origin in the atlas
+    s32, t32 = s.astype(np.float32), t.astype(np.float32)
     prof = np.empty((n_faces, 4, len(_PROFILE_T), len(s)), np.float32)
     pixel_mm = np.repeat([m.pixel_mm for m in faces], 4)
     for _ in range(iterations):
@@ -423,15 +429,17 @@ def _refine_yaws(camera: Camera, faces: list[_Measured], iterations: int = 3) ->
         # the samples' world points c + (dist + s) n + t tangent are affine in (s, t): so are their homogeneous
         # pixels, H [c + dist n, 1] + s H [n, 0] + t H [tangent, 0]
         base = np.concatenate([centre[:, None] + dist[..., None] * normal, np.ones((n_faces, 4, 1))], axis=-1)
-        hb = np.einsum("fij,faj->fai", homographies, base)                 # (F, 4, 3)
-        hn = np.einsum("fij,faj->fai", homographies[:, :, :2], normal)
-        ht = np.einsum("fij,faj->fai", homographies[:, :, :2], tangent)
-        hom = (hb[:, :, None, None] + s[:, None] * hn[:, :, None, None]
-               + t[..., None, None] * ht[:, :, None, None])               # (F, 4, M, K, 3)
+        f32 = np.float32                # patch pixels are small numbers: float32 is exact to 1e-5 px
+        hb = np.einsum("fij,faj->fai", homographies, base).astype(f32)     # (F, 4, 3)
+        hn = np.einsum("fij,faj->fai", homographies[:, :, :2], normal).astype(f32)
+        ht = np.einsum("fij,faj->fai", homographies[:, :, :2], tangent).astype(f32)
+        hom = (hb[:, :, None, None] + s32[:, None] * hn[:, :, None, None]
+               + t32[..., None, None] * ht[:, :, None, None])             # (F, 4, M, K, 3)
         px = hom[..., :2] / hom[..., 2:]                                   # patch pixels
         # a sample off its patch reads the atlas's gap around the patch, NaN (feature) and 1 (occluded), as the
         # border of a remap of the patch alone would: clipped to 1.5 px (linear) / 1 px (nearest) off the patch
-        px = (np.clip(px, -1.5, size[:, None, None, None] + 0.5) + shift[:, None, None, None]).astype(np.float32)
+        np.clip(px, f32(-1.5), size[:, None, None, None], out=px)
+        px += shift[:, None, None, None]
         px = px.reshape(-1, len(s), 2)
         p = cv2.remap(feature, px, None, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=np.nan)
         hidden = cv2.remap(near, px, None, cv2.INTER_NEAREST, borderMode=cv2.BORDER_CONSTANT, borderValue=1)
@@ -474,11 +482,14 @@ def _measure(face: Face, f: _Frame, settings: DetectionSettings) -> _Measured:
     outline = pixels_to_plane(f.camera, contour, face.height_mm)[:, :2]
     cam = f.camera
     centre_guess = outline.mean(axis=0)
-    pixel_mm = float(cam.depth_of(np.array([[*centre_guess, face.height_mm]]))[0] / cam.K[0, 0])
+    pixel_mm = float((cam.T_cam_world[2, :2] @ centre_guess + cam.T_cam_world[2, 2] * face.height_mm
+                      + cam.T_cam_world[2, 3]) / cam.K[0, 0])                     # the face's depth / fx
     edges = lab_config().block_edges_mm
     # a hint for the edge when part of the face is hidden: the size whose stacks reach this height best (None when
     # both sizes' stacks reach it within 1.5 mm, as 3 x 25 and 2 x 38 do: then the free outline decides)
-    misfit = {e: float(np.min(np.abs(face.height_mm - e - _stack_heights(include_zero=True)))) for e in edges.values()}
+    sizes = tuple(edges.values())
+    below = face.height_mm - np.array(sizes)[:, None] - _stack_heights(include_zero=True)
+    misfit = dict(zip(sizes, np.abs(below).min(axis=1).tolist()))
     hint = min(misfit, key=misfit.get)
     if max(misfit.values()) - min(misfit.values()) < 1.5:
         hint = None
