@@ -136,6 +136,8 @@ class _Frame:
         self.tz = np.float32(camera.T_world_cam[2, 3])
 
 
+_SUM3 = np.ones((1, 3))                     # cv2.transform: the sum of three channels
+_SQUARE3, _SQUARE5, _SQUARE7 = (np.ones((k, k), np.uint8) for k in (3, 5, 7))   # morphology kernels
 ARM_MAX_LEVEL = 110    # the RX200 is black: its pixels are dark (max channel below this, 8-bit) ...
 ARM_MAX_CHROMA = 22    # ... and grey (max - min channel below this), unlike every block colour's top face
 
@@ -159,7 +161,7 @@ def _board_white_balance(rgb: np.ndarray, height_small: np.ndarray, valid: np.nd
     # the printed grid and tags are dark: use the bright majority of the board (brightness R + G + B at or above
     # its 40th percentile, linearly interpolated as numpy's percentile)
     sub = rgb[::4 * step, ::4 * step].astype(np.float32)
-    total = cv2.transform(sub, np.ones((1, 3)))
+    total = cv2.transform(sub, _SUM3)
     values = total[sample]
     q = 0.4 * (n - 1)
     lo = int(q)
@@ -185,7 +187,7 @@ def _refine_by_colour(face: Face, f: _Frame, pad: int = 6):
     if s > 1:
         big = cv2.resize(big, None, fx=s, fy=s, interpolation=cv2.INTER_NEAREST)   # each sample becomes s x s
     seed[y - y0:y - y0 + big.shape[0], x - x0:x - x0 + big.shape[1]] = big[:y1 - y, :x1 - x]
-    core = cv2.erode(seed, np.ones((7, 7), np.uint8))
+    core = cv2.erode(seed, _SQUARE7)
     if cv2.countNonZero(core) < 20:
         core = seed
     rgb = f.rgb[y0:y1, x0:x1]
@@ -196,7 +198,7 @@ def _refine_by_colour(face: Face, f: _Frame, pad: int = 6):
     affine[[0, 1, 2], [0, 1, 2]] = 1 / spread
     affine[:, 3] = -mean / spread
     scaled = cv2.transform(rgb.astype(np.float32), affine)
-    distance = cv2.sqrt(cv2.transform(scaled * scaled, np.ones((1, 3))))
+    distance = cv2.sqrt(cv2.transform(scaled * scaled, _SUM3))
     height = f.depth[y0:y1, x0:x1] * f.kz[y0:y1, x0:x1] + f.tz
     no_return = np.isnan(height)
     cv2.patchNaNs(height, face.height_mm)        # no return: neither below nor above
@@ -221,7 +223,7 @@ def _refine_by_colour(face: Face, f: _Frame, pad: int = 6):
     overlap = np.bincount(labels[seed.view(bool)], minlength=n)
     overlap[0] = 0
     mask = (labels == int(np.argmax(overlap))).astype(np.uint8)
-    return cv2.morphologyEx(mask, cv2.MORPH_CLOSE, np.ones((3, 3), np.uint8)), (x0, y0), mean, occluder, distance
+    return cv2.morphologyEx(mask, cv2.MORPH_CLOSE, _SQUARE3), (x0, y0), mean, occluder, distance
 
 
 def _edge_direction(points: np.ndarray, theta: float, span: int = 4, free: np.ndarray | None = None) -> float:
@@ -352,7 +354,7 @@ def _edge_offsets(prof: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, np.ndarr
         half = np.where(ok, 0.5 * (inside + beyond), EDGE_LEVEL)
     m = np.maximum((p >= half[:, None]).argmax(axis=-1), 1)
     p0, p1 = p[rows, m - 1], p[rows, m]
-    frac = np.clip((half - p0) / np.where(p1 > p0, p1 - p0, 1.0), 0.0, 1.0)
+    frac = np.minimum(np.maximum((half - p0) / np.where(p1 > p0, p1 - p0, 1.0), 0.0), 1.0)
     return (s[0] + EDGE_STEP_MM * (m - 1 + frac)).reshape(shape), ok.reshape(shape)
 
 
@@ -438,7 +440,7 @@ def _refine_yaws(camera: Camera, faces: list[_Measured], iterations: int = 3) ->
         px = hom[..., :2] / hom[..., 2:]                                   # patch pixels
         # a sample off its patch reads the atlas's gap around the patch, NaN (feature) and 1 (occluded), as the
         # border of a remap of the patch alone would: clipped to 1.5 px (linear) / 1 px (nearest) off the patch
-        np.clip(px, f32(-1.5), size[:, None, None, None], out=px)
+        np.minimum(np.maximum(px, f32(-1.5), out=px), size[:, None, None, None], out=px)
         px += shift[:, None, None, None]
         px = px.reshape(-1, len(s), 2)
         p = cv2.remap(feature, px, None, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=np.nan)
@@ -476,7 +478,7 @@ def _measure(face: Face, f: _Frame, settings: DetectionSettings) -> _Measured:
     mask_u8, origin, mean_rgb, occluder, feature = _refine_by_colour(face, f)
     contours, _ = cv2.findContours(mask_u8, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
     contour = max(contours, key=cv2.contourArea).reshape(-1, 2)
-    near = cv2.dilate(occluder.astype(np.uint8), np.ones((5, 5), np.uint8))
+    near = cv2.dilate(occluder.view(np.uint8), _SQUARE5)
     blocked = near[contour[:, 1], contour[:, 0]] > 0
     contour = contour + np.array(origin)
     outline = pixels_to_plane(f.camera, contour, face.height_mm)[:, :2]
