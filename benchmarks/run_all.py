@@ -32,8 +32,10 @@ def main(argv: list[str]) -> int:
     failed = []
     if str(HERE) not in sys.path:
         sys.path.insert(0, str(HERE))
+    saved_argv = sys.argv
     for path in benchmark_files(argv):
         print(f"=== {path.stem} ===", flush=True)
+        sys.argv = [str(path)]           # each benchmark runs with its defaults, not with run_all's arguments
         try:
             runpy.run_path(str(path), run_name="__main__")
         except SystemExit as e:          # a script may end with sys.exit(...)
@@ -43,6 +45,8 @@ def main(argv: list[str]) -> int:
         except Exception:
             failed.append(path.stem)
             traceback.print_exc()
+        finally:
+            sys.argv = saved_argv
         print(flush=True)
     if failed:
         print(f"failed: {', '.join(failed)}")
