@@ -138,6 +138,8 @@ class _Frame:
 
 _SUM3 = np.ones((1, 3))                     # cv2.transform: the sum of three channels
 _SQUARE3, _SQUARE5, _SQUARE7 = (np.ones((k, k), np.uint8) for k in (3, 5, 7))   # morphology kernels
+STANDING_RISE_MM = 3.0    # a pixel not of a face's colour this far above it is something standing on the face
+STANDING_KERNEL = np.ones((9, 9), np.uint8)   # outline points within 4 px of such a pixel are not the face's edge
 ARM_MAX_LEVEL = 110    # the RX200 is black: its pixels are dark (max channel below this, 8-bit) ...
 ARM_MAX_CHROMA = 22    # ... and grey (max - min channel below this), unlike every block colour's top face
 
@@ -176,8 +178,10 @@ def _refine_by_colour(face: Face, f: _Frame, pad: int = 6):
     """The face's full-resolution pixels by colour. The top face is evenly lit and brighter than the shaded sides, so
     pixels near the depth-seeded face whose colour matches the face's core colour, and that are not clearly below
     the face, form the face. Returns the refined mask (uint8), the patch origin (x0, y0), the core's mean colour,
-    the occluders of the patch (bool): pixels clearly above the face (what stands on it, or the arm), and the
-    patch's colour distance to the core colour (float32, in core spreads: small on the face, large off it)."""
+    the occluders of the patch (bool): pixels clearly above the face (what stands on it, or the arm), the pixels of
+    what stands on it that rise less (bool: not of the face's colour, above it by more than STANDING_RISE_MM, not
+    occluders: the foot of a block's side faces), and the patch's colour distance to the core colour (float32, in
+    core spreads: small on the face, large off it)."""
     s = f.step
     x, y, w, h = (v * s for v in face.bbox)
     H, W = f.depth.shape
@@ -188,10 +192,16 @@ def _refine_by_colour(face: Face, f: _Frame, pad: int = 6):
         big = cv2.resize(big, None, fx=s, fy=s, interpolation=cv2.INTER_NEAREST)   # each sample becomes s x s
     seed[y - y0:y - y0 + big.shape[0], x - x0:x - x0 + big.shape[1]] = big[:y1 - y, :x1 - x]
     core = cv2.erode(seed, _SQUARE7)
-    if cv2.countNonZero(core) < 20:
-        core = seed
     rgb = f.rgb[y0:y1, x0:x1]
-    mean, spread = (v.ravel() for v in cv2.meanStdDev(rgb, mask=core))
+    if cv2.countNonZero(core) >= 20:
+        mean, spread = (v.ravel() for v in cv2.meanStdDev(rgb, mask=core))
+    else:
+        # a thin face (the ring of a block under a smaller one): no core survives the erosion and the seed's pixels
+        # mix in the neighbours' colours (the block on it, the face's own shaded sides), so the colour is the seed's
+        # median and the spread its median absolute deviation (as a standard deviation)
+        pixels = rgb[seed.view(bool)].astype(np.float32)
+        mean = np.median(pixels, axis=0)
+        spread = 1.4826 * np.median(np.abs(pixels - mean), axis=0)
     spread = np.maximum(spread, 4.0)
     # the colour distance in core spreads: one affine transform per channel, then the root of the squares' sum
     affine = np.zeros((3, 4))
@@ -217,13 +227,16 @@ def _refine_by_colour(face: Face, f: _Frame, pad: int = 6):
             not_below &= ~arm
             occluder |= arm & no_return & (distance >= 3.5)
     candidate = ((distance < 3.5) & not_below).astype(np.uint8)
+    # what stands on the face: pixels not of its colour that rise above it (a block's side faces rise from the face,
+    # so they are above it by less than `occluder` asks right next to it)
+    standing = (height > face.height_mm + STANDING_RISE_MM) & ~occluder & (distance >= 3.5)
     n, labels = cv2.connectedComponents(candidate, connectivity=4)
     if n <= 1:
-        return seed, (x0, y0), mean, occluder, distance
+        return seed, (x0, y0), mean, occluder, standing, distance
     overlap = np.bincount(labels[seed.view(bool)], minlength=n)
     overlap[0] = 0
     mask = (labels == int(np.argmax(overlap))).astype(np.uint8)
-    return cv2.morphologyEx(mask, cv2.MORPH_CLOSE, _SQUARE3), (x0, y0), mean, occluder, distance
+    return cv2.morphologyEx(mask, cv2.MORPH_CLOSE, _SQUARE3), (x0, y0), mean, occluder, standing, distance
 
 
 def _edge_direction(points: np.ndarray, theta: float, span: int = 4, free: np.ndarray | None = None) -> float:
@@ -475,11 +488,11 @@ def _refine_yaws(camera: Camera, faces: list[_Measured], iterations: int = 3) ->
 def _measure(face: Face, f: _Frame, settings: DetectionSettings) -> _Measured:
     """A face's outline, intersected with the horizontal plane at the face's height (its world footprint without the
     per-pixel depth noise), and the square fitted to it."""
-    mask_u8, origin, mean_rgb, occluder, feature = _refine_by_colour(face, f)
+    mask_u8, origin, mean_rgb, occluder, standing, feature = _refine_by_colour(face, f)
     contours, _ = cv2.findContours(mask_u8, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
     contour = max(contours, key=cv2.contourArea).reshape(-1, 2)
     near = cv2.dilate(occluder.view(np.uint8), _SQUARE5)
-    blocked = near[contour[:, 1], contour[:, 0]] > 0
+    blocked = (near | cv2.dilate(standing.view(np.uint8), STANDING_KERNEL))[contour[:, 1], contour[:, 0]] > 0
     contour = contour + np.array(origin)
     outline = pixels_to_plane(f.camera, contour, face.height_mm)[:, :2]
     cam = f.camera
