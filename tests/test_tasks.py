@@ -49,6 +49,25 @@ def test_sag_fit_predicts_the_simulators_bend_at_new_poses():
     assert comp.max() < 1.5 and comp[:, 2].mean() < 0.8  # and the fitted model takes it out
 
 
+def test_setting_up_a_task_context_touches_no_block_and_the_twin_is_the_same_arm():
+    from armlab.tasks.events import event_station
+
+    st = event_station("line_up", 3, seed=1)        # its sag calibration poses used to shove 3 blocks and a stack
+    before = [(o.position.copy(), o.yaw) for o in st.world.objects]
+    t0 = st.world.time_s
+    tasks.context(st)
+    assert [(o.position.tolist(), o.yaw) for o in st.world.objects] == [(p.tolist(), y) for p, y in before]
+    twin = st.arm.empty_board_twin()
+    assert twin.world is not st.world and not twin.world.objects and twin.seed == st.arm.seed
+    q_a, q = kinematics.ik([-100.0, 300.0, 120.0], 1.2, 0.3)[0], kinematics.ik([150.0, 250.0, 60.0], np.pi / 2)[0]
+    assert np.all(q_a != q)                            # every joint ends moving the same way (backlash side)
+    for arm in (st.arm, twin):
+        arm.move_to(q_a)
+        arm.move_to(q)
+    assert np.allclose(twin.q_true, st.arm.q_true, atol=1e-9)   # same offsets, sag, backlash: the fit holds here
+    assert st.world.time_s - t0 < 30.0                 # calibration (camera view) only, not 30 sag poses
+
+
 def test_sag_command_inverts_physical():
     model = SagModel(np.array([-1e-4, 2e-5, 1.5e-4, 1e-4, -1e-4, 0.001, -0.02, 0.006, 0.002]))
     q = kinematics.ik([100.0, 300.0, 40.0], np.pi / 2, 0.3)[0]

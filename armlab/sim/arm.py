@@ -136,6 +136,7 @@ class SimArm:
         self.gripper_geometry = gripper or GRIPPER
         self.real_time = bool(real_time)
         self.gripper_time_s = float(gripper_time_s)
+        self.seed = int(seed)
         offsets_rng, self._noise_rng = (np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(2))
         self._offsets = offsets_rng.normal(0.0, self.realism.joint_offset_std_rad, 5)
         self._motor = self.robot.sleep.astype(float)       # the lab's arm starts asleep
@@ -166,6 +167,13 @@ class SimArm:
         """The physical joint angles (5,) rad (ground truth: what the camera sees and the world feels)."""
         self.world.sync()
         return self._q_true.copy()
+
+    def empty_board_twin(self) -> SimArm:
+        """The same arm (realism, seed: the same homing offsets, sag and backlash; gripper, robot) asleep over an empty
+        board of its own, for measurements a lab makes before the blocks are set out (e.g. the sag fit of
+        tasks.calibrate_sag): moving it touches nothing of this arm's world and takes none of its time."""
+        return SimArm(World(), self.realism, self.gripper_geometry, self.seed, robot=self.robot,
+                      gripper_time_s=self.gripper_time_s)
 
     def tool_pose_true(self) -> np.ndarray:
         """The physical tool pose (4, 4) in the world (ground truth, mm)."""

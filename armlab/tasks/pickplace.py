@@ -73,12 +73,16 @@ def calibrate_sag(arm, measure: Callable[[], np.ndarray], poses=None) -> SagMode
 
 
 def context(station, intrinsics="checkerboard") -> TaskContext:
-    """The station's TaskContext, created (camera calibrated, sag fitted in simulation) on first use."""
+    """The station's TaskContext, created (camera calibrated, sag fitted in simulation) on first use.
+
+    In simulation the sag is fitted as a lab fits it, on the same arm over an empty board (SimArm.empty_board_twin:
+    its calibration poses go down to 40 mm over the work area, where they would shove the scene's blocks)."""
     ctx = getattr(station, "_tasks_context", None)
     if ctx is None:
         arm = GuardedArm(station.arm)
         if station.kind == "sim":
-            arm.sag = calibrate_sag(station.arm, lambda: station.arm.tool_pose_true()[:3, 3])
+            twin = station.arm.empty_board_twin()
+            arm.sag = calibrate_sag(twin, lambda: twin.tool_pose_true()[:3, 3])
         ctx = TaskContext(arm)
         ctx.calibration = perception.calibrate_camera(station, intrinsics, arm=arm)
         station._tasks_context = ctx
