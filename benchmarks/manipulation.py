@@ -2,7 +2,8 @@
 
 Pick and place: random scenes ("random" preset: blocks of both sizes at random positions and yaws within reach)
 seen through the calibrated camera (checkerboard intrinsics, tag extrinsics, depth correction); every detected block
-is picked (tasks.pick) and placed (tasks.place) at a random free spot with a random yaw; the placement error is the
+is seen again just before its pick (a new look, as the tasks do: an earlier pick may have nudged it) and picked
+(tasks.pick) and placed (tasks.place) at a random free spot with a random yaw; the placement error is the
 placed block's true bottom-face centre minus the target. Three ways to handle the sag, on the same scenes:
   none        - plans executed as they are;
   lab rule    - every pick and place target raised by z += 0.068 r + 3 mm (r: reach, mm), the lab's correction;
@@ -56,6 +57,16 @@ def _recover(station, ctx) -> bool:
         return False
 
 
+def _seen_again(station, block, within_mm: float = 40.0):
+    """The block of the same colour and size nearest to where `block` was seen, in a new look (None if none within
+    within_mm)."""
+    same = [b for b in tasks.look(station).blocks if (b.color, b.size) == (block.color, block.size)]
+    if not same:
+        return None
+    near = min(same, key=lambda b: np.hypot(*(b.position[:2] - block.position[:2])))
+    return near if np.hypot(*(near.position[:2] - block.position[:2])) <= within_mm else None
+
+
 def pick_place_trials(method: str, seeds, blocks_per_scene: int = 8, reach=(160.0, 330.0)) -> list[dict]:
     """Run the pick-and-place trials for one sag method, targets within `reach` (mm); one dict per block: grasped,
     error (3,) mm or None, yaw_error rad or None, failure text."""
@@ -67,7 +78,13 @@ def pick_place_trials(method: str, seeds, blocks_per_scene: int = 8, reach=(160.
         if method != "tasks.sag":
             ctx.arm.sag = SagModel()
         seen = tasks.look(st).blocks
-        for block in seen:
+        for listed in seen:
+            # look again before each pick, as the tasks do: an earlier pick's pads may have nudged this block
+            block = _seen_again(st, listed)
+            if block is None:
+                trials.append({"grasped": False, "error": None, "yaw_error": None,
+                               "failure": f"the {listed.size} {listed.color} block is not seen again"})
+                continue
             truth = min(st.world.blocks, key=lambda o: np.hypot(*(o.position[:2] - block.position[:2])))
             target, yaw = free_spot(rng, st.world, reach=reach), float(rng.uniform(-np.pi / 4, np.pi / 4))
             dz = lab_rule_dz if method == "lab rule" else (lambda xy: 0.0)
