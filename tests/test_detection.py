@@ -395,3 +395,12 @@ def test_scoring_matches_and_counts(ideal):
     score = score_frame(found[1:], truth)           # one detection left out: one miss, no extras
     assert len(score.pairs) == 5 and len(score.missed) == 1 and not score.extra
     assert yaw_error(np.pi / 4 - 0.01, -np.pi / 4 + 0.01) == pytest.approx(0.02)
+
+
+def test_towers_taller_than_six_levels_need_max_levels():
+    from armlab.detection.detect import stack_levels
+
+    assert stack_levels(8 * 38.0, 38.0) == 6                       # the default caps the count
+    assert stack_levels(8 * 38.0, 38.0, max_levels=13) == 8
+    with pytest.raises(ValueError, match="max_levels"):
+        DetectionSettings(max_levels=0)

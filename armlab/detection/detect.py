@@ -64,6 +64,8 @@ class DetectionSettings:
     much of the board's border; level_tolerance: a face's height must be within this of a stack of the lab's
     pieces (sums of the block edges), which rejects the oblique side faces near the image border;
     edge_tolerance: a cube's measured edge is within this of one of the lab's block edges;
+    max_levels: the tallest stack (blocks) a face may top: faces at no height of such a stack are not reported,
+    so raise it (and max_height) for towers (the "to the sky" event);
     min_face_pixels: fewest full-resolution pixels of a face; step: segmentation works on every step-th pixel
     (each face is then measured at full resolution)."""
 
@@ -78,8 +80,11 @@ class DetectionSettings:
     step: int = 2
     level_tolerance: float = 4.0
     edge_tolerance: float = 4.0
+    max_levels: int = 6
 
     def __post_init__(self):
+        if not isinstance(self.max_levels, int) or self.max_levels < 1:
+            raise ValueError(f"DetectionSettings.max_levels must be a positive integer, got {self.max_levels!r}")
         if not isinstance(self.step, int) or self.step < 1:
             raise ValueError(f"DetectionSettings.step must be a positive integer, got {self.step!r}")
         if not 0 < self.min_height < self.max_height:
@@ -503,7 +508,7 @@ def _measure(face: Face, f: _Frame, settings: DetectionSettings) -> _Measured:
     # a hint for the edge when part of the face is hidden: the size whose stacks reach this height best (None when
     # both sizes' stacks reach it within 1.5 mm, as 3 x 25 and 2 x 38 do: then the free outline decides)
     sizes = tuple(edges.values())
-    below = face.height_mm - np.array(sizes)[:, None] - _stack_heights(include_zero=True)
+    below = face.height_mm - np.array(sizes)[:, None] - _stack_heights(settings.max_levels, include_zero=True)
     misfit = dict(zip(sizes, np.abs(below).min(axis=1).tolist()))
     hint = min(misfit, key=misfit.get)
     if max(misfit.values()) - min(misfit.values()) < 1.5:
@@ -546,7 +551,7 @@ def _describe(measured: list[_Measured], f: _Frame, settings: DetectionSettings,
         size = "large" if edge > settings.size_split else "small"
         out.append(Block(color=name, size=size, position=centre, yaw=_wrap_yaw(theta), pixel=(float(u), float(v)),
                          edge_mm=edge, shape="cube" if is_cube else "distractor",
-                         levels=stack_levels(m.face.height_mm, block_edges[size]),
+                         levels=stack_levels(m.face.height_mm, block_edges[size], max_levels=settings.max_levels),
                          color_margin=float(margin), contour=m.contour, mean_rgb=m.mean_rgb, white_balance=gains))
     return out
 
@@ -609,7 +614,7 @@ def detect_objects(rgb, depth_mm, camera: Camera, arm_q=None, color_model: Color
     faces = segment_faces(height, valid, settings.min_height,
                           min_face_pixels=max(8, settings.min_face_pixels // settings.step ** 2),
                           median_px=5 if settings.step == 1 else 3)
-    heights = _stack_heights()
+    heights = _stack_heights(settings.max_levels)
     faces = [face for face in faces if np.min(np.abs(heights - face.height_mm)) <= settings.level_tolerance]
     measured = [_measure(face, f, settings) for face in faces]
     cubes = [m for m in measured if m.cube_sized]      # the yaw of what cannot be a cube is not worth refining

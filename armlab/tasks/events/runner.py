@@ -34,7 +34,7 @@ from .sort_stack import SortStack
 __all__ = ["EventResult", "MoveLog", "Look", "run_event", "see", "make_strategy", "MAX_PICK_TRIES"]
 
 MAX_PICK_TRIES = 3
-SKY_SETTINGS = DetectionSettings(max_height=500.0)     # the tower rises above the default 260 mm limit
+SKY_SETTINGS = DetectionSettings(max_height=500.0, max_levels=13)   # the tower rises above the default 260 mm, 6 levels
 
 
 @dataclass(frozen=True)
