@@ -189,24 +189,15 @@ def test_yaw_of_small_blocks_whose_sides_render_nearly_straight(spec):
     assert worst < 1.5, (spec, worst)
 
 
-def test_plane_homographies_of_many_faces_match_one_at_a_time(ideal):
-    from armlab.detection.detect import _plane_homographies, _plane_homography
-
-    cam = ideal[0].camera.truth
-    centres, z, reach = np.array([[0.0, 150.0], [-320.0, -100.0]]), np.array([25.0, 38.0]), np.array([20.0, 30.0])
-    many = _plane_homographies(cam, centres, z, reach)
-    assert many.shape == (2, 3, 3)
-    for k in range(2):
-        assert np.allclose(many[k], _plane_homography(cam, centres[k], z[k], reach[k]))
-
-
-def test_plane_homography_matches_the_lens_model(ideal):
-    from armlab.detection.detect import _plane_homography
+def test_plane_homographies_of_many_faces_match_the_lens_model(ideal):
+    from armlab.detection.detect import _plane_homographies
 
     station, _ = ideal
     cam = station.camera.truth
-    for centre, z in [((0.0, 150.0), 25.0), ((-320.0, -100.0), 38.0), ((300.0, 280.0), 114.0)]:
-        H = _plane_homography(cam, centre, z, 25.0)
+    centres, heights = np.array([[0.0, 150.0], [-320.0, -100.0], [300.0, 280.0]]), np.array([25.0, 38.0, 114.0])
+    many = _plane_homographies(cam, centres, heights, np.array([25.0, 25.0, 25.0]))
+    assert many.shape == (3, 3, 3)
+    for H, centre, z in zip(many, centres, heights):     # each face's own plane, all from one call
         xy = np.asarray(centre) + np.random.default_rng(0).uniform(-25, 25, (50, 2))
         uv = cam.project(np.column_stack([xy, np.full(50, z)]))
         h = np.column_stack([xy, np.ones(50)]) @ H.T

@@ -328,12 +328,6 @@ def _plane_homographies(camera: Camera, centres, z, reach) -> np.ndarray:
                      for sq, p in zip(square, uv)]).reshape(n, 3, 3)
 
 
-def _plane_homography(camera: Camera, centre, z: float, reach: float) -> np.ndarray:
-    """3x3 homography from world (x, y) on the plane z (mm) to pixels, exact at four points `reach` mm around
-    `centre` (see _plane_homographies)."""
-    return _plane_homographies(camera, centre, z, reach)[0]
-
-
 def _line_fits(t: np.ndarray, y: np.ndarray, w: np.ndarray):
     """Least-squares lines y = a + b t through the rows of t, y (S, M) using the points where w (S, M) bool: slopes b
     (S,), intercepts a (S,), point counts n (S,), spread of the used t (S,) and sum of squared t deviations (S,)."""
