@@ -184,8 +184,9 @@ class View:
         (N, 3) RGB 0..255, surface ids (N,) >= 1 (used to find depth edges; give faces of different planes
         different ids).
 
-        Each polygon is filled (OpenCV, 8 bits of sub-pixel precision) into a mask over its pixel box, where its
-        float32 inverse depth plane replaces the buffer's wherever it is nearer."""
+        A face covers the pixels whose centres lie inside its projected polygon (edges included, within
+        `_EDGE_TOL_PX`): the rows' spans of every face are found at once (`_row_spans`); over its pixel box, the face's
+        float32 inverse depth plane replaces the buffer's wherever it covers and is nearer."""
         V = np.asarray(vertices, dtype=float)
         if V.ndim != 3 or V.shape[2] != 3 or V.shape[1] < 3:
             raise ValueError(f"vertices must be (N, K >= 3, 3) camera mm, got shape {V.shape}")
@@ -216,13 +217,16 @@ class View:
             A = (normals[:, 0] / fx / offsets).tolist()
             B = (ky / offsets).tolist()
             C = ((normals[:, 2] - normals[:, 0] * cx / fx - ky * cy) / offsets).tolist()
-        # pixel boxes [x0, x1) x [y0, y1) within the canvas and fixed-point (8 bits) corners relative to the box of
-        # the faces that need no near clipping
+        # pixel boxes [x0, x1) x [y0, y1) within the canvas and the covered span of every box row of the faces that
+        # need no near clipping
         simple = front & ~needs_clip
         uv_s = np.where(simple[:, None, None], uv, 0.0)
         box = np.column_stack([np.floor(uv_s.min(axis=1)), np.ceil(uv_s.max(axis=1)) + 1])
         box = np.clip(box, 0, [Wc, Hc, Wc, Hc]).astype(np.int64)
-        corners = np.rint((uv_s - box[:, None, :2]) * 256).astype(np.int32)
+        span_first, span_last, span_start = _row_spans(uv_s[simple], box[simple])
+        span_of = np.zeros(N, np.int64)
+        span_of[simple] = np.arange(int(simple.sum()))
+        span_of = span_of.tolist()
         boxes = box.tolist()
         palette = np.clip(np.rint(colors), 0, 255).astype(int).tolist()
         mask_buf = np.empty((Hc, Wc), np.uint8)
@@ -239,15 +243,19 @@ class View:
                 x0, y0 = np.floor(P2.min(axis=0)).astype(int).tolist()
                 x1, y1 = (np.ceil(P2.max(axis=0)) + 1).astype(int).tolist()
                 x0, y0, x1, y1 = max(x0, 0), max(y0, 0), min(x1, Wc), min(y1, Hc)
-                pts = np.rint((P2 - (x0, y0)) * 256).astype(np.int32)
+                if x0 >= x1 or y0 >= y1:
+                    continue
+                first, last, _ = _row_spans(P2[None], np.array([[x0, y0, x1, y1]]))
             else:
                 x0, y0, x1, y1 = boxes[i]
-                pts = corners[i]
-            if x0 >= x1 or y0 >= y1:
-                continue
+                if x0 >= x1 or y0 >= y1:
+                    continue
+                j = span_of[i]
+                first = span_first[span_start[j]:span_start[j + 1]]
+                last = span_last[span_start[j]:span_start[j + 1]]
             mask = mask_buf[y0:y1, x0:x1]
-            mask.fill(0)
-            cv2.fillConvexPoly(mask, pts, 1, cv2.LINE_8, 8)
+            cols = _COLS[:x1 - x0]
+            np.logical_and(cols >= first[:, None], cols <= last[:, None], out=mask.view(bool))
             # float32 inverse depth of the face's plane over the box; the winners: inside and nearer
             w = cv2.addWeighted(grid_u[y0:y1, x0:x1], A[i], grid_v[y0:y1, x0:x1], B[i], C[i])
             zb = canvas.inv_depth[y0:y1, x0:x1]
@@ -403,6 +411,52 @@ class View:
 
 LENS_CELL_PX = 8             # cells grouping the image rectangles of the partial lens update
 LENS_BAND_CELLS = 4          # band height (cells) of a sparse group's boxes
+
+
+_EDGE_TOL_PX = 1e-4          # a pixel centre this close outside a face's edge counts as inside (faces sharing an
+                             # edge, computed from its two directions, leave no pixel to neither)
+_COLS = np.arange(1 << 16, dtype=np.int32)
+
+
+def _row_spans(uv: np.ndarray, box: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The pixels whose centres lie inside convex polygons, row by row within their pixel boxes.
+
+    uv: (M, K, 2) polygon corners (canvas px, either winding; repeated corners allowed), box: (M, 4) integer pixel
+    boxes (x0, y0, x1, y1), end exclusive. Returns first, last, start: polygon m's box row y0 + r covers the box
+    columns first[start[m] + r] .. last[start[m] + r] (box-relative, inclusive; empty when first > last)."""
+    box = np.asarray(box, np.int64)
+    rows = np.maximum(box[:, 3] - box[:, 1], 0)
+    start = np.zeros(len(box) + 1, np.int64)
+    np.cumsum(rows, out=start[1:])
+    total = int(start[-1])
+    face = np.repeat(np.arange(len(box)), rows)
+    v = (np.arange(total) - start[face] + box[face, 1]).astype(float)        # canvas row of every span
+    a, b = uv, np.roll(uv, -1, axis=1)
+    d = b - a
+    length = np.hypot(d[..., 0], d[..., 1])
+    area = np.sum(a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0], axis=1)
+    sign = np.where(area < 0, -1.0, 1.0)[:, None]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        # inside edge (a -> b): su u + sv v + s0 >= 0 (unit normal, px; 0, 0, 0 for a repeated corner)
+        su = np.where(length > 0, -d[..., 1] * sign / length, 0.0)
+        sv = np.where(length > 0, d[..., 0] * sign / length, 0.0)
+    s0 = -(su * a[..., 0] + sv * a[..., 1])
+    lo = np.full(total, -np.inf)
+    hi = np.full(total, np.inf)
+    for k in range(uv.shape[1]):
+        cu, cv_, c0 = su[face, k], sv[face, k], s0[face, k]
+        rest = cv_ * v + c0 + _EDGE_TOL_PX            # cu u + rest >= 0
+        with np.errstate(divide="ignore", invalid="ignore"):
+            bound = -rest / cu
+        flat = np.abs(cu) < 1e-12
+        lo = np.where(cu >= 1e-12, np.maximum(lo, bound), lo)
+        hi = np.where(cu <= -1e-12, np.minimum(hi, bound), hi)
+        hi = np.where(flat & (rest < 0), -np.inf, hi)
+    x0 = box[face, 0]
+    width = box[face, 2] - x0
+    first = np.clip(np.ceil(lo), x0, x0 + width) - x0
+    last = np.clip(np.floor(hi), x0 - 1, x0 + width - 1) - x0
+    return first.astype(np.int32), last.astype(np.int32), start
 
 
 def _surface_edges(surface: np.ndarray) -> np.ndarray:
