@@ -18,7 +18,7 @@ from armlab.lab import lab_config
 from armlab.sim.board_texture import BOARD_RGB
 from armlab.sim.camera import CameraRealism, SimCamera, true_camera
 from armlab.sim.faces import ARM_RGB, shade
-from armlab.sim.render import render
+from armlab.sim.render import render, render_exact
 
 SLEEP = np.array([0.0, -1.80, 1.55, 0.8, 0.0])
 # the realistic camera's geometry (intrinsics, distortion, mount error) without any image or depth noise
@@ -353,3 +353,98 @@ def test_sensor_caches_are_per_camera():
     assert np.array_equal(first[0], again[0]) and np.array_equal(first[1], again[1], equal_nan=True)
     other = render(cam_b, objs, realism=b, rng=np.random.default_rng(3))
     assert not np.array_equal(first[0], other[0])
+
+
+def _centre_inside(P, U, V, margin):
+    """Pixel centres (U, V) strictly inside the convex polygon P (K, 2) by more than `margin` px (+1), outside by
+    more than `margin` (-1), or within `margin` of an edge (0)."""
+    area = np.sum(P[:, 0] * np.roll(P, -1, 0)[:, 1] - P[:, 1] * np.roll(P, -1, 0)[:, 0])
+    dist = np.full(U.shape, np.inf)
+    for a, b in zip(P, np.roll(P, -1, 0)):
+        d = b - a
+        dist = np.minimum(dist, np.sign(area) * (d[0] * (V - a[1]) - d[1] * (U - a[0])) / np.hypot(*d))
+    return np.where(dist > margin, 1, np.where(dist < -margin, -1, 0))
+
+
+def test_faces_cover_the_pixels_whose_centres_are_inside():
+    """Random convex polygons (3-6 corners, either winding, 1-30 px across, fronto-parallel) cover exactly the pixels
+    whose centres lie inside them, against 8x8 supersampled coverage: every pixel wholly inside is drawn, every
+    pixel wholly outside is not, and a pixel cut by one straight edge is drawn when more than half of it is covered
+    (its centre is inside)."""
+    from armlab.sim.raster import view_for
+    K = np.array([[600.0, 0, 100], [0, 600.0, 80], [0, 0, 1]])
+    view = view_for(Camera(K, np.zeros(5), np.eye(4), 200, 160))
+    rng = np.random.default_rng(3)
+    sub = (np.arange(8) + 0.5) / 8 - 0.5
+    for trial in range(60):
+        n = int(rng.integers(3, 7))
+        angles = np.sort(rng.uniform(0, 2 * np.pi, n))[::rng.choice([-1, 1])]
+        radius = rng.uniform(0.5, 15.0)
+        P = rng.uniform(40, 120, 2) + radius * np.column_stack([np.cos(angles),
+                                                                rng.uniform(0.2, 1.0) * np.sin(angles)])
+        Z = 500.0
+        vertices = np.column_stack([(P - K[:2, 2]) / K[0, 0] * Z, np.full(n, Z)])
+        canvas = view.new_canvas()
+        view.fill_polygons(canvas, vertices[None], np.array([[0.0, 0.0, -1.0]]), np.array([[200.0, 0, 0]]),
+                           np.array([1]))
+        drawn = canvas.surface > 0
+        V, U = np.mgrid[0:view.height, 0:view.width].astype(float)
+        centre = _centre_inside(P, U, V, 1e-3)
+        assert not np.any(drawn & (centre < 0)) and np.all(drawn[centre > 0]), trial
+        # supersampled coverage of the pixels near the polygon
+        x0, y0 = np.floor(P.min(axis=0)).astype(int) - 1
+        x1, y1 = np.ceil(P.max(axis=0)).astype(int) + 2
+        Vs, Us = np.mgrid[y0:y1, x0:x1].astype(float)
+        Us = Us[:, None, :, None] + sub[None, None, None, :]
+        Vs = Vs[:, None, :, None] + sub[None, :, None, None]
+        Us, Vs = np.broadcast_arrays(Us, Vs)
+        cover = (_centre_inside(P, Us, Vs, 0.0) >= 0).reshape(y1 - y0, 8, x1 - x0, 8).mean(axis=(1, 3))
+        box = drawn[y0:y1, x0:x1]
+        assert np.all(box[cover == 1.0]) and not np.any(box[cover == 0.0]), trial
+        # a pixel away from the corners (only one edge crosses it) is drawn exactly when its centre is inside
+        corner_far = np.min(np.hypot(Us.reshape(y1 - y0, 8, x1 - x0, 8)[:, :1, :, :1, None] - P[:, 0],
+                                     Vs.reshape(y1 - y0, 8, x1 - x0, 8)[:, :1, :, :1, None] - P[:, 1]), axis=-1)
+        one_edge = (corner_far[:, 0, :, 0] > 1.5) & (np.abs(cover - 0.5) > 0.05)
+        assert np.array_equal(box[one_edge], cover[one_edge] > 0.5), trial
+
+
+def _crop_camera(camera, x0, y0, n, scale):
+    """The camera's pinhole (no distortion) image of pixels x0..x0+n-1, y0..y0+n-1, `scale` x `scale` samples per
+    pixel (sample centres evenly inside each pixel)."""
+    K = camera.K.copy()
+    K[:2] *= scale
+    K[0, 2] = scale * (camera.K[0, 2] - x0 + 0.5) - 0.5
+    K[1, 2] = scale * (camera.K[1, 2] - y0 + 0.5) - 0.5
+    return Camera(K, np.zeros(5), camera.T_cam_world, n * scale, n * scale)
+
+
+@pytest.mark.parametrize("x, y, edge, yaw", [(150.0, -80.0, 25.0, 0.0), (190.0, -150.0, 38.0, 0.0),
+                                             (-230.0, 120.0, 25.0, 0.4), (60.0, 300.0, 38.0, 1.2)])
+def test_top_face_edge_next_to_its_side_face_matches_supersampling(x, y, edge, yaw):
+    """A cube's top face where it meets its own visible side face (and the board): every pixel the top face covers
+    wholly is drawn as top, none it misses is, a pixel more than 60 % covered is top and one less than 40 % is not;
+    the top's area is the supersampled one within the half pixel per edge pixel that rounding can take."""
+    from armlab.detection.heightmap import world_from_depth
+    truth = true_camera(CameraRealism.ideal())
+    o = cube("orange", x, y, edge, yaw=yaw)
+    u, v = truth.project(np.array([[x, y, edge]]))[0]
+    n = 48
+    x0, y0 = int(round(u)) - n // 2, int(round(v)) - n // 2
+
+    def top(scale):
+        cam = _crop_camera(truth, x0, y0, n, scale)
+        _, depth = render_exact(cam, [o])
+        return np.abs(world_from_depth(depth, cam)[2] - edge) < 0.3
+
+    drawn = top(1)
+    cover = top(8).reshape(n, 8, n, 8).mean(axis=(1, 3))
+    assert np.all(drawn[cover == 1.0]) and not np.any(drawn[cover == 0.0])
+    # away from the top's corners a pixel is cut by one straight edge: drawn when more than half of it is covered
+    a = yaw + np.pi / 4 * np.array([1, 3, 5, 7])
+    c = np.asarray(o.position[:2]) + edge / np.sqrt(2) * np.column_stack([np.cos(a), np.sin(a)])
+    corners = truth.project(np.column_stack([c, np.full(4, edge)])) - (x0, y0)
+    V, U = np.mgrid[0:n, 0:n]
+    far = np.min(np.hypot(U[..., None] - corners[:, 0], V[..., None] - corners[:, 1]), axis=-1) > 1.5
+    assert np.all(drawn[far & (cover > 0.6)]) and not np.any(drawn[far & (cover < 0.4)])
+    rim = (cover > 0) & (cover < 1)
+    assert abs(drawn.sum() - cover.sum()) < 0.25 * rim.sum()
