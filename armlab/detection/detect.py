@@ -66,8 +66,9 @@ class DetectionSettings:
     edge_tolerance: a cube's measured edge is within this of one of the lab's block edges;
     max_levels: the tallest stack (blocks) a face may top: faces at no height of such a stack are not reported,
     so raise it (and max_height) for towers (the "to the sky" event);
-    min_face_pixels: fewest full-resolution pixels of a face; step: segmentation works on every step-th pixel
-    (each face is then measured at full resolution)."""
+    min_face_pixels: fewest full-resolution pixels of a face (80: a small triangle or arch, 25 mm, far out on the
+    board keeps fewer than 120 once the segmentation's median and opening have taken its corners and legs); step:
+    segmentation works on every step-th pixel (each face is then measured at full resolution)."""
 
     min_height: float = 10.0
     max_height: float = 260.0
@@ -76,7 +77,7 @@ class DetectionSettings:
     min_rectangularity: float = 0.8
     max_aspect: float = 1.15
     board_margin: float = 5.0
-    min_face_pixels: int = 120
+    min_face_pixels: int = 80
     step: int = 2
     level_tolerance: float = 4.0
     edge_tolerance: float = 4.0
@@ -304,11 +305,15 @@ def _fit_square(points: np.ndarray, blocked: np.ndarray, pixel_mm: float, edge_h
 
 
 EDGE_SEARCH_MM = 3.5    # the side refinement looks this far inside and outside each fitted side
+CUBE_SIZE_SLACK = (2.0, 0.15)   # a face this near (edge mm, aspect) to cube-sized by its colour outline is refined and
+                                # judged again on its image edges (the outline can take or leave a boundary pixel)
 EDGE_STEP_MM = 0.5      # sampling step across a side
 EDGE_SAMPLES = 21       # profiles along each side (its middle 80 %: corners are rounded by blur)
 EDGE_FIT_TOL = 0.6      # edge points farther than this (mm) from a side's first line fit are left out of the refit
 EDGE_QUANT_PX = 12 ** -0.5   # an edge's position error from the pixel grid (px, a uniform one-pixel step's spread)
-SEEN_SIDE_VAR = 4.0         # a side whose own side face is in view beyond it: its slope's variance counts 4 times
+SEEN_SIDE_VAR = 1.4         # a side whose own side face is in view beyond it: its slope's variance counts 1.4 times
+                            # (measured: its squared slope error over its variance is 1.4 times a silhouette's, on
+                            # seeds 300-315 with the renderer filling faces by pixel centre)
 EDGE_LEVEL = 3.5        # the face ends where the colour distance to its core colour first reaches this (core spreads)
 _PROFILE_T = np.linspace(-0.8, 0.8, EDGE_SAMPLES)
 _PROFILE_S = np.arange(-EDGE_SEARCH_MM, EDGE_SEARCH_MM + 1e-9, EDGE_STEP_MM)
@@ -372,9 +377,11 @@ def _edge_offsets(prof: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, np.ndarr
 
 @dataclass
 class _Measured:
-    """One face measured on its own (before the batched yaw refinement): the fitted square (centre (2,) mm, sides
-    (2,) mm, theta rad), whether the outline was complete and the face cube-sized, and what the refinement and the
-    Block need."""
+    """One face measured on its own (before the batched refinement): the fitted square (centre (2,) mm, sides (2,) mm,
+    theta rad; the refinement moves them onto the image edges), whether the outline was complete and the face
+    cube-sized (before the refinement: near enough to be refined and judged again), the square fitted to the colour
+    outline itself (outline_centre, outline_sides: what the outline's rectangularity is measured against), and what the
+    refinement and the Block need."""
 
     face: Face
     centre: np.ndarray
@@ -383,6 +390,8 @@ class _Measured:
     complete: bool
     cube_sized: bool
     outline: np.ndarray
+    outline_centre: np.ndarray
+    outline_sides: np.ndarray
     blocked: np.ndarray
     pixel_mm: float
     contour: np.ndarray
@@ -390,6 +399,7 @@ class _Measured:
     feature: np.ndarray
     near: np.ndarray
     origin: tuple[int, int]
+    plane_z: float
 
 
 def _refine_yaws(camera: Camera, faces: list[_Measured], iterations: int = 3) -> np.ndarray:
@@ -403,10 +413,12 @@ def _refine_yaws(camera: Camera, faces: list[_Measured], iterations: int = 3) ->
     (EDGE_QUANT_PX px over the side's length: the renderer and the sensor draw edges on whole pixels, so a side turned
     by less than a pixel over its length looks straight and its residuals say nothing of it), and SEEN_SIDE_VAR times
     that for a side whose own side face is in view beyond it (a softer edge against a face of the same colour, seen
-    to err twice as much as a silhouette against the board). Sharp, long, unhidden silhouettes count most and sides
+    to err a little more than a silhouette against the board). Sharp, long, unhidden silhouettes count most and sides
     next to occluders not at all. A face keeps its yaw when no side shows a usable edge, or only one side whose own
     side face is in view beyond it or with fewer than 8 edge points. The result is the middle of the last two
-    iterations' yaws."""
+    iterations' yaws. The fits' intercepts a (where each side's edge is, at its middle) also move the squares: every
+    iteration, a pair of opposite sides that both show an edge sets the face's centre and side length along them, and
+    the faces' centre and sides are left at the last iteration's (in place)."""
     n_faces = len(faces)
     if n_faces == 0:
         return np.zeros(0)
@@ -419,7 +431,7 @@ def _refine_yaws(camera: Camera, faces: list[_Measured], iterations: int = 3) ->
     # one plane homography per face (world (x, y) at the face's height -> pixels), from one projection of all faces'
     # corner points; then into an atlas that stacks the faces' patches (feature and occluder masks) with gaps, so
     # that each iteration samples every face in one remap
-    homographies = _plane_homographies(camera, centre, [m.face.height_mm for m in faces],
+    homographies = _plane_homographies(camera, centre, [m.plane_z for m in faces],
                                        half.max(axis=1) + EDGE_SEARCH_MM)
     gap = 4                                                                # >= 3 px
     shapes = np.array([m.feature.shape for m in faces])
@@ -479,7 +491,17 @@ def _refine_yaws(camera: Camera, faces: list[_Measured], iterations: int = 3) ->
         lone = (n_good == 1) & ((good & sees_side).any(axis=1) | (fewest < 8))
         total = weights.sum(axis=1)
         turn = (np.where(good, turns, 0.0) * weights).sum(axis=1) / np.maximum(total, 1e-12)
+        # the sides where they are: a pair of opposite sides that both show an edge moves the centre to their middle
+        # and sets the side length between them (the edges' sub-pixel positions: unbiased, unlike the colour
+        # outline, whose threshold leaves out the blurred boundary pixel on a side against the board)
+        a4 = a.reshape(n_faces, 4)
+        pair = good[:, :2] & good[:, 2:]                                   # (F, 2) sides 0 + 2, 1 + 3
+        move = np.where(pair, 0.5 * (a4[:, :2] - a4[:, 2:]), 0.0)
+        centre = centre + move[:, 0, None] * normal[:, 0] + move[:, 1, None] * normal[:, 1]
+        dist = dist + np.where(pair, 0.5 * (a4[:, :2] + a4[:, 2:]), 0.0)[:, [0, 1, 0, 1]]
         previous, theta = theta, theta + np.where((n_good > 0) & ~lone & (total > 0), turn, 0.0)
+    for m, c, d in zip(faces, centre, dist):
+        m.centre, m.sides = c, 2 * d[:2]
     # the last step can swing between two readings of a jagged side: take the middle of the last two
     return 0.5 * (previous + theta) if iterations > 1 else theta
 
@@ -493,10 +515,16 @@ def _measure(face: Face, f: _Frame, settings: DetectionSettings) -> _Measured:
     near = cv2.dilate(occluder.view(np.uint8), _SQUARE5)
     blocked = (near | cv2.dilate(standing.view(np.uint8), STANDING_KERNEL))[contour[:, 1], contour[:, 0]] > 0
     contour = contour + np.array(origin)
-    outline = pixels_to_plane(f.camera, contour, face.height_mm)[:, :2]
+    # the face's plane: the height of the lab's stack nearest to its measured height (faces are kept only within
+    # level_tolerance of one), which the depth reads a little low and, far out on the board, up to a few mm off; the
+    # image outline and edges are intersected with it (a plane 3 mm off moves a point 3 mm x its distance from the
+    # camera's nadir / the camera's height: 1-1.5 mm at the board's far corners)
+    heights = _stack_heights(settings.max_levels)
+    plane_z = float(heights[np.argmin(np.abs(heights - face.height_mm))])
+    outline = pixels_to_plane(f.camera, contour, plane_z)[:, :2]
     cam = f.camera
     centre_guess = outline.mean(axis=0)
-    pixel_mm = float((cam.T_cam_world[2, :2] @ centre_guess + cam.T_cam_world[2, 2] * face.height_mm
+    pixel_mm = float((cam.T_cam_world[2, :2] @ centre_guess + cam.T_cam_world[2, 2] * plane_z
                       + cam.T_cam_world[2, 3]) / cam.K[0, 0])                     # the face's depth / fx
     edges = lab_config().block_edges_mm
     # a hint for the edge when part of the face is hidden: the size whose stacks reach this height best (None when
@@ -508,14 +536,22 @@ def _measure(face: Face, f: _Frame, settings: DetectionSettings) -> _Measured:
     if max(misfit.values()) - min(misfit.values()) < 1.5:
         hint = None
     centre_xy, sides, theta, complete = _fit_square(outline, blocked, pixel_mm, hint, tuple(edges.values()))
+    centre_xy, sides = np.asarray(centre_xy, float), np.asarray(sides, float)
+    return _Measured(face, centre_xy.copy(), sides.copy(), float(theta), bool(complete),
+                     _cube_sized(sides, settings, CUBE_SIZE_SLACK), outline, centre_xy, sides, blocked, pixel_mm,
+                     contour, mean_rgb, feature, near, origin, plane_z)
+
+
+def _cube_sized(sides, settings: DetectionSettings, slack: tuple[float, float] = (0.0, 0.0)) -> bool:
+    """Whether a face's square (sides (2,) mm) is a cube's: its edge (the root of the sides' product) within the
+    settings' range and tolerance of a lab edge, its aspect at most max_aspect; each loosened by slack (mm, aspect)."""
     w, h = sides
     edge = float(np.sqrt(w * h))
     aspect = float(max(w, h) / max(min(w, h), 1e-6))
     lo, hi = settings.cube_edge_range
-    nominal = min(abs(edge - e) for e in edges.values())
-    cube_sized = lo <= edge <= hi and nominal <= settings.edge_tolerance and aspect <= settings.max_aspect
-    return _Measured(face, np.asarray(centre_xy, float), np.asarray(sides, float), float(theta), bool(complete),
-                     bool(cube_sized), outline, blocked, pixel_mm, contour, mean_rgb, feature, near, origin)
+    nominal = min(abs(edge - e) for e in lab_config().block_edges_mm.values())
+    return bool(lo - slack[0] <= edge <= hi + slack[0] and nominal <= settings.edge_tolerance + slack[0]
+                and aspect <= settings.max_aspect + slack[1])
 
 
 def _describe(measured: list[_Measured], f: _Frame, settings: DetectionSettings, color_model: ColorModel,
@@ -530,8 +566,8 @@ def _describe(measured: list[_Measured], f: _Frame, settings: DetectionSettings,
     block_edges = lab_config().block_edges_mm
     out = []
     for m, name, margin, centre, (u, v) in zip(measured, names, margins, centres, pixels):
-        (w, h), theta, centre_xy, pixel_mm = m.sides, m.theta, m.centre, m.pixel_mm
-        edge = float(np.sqrt(w * h))
+        (w, h), theta, centre_xy, pixel_mm = m.outline_sides, m.theta, m.outline_centre, m.pixel_mm
+        edge = float(np.sqrt(np.prod(m.sides)))
         if m.complete:
             o32 = m.outline.astype(np.float32)
             area = cv2.contourArea(o32) + 0.5 * pixel_mm * cv2.arcLength(o32, True)
@@ -611,9 +647,11 @@ def detect_objects(rgb, depth_mm, camera: Camera, arm_q=None, color_model: Color
     heights = _stack_heights(settings.max_levels)
     faces = [face for face in faces if np.min(np.abs(heights - face.height_mm)) <= settings.level_tolerance]
     measured = [_measure(face, f, settings) for face in faces]
-    cubes = [m for m in measured if m.cube_sized]      # the yaw of what cannot be a cube is not worth refining
+    # what cannot be a cube is not worth refining; what is near enough is judged again on its refined square
+    cubes = [m for m in measured if m.cube_sized]
     for m, theta in zip(cubes, _refine_yaws(camera, cubes)):
         m.theta = float(theta)
+        m.cube_sized = _cube_sized(m.sides, settings)
     found = _describe(measured, f, settings, color_model, gains)
     found.sort(key=lambda b: float(np.hypot(*b.position[:2])))
     return found
