@@ -49,10 +49,39 @@ def test_exact_frame_gives_every_block_to_a_fraction_of_a_millimetre(ideal):
         top = np.array([t.position[0], t.position[1], t.top_z])
         b = min(found, key=lambda b: np.linalg.norm(b.position - top))
         assert np.linalg.norm(b.position - top) < 1.0
-        assert yaw_error(b.yaw, t.yaw) < np.radians(1.0)
+        assert yaw_error(b.yaw, t.yaw) < np.radians(EXACT_YAW_MAX_DEG)
         assert (b.color, b.size, b.levels) == (t.color, t.size, 1)
         assert -np.pi / 4 <= b.yaw < np.pi / 4
         assert np.allclose(b.pixel, cam.project(b.position[None])[0])
+
+
+# An exact frame has no blur: a side is a hard staircase of whole pixels, and a small block's side (about 22 px) leans
+# 2.6 deg per pixel; its fitted yaw can be a degree off whatever the detector does (measured over 180 blocks of seeds
+# 11-40: the worst is 1.30 deg, the mean 0.22). Eight frames hold the mean and the worst to those figures' bounds.
+EXACT_YAW_MAX_DEG = 1.5
+
+
+def test_exact_frames_give_yaw_and_position_to_the_pixel_grid_limit():
+    """Eight exact frames of six scattered blocks (48 blocks): yaw error mean < 0.3 deg and every one below
+    EXACT_YAW_MAX_DEG; position error (top centre) mean < 0.1 mm and every one below 0.5 mm. (The renderer and
+    detector before faces were filled by pixel centre and sides taken from edge pairs read 0.32 / 2.0 deg and
+    0.13 / 0.57 mm on these frames.)"""
+    yaw, pos = [], []
+    for seed in range(11, 19):
+        station = make_station("sim", seed=seed, scene="random", realism="ideal")
+        frame = station.camera.capture()
+        found = detect_blocks(frame.rgb, frame.depth, station.camera.truth, station.arm.joint_positions())
+        assert len(found) == len(station.world.blocks) == 6
+        for t in station.world.blocks:
+            top = np.array([t.position[0], t.position[1], t.top_z])
+            b = min(found, key=lambda b: np.linalg.norm(b.position - top))
+            pos.append(np.linalg.norm(b.position - top))
+            yaw.append(np.degrees(yaw_error(b.yaw, t.yaw)))
+    yaw, pos = np.array(yaw), np.array(pos)
+    print(f"yaw error mean {yaw.mean():.3f} max {yaw.max():.3f} deg; position mean {pos.mean():.3f} max "
+          f"{pos.max():.3f} mm")
+    assert yaw.mean() < 0.3 and yaw.max() < EXACT_YAW_MAX_DEG
+    assert pos.mean() < 0.1 and pos.max() < 0.5
 
 
 def test_realistic_frames_meet_the_goals(case):
@@ -141,9 +170,9 @@ def test_thin_distractors_are_found_and_not_called_blocks():
 
 def test_yaw_refinement_recovers_a_turned_start():
     """The edge refinement alone turns squares started 4 deg off back onto the blocks (exact frame): to the yaws the
-    detector finds from its own start (within 0.2 deg), which are within 1 deg of the truth. (An exact frame has no
-    blur: its edges are hard one-pixel staircases, and a small block's sides can lean up to about a degree from the
-    truth whatever the start.)"""
+    detector finds from its own start (within 0.2 deg), which are within EXACT_YAW_MAX_DEG of the truth. (An exact
+    frame has no blur: its edges are hard one-pixel staircases, and a small block's sides can lean up to about a
+    degree from the truth whatever the start.)"""
     from armlab.detection import detect as D
 
     station = make_station("sim", seed=11, scene="random", realism="ideal")
@@ -170,7 +199,7 @@ def test_yaw_refinement_recovers_a_turned_start():
             m.theta = t.yaw + np.radians(turn)
         yaws = real(cam, seen, iterations=3)
         assert max(np.degrees(yaw_error(y, o)) for y, o in zip(yaws, own)) < 0.2
-        assert max(np.degrees(yaw_error(y, t.yaw)) for y, t in zip(yaws, truth)) < 1.0
+        assert max(np.degrees(yaw_error(y, t.yaw)) for y, t in zip(yaws, truth)) < EXACT_YAW_MAX_DEG
     assert len(real(cam, [])) == 0
 
 
