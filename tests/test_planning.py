@@ -433,6 +433,42 @@ def test_planner_and_simulator_share_one_gripper_and_base_description(monkeypatc
     assert np.allclose(np.abs(base[:, :2]).max(axis=0), (70.0, 80.0))
 
 
+def _held_cube_lowest_z(q, edge: float, depth: float) -> float:
+    """World z (mm) of the lowest corner of a cube held as plan_pick grasps it (square to the fingers, its top
+    `depth` above the tool point along the tool's approach axis) with the arm at joint angles q (5,) rad."""
+    T_down = kinematics.fk(kinematics.ik([0.0, 250.0, 50.0], np.pi / 2)[0])
+    approach = T_down[:3, :3].T @ [0.0, 0.0, -1.0]                       # world down, in the tool frame
+    centre = (edge / 2 - depth) * approach
+    corners = centre + np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)]) * edge / 2
+    T = kinematics.fk(q)
+    return float((T[:3, 3] + corners @ T[:3, :3].T)[:, 2].min())
+
+
+def test_a_tilted_place_releases_the_lowest_edge_at_the_target_height():
+    # the to-the-sky tower's 8th level from the hand-over side: the hover is high, so the descent comes in tilted
+    # (flatter than a straight descent from the spot itself would be); the held cube's lowest edge, not its bottom
+    # face's centre, must end at the target height (without the lift it ends 5.6 mm lower, inside the tower's top;
+    # it ends 1.3 mm high since the tilted cube also hangs less far below the tool point: (e - depth)(1 - sin pitch))
+    from armlab.tasks.events.sky import SKY_CLEARANCE_MM
+
+    e, spot = 38.0, np.array([120.0, 120.0, 268.0])
+    q0 = kinematics.ik(np.array([-200.0, 150.0, 330.0]), 0.0, 0.0)[0]
+    tower = [planning.Obstacle(120.0, 120.0, 266.0, e / np.sqrt(2))]
+    plan = planning.plan_place(q0, spot, e, 0.0, tower, clearance=SKY_CLEARANCE_MM)
+    down = next(s.trajectory for s in plan.steps if s.label == "descend")
+    assert down.pitch < np.radians(75)                                   # tilted
+    lift = planning.tilted_release_lift(e, down.pitch)
+    assert lift > 4.0
+    assert down.p1[2] >= planning.place_tool_height(spot[2], e) + lift - 1e-9
+    assert spot[2] <= _held_cube_lowest_z(down.end, e, planning.default_grasp_depth(e)) <= spot[2] + 3.0
+    # top-down places are not lifted
+    flat = planning.plan_place(q0, [0.0, 250.0, 0.0], e, 0.0)
+    down = next(s.trajectory for s in flat.steps if s.label == "descend")
+    assert down.pitch == pytest.approx(np.pi / 2)
+    assert down.p1[2] == pytest.approx(planning.place_tool_height(0.0, e))
+    assert planning.tilted_release_lift(e, np.pi / 2) == pytest.approx(0.0, abs=1e-12)
+
+
 def test_place_prefers_a_shorter_top_down_descent_that_keeps_the_yaw():
     # 390 mm out the tool cannot come straight down from the 88 mm transit height, but can from a lower hover
     plan = planning.plan_place(planning.CAMERA_CLEAR_POSE, [0.0, 390.0, 0.0], 38.0, yaw=0.3)

@@ -24,6 +24,7 @@ from .pickplace import (
     plan_pick,
     plan_pick_place,
     plan_place,
+    tilted_release_lift,
 )
 from .plan import (
     GRIPPER_TIME_S,
@@ -54,7 +55,7 @@ __all__ = [
     "steepest_pitch_inside",
     "CAMERA_CLEAR_POSE", "default_grasp_depth", "grasp_height", "place_tool_height", "plan_camera_clear", "plan_pick",
     "plan_pick_place",
-    "plan_place",
+    "plan_place", "tilted_release_lift",
     "GRIPPER_TIME_S", "ExecutionResult", "GripperStep", "MoveStep", "Plan", "PlanSample", "execute", "plot_plan",
     "sample_plan",
     "SCALINGS", "moving_time", "time_scaling",

@@ -39,7 +39,7 @@ from .trajectory import cartesian_line, check_point, joint_move, reverse
 from .transit import DEFAULT_CLEARANCE_MM, GRIPPER_RADIUS_MM, Obstacle, as_obstacles, transit_clearance
 
 __all__ = ["CAMERA_CLEAR_POSE", "default_grasp_depth", "grasp_height", "place_tool_height", "plan_pick", "plan_place",
-           "plan_pick_place", "plan_camera_clear"]
+           "plan_pick_place", "plan_camera_clear", "tilted_release_lift"]
 
 CAMERA_CLEAR_POSE = np.array([0.0, 0.0, -np.pi / 2, 0.0, 0.0])
 FINGERTIP_MM = GRIPPER.fingertip_mm   # finger tips beyond the tool point along the approach (half a finger pad)
@@ -125,6 +125,17 @@ def _rise(q0: np.ndarray, z_t: float, scaling: str, robot: RobotModel):
         return move
 
 
+_RELEASE_TRIES = 4            # plans made at most for a tilted place's release height (plan_place)
+_RELEASE_OVERSHOOT_MM = 0.25  # each new try raises the place this much above the drop it must cover
+
+
+def tilted_release_lift(edge: float, pitch: float) -> float:
+    """How far (mm) a held cube's lowest edge hangs below its bottom-face centre when the tool is at `pitch` rad
+    (pi/2: top-down, 0 mm): the cube turns with the tool by pi/2 - pitch, so that edge sits (edge / 2) |cos(pitch)|
+    lower. A tilted place is raised by this much, so that the edge, not the face's centre, arrives at the target."""
+    return float(edge / 2 * abs(np.cos(pitch)))
+
+
 def _approach(q_start, target: np.ndarray, yaw: float, floor_z: float, held_below: float, action: str,
               obstacles, clearance: float, scaling: str, robot: RobotModel, what: str,
               low_hover: float | None = None) -> Plan:
@@ -208,15 +219,28 @@ def plan_place(q_start, position, edge: float, yaw: float = 0.0, obstacles=(),
     held block. The yaw is reached exactly for top-down placing, so when the descent from the transit height cannot be
     top-down a shorter one from a lower hover point (down to LOW_HOVER_MM above the placed block, the transit still
     checked against every obstacle) is preferred; only when none works is the place tilted, which leaves the block
-    square to the fingers: yaw = heading (mod 90 deg), up to 45 deg from the requested yaw (grasp module notes).
+    square to the fingers: yaw = heading (mod 90 deg), up to 45 deg from the requested yaw (grasp module notes), and
+    releases it tilted_release_lift(edge, pitch) higher, so that its lowest edge, not its bottom face's centre,
+    comes down no lower than position's height.
     """
     robot = robot or rx200()
     position = check_point(position, "place position")
     depth = _check_edge_depth(edge, grasp_depth)
-    target = np.array([position[0], position[1], place_tool_height(position[2], edge, depth)])
-    return _approach(q_start, target, yaw, position[2] + edge, edge - depth, "open", obstacles, clearance, scaling,
-                     robot, f"placing at ({position[0]:.1f}, {position[1]:.1f}, {position[2]:.1f}) mm",
-                     low_hover=position[2] + edge + LOW_HOVER_MM)
+    lift = 0.0
+    for attempt in range(_RELEASE_TRIES):
+        # a tilted descent's pitch depends on the hover height the plan settles on: plan, then again with the place
+        # raised by the lowest edge's drop at that pitch until the drop is covered (the last try: the most any pitch
+        # can drop it, edge / 2)
+        p = position + [0.0, 0.0, lift]
+        target = np.array([p[0], p[1], place_tool_height(p[2], edge, depth)])
+        plan = _approach(q_start, target, yaw, p[2] + edge, edge - depth, "open", obstacles, clearance, scaling,
+                         robot, f"placing at ({position[0]:.1f}, {position[1]:.1f}, {position[2]:.1f}) mm",
+                         low_hover=p[2] + edge + LOW_HOVER_MM)
+        need = tilted_release_lift(edge, next(s.trajectory for s in plan.steps if s.label == "descend").pitch)
+        if need <= lift + 1e-9:
+            break
+        lift = need + _RELEASE_OVERSHOOT_MM if attempt < _RELEASE_TRIES - 2 else edge / 2
+    return plan
 
 
 def plan_pick_place(q_start, top, yaw: float, edge: float, position, place_yaw: float = 0.0, obstacles=(),

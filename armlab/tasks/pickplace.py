@@ -9,8 +9,9 @@ compensates sag) and station.camera. Each station gets a TaskContext on first us
 - known: what stands on the board (detections from the last look, updated by picks and places), the obstacles plans
   avoid; held: the block in the gripper.
 place() releases the block RELEASE_GAP_MM above the requested bottom height, so a residual arm error never pushes
-it into what it is put on (the block drops that little and settles); at long reach, where the tool is tilted, also
-by how far the tilted block's lowest edge hangs below its bottom-face centre. Units: mm, rad; world (board) frame.
+it into what it is put on (the block drops that little and settles); at long reach, where the tool is tilted,
+planning.plan_place also lifts it by how far the tilted block's lowest edge hangs below its bottom-face centre
+(planning.tilted_release_lift). Units: mm, rad; world (board) frame.
 """
 
 from __future__ import annotations
@@ -127,17 +128,6 @@ def pick(station, block, obstacles=None) -> bool:
     return held
 
 
-def _tilt_drop(position: np.ndarray, edge: float, yaw: float) -> float:
-    """How far (mm) the lowest edge of a held cube hangs below its bottom-face centre when the place is not top-down:
-    the cube turns with the tool by pi/2 - pitch, so that edge sits (edge / 2) cos(pitch) lower."""
-    tool = np.array([position[0], position[1], planning.place_tool_height(position[2], edge)])
-    try:
-        grasp = planning.choose_grasp(tool, yaw)
-    except ValueError:          # unreachable: plan_place says why
-        return 0.0
-    return 0.0 if grasp.top_down else float(edge / 2 * abs(np.cos(grasp.pitch)))
-
-
 def place(station, position, yaw: float = 0.0, obstacles=None,
           clearance: float = planning.DEFAULT_CLEARANCE_MM) -> bool:
     """Put the held block's bottom-face centre at `position` (3,) world mm with yaw (rad); True when the plan ran
@@ -150,9 +140,8 @@ def place(station, position, yaw: float = 0.0, obstacles=None,
     if p.shape != (3,) or not np.all(np.isfinite(p)):
         raise ValueError(f"place position must be 3 finite numbers (x, y, z in world mm), got {position!r}")
     obs = ctx.known if obstacles is None else list(obstacles)
-    gap = RELEASE_GAP_MM + _tilt_drop(p, edge, float(yaw))
-    plan = planning.plan_place(ctx.arm.joint_positions(), p + [0.0, 0.0, gap], edge, float(yaw), obstacles=obs,
-                               clearance=clearance)
+    plan = planning.plan_place(ctx.arm.joint_positions(), p + [0.0, 0.0, RELEASE_GAP_MM], edge, float(yaw),
+                               obstacles=obs, clearance=clearance)
     planning.execute(plan, ctx.arm)
     ctx.held = None
     ctx.known = [*ctx.known, Obstacle(float(p[0]), float(p[1]), float(p[2] + edge), edge / np.sqrt(2))]
