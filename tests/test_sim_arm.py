@@ -1,5 +1,6 @@
 """The simulated arm and gripper: driver refusals, board collisions, motion in simulated time, emergency stop,
-teaching by hand, gravity sag, and grasping, carrying, dropping, stacking and tipping by geometry."""
+teaching by hand, gravity sag, grasping, carrying, dropping, stacking and tipping by geometry, and a held block's
+collisions with the other objects."""
 
 import numpy as np
 import pytest
@@ -10,8 +11,9 @@ from armlab.profile import trapezoid_fraction
 from armlab.robot import rx200
 from armlab.sim import ArmRealism, GripperGeometry, SimArm, World
 from armlab.sim.arm import gravity_deflection
-from armlab.sim.geometry import wrap_quarter
+from armlab.sim.geometry import boxes_overlap, convex_penetration, prism_features, wrap_quarter
 from armlab.station import Arm, EmergencyStopped, MotionRefused
+from armlab.transforms import homogeneous, rot_z
 
 DOWN = np.pi / 2
 
@@ -317,3 +319,157 @@ def test_held_block_counts_in_the_board_collision_check():
     q = kinematics.ik([0.0, 250.0, 10.0], DOWN, aligned_roll(block.position, 0.0))[0]
     with pytest.raises(MotionRefused, match="held red block would go"):
         arm.move_to(q)
+
+
+# -- a held block against the other objects -----------------------------------------------------------------------
+
+def test_convex_penetration_agrees_with_the_oriented_box_test():
+    rng = np.random.default_rng(7)
+    for _ in range(300):
+        h1, h2 = rng.uniform(5.0, 20.0, 3), rng.uniform(5.0, 20.0, 3)
+        R1 = kinematics.fk(rng.uniform(-1.0, 1.0, 5))[:3, :3]                 # any rotation
+        R2 = rot_z(rng.uniform(-np.pi, np.pi))
+        c1, c2 = rng.normal(0.0, 20.0, 3), rng.normal(0.0, 20.0, 3)
+        square = lambda h: np.array([[-h[0], -h[1]], [h[0], -h[1]], [h[0], h[1]], [-h[0], h[1]]])   # noqa: E731
+        depth = convex_penetration(prism_features(square(h1), h1[2], homogeneous(R1, c1)),
+                                   prism_features(square(h2), h2[2], homogeneous(R2, c2)))
+        for margin in (0.0, 0.5):
+            assert (depth > margin) == boxes_overlap(c1, R1, h1, c2, R2, h2, margin)
+
+
+def _world_state(world, arm):
+    """Everything a refused move must leave as it was: true joints, motors, clock, every object's pose, what is held."""
+    poses = {o.id: (o.position.copy(), o.yaw, np.array(o.tilt, dtype=float)) for o in world.objects}
+    return arm.q_true, arm._motor.copy(), world.time_s, poses, [o.id for o in arm.holding], set(world.held)
+
+
+def _assert_same_state(before, after):
+    (q, motor, t, poses, holding, held), (q2, motor2, t2, poses2, holding2, held2) = before, after
+    np.testing.assert_array_equal(q2, q)
+    np.testing.assert_array_equal(motor2, motor)
+    assert t2 == t and holding2 == holding and held2 == held
+    assert poses2.keys() == poses.keys()
+    for i, (p, yaw, tilt) in poses.items():
+        np.testing.assert_array_equal(poses2[i][0], p)
+        assert poses2[i][1] == yaw
+        np.testing.assert_array_equal(poses2[i][2], tilt)
+
+
+def _holding_beside(realism="realistic"):
+    """A world with a standing red block at (0, 250) and the arm holding the blue block at (-100, 250, 30) mm."""
+    standing, held = cube("red", xy=(0.0, 250.0), id=0), cube("blue", xy=(-100.0, 250.0), id=1)
+    world, arm = make([standing, held], realism=realism)
+    assert pick(arm, held)
+    move_tool(arm, [-100.0, 250.0, 30.0], aligned_roll(held.position, 0.0))
+    return world, arm, standing, held
+
+
+def test_held_block_moved_sideways_through_a_standing_block_is_refused_and_nothing_changes():
+    world, arm, standing, held = _holding_beside()
+    before = _world_state(world, arm)
+    target = [100.0, 250.0, 30.0]
+    with pytest.raises(MotionRefused, match=r"collision of the held block\): the held object 1 \(large blue block "
+                                            r"at .*\) would go [0-9.]+ mm into object 0 \(large red block at "
+                                            r"\(0.0, 250.0, 19.0\) mm\), with its centre at \(") as e:
+        move_tool(arm, target, aligned_roll(target, 0.0))
+    hit_at = [float(v) for v in str(e.value).split("centre at (")[-1].split(")")[0].split(",")]
+    # where it first goes HELD_CONTACT_TOL_MM into the red block's -x face (x = -38 mm for its centre), within one
+    # checked path step (0.01 rad of waist at about 270 mm reach)
+    assert -38.0 + 0.5 < hit_at[0] < -38.0 + 0.5 + 2.8
+    _assert_same_state(before, _world_state(world, arm))
+    assert world.problems() == []
+    # the same move lifted over the red block is accepted and carries the blue block over
+    move_tool(arm, [-100.0, 250.0, 80.0], aligned_roll(target, 0.0))
+    move_tool(arm, [100.0, 250.0, 80.0], aligned_roll(target, 0.0))
+    assert [o.id for o in arm.holding] == [1] and held.position[0] > 95.0
+    np.testing.assert_allclose(standing.position, [0.0, 250.0, 19.0])
+    assert world.problems() == []
+
+
+def test_held_block_cannot_be_pushed_through_a_block_by_hand_either():
+    world, arm, standing, held = _holding_beside()
+    arm.set_torque(False)
+    before = _world_state(world, arm)
+    target = np.array([60.0, 250.0, 30.0])
+    with pytest.raises(MotionRefused, match="cannot push the held block through another object: the held object 1"):
+        arm.move_by_hand(kinematics.ik(target, DOWN, aligned_roll(target, 0.0), current=arm.q_true)[0])
+    _assert_same_state(before, _world_state(world, arm))
+
+
+def _sweep_over(standing_top: float, bottom_offset: float):
+    """Hold a large block with its bottom `bottom_offset` mm above standing_top and turn only the waist, so it slides
+    at a constant height across the top of the red block standing at (0, 250) (ideal arm: no sag)."""
+    standing, held = cube("red", xy=(0.0, 250.0), id=0), cube("blue", xy=(-150.0, 200.0), id=1)
+    world, arm = make([standing, held])
+    assert pick(arm, held)
+    start = np.array([-80.0, np.sqrt(250.0 ** 2 - 80.0 ** 2), standing_top + bottom_offset + 19.0])   # r = 250 mm
+    move_tool(arm, start + [0, 0, 30], aligned_roll(start, 0.0))
+    move_tool(arm, start, aligned_roll(start, 0.0))
+    q = arm.joint_positions()
+    q[0] -= 2 * np.arctan2(-start[0], start[1])              # to x = +80 mm on the same circle
+    return world, arm, q
+
+
+def test_held_block_may_slide_in_resting_contact_over_a_block_but_not_press_into_it():
+    world, arm, q = _sweep_over(38.0, 0.0)
+    arm.move_to(q)                                           # bottom on the red block's top: resting contact
+    assert world.problems() == []
+    world, arm, q = _sweep_over(38.0, -0.3)                  # 0.3 mm in: within HELD_CONTACT_TOL_MM
+    arm.move_to(q)
+    world, arm, q = _sweep_over(38.0, -2.0)
+    with pytest.raises(MotionRefused, match=r"would go 2.0 mm into object 0 \(large red block"):
+        arm.move_to(q)
+
+
+def test_held_block_is_checked_against_a_distractor_by_its_own_footprint():
+    # A 38 mm triangle at (0, 250): apex at (0, 269), base from (-19, 231) to (19, 231). A small held block lowered
+    # to 1 mm above the board into its bounding square's corner near (19, 269) stays 8.9 mm clear of the slanted
+    # side; lowered over the apex it would go 6 mm into the triangle.
+    for x, refused in ((25.5, False), (0.0, True)):
+        triangle = ObjectState("green", "large", 38.0, np.array([0.0, 250.0, 19.0]), 0.0, "triangle", 0)
+        held = cube("blue", "small", xy=(-100.0, 250.0), id=1)
+        world, arm = make([triangle, held])
+        assert pick(arm, held)
+        above, low = np.array([x, 275.5, 80.0]), np.array([x, 275.5, 12.5 + 1.0])
+        move_tool(arm, above, aligned_roll(above, 0.0))
+        if refused:
+            with pytest.raises(MotionRefused, match=r"would go 6.0 mm into object 0 \(large green triangle"):
+                move_tool(arm, low, aligned_roll(low, 0.0))
+        else:
+            move_tool(arm, low, aligned_roll(low, 0.0))
+            assert held.bottom_z == pytest.approx(1.0)
+
+
+def test_placing_on_a_block_in_resting_contact_and_lifting_off_again_are_accepted():
+    lower, upper = cube("red", xy=(100.0, 250.0), id=0), cube("blue", xy=(-100.0, 250.0), id=1)
+    world, arm = make([lower, upper])
+    assert pick(arm, upper)
+    on_top = lower.position + [0.0, 0.0, 38.0]              # the held block's bottom exactly on the red block's top
+    move_tool(arm, on_top + [0, 0, 40], aligned_roll(on_top, 0.0))
+    move_tool(arm, on_top, aligned_roll(on_top, 0.0))
+    assert upper.bottom_z == pytest.approx(lower.top_z)
+    arm.open_gripper()
+    np.testing.assert_allclose(upper.position, on_top, atol=1e-6)
+    assert arm.close_gripper()
+    move_tool(arm, on_top + [0, 0, 60], aligned_roll(on_top, 0.0))
+    assert upper.bottom_z == pytest.approx(lower.top_z + 60.0)
+    np.testing.assert_allclose(lower.position, [100.0, 250.0, 19.0])
+    assert world.problems() == []
+
+
+def test_lifting_a_block_the_grasp_pressed_into_the_stack_below_is_accepted():
+    # Heavy blocks: taking the weight at the grasp sags the arm, which presses the held block into the one below
+    # further than HELD_CONTACT_TOL_MM; the lift only takes it out again.
+    lower, upper = cube("red", xy=(0.0, 300.0), id=0), cube("blue", xy=(0.0, 300.0), z=38.0 + 19.0, id=1)
+    world, arm = make([lower, upper], realism=ArmRealism(block_density_kg_m3=6000.0))
+    roll = aligned_roll(upper.position, 0.0)
+    move_tool(arm, upper.position + [0, 0, 60], roll)
+    move_tool(arm, upper.position, roll)
+    sag = upper.position[2] - arm.tool_pose_true()[2, 3]      # the empty arm's sag here: aim that much higher
+    move_tool(arm, upper.position + [0, 0, 60], roll)
+    move_tool(arm, upper.position + [0, 0, sag], roll)
+    assert arm.close_gripper()
+    assert lower.top_z - upper.bottom_z > 1.0                 # pressed in by the weight
+    move_tool(arm, upper.position + [0, 0, 60], roll)
+    assert upper.bottom_z > lower.top_z + 30.0
+    np.testing.assert_allclose(lower.position, [0.0, 300.0, 19.0])

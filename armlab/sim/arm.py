@@ -1,5 +1,6 @@
 """The simulated RX200 arm: the manufacturer's time-based motion in simulated time, the driver's refusals, board
-collisions, gravity sag, backlash, encoder noise, torque-off teaching, the gripper and an emergency stop.
+collisions, collisions of a held block with the other objects, gravity sag, backlash, encoder noise, torque-off
+teaching, the gripper and an emergency stop.
 
 Units: rad, s, mm; world (board) frame. Three joint vectors are kept apart:
 - the motor positions (what the servos are commanded to and hold),
@@ -16,11 +17,13 @@ from dataclasses import dataclass, fields, replace
 import numpy as np
 
 from armlab import kinematics
+from armlab.blocks import ObjectState, footprint
 from armlab.gripper_geometry import GRIPPER
 from armlab.profile import default_moving_time, trapezoid_fraction, velocity_violations
 from armlab.robot import RobotModel, rx200
+from armlab.sim.geometry import convex_penetration, prism_features
 from armlab.sim.gripper import PAD_NAMES, GripperGeometry, close_on, push_with_pads
-from armlab.sim.world import World
+from armlab.sim.world import World, _describe
 from armlab.station import EmergencyStopped, MotionRefused
 from armlab.transforms import homogeneous, invert_transform, rot_z, rpy_from_matrix
 
@@ -28,7 +31,9 @@ __all__ = ["ArmRealism", "SimArm", "gravity_deflection"]
 
 GRAVITY = 9.81                 # m/s^2
 BOARD_CONTACT_TOL_MM = 1.0     # a part may touch the board this far in (rubber pads, wood): not a collision
-_PATH_STEP_RAD = 0.01          # board-collision check: largest joint change between checked path samples
+HELD_CONTACT_TOL_MM = 0.5      # a held block may press this far into another object (resting on it, placing it on a
+                               # stack, touching a neighbour): not a collision
+_PATH_STEP_RAD = 0.01          # collision checks: largest joint change between checked path samples
 _POINT_NAMES = ("base", "waist", "shoulder joint", "elbow joint", "wrist joint", "wrist_rotate joint",
                 "tool point")
 
@@ -102,6 +107,16 @@ def gravity_deflection(q, realism: ArmRealism, payload_kg: float = 0.0, robot: R
     out[..., 1] = realism.shoulder_compliance_rad_per_nm * moment(r[..., 2], [(m_up, upper), *beyond_elbow])
     out[..., 2] = realism.elbow_compliance_rad_per_nm * moment(r[..., 3], beyond_elbow)
     return out
+
+
+def _xyz(p) -> str:
+    return f"({p[0]:.1f}, {p[1]:.1f}, {p[2]:.1f})"
+
+
+def _radius(o: ObjectState) -> float:
+    """Radius (mm) of a sphere about the object's centre that holds it (+ 1 mm): the pre-check of held collisions."""
+    corners = np.vstack(footprint(o.shape, o.edge))
+    return float(np.sqrt(np.max(np.sum(corners ** 2, axis=1)) + (o.edge / 2) ** 2)) + 1.0
 
 
 @dataclass
@@ -236,11 +251,18 @@ class SimArm:
         if self._estopped:
             raise EmergencyStopped(f"{what} refused: the arm is emergency-stopped; call reset() first")
 
+    @staticmethod
+    def _path_samples(q0, q1) -> np.ndarray:
+        """Fractions s (n,) in [0, 1] at which the straight joint-space path q0 -> q1 (rad) is checked: at most
+        _PATH_STEP_RAD of joint change apart, both ends included."""
+        dq = np.asarray(q1, dtype=float) - np.asarray(q0, dtype=float)
+        return np.linspace(0.0, 1.0, max(2, int(np.ceil(np.abs(dq).max() / _PATH_STEP_RAD)) + 1))
+
     def _board_collision(self, q0, q1, physical) -> str | None:
         """Why the straight joint-space path q0 -> q1 (motor positions) would put a part below the board, or None."""
         dq = np.asarray(q1) - np.asarray(q0)
-        n = max(2, int(np.ceil(np.abs(dq).max() / _PATH_STEP_RAD)) + 1)
-        s = np.linspace(0.0, 1.0, n)
+        s = self._path_samples(q0, q1)
+        n = len(s)
         Q = physical(q0 + s[:, None] * dq)
         frames = kinematics.link_frames(Q, self.robot, check_limits=False)
         T = frames[:, 6]
@@ -268,12 +290,58 @@ class SimArm:
                         f"{100 * s[first]:.0f}%)")
         return None
 
+    def _held_collision(self, q0, q1, physical) -> str | None:
+        """Why the straight joint-space path q0 -> q1 (motor positions) would drive a held object into another object
+        of the world, or None.
+
+        Each held object is its footprint prism (bottom to top face) carried with the tool; each other object is its
+        upright footprint prism where it stands (world frame, mm). At every path sample (as for the board) their
+        penetration depth is found by the separating axis theorem (geometry.convex_penetration). A pair collides
+        where the depth exceeds HELD_CONTACT_TOL_MM (resting on a stack, placing on one, touching a neighbour) and
+        what it already is at the start of the path (the block a held block rests on when the lift starts, pressed a
+        little further in by the weight the arm took on at the grasp): a held block never needs to go deeper into
+        anything than it already is. Objects held together (a grasped block and what is stacked on it) move as one.
+        """
+        if not self._held:
+            return None
+        others = [o for o in self.world.objects if o.id not in self.world.held]
+        if not others:
+            return None
+        dq = np.asarray(q1) - np.asarray(q0)
+        s = self._path_samples(q0, q1)
+        T = kinematics.fk_pox(physical(q0 + s[:, None] * dq), self.robot, check_limits=False)     # (n, 4, 4)
+        fixed = [(o, [prism_features(p, o.edge / 2, homogeneous(rot_z(o.yaw), o.position))
+                      for p in footprint(o.shape, o.edge)]) for o in others]
+        first = None       # (sample where the depth first exceeds the allowance, held, other, depth (n,), centres)
+        for held, T_rel in self._held:
+            poses = T @ T_rel                                                                       # (n, 4, 4)
+            centres = poses[:, :3, 3]
+            for other, other_pieces in fixed:
+                near = np.flatnonzero(np.linalg.norm(centres - other.position, axis=1) < _radius(held) + _radius(other))
+                if not near.size:
+                    continue
+                moving = [prism_features(p, held.edge / 2, poses[near]) for p in footprint(held.shape, held.edge)]
+                depth = np.full(len(s), -np.inf)
+                # Footprints are unions of convex pieces: two objects go as deep into each other as their deepest pair.
+                depth[near] = np.max([convex_penetration(a, b) for a in moving for b in other_pieces], axis=0)
+                hits = np.flatnonzero(depth > max(HELD_CONTACT_TOL_MM, depth[0]) + 1e-9)
+                if hits.size and (first is None or hits[0] < first[0]):
+                    first = (int(hits[0]), held, other, depth, centres)
+        if first is None:
+            return None
+        k, held, other, depth, centres = first
+        i = int(np.argmax(depth))
+        return (f"the held {_describe(held)} would go {depth[i]:.1f} mm into {_describe(other)}, with its centre at "
+                f"{_xyz(centres[i])} mm, {100 * s[i]:.0f}% of the way along the move (it would hit it at "
+                f"{100 * s[k]:.0f}%, centre at {_xyz(centres[k])} mm)")
+
     # -- motion ---------------------------------------------------------------------------------------------
     def move_to(self, q, moving_time: float | None = None, accel_time: float | None = None,
                 blocking: bool = True) -> None:
         """Move to joint positions q (5,) rad in moving_time s (default: the lab's rule, profile.default_moving_time)
         with accel_time s ramps (default moving_time / 3). Raises MotionRefused before anything moves when q is out
-        of the joint limits, too fast for a joint, or the path would put any part of the arm below the board."""
+        of the joint limits, too fast for a joint, or the path would put any part of the arm below the board or drive
+        a held block into another object (deeper than HELD_CONTACT_TOL_MM and than it already is)."""
         self._check_ready("motion")
         if not self._torque:
             raise MotionRefused("motion refused: torque is off (the arm is being moved by hand); "
@@ -303,6 +371,9 @@ class SimArm:
         hit = self._board_collision(start, q, lambda Q: self._physical(Q, direction))
         if hit:
             raise MotionRefused(f"motion refused (collision with the board): {hit}")
+        hit = self._held_collision(start, q, lambda Q: self._physical(Q, direction))
+        if hit:
+            raise MotionRefused(f"motion refused (collision of the held block): {hit}")
         self._direction = direction
         self._motion = _Motion(self.world.time_s, start, q, T, Ta)
         if blocking:
@@ -376,7 +447,7 @@ class SimArm:
     def move_by_hand(self, q) -> None:
         """With torque off, pose the arm by hand at physical joint angles q (5,) rad (a student's hand: no sag, no
         backlash); the encoders then read it back. Refused (MotionRefused) with torque on, past a joint's hard stop,
-        or through the board."""
+        through the board, or pushing a held block into another object."""
         if self._torque:
             raise MotionRefused("the motors hold the arm: call set_torque(False) before moving it by hand")
         q = kinematics.check_joints(q, self.robot, check_limits=False).astype(float)
@@ -386,6 +457,9 @@ class SimArm:
         hit = self._board_collision(self._q_true, q, lambda Q: Q)
         if hit:
             raise MotionRefused(f"the hand cannot push the arm through the board: {hit}")
+        hit = self._held_collision(self._q_true, q, lambda Q: Q)
+        if hit:
+            raise MotionRefused(f"the hand cannot push the held block through another object: {hit}")
         self._motor = q - self._offsets
         self._refresh()
 

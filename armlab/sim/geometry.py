@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["polygons_overlap", "point_in_convex", "convex_hull", "separation_along", "boxes_overlap",
-           "box_corners", "wrap_quarter"]
+           "box_corners", "wrap_quarter", "prism_features", "convex_penetration"]
 
 
 def wrap_quarter(angle) -> np.ndarray:
@@ -91,3 +91,49 @@ def boxes_overlap(c1, R1, h1, c2, R2, h2, margin: float = 0.0) -> bool:
         if r1 + r2 - abs(d @ axis) <= margin:
             return False
     return True
+
+
+def prism_features(poly, half_height: float, pose) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The convex prism of footprint `poly` (K, 2) (the prism's own x, y) from z = -half_height to +half_height in its
+    own frame, placed by `pose` (..., 4, 4) (prism frame -> world): its vertices (..., 2K, 3), unit face normals
+    (..., K + 1, 3) and unit edge directions (..., K + 1, 3), in world units (mm in the kit), for convex_penetration.
+    """
+    poly = np.asarray(poly, dtype=float)
+    pose = np.asarray(pose, dtype=float)
+    k = len(poly)
+    h = float(half_height)
+    local = np.vstack([np.column_stack([poly, np.full(k, -h)]), np.column_stack([poly, np.full(k, h)])])
+    edges = np.roll(poly, -1, axis=0) - poly
+    edges = edges / np.linalg.norm(edges, axis=1, keepdims=True)
+    up = np.array([[0.0, 0.0, 1.0]])
+    normals = np.vstack([np.column_stack([edges[:, 1], -edges[:, 0], np.zeros(k)]), up])
+    directions = np.vstack([np.column_stack([edges, np.zeros(k)]), up])
+    R, t = pose[..., :3, :3], pose[..., :3, 3]
+    turn = lambda v: np.einsum("...ij,vj->...vi", R, v)   # noqa: E731
+    return turn(local) + t[..., None, :], turn(normals), turn(directions)
+
+
+def convex_penetration(a, b) -> np.ndarray:
+    """How deep (in the callers' units) two convex polyhedra interpenetrate, by the separating axis theorem: the least
+    overlap of their projections over the face normals of both and the cross products of their edge directions.
+
+    a, b: (vertices (..., V, 3), unit face normals (..., F, 3), unit edge directions (..., E, 3)), e.g. from
+    prism_features; the leading dimensions broadcast (e.g. a moving prism sampled along a path against a fixed one).
+    Returns (...,): > 0 the penetration depth (how far one must move to come apart), 0 touching, < 0 apart (then
+    -value is a lower bound on their distance).
+    """
+    va, na, ea = (np.asarray(x, dtype=float) for x in a)
+    vb, nb, eb = (np.asarray(x, dtype=float) for x in b)
+    lead = np.broadcast_shapes(va.shape[:-2], na.shape[:-2], ea.shape[:-2], vb.shape[:-2], nb.shape[:-2],
+                               eb.shape[:-2])
+    cross = np.cross(ea[..., :, None, :], eb[..., None, :, :])
+    cross = np.broadcast_to(cross, lead + cross.shape[-3:]).reshape(lead + (-1, 3))
+    axes = np.concatenate([np.broadcast_to(na, lead + na.shape[-2:]), np.broadcast_to(nb, lead + nb.shape[-2:]),
+                           cross], axis=-2)
+    norm = np.linalg.norm(axes, axis=-1)
+    valid = norm > 1e-6                                  # parallel edges give no axis
+    axes = axes / np.where(valid, norm, 1.0)[..., None]
+    pa = np.einsum("...vk,...mk->...mv", va, axes)
+    pb = np.einsum("...vk,...mk->...mv", vb, axes)
+    overlap = np.minimum(pa.max(-1), pb.max(-1)) - np.maximum(pa.min(-1), pb.min(-1))
+    return np.where(valid, overlap, np.inf).min(axis=-1)
