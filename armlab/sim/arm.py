@@ -23,7 +23,7 @@ from armlab.profile import default_moving_time, trapezoid_fraction, velocity_vio
 from armlab.robot import RobotModel, rx200
 from armlab.sim.geometry import convex_penetration, prism_features
 from armlab.sim.gripper import PAD_NAMES, GripperGeometry, close_on, push_with_pads
-from armlab.sim.world import World, _describe
+from armlab.sim.world import World, describe_object
 from armlab.station import EmergencyStopped, MotionRefused
 from armlab.transforms import homogeneous, invert_transform, rot_z, rpy_from_matrix
 
@@ -331,8 +331,8 @@ class SimArm:
             return None
         k, held, other, depth, centres = first
         i = int(np.argmax(depth))
-        return (f"the held {_describe(held)} would go {depth[i]:.1f} mm into {_describe(other)}, with its centre at "
-                f"{_xyz(centres[i])} mm, {100 * s[i]:.0f}% of the way along the move (it would hit it at "
+        return (f"the held {describe_object(held)} would go {depth[i]:.1f} mm into {describe_object(other)}, with "
+                f"its centre at {_xyz(centres[i])} mm, {100 * s[i]:.0f}% of the way along the move (it would hit it at "
                 f"{100 * s[k]:.0f}%, centre at {_xyz(centres[k])} mm)")
 
     # -- motion ---------------------------------------------------------------------------------------------

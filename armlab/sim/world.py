@@ -22,13 +22,14 @@ from armlab.blocks import ObjectState
 from armlab.lab import lab_config
 from armlab.sim.geometry import convex_hull, point_in_convex, polygons_overlap, separation_along
 
-__all__ = ["World", "SETTLE_TOL_MM"]
+__all__ = ["World", "SETTLE_TOL_MM", "describe_object"]
 
 SETTLE_TOL_MM = 0.5          # an object counts as resting on a support when its bottom is this close to the top
 _MAX_CHAIN = 20              # longest chain of tip-offs or pushes followed before giving up
 
 
-def _describe(o: ObjectState) -> str:
+def describe_object(o: ObjectState) -> str:
+    """An object for messages: its id, size, colour, kind and centre (world mm)."""
     kind = "block" if o.is_block else o.shape
     return f"object {o.id} ({o.size} {o.color} {kind} at ({o.position[0]:.1f}, {o.position[1]:.1f}, " \
            f"{o.position[2]:.1f}) mm)"
@@ -170,7 +171,7 @@ class World:
                         for s in supports for q in s.footprint_world())
             obj.position[:2] += d * (shift + 1.0)
             obj.position[2] = height   # it falls from the support's top, then settles again below
-        raise RuntimeError(f"{_describe(obj)} did not come to rest after {_MAX_CHAIN} tip-offs")
+        raise RuntimeError(f"{describe_object(obj)} did not come to rest after {_MAX_CHAIN} tip-offs")
 
     def shove(self, obj: ObjectState, direction, distance: float, _moved: tuple = ()) -> None:
         """Slide obj (and everything stacked on it) horizontally by distance mm along direction (2,), pushing any
@@ -201,19 +202,20 @@ class World:
         for o in objs:
             pts = np.vstack(o.footprint_world())
             if not np.all(lab.on_board(pts)):
-                out.append(f"{_describe(o)} is not entirely on the board (x in {lab.board_x}, y in {lab.board_y})")
+                out.append(f"{describe_object(o)} is not entirely on the board (x in {lab.board_x}, "
+                           f"y in {lab.board_y})")
             if o.id in self.held:
                 continue
             height, supports = self.supports_of(o)
             if abs(o.bottom_z - height) > SETTLE_TOL_MM:
-                out.append(f"{_describe(o)} does not rest on its support: bottom at {o.bottom_z:.1f} mm, "
+                out.append(f"{describe_object(o)} does not rest on its support: bottom at {o.bottom_z:.1f} mm, "
                            f"support top at {height:.1f} mm")
             elif not self._supported(o, supports):
-                out.append(f"{_describe(o)} would tip off: its centre is not over the object(s) below it")
+                out.append(f"{describe_object(o)} would tip off: its centre is not over the object(s) below it")
         for i, a in enumerate(objs):
             for b in objs[i + 1:]:
                 if self.collide(a, b):
-                    out.append(f"{_describe(a)} overlaps {_describe(b)}")
+                    out.append(f"{describe_object(a)} overlaps {describe_object(b)}")
         ids = [o.id for o in objs]
         if len(set(ids)) != len(ids):
             out.append(f"object ids are not unique: {ids}")
