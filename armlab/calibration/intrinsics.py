@@ -12,6 +12,7 @@ import cv2
 import numpy as np
 
 from armlab.images import check_gray_or_rgb
+from armlab.repeatable import opencv_single_thread
 
 __all__ = ["IntrinsicsResult", "calibrate_intrinsics", "find_checkerboard", "checkerboard_points",
            "compare_intrinsics"]
@@ -120,9 +121,10 @@ def calibrate_intrinsics(images, pattern_size: tuple[int, int] = (9, 6), square_
         raise ValueError(f"the checkerboard was found in {len(used)} of {len(images)} images; at least {min_views} "
                          f"are needed (check pattern_size={tuple(pattern_size)} counts INNER corners)")
     flags = cv2.CALIB_FIX_K3 if fix_k3 else 0
-    # BEGIN SOLUTION
-    rms, K, dist, rvecs, tvecs = cv2.calibrateCamera(obj, img, size, None, None, flags=flags)
-    # END SOLUTION
+    with opencv_single_thread():          # the threaded solver's sums are not repeatable (armlab.repeatable)
+        # BEGIN SOLUTION
+        rms, K, dist, rvecs, tvecs = cv2.calibrateCamera(obj, img, size, None, None, flags=flags)
+        # END SOLUTION
     per_view = []
     for o, m, r, t in zip(obj, img, rvecs, tvecs):
         proj, _ = cv2.projectPoints(o, r, t, K, dist)

@@ -51,7 +51,8 @@ class ArmRealism:
         shoulder_compliance_rad_per_nm, elbow_compliance_rad_per_nm: joint deflection per N m of gravity moment.
         upper_arm_kg, forearm_kg, gripper_kg: link masses (kg).
         block_density_kg_m3: density of the wooden blocks (for a held block's weight).
-        backlash_rad: gear play per joint; the link trails the motor by half of it in the last direction of motion.
+        backlash_rad: gear play per joint: the link stays put until the motor has taken up the play, then trails it by
+            half the play (a play operator: the link moves continuously with the motor, never jumps).
         joint_offset_std_rad: std of the per-joint homing offsets (drawn once per arm from its seed).
         encoder_noise_rad: std of the read noise on joint_positions() (seeded).
         encoder_ticks: encoder counts per turn (readings are quantised; 0 = not quantised).
@@ -155,7 +156,7 @@ class SimArm:
         offsets_rng, self._noise_rng = (np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(2))
         self._offsets = offsets_rng.normal(0.0, self.realism.joint_offset_std_rad, 5)
         self._motor = self.robot.sleep.astype(float)       # the lab's arm starts asleep
-        self._direction = np.zeros(5)
+        self._link = self._motor.copy()                     # where the gears hold the links (backlash state)
         self._motion: _Motion | None = None
         self._torque = True
         self._estopped = False
@@ -168,13 +169,22 @@ class SimArm:
     def _payload_kg(self) -> float:
         return sum(self.realism.block_density_kg_m3 * (o.edge / 1000.0) ** 3 for o, _ in self._held)
 
-    def _physical(self, motor, direction=None) -> np.ndarray:
-        """Physical joint angles (..., 5) for motor positions (..., 5) under the current load and torque state."""
-        q = np.asarray(motor, dtype=float) + self._offsets
+    def _geared(self, motor) -> np.ndarray:
+        """Link angles (..., 5) rad behind the gears for motor positions (..., 5) reached from the present link state
+        along a path on which each joint moves one way (a straight joint move): the play operator
+        clip(link, motor - b/2, motor + b/2). Continuous in the motor positions, so a motion of 1e-12 rad moves the
+        link by at most that much (no jump of the whole play when a joint barely moves, or not at all)."""
+        half = 0.5 * self.realism.backlash_rad
+        motor = np.asarray(motor, dtype=float)
+        return np.clip(self._link, motor - half, motor + half)
+
+    def _physical(self, motor) -> np.ndarray:
+        """Physical joint angles (..., 5) for motor positions (..., 5) reached from the present state by a straight
+        joint move, under the current load and torque state."""
+        motor = np.asarray(motor, dtype=float)
         if not self._torque:                        # held by hand: no servo, no gear load
-            return q
-        d = self._direction if direction is None else direction
-        q = q - 0.5 * self.realism.backlash_rad * np.sign(d)
+            return motor + self._offsets
+        q = self._geared(motor) + self._offsets
         return q + gravity_deflection(q, self.realism, self._payload_kg(), self.robot)
 
     @property
@@ -210,6 +220,7 @@ class SimArm:
 
     def _refresh(self) -> None:
         """Recompute the physical pose, carry held objects, and let the pads push what they run into."""
+        self._link = self._geared(self._motor) if self._torque else self._motor.copy()
         self._q_true = self._physical(self._motor)
         T = kinematics.fk_pox(self._q_true, self.robot, check_limits=False)
         for obj, T_rel in self._held:
@@ -367,14 +378,12 @@ class SimArm:
         too_fast = velocity_violations(start, q, T, self.robot)
         if too_fast:
             raise MotionRefused(f"motion refused (velocity limits, moving time {T:.2f} s): " + "; ".join(too_fast))
-        direction = np.where(q != start, np.sign(q - start), self._direction)
-        hit = self._board_collision(start, q, lambda Q: self._physical(Q, direction))
+        hit = self._board_collision(start, q, self._physical)
         if hit:
             raise MotionRefused(f"motion refused (collision with the board): {hit}")
-        hit = self._held_collision(start, q, lambda Q: self._physical(Q, direction))
+        hit = self._held_collision(start, q, self._physical)
         if hit:
             raise MotionRefused(f"motion refused (collision of the held block): {hit}")
-        self._direction = direction
         self._motion = _Motion(self.world.time_s, start, q, T, Ta)
         if blocking:
             self.wait()
