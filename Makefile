@@ -16,9 +16,11 @@ $(STAMP): requirements.txt pyproject.toml
 demo: $(STAMP)
 	MPLBACKEND=Agg $(PY) -m armlab demo
 
-## make test: lint + unit tests + every notebook under nbval (installs headless Chromium for the browser checks)
+## make test: lint + unit tests + every notebook under nbval, natively and under other CPUs' numerics
+## (installs headless Chromium for the browser checks)
 test: $(STAMP) browser lint
 	$(PY) -m pytest -q tests notebooks $(NBVAL)
+	bash tools/nbval-numerics $(PY) $(NBVAL)
 
 lint: $(STAMP)
 	$(PY) -m ruff check armlab tests benchmarks notebooks tools/build-notebook tools/student-release
@@ -28,6 +30,7 @@ unit: $(STAMP)
 
 notebooks: $(STAMP)
 	$(PY) -m pytest -q notebooks $(NBVAL)
+	bash tools/nbval-numerics $(PY) $(NBVAL)
 
 browser:
 	bash tools/ensure-chromium

@@ -28,7 +28,7 @@ from armlab.planning import Obstacle
 
 from . import perception
 from .guard import GuardedArm
-from .sag import SagModel, calibration_poses, fit_sag
+from .sag import SagModel, calibration_poses, fit_sag, hover_pose
 
 __all__ = ["TaskContext", "context", "calibrate_sag", "pick", "place", "look", "RELEASE_GAP_MM"]
 
@@ -56,13 +56,9 @@ def calibrate_sag(arm, measure: Callable[[], np.ndarray], poses=None) -> SagMode
     """Fit a SagModel: move the raw arm (no compensation) to each pose (default sag.calibration_poses), passing
     above it first, and call measure() -> tool point (3,) world mm there. Returns the fitted model."""
     poses = calibration_poses(arm.robot) if poses is None else np.asarray(poses, dtype=float)
-    from armlab import kinematics
-
     q_cmd, measured = [], []
     for q in poses:
-        p = kinematics.fk(q, arm.robot)[:3, 3]
-        above = kinematics.ik(p + [0.0, 0.0, 60.0], np.pi / 2, 0.0, current=q, robot=arm.robot)[0] \
-            if np.hypot(p[0], p[1]) < 330 else None
+        above = hover_pose(q, arm.robot)
         if above is not None:
             arm.move_to(above)
         arm.move_to(q)

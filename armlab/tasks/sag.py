@@ -32,11 +32,16 @@ import numpy as np
 from armlab import kinematics
 from armlab.robot import RobotModel, rx200
 
-__all__ = ["SagModel", "fit_sag", "calibration_poses", "LAB_BASELINE"]
+__all__ = ["SagModel", "fit_sag", "calibration_poses", "hover_pose", "LAB_BASELINE", "HOVER_MAX_REACH_MM"]
 
 LAB_BASELINE = (0.068, 3.0)     # the lab's rule: z += 0.068 r + 3 mm (r: horizontal reach of the target, mm)
 _N_PARAMS = 9                   # a1..a3, b1..b2, offsets of waist, shoulder, elbow, wrist_angle
 _SHOULDER, _ELBOW, _WRIST, _TOOL = 2, 3, 4, 6   # rows of kinematics.joint_positions
+HOVER_MAX_REACH_MM = 290.0      # calibration poses within this reach are approached from 60 mm above (hover_pose);
+                                # halfway between the poses' reaches of 250 and 330 mm, so that no rounding of a
+                                # pose's reach (330 mm came out as 329.99999999999994 on one CPU, 330.0 on another)
+                                # changes the path the arm takes
+HOVER_HEIGHT_MM = 60.0
 
 
 def _features(q: np.ndarray, robot: RobotModel) -> tuple[np.ndarray, np.ndarray]:
@@ -133,6 +138,17 @@ def fit_sag(q_cmd, p_measured, robot: RobotModel | None = None, iterations: int 
     # END SOLUTION
     resid = p - kinematics.fk(model.physical(q, robot), robot, check_limits=False)[:, :3, 3]
     return SagModel(model.params, float(np.sqrt(np.mean(np.sum(resid**2, axis=1)))), int(q.shape[0]))
+
+
+def hover_pose(q, robot: RobotModel | None = None) -> np.ndarray | None:
+    """Joint angles (5,) rad HOVER_HEIGHT_MM straight above the tool point of calibration pose q (5,) rad, from
+    which the arm comes down onto it, or None when the pose lies beyond HOVER_MAX_REACH_MM (approached directly)."""
+    robot = robot or rx200()
+    q = np.asarray(q, dtype=float)
+    p = kinematics.fk(q, robot)[:3, 3]
+    if np.hypot(p[0], p[1]) >= HOVER_MAX_REACH_MM:
+        return None
+    return kinematics.ik(p + [0.0, 0.0, HOVER_HEIGHT_MM], np.pi / 2, 0.0, current=q, robot=robot)[0]
 
 
 def calibration_poses(robot: RobotModel | None = None) -> np.ndarray:

@@ -16,6 +16,7 @@
 # %%
 import numpy as np
 import matplotlib.pyplot as plt
+from IPython import get_ipython
 
 from armlab import kinematics
 from armlab.camera import Camera, look_at
@@ -23,6 +24,7 @@ from armlab.lab import lab_config
 from armlab.robot import rx200
 from armlab.viz import Viewer
 
+get_ipython().run_line_magic("matplotlib", "inline")  # figures appear below their cell
 np.set_printoptions(precision=3, suppress=True)
 robot = rx200()
 lab = lab_config()
@@ -46,7 +48,7 @@ print("joints:", ", ".join(robot.joint_names))
 
 # %%
 T_home = kinematics.fk(robot.home)
-print("tool point at home (mm):", T_home[:3, 3])
+print("tool point at home (mm):", T_home[:3, 3].round(1))
 print("approach direction (tool x):", T_home[:3, 0].round(12) + 0.0)  # + 0.0 turns -0 into 0
 print("finger opening direction (tool y):", T_home[:3, 1].round(12) + 0.0)
 
@@ -69,7 +71,7 @@ for tag_id, (u, v) in zip(lab.tags.centres_mm, camera.project(tag_centres)):
 # %%
 back = camera.pixel_to_plane(camera.project(tag_centres), 0.0)
 err = np.abs(back - tag_centres).max()
-assert err < 1e-6, err
+assert err < 1e-6, f"the round trip misses a tag centre by {err:.1e} mm: project and pixel_to_plane disagree"
 print("OK: world -> pixel -> board plane round trip of the 4 tag centres within 1e-6 mm")
 
 # %% [markdown]
@@ -140,7 +142,8 @@ times = np.linspace(0.0, T, 31)
 s = trapezoid_fraction(times, T, T / 3)
 qs = robot.sleep + s[:, None] * (robot.home - robot.sleep)
 viewer.animate(times, qs, gripper_opening_mm=np.linspace(30, 60, len(times)))
-print(f"sleep -> home in {T:.2f} s, {len(times)} keyframes; the tool ends at {kinematics.fk(qs[-1])[:3, 3]} mm")
+end = kinematics.fk(qs[-1])[:3, 3].round(1)
+print(f"sleep -> home in {T:.2f} s, {len(times)} keyframes; the tool ends at {end} mm")
 
 # %% [markdown]
 # **Check:** the links the viewer draws must join exactly the joint positions of the kinematic model, at every pose
@@ -158,11 +161,11 @@ for i, name in enumerate(LINK_NAMES):
     half = np.linalg.norm(points[0, i + 1] - points[0, i]) / 2
     ends = T_link[:, :3, 3, None] + T_link[:, :3, 1, None] * np.array([-half, half])
     gap = max(gap, np.abs(np.swapaxes(ends, 1, 2) - points[:, i:i + 2]).max())
-assert gap < 1e-9, gap
+assert gap < 1e-9, f"a drawn link misses its joints by {gap:.1e} mm: the viewer's link poses are off"
 tool = kinematics.fk(robot.home)[:3, 3]
-assert np.allclose(tool, [0.0, 408.575, 304.57], atol=1e-9), tool
+assert np.allclose(tool, [0.0, 408.575, 304.57], atol=1e-9), f"home tool point {tool} mm, expected (0, 408.575, 304.57)"
 print(f"OK: drawn links join the joint positions at 100 random poses (gaps below 1e-9 mm); "
-      f"home tool point {tool} mm matches the manufacturer")
+      f"home tool point {tool.round(1)} mm matches the manufacturer")
 
 # %% [markdown]
 # ## 3 · The station: simulated or real
@@ -204,7 +207,7 @@ fig.tight_layout()
 from armlab.station import MotionRefused
 
 station.arm.home()
-print("encoders after home:", station.arm.joint_positions().round(3))
+print("encoders after home:", station.arm.joint_positions().round(3) + 0.0)  # + 0.0 turns -0 into 0
 try:
     station.arm.move_to([0.0, 1.2, 1.0, 0.5, 0.0])   # tips the arm into the board
 except MotionRefused as refusal:
@@ -236,7 +239,7 @@ tops = np.array([b.position + [0, 0, b.edge / 2] for b in station.world.blocks])
 uv = truth.project(tops)
 back = truth.pixel_to_world(uv, sample_depth(frame.depth, uv, radius=3))
 err = np.linalg.norm(back - tops, axis=1)
-assert np.all(err < 30), err
+assert np.all(err < 30), f"block tops seen {err.round(1)} mm from where they are: depth or camera pose is off"
 print(f"OK: {len(tops)} block tops seen where they are: error {err.min():.0f}-{err.max():.0f} mm "
       "before depth calibration")
 

@@ -84,7 +84,7 @@ def project_pinhole(K, T_cam_world, points_world):
 tag_centres = np.array([[x, y, 0.0] for x, y in lab.tags.centres_mm.values()])
 T_hand = cal.hand_measured_extrinsic()     # the nominal mount of data/lab.json, as measured with a tape
 print("tag centres through the factory K and the tape-measured mount (px):")
-print(project_pinhole(lab.factory_K, T_hand, tag_centres))
+print(project_pinhole(lab.factory_K, T_hand, tag_centres).round(1))
 
 # %% [markdown]
 # **Check:** your projection must agree with `armlab.camera.Camera.project` (which also handles distortion) when the
@@ -93,8 +93,8 @@ print(project_pinhole(lab.factory_K, T_hand, tag_centres))
 # %%
 reference = Camera(lab.factory_K, np.zeros(5), T_hand).project(tag_centres)
 err = np.abs(project_pinhole(lab.factory_K, T_hand, tag_centres) - reference).max()
-assert err < 1e-9, err
-print(f"OK: project_pinhole matches Camera.project on the 4 tag centres (max difference {err:.0e} px)")
+assert err < 1e-9, f"project_pinhole is {err:.2g} px off Camera.project: check K @ (R p + t) and the division by Z"
+print("OK: project_pinhole matches Camera.project on the 4 tag centres (within 1e-9 px)")
 
 # %% [markdown]
 # ## 2 · Intrinsics from checkerboard photos
@@ -144,7 +144,10 @@ v, u = np.mgrid[0:720:20, 0:1280:20]
 grid_px = np.column_stack([u.ravel(), v.ravel()]).astype(float)
 rays = np.column_stack([truth.normalized_rays(grid_px), np.ones(len(grid_px))])
 model_err = np.linalg.norm(truth.with_intrinsics(intrinsics.K, intrinsics.dist).project_camera(rays) - grid_px, axis=1)
-assert abs(d["focal_rel_pct"]) < 0.1 and max(abs(d["dcx_px"]), abs(d["dcy_px"])) < 1.5 and model_err.max() < 1.5
+assert abs(d["focal_rel_pct"]) < 0.1, f"focal length {d['focal_rel_pct']:+.2f} % off the truth: check views, corners"
+assert max(abs(d["dcx_px"]), abs(d["dcy_px"])) < 1.5, \
+    f"principal point off by ({d['dcx_px']:+.1f}, {d['dcy_px']:+.1f}) px"
+assert model_err.max() < 1.5, f"the fitted lens model is {model_err.max():.1f} px off the true lens somewhere"
 factory_rel = cal.compare_intrinsics(lab.factory_K, K_true)["focal_rel_pct"]
 print(f"OK: checkerboard focal error {abs(d['focal_rel_pct']):.2f} % (factory {factory_rel:+.2f} %), "
       f"lens model within {model_err.max():.1f} px over the image")
@@ -175,7 +178,8 @@ for name, (K, dist) in [("our photos", (intrinsics.K, intrinsics.dist)), ("its o
 
 # %%
 own_mm, borrowed_mm = borrowed_vs_own["its own photos"]["position_mm"], borrowed_vs_own["our photos"]["position_mm"]
-assert own_mm < 1.5 and borrowed_mm > 5.0
+assert own_mm < 1.5, f"with its own photos the camera is {own_mm:.1f} mm off (expected < 1.5 mm)"
+assert borrowed_mm > 5.0, f"another camera's K placed it only {borrowed_mm:.1f} mm off: the two cameras look alike"
 print(f"OK: each camera needs its own checkerboard photos: {own_mm:.1f} mm with its own, {borrowed_mm:.1f} mm with "
       f"another camera's")
 
@@ -219,6 +223,8 @@ print(f"{'tape-measured':>22} {'':>28} {hand['position_mm']:7.2f} mm {hand['angl
 # RMS), yet the camera lands ~20 mm off: a focal length 1.2 % too long is "explained" by a camera 1.2 % too far.
 
 # %%
+# NBVAL_IGNORE_OUTPUT
+# (illustrative: the raw matrices; the check below compares them)
 T_tags = extrinsics["checkerboard K"].T_cam_world
 print("tape-measured T_cam_world:\n", T_hand.round(3) + 0.0)  # + 0.0 turns -0 into 0
 print("AprilTag T_cam_world (checkerboard K):\n", T_tags.round(3) + 0.0)
@@ -230,7 +236,9 @@ print("AprilTag T_cam_world (checkerboard K):\n", T_tags.round(3) + 0.0)
 # %%
 good = cal.compare_extrinsics(T_tags, truth.T_cam_world)
 bad = cal.compare_extrinsics(extrinsics["factory K"].T_cam_world, truth.T_cam_world)
-assert good["position_mm"] < 1.0 and good["angle_deg"] < 0.1 and bad["position_mm"] > 10.0
+assert good["position_mm"] < 1.0 and good["angle_deg"] < 0.1, \
+    f"tag extrinsic {good['position_mm']:.1f} mm / {good['angle_deg']:.2f} deg off the truth: check the PnP inputs"
+assert bad["position_mm"] > 10.0, f"the factory K gave only {bad['position_mm']:.1f} mm of error (expected > 10 mm)"
 print(f"OK: tag extrinsic {good['position_mm']:.1f} mm / {good['angle_deg']:.2f} deg from the truth with the "
       f"checkerboard K ({bad['position_mm']:.0f} mm with the factory K)")
 
@@ -274,7 +282,9 @@ print(f"homography error: {err_h.mean():.2f} mm mean, {err_h.max():.2f} mm max (
 again = cal.detect_tags(top_b)
 offset = max(np.abs(t.center - view.from_world([lab.tags.centres_mm[t.tag_id]])[0]).max() for t in again)
 far = np.linalg.norm(grid[:, :2] - [0, 150], axis=1) > 400
-assert [t.tag_id for t in again] == [1, 2, 3, 4] and offset < 0.5 and err_h[far].max() > 2.0
+assert [t.tag_id for t in again] == [1, 2, 3, 4], f"tags {[t.tag_id for t in again]} found in the BoardView image"
+assert offset < 0.5, f"BoardView tags {offset:.2f} mm from where they are on the board"
+assert err_h[far].max() > 2.0, "the tag homography is exact at the borders: it should not be (lens distortion)"
 print(f"OK: BoardView tags within {offset:.2f} mm; homography off by up to {err_h[far].max():.1f} mm at the borders")
 
 # %% [markdown]
@@ -335,8 +345,10 @@ round_trip = camera.pixel_to_world(camera.project(grid), camera.depth_of(grid))
 pinhole = Camera(intrinsics.K, np.zeros(5), T_tags)
 p = grid[100]
 mine = pixel_to_world_pinhole(pinhole.K, T_tags, pinhole.project(p)[0], pinhole.depth_of(p)[0])
-assert np.abs(round_trip - grid).max() < 1e-6 and np.abs(mine - p).max() < 1e-6
-print(f"OK: world -> pixel -> world within {np.abs(round_trip - grid).max():.0e} mm at {len(grid)} grid points; "
+assert np.abs(round_trip - grid).max() < 1e-6, f"the round trip misses by {np.abs(round_trip - grid).max():.2g} mm"
+assert np.abs(mine - p).max() < 1e-6, \
+    f"pixel_to_world_pinhole is {np.abs(mine - p).max():.2g} mm off: Z K^-1 (u, v, 1), then T^-1"
+print(f"OK: world -> pixel -> world within 1e-6 mm at {len(grid)} grid points; "
       f"pinhole back-projection exact")
 
 # %% [markdown]
@@ -379,7 +391,8 @@ vv, uu = np.mgrid[0:720:8, 0:1280:8]
 true_bias = bu * (uu / 1280 - 0.5) + bv * (vv / 720 - 0.5) + b0
 bias_err = np.abs(correction.bias(camera.image_shape)[::8, ::8] - true_bias).max()
 before_q, after_q = np.abs(quarter_medians(raw)), np.abs(quarter_medians(fixed))
-assert after_q.max() < 0.5 and before_q.max() > 3.0 and bias_err < 1.0
+assert after_q.max() < 0.5, f"after correction a quarter of the image is still {after_q.max():.2f} mm off the board"
+assert before_q.max() > 3.0 and bias_err < 1.0, f"the fitted bias plane is {bias_err:.2f} mm off the simulator's"
 print(f"OK: quarter medians {before_q.max():.1f} mm -> {after_q.max():.2f} mm; bias plane within {bias_err:.2f} mm "
       f"of the simulator's")
 
@@ -426,7 +439,10 @@ fig.tight_layout()
 # grows towards the borders (less than 0.2 mm per 100 mm).
 
 # %%
-assert after.mean_mm < 2.0 and after.max_mm < 5.0 and abs(after.border_growth()) < 0.2
+assert after.mean_mm < 2.0 and after.max_mm < 5.0, \
+    f"grid error {after.mean_mm:.2f} mm mean, {after.max_mm:.2f} mm max after calibration"
+assert abs(after.border_growth()) < 0.2, \
+    f"the error still grows {after.border_growth():+.2f} mm per 100 mm towards the borders"
 print(f"OK: grid error {before.mean_mm:.1f} mm -> {after.mean_mm:.2f} mm mean, max {after.max_mm:.2f} mm, "
       f"no growth towards the borders ({after.border_growth():+.2f} mm per 100 mm)")
 
@@ -481,7 +497,8 @@ fig.tight_layout()
 # %%
 real_tags, real_refined = refine_rows[cases[0][0]]
 flat_tags, flat_refined = refine_rows[cases[2][0]]
-assert real_refined.mean_mm > 1.5 * real_tags.mean_mm and flat_refined.mean_mm < 0.6 * flat_tags.mean_mm
+assert real_refined.mean_mm > 1.5 * real_tags.mean_mm, "refining from the L515's biased depth should hurt"
+assert flat_refined.mean_mm < 0.6 * flat_tags.mean_mm, "refining from unbiased depth should rescue the factory K"
 print(f"OK: refinement from depth does not help on the L515's depth (grid error {real_tags.mean_mm:.2f} -> "
       f"{real_refined.mean_mm:.2f} mm mean); on unbiased depth it rescues the factory K "
       f"({flat_tags.mean_mm:.1f} -> {flat_refined.mean_mm:.1f} mm)")
@@ -510,5 +527,5 @@ with tempfile.TemporaryDirectory() as folder:
 
 # %%
 same = np.nanmax(np.abs(loaded.pixel_to_world(g_uv, frame.depth) - final.pixel_to_world(g_uv, frame.depth)))
-assert same == 0.0
+assert same == 0.0, f"the loaded calibration moves grid estimates by {same:.2g} mm: a field did not round-trip"
 print(f"OK: the loaded calibration reproduces all {len(g_uv)} grid estimates exactly")

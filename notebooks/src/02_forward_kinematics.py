@@ -110,7 +110,7 @@ for name, (th, d, a, al) in zip(robot.joint_names, table):
 
 # %%
 assert np.allclose(table, robot.dh, atol=1e-12), "the hand-built table differs from data/rx200_dh.csv"
-print("Hand-built DH table equals the kit's data/rx200_dh.csv: yes")
+print("OK: the hand-built DH table equals the kit's data/rx200_dh.csv")
 
 # %% [markdown]
 # ### Exercise: the DH link transform and the chain
@@ -145,15 +145,18 @@ def fk_from_table(q, table):
     # END SOLUTION
 
 
-print("tool point at home (mm):", fk_from_table(robot.home, table)[:3, 3])
+print("tool point at home (mm):", fk_from_table(robot.home, table)[:3, 3].round(1))
 
 # %%
 Q = random_q(1000)
 ours = np.stack([fk_from_table(q, table) for q in Q])
 err = np.abs(ours[:, :3, 3] - kinematics.fk(Q)[:, :3, 3]).max()
-assert np.allclose(fk_from_table(robot.home, table)[:3, 3], [0, 408.575, 304.57], atol=1e-9)
-assert err < 1e-9 and np.allclose(ours[:, :3, :3], kinematics.fk(Q)[:, :3, :3], atol=1e-12)
-print(f"Your FK matches armlab.kinematics.fk at 1000 random poses: max error {err:.0e} mm")
+home = fk_from_table(robot.home, table)[:3, 3]
+assert np.allclose(home, [0, 408.575, 304.57], atol=1e-9), \
+    f"tool point {home.round(1)} mm at the home pose, expected (0, 408.6, 304.6): check the signs of theta and alpha"
+assert err < 1e-9, f"your tool point is up to {err:.2g} mm off kinematics.fk: check the order of Rz, Tz, Tx, Rx"
+assert np.allclose(ours[:, :3, :3], kinematics.fk(Q)[:, :3, :3], atol=1e-12), "the tool orientation is off"
+print("OK: your FK matches armlab.kinematics.fk at 1000 random poses within 1e-9 mm")
 
 # %% [markdown]
 # ## 3 · A side view of the frames
@@ -194,10 +197,10 @@ lengths = np.linalg.norm(np.diff(P, axis=1), axis=-1)
 expected = [65.66, 38.91, L1, L2, 65.0, Lt - 65.0]
 heading = Q[:, 0] + np.pi / 2
 across = np.stack([-np.sin(heading), np.cos(heading), np.zeros(len(Q))], 1)
-assert np.allclose(lengths, expected, atol=1e-9)
-assert np.allclose(kinematics.link_frames(Q)[:, 1, :3, 3], [0, 0, h0], atol=1e-9)
-assert np.abs(np.sum(P * across[:, None], axis=-1)).max() < 1e-9
-print(f"Link lengths {np.round(expected, 3).tolist()} mm and the arm's plane hold at 1000 random poses")
+assert np.allclose(lengths, expected, atol=1e-9), f"link lengths {np.round(lengths[0], 3)} mm, expected {expected}"
+assert np.allclose(kinematics.link_frames(Q)[:, 1, :3, 3], [0, 0, h0], atol=1e-9), "the shoulder is not at (0, 0, h0)"
+assert np.abs(np.sum(P * across[:, None], axis=-1)).max() < 1e-9, "a joint leaves the arm's vertical plane"
+print(f"OK: link lengths {np.round(expected, 3).tolist()} mm and the arm's plane hold at 1000 random poses")
 
 # %% [markdown]
 # ## 4 · Cross-check: the manufacturer's product of exponentials
@@ -235,9 +238,9 @@ Q = random_q(1000)
 T_dh, T_pox = kinematics.fk(Q), fk_pox(Q)
 err_p = np.abs(T_dh[:, :3, 3] - T_pox[:, :3, 3]).max()
 err_R = np.abs(T_dh[:, :3, :3] - T_pox[:, :3, :3]).max()
-assert err_p < 1e-9 and err_R < 1e-12
-print(f"FK matches the manufacturer's PoX model at 1000 random poses: max error {err_p:.0e} mm, "
-      f"rotation {err_R:.0e}")
+assert err_p < 1e-9, f"DH and PoX tool points differ by {err_p:.2g} mm at random poses"
+assert err_R < 1e-12, f"DH and PoX tool orientations differ by {err_R:.2g}"
+print("OK: FK matches the manufacturer's PoX model at 1000 random poses within 1e-9 mm and 1e-12 in rotation")
 
 # %% [markdown]
 # ## 5 · The lab report's Table I: small numbers, real millimetres
@@ -295,8 +298,8 @@ fig.tight_layout()
 # %%
 e1, e2 = (errors[name] for name in report_tables)
 ok = ~np.isnan(e1)
-assert ok.sum() > 300
+assert ok.sum() > 300, f"only {ok.sum()} board points were compared"
 assert np.nanmin(e1) > 4.0 and np.nanmax(e1) < 7.0, "152.575 mm: expected about 5 mm of error"
 assert np.nanmin(e2) > 15.0 and np.nanmax(e2) < 18.0, "174.15 mm: expected about 16.5 mm of error"
-print(f"Table I's numbers misplace a top-down grasp by {np.nanmin(e1):.1f}-{np.nanmax(e1):.1f} mm "
+print(f"OK: Table I's numbers misplace a top-down grasp by {np.nanmin(e1):.1f}-{np.nanmax(e1):.1f} mm "
       f"(174.15 mm variant: {np.nanmin(e2):.1f}-{np.nanmax(e2):.1f} mm) at {ok.sum()} board points")

@@ -109,7 +109,7 @@ def four_branches(p, pitch, roll=0.0):
 
 
 BRANCHES = ["facing, elbow up", "facing, elbow down", "flipped, elbow up", "flipped, elbow down"]
-print(np.round(four_branches([150.0, 200.0, 60.0], 0.8), 3))
+print(np.round(four_branches([150.0, 200.0, 60.0], 0.8), 3) + 0.0)  # + 0.0 turns -0 into 0
 
 # %% [markdown]
 # Check: FK of every branch that is in reach must land on the target with the requested pitch, over many random
@@ -129,8 +129,9 @@ for p, pitch, q in zip(P, pitches, Q):
     worst = max(worst, np.abs(Tc[:, :3, 3] - p).max())
     assert np.allclose(Tc[:, :3, 0], kinematics.fk(q)[:3, 0], atol=1e-9)   # the same approach direction
     found += np.abs(wrap(cand - q)).max(axis=1).min() < 1e-9
-assert worst < 1e-9 and found == len(Q)
-print(f"planar_ik: every branch lands on its target (max error {worst:.0e} mm) and the original joint angles are "
+assert worst < 1e-9, f"a branch misses its target by {worst:.2g} mm: check the law of cosines and the wrist angle"
+assert found == len(Q), f"the original joints are among the branches for only {found} of {len(Q)} targets"
+print(f"OK: planar_ik: every branch lands on its target (within 1e-9 mm) and the original joint angles are "
       f"among the branches for all {found} targets")
 
 # %% [markdown]
@@ -165,8 +166,9 @@ fig.tight_layout()
 solutions = kinematics.ik(target, pitch)
 order = ["facing, elbow up", "flipped, elbow up", "facing, elbow down"]   # elbow up first, then least motion
 assert [name for name, q in zip(BRANCHES, cand) if not robot.limit_violations(q)] == sorted(order, key=BRANCHES.index)
-assert np.allclose(solutions, [cand[BRANCHES.index(name)] for name in order])
-print(f"kinematics.ik returns {len(solutions)} solutions, in the order {order}")
+assert np.allclose(solutions, [cand[BRANCHES.index(name)] for name in order]), \
+    "kinematics.ik's solutions are not your branches in the order elbow up first, then least motion"
+print(f"OK: kinematics.ik returns {len(solutions)} solutions, in the order {order}")
 
 # %% [markdown]
 # ## 3 · Which board cells can be grasped straight down?
@@ -229,7 +231,7 @@ for p in cells[np.isfinite(steepest.ravel()) & ~top_down.ravel()][::40]:
         raise AssertionError("a steeper pitch worked")
     except kinematics.Unreachable:
         pass
-print(f"Top-down grasps reach exactly the r < {r_max:.1f} mm disc (minus the line straight behind the base); "
+print(f"OK: top-down grasps reach exactly the r < {r_max:.1f} mm disc (minus the line straight behind the base); "
       "steepest_pitch agrees with the map")
 
 # %% [markdown]
@@ -283,9 +285,10 @@ print(f"cells the report misses: {(~right).sum()}, all behind the base (y < 0): 
       f"worst tool error there {err[~right & finite].max():.0f} mm")
 
 # %%
-assert ours.ok.all() and np.abs(kinematics.fk(ours.q)[:, :3, 3] - pts).max() < 1e-6
-assert np.all(right[pts[:, 1] > 0]) and not np.any(right[pts[:, 1] < 0])
-print(f"kinematics.ik reaches all {len(pts)} reachable board cells; the report's equation (4) without (5) misses "
+assert ours.ok.all(), f"kinematics.ik fails at {(~ours.ok).sum()} reachable cells"
+assert np.abs(kinematics.fk(ours.q)[:, :3, 3] - pts).max() < 1e-6, "an IK solution misses its cell"
+assert np.all(right[pts[:, 1] > 0]) and not np.any(right[pts[:, 1] < 0]), "the report's equations fail in front"
+print(f"OK: kinematics.ik reaches all {len(pts)} reachable board cells; the report's equation (4) without (5) misses "
       f"the {(~right).sum()} cells behind the base")
 
 # %% [markdown]
@@ -304,6 +307,6 @@ for p, pitch, q in zip(P, pitches, Q):
     sols = kinematics.ik(p, pitch, q[4])
     facing = np.abs(wrap(sols[:, 0] - (np.arctan2(p[1], p[0]) - np.pi / 2))) < 1e-6
     only_flipped += not facing.any()
-assert 0 < only_flipped < len(Q)
-print(f"{only_flipped} of {len(Q)} random reachable poses ({only_flipped / len(Q):.0%}) need the flipped waist; "
+assert 0 < only_flipped < len(Q), f"{only_flipped} of {len(Q)} poses need the flipped waist"
+print(f"OK: {only_flipped} of {len(Q)} random reachable poses ({only_flipped / len(Q):.0%}) need the flipped waist; "
       "dropping equation (5) loses them")

@@ -15,6 +15,7 @@
 import cv2
 import matplotlib.pyplot as plt
 import numpy as np
+from IPython import get_ipython
 
 from armlab.blocks import COLORS
 from armlab.detection import default_color_model, detect_objects, draw_detections, height_from_depth
@@ -22,6 +23,7 @@ from armlab.detection import hsv_table_classify
 from armlab.detection.color import LAB_HSV_TABLE
 from armlab.sim.scoring import Score, corrected_depth, score_frame, sim_case
 
+get_ipython().run_line_magic("matplotlib", "inline")
 plt.rcParams["figure.dpi"] = 60
 case = sim_case("line_up_3", 300, arm_over_board=True)      # seeded: the same frame every run
 depth = corrected_depth(case)                                   # depth-plane correction of notebook 01
@@ -93,7 +95,8 @@ fig.tight_layout()
 # %%
 hsv_acc = np.mean(np.array(hsv_labels) == np.array(truth))
 model_acc = np.mean(np.array(model_labels) == np.array(truth))
-assert model_acc == 1.0 and hsv_acc < 0.8
+assert model_acc == 1.0, f"the colour model names {model_acc:.0%} of the faces right (expected all)"
+assert hsv_acc < 0.8, f"the lab's HSV table got {hsv_acc:.0%}: this scene should show its failures"
 print(f"OK: on {len(truth)} faces the colour model is right on {model_acc:.0%}, the HSV table on {hsv_acc:.0%}")
 
 # %% [markdown]
@@ -136,7 +139,8 @@ print(f"{block.color} {block.size}: moment centroid ({u:.1f}, {v:.1f}) px, "
       f"projected face centre ({block.pixel[0]:.1f}, {block.pixel[1]:.1f}) px")
 
 # %%
-assert np.hypot(u - block.pixel[0], v - block.pixel[1]) < 2.0
+off = np.hypot(u - block.pixel[0], v - block.pixel[1])
+assert off < 2.0, f"your centroid is {off:.1f} px from the face centre: sum u and v over the mask, divide by its area"
 print("OK: the moment centroid lies within 2 px of the projected top-face centre")
 
 # %% [markdown]
@@ -160,7 +164,9 @@ def wrap_yaw(angle: float) -> float:
     # END SOLUTION
 
 
-assert np.isclose(wrap_yaw(np.pi / 2 + 0.1), 0.1) and np.isclose(wrap_yaw(np.pi / 4), -np.pi / 4)
+assert np.isclose(wrap_yaw(np.pi / 2 + 0.1), 0.1), \
+    "wrap_yaw(pi/2 + 0.1) should be 0.1: a cube turned 90 deg looks the same"
+assert np.isclose(wrap_yaw(np.pi / 4), -np.pi / 4), "wrap_yaw must return angles in [-pi/4, pi/4)"
 fig, ax = plt.subplots(figsize=(10, 5.6))
 ax.imshow(draw_detections(case.rgb, found, case.camera))
 ax.set_axis_off()

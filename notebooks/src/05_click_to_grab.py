@@ -21,7 +21,7 @@ from IPython import get_ipython
 
 from armlab import kinematics, make_station, planning, tasks
 from armlab.tasks.experiments import LAB_TABLE_III_ERROR_MM, format_table, reach_experiment
-from armlab.tasks.sag import LAB_BASELINE, calibration_poses
+from armlab.tasks.sag import LAB_BASELINE, calibration_poses, hover_pose
 
 get_ipython().run_line_magic("matplotlib", "inline")
 np.set_printoptions(precision=1, suppress=True)
@@ -67,8 +67,10 @@ print("clicked the red block at pixel", np.round(red.pixel, 1), "-> world", p, "
 
 # %%
 err = np.abs(p - (truth.position + [0, 0, truth.edge / 2]))
-assert np.allclose(p, tasks.surface_point(ctx.calibration, obs.depth, red.pixel), atol=1e-6) and err.max() < 3.0
-print(f"pixel_to_world OK: matches tasks.surface_point, {err.max():.1f} mm from the true block top")
+assert np.allclose(p, tasks.surface_point(ctx.calibration, obs.depth, red.pixel), atol=1e-6), \
+    "your point differs from tasks.surface_point: median depth of the window, Z (x, y, 1), then camera_to_world"
+assert err.max() < 3.0, f"the clicked point is {err.max():.1f} mm from the true block top"
+print(f"OK: pixel_to_world matches tasks.surface_point, {err.max():.1f} mm from the true block top")
 
 # %% [markdown]
 # ## 2 · World → joints
@@ -87,8 +89,8 @@ print("grasp point", grasp_point, "mm -> joints", np.degrees(q), "deg")
 print("FK of those joints puts the tool at", kinematics.fk(q)[:3, 3], "mm")
 
 # %%
-assert np.allclose(kinematics.fk(q)[:3, 3], grasp_point, atol=1e-6)
-print("world -> joints OK: FK(IK(p)) = p")
+assert np.allclose(kinematics.fk(q)[:3, 3], grasp_point, atol=1e-6), "FK(IK(p)) misses the grasp point"
+print("OK: world -> joints: FK(IK(p)) = p")
 
 # %% [markdown]
 # ## 3 · Where the arm really goes: sag, and how to take it out
@@ -111,8 +113,8 @@ rng = np.random.default_rng(0)
 poses = calibration_poses()
 measured = []
 for qc in poses:                       # the raw arm, no compensation
-    station.arm.move_to(kinematics.ik(kinematics.fk(qc)[:3, 3] + [0, 0, 60], np.pi / 2, 0.0, current=qc)[0]
-                        if np.hypot(*kinematics.fk(qc)[:2, 3]) < 330 else qc)
+    above = hover_pose(qc)             # 60 mm above the pose (None far out: approached directly)
+    station.arm.move_to(qc if above is None else above)
     station.arm.move_to(qc)
     measured.append(station.arm.tool_pose_true()[:3, 3] + rng.normal(0, 1.0, 3))
 measured = np.array(measured)
@@ -141,8 +143,9 @@ _ = ax.set_title("sag against reach: two heights per reach, so a line cannot fit
 # %%
 line_rms = np.sqrt(np.mean((slope * reach + offset + dz) ** 2))
 model_rms = np.sqrt(np.mean((predicted - dz) ** 2))
-assert model_rms < 1.5 and model_rms < line_rms
-print(f"sag model OK: z residual {model_rms:.1f} mm (the best straight line in r: {line_rms:.1f} mm)")
+assert model_rms < 1.5, f"the joint model leaves {model_rms:.1f} mm of z error (expected < 1.5 mm)"
+assert model_rms < line_rms, "a straight line in r fits the sag better than the joint model: check your polyfit"
+print(f"OK: sag model: z residual {model_rms:.1f} mm (the best straight line in r: {line_rms:.1f} mm)")
 
 # %% [markdown]
 # ## 4 · The lab report's six locations (Tables II and III)
@@ -163,8 +166,9 @@ print(format_table(["loc", "want x", "y", "z", "got x", "y", "z", "lab |dx|", "|
                     "|dz|", "comp |dx|", "|dy|", "|dz|"], rows))
 
 # %%
-assert np.all(avg(comp) < 3.0) and np.all(avg(comp) < LAB_TABLE_III_ERROR_MM.mean(axis=0))
-print(f"six locations OK: mean error {avg(comp).round(1)} mm with sag compensation (lab report: 7.5 / 9.2 / 2.5 mm)")
+assert np.all(avg(comp) < 3.0), f"mean error {avg(comp).round(1)} mm with sag compensation (expected < 3 mm)"
+assert np.all(avg(comp) < LAB_TABLE_III_ERROR_MM.mean(axis=0)), "no better than the lab report's arm"
+print(f"OK: six locations: mean error {avg(comp).round(1)} mm with sag compensation (lab report: 7.5 / 9.2 / 2.5 mm)")
 
 # %% [markdown]
 # ## 5 · The misaligned wrist
@@ -187,8 +191,9 @@ held_turned = tasks.pick(station, green)
 print(f"roll from the yaw ({np.degrees(green.yaw):.1f} deg): held = {held_turned}")
 
 # %%
-assert held_turned and (not held_unturned or abs(green_truth.yaw - yaw_before) > np.radians(5))
-print("misaligned wrist OK: roll 0 fails or shoves the block; the roll from the block's yaw grasps it")
+assert held_turned, f"the turned wrist did not grasp the green block: {station.arm.last_grasp}"
+assert not held_unturned or abs(green_truth.yaw - yaw_before) > np.radians(5), "roll 0 grasped a turned block cleanly"
+print("OK: misaligned wrist: roll 0 fails or shoves the block; the roll from the block's yaw grasps it")
 
 # %% [markdown]
 # ## 6 · Click to grab, click to drop
@@ -228,8 +233,8 @@ print(refused.message)
 red = next(b for b in tasks.look(station).blocks if b.color == "red")
 (W, H), (w, h) = panel.frame_size(), panel.image_size()
 x, y = (np.asarray(red.pixel) + 0.5) * [w / W, h / H]
-event = {"type": "click", "dataX": int(round(x)), "dataY": int(round(y)), "relativeX": round(x, 1),
-         "relativeY": round(y, 1), "boundingRectWidth": w, "boundingRectHeight": h}
+event = {"type": "click", "dataX": int(round(x)), "dataY": int(round(y)), "relativeX": round(float(x), 1),
+         "relativeY": round(float(y), 1), "boundingRectWidth": w, "boundingRectHeight": h}
 print("event", event)
 grab_event = panel.handle_event(event)
 print(grab_event.message)
@@ -242,7 +247,9 @@ print(drop_event.message)
 green_err = np.abs(green_truth.position - [0, 0, green_truth.edge / 2] - [-200.0, 80.0, 0.0])
 red_truth = next(o for o in station.world.blocks if o.color == "red")
 red_err = np.abs(red_truth.position - [0, 0, red_truth.edge / 2] - spot)
-assert drop.ok and green_err.max() < 3.0 and not refused.ok and not refused.moved
-assert grab_event.ok and drop_event.ok and red_err.max() < 3.0 and panel.next_action == "grab"
-print(f"click to grab/drop OK: the blocks landed {green_err.max():.1f} and {red_err.max():.1f} mm from the clicked "
+assert drop.ok and green_err.max() < 3.0, f"the green block landed {green_err.max():.1f} mm from the clicked spot"
+assert not refused.ok and not refused.moved, "a click on the robot's base was not refused, or moved the arm"
+assert grab_event.ok and drop_event.ok, f"the browser-style clicks failed: {grab_event.message} / {drop_event.message}"
+assert red_err.max() < 3.0 and panel.next_action == "grab", f"the red block landed {red_err.max():.1f} mm off"
+print(f"OK: click to grab/drop: the blocks landed {green_err.max():.1f} and {red_err.max():.1f} mm from the clicked "
       f"spots; the refused click moved nothing")

@@ -23,7 +23,7 @@ from armlab import kinematics, make_station, tasks
 from armlab.tasks import teach
 
 get_ipython().run_line_magic("matplotlib", "inline")
-np.set_printoptions(precision=3, suppress=True)
+np.set_printoptions(precision=1, suppress=True)
 station = make_station("sim", seed=0, scene="swap")
 for o in station.world.blocks:
     print(f"{o.color:4s} block at {o.position} mm")
@@ -47,13 +47,14 @@ for q, g in zip(poses, gripper):
 # END SOLUTION
 program = recorder.finish()
 print(f"{len(program)} waypoints; gripper states: {' '.join(g[0] for g in program.gripper)} (o = open, c = closed)")
-print("first waypoint (rad):", program.q[0])
+print("first waypoint (rad):", program.q[0].round(3))
 
 # %%
 tool = kinematics.fk(program.q)[:, :3, 3]
-assert len(program) == 18 and station.arm.torque_enabled
-assert np.abs(tool[1] - [-100, 225, 19]).max() < 2.0       # the reading is where the hand held the arm
-print(f"teach OK: 18 waypoints; waypoint 1 is the grasp at A, tool at {tool[1].round(1)} mm")
+assert len(program) == 18, f"{len(program)} waypoints recorded, expected one per pose (18)"
+assert station.arm.torque_enabled, "the torque is still off after finish()"
+assert np.abs(tool[1] - [-100, 225, 19]).max() < 2.0, f"waypoint 1 puts the tool at {tool[1].round(1)} mm, not at A"
+print(f"OK: teach: 18 waypoints; waypoint 1 is the grasp at A, tool at {tool[1].round(1)} mm")
 
 # %% [markdown]
 # ## 2 · Save and load
@@ -74,8 +75,8 @@ except tasks.TeachFileError as e:
     print("refused:", str(e).replace(str(folder), "<folder>"))
 
 # %%
-assert np.abs(loaded.q - program.q).max() < 1e-6 and loaded.gripper == program.gripper
-print("save/load OK: the program round-trips (to 1e-6 rad) and a bad gripper value is refused")
+assert np.abs(loaded.q - program.q).max() < 1e-6 and loaded.gripper == program.gripper, "the program did not round-trip"
+print("OK: save/load: the program round-trips (to 1e-6 rad) and a bad gripper value is refused")
 
 # %% [markdown]
 # ## 3 · Repeat, and figure 10
@@ -106,8 +107,9 @@ print(f"red block now at {red.position} mm, blue block now at {blue.position} mm
 # %%
 peak = max(float(np.max(s.trajectory.peak_speed() / station.arm.robot.velocity)) for s in plan.steps
            if hasattr(s, "trajectory"))
-assert result.grasps == (True, True, True)
-assert np.abs(red.position - b).max() < 3.0 and np.abs(blue.position - a).max() < 3.0
-assert peak <= 1.0
-print(f"swap OK: red is {np.abs(red.position - b).max():.1f} mm from B's spot, blue "
+assert result.grasps == (True, True, True), f"grasps {result.grasps}: a block was not held"
+assert np.abs(red.position - b).max() < 3.0, f"red is {np.abs(red.position - b).max():.1f} mm from B's spot"
+assert np.abs(blue.position - a).max() < 3.0, f"blue is {np.abs(blue.position - a).max():.1f} mm from A's spot"
+assert peak <= 1.0, f"a joint ran at {100 * peak:.0f}% of its velocity limit"
+print(f"OK: swap: red is {np.abs(red.position - b).max():.1f} mm from B's spot, blue "
       f"{np.abs(blue.position - a).max():.1f} mm from A's; peak joint speed {100 * peak:.0f}% of its limit")

@@ -91,9 +91,10 @@ def sky_points(n):
 
 # %%
 ns = np.arange(0, 25)
-assert all(sky_points(n) == scoring.sky_points(n) for n in ns)
-assert sky_points(8) == 240 and sky_points(20) == 840
-print(f"sky_points agrees with the kit's scorer for towers of 0..24 blocks; the class record (20) is worth "
+wrong = [int(n) for n in ns if sky_points(n) != scoring.sky_points(n)]
+assert not wrong, f"sky_points is wrong for towers of {wrong} blocks: 30 each up to 8, then 50 each"
+assert sky_points(8) == 240 and sky_points(20) == 840, "8 blocks are worth 240 points, 20 blocks 840"
+print(f"OK: sky_points agrees with the kit's scorer for towers of 0..24 blocks; the class record (20) is worth "
       f"{sky_points(20)} points")
 
 # %% [markdown]
@@ -131,11 +132,12 @@ ax.set(xlabel="simulated time (s)", ylabel="joint angle (rad)")
 _ = ax.legend(fontsize=7, ncol=5, loc="lower right")
 
 # %%
-assert sort3.score.full_marks and sort3.within_limit
-assert sort3.score == score_event("sort_stack", 3, station.world.objects)
+assert sort3.score.full_marks, f"sort 'n stack scored {sort3.score.points:g}/{sort3.score.max_points}"
+assert sort3.within_limit, f"sort 'n stack took {sort3.time_s:.0f} s (limit 180 s)"
+assert sort3.score == score_event("sort_stack", 3, station.world.objects), "the score is not the world's"
 err = np.linalg.norm(sort3.placement_errors[:, :2], axis=1)
-assert err.max() < 3.0
-print(f"sort 'n stack level 3: {sort3.score.points:g}/{sort3.score.max_points} in {sort3.time_s:.0f} s of 180 s, "
+assert err.max() < 3.0, f"a block was placed {err.max():.1f} mm from its spot"
+print(f"OK: sort 'n stack level 3: {sort3.score.points:g}/{sort3.score.max_points} in {sort3.time_s:.0f} s of 180 s, "
       f"placement error at most {err.max():.1f} mm")
 
 # %% [markdown]
@@ -155,8 +157,8 @@ print(line3.score.table())
 before_after(line3)
 
 # %%
-assert line3.score.full_marks and line3.within_limit
-print(f"line 'em up level 3: {line3.score.points:g}/{line3.score.max_points} in {line3.time_s:.0f} s of 600 s")
+assert line3.score.full_marks and line3.within_limit, f"line 'em up: {line3.summary()}"
+print(f"OK: line 'em up level 3: {line3.score.points:g}/{line3.score.max_points} in {line3.time_s:.0f} s of 600 s")
 
 # %% [markdown]
 # ## 4 · To the sky
@@ -194,7 +196,8 @@ ax.set(xlim=(TOWER_XY[0] - 80, TOWER_XY[0] + 80), ylim=(0, 520), aspect="equal",
 ax.tick_params(labelsize=7)
 
 # %%
-assert tower >= 12 and sky.score.points == scoring.sky_points(tower)
-assert "out of reach" in sky.stopped
-print(f"to the sky: a stable tower of {tower} blocks ({sky.score.points:g} points); it stopped because the next "
+assert tower >= 12, f"the tower has {tower} blocks (expected at least 12)"
+assert sky.score.points == scoring.sky_points(tower), "the score does not follow the sky rules"
+assert "out of reach" in sky.stopped, f"the tower stopped for another reason: {sky.stopped}"
+print(f"OK: to the sky: a stable tower of {tower} blocks ({sky.score.points:g} points); it stopped because the next "
       f"level is out of the arm's reach")
