@@ -3,7 +3,7 @@ PY      := .venv/bin/python
 STAMP   := .venv/.installed
 NBVAL   := --nbval --nbval-sanitize-with tests/nbval_sanitize.cfg --nbval-cell-timeout=600
 
-.PHONY: demo test lint unit notebooks lab bench browser student clean
+.PHONY: demo test lint unit notebooks lab bench browser camera student clean
 
 $(STAMP): requirements.txt pyproject.toml
 	test -x $(PY) || python3 -m venv .venv
@@ -18,14 +18,14 @@ demo: $(STAMP)
 
 ## make test: lint + unit tests + every notebook under nbval, natively and under other CPUs' numerics
 ## (installs headless Chromium for the browser checks)
-test: $(STAMP) browser lint
+test: $(STAMP) browser camera lint
 	$(PY) -m pytest -q tests notebooks $(NBVAL)
 	bash tools/nbval-numerics $(PY) $(NBVAL)
 
 lint: $(STAMP)
 	$(PY) -m ruff check armlab tests benchmarks notebooks tools/build-notebook tools/student-release
 
-unit: $(STAMP)
+unit: $(STAMP) camera
 	MPLBACKEND=Agg $(PY) -m pytest -q tests
 
 notebooks: $(STAMP)
@@ -34,6 +34,9 @@ notebooks: $(STAMP)
 
 browser:
 	bash tools/ensure-chromium
+
+camera: $(STAMP)
+	bash tools/ensure-realsense $(PY)
 
 ## make lab: JupyterLab on notebooks/
 lab: $(STAMP)

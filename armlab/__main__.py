@@ -1,4 +1,5 @@
-"""Command line: `python -m armlab demo` runs the kit's main job headless on the simulator."""
+"""Command line: `python -m armlab demo` runs the kit's main job headless on the simulator; `python -m armlab record
+OUT.bag` records the lab's RealSense camera for replay with make_station("real", arm=False, playback=...)."""
 
 from __future__ import annotations
 
@@ -16,7 +17,15 @@ def main(argv: list[str] | None = None) -> int:
                       help="the competition event to run (default: sort_stack)")
     demo.add_argument("--level", type=int, default=3, help="the event's level, 1-3 (default: 3; sky: 1)")
     demo.add_argument("--no-html", action="store_true", help="skip the meshcat replay page")
-    args = parser.parse_args(argv)
+    sub.add_parser("record", add_help=False,
+                   help="record the RealSense camera to a .bag (replay: make_station('real', arm=False, playback=...))")
+    args, rest = parser.parse_known_args(argv)
+    if args.command == "record":
+        from armlab.hardware.record import main as record_main
+
+        return record_main(rest)
+    if rest:
+        parser.error(f"unrecognized arguments: {' '.join(rest)}")
     if args.command == "demo":
         from armlab.demo import run_demo
 

@@ -26,12 +26,15 @@ import pytest
 
 import armlab.hardware
 from armlab import kinematics, make_station
-from armlab.hardware import HardwareUnavailable, interbotix, realsense
+from armlab.hardware import HardwareUnavailable, interbotix, realsense, ros_session
 from armlab.hardware.interbotix import HOLD_TIME_S, RealArm
 from armlab.hardware.safety import DEFAULT_BOARD_MARGIN_MM, board_collision, check_move, path_heights
 from armlab.profile import default_moving_time
 from armlab.robot import rx200
 from armlab.station import Arm, EmergencyStopped, Frame, MotionRefused, RGBDCamera
+
+sys.path.insert(0, os.path.dirname(__file__))
+from vendor import ros as fake_ros  # noqa: E402
 
 VENDOR_MODULES = ("interbotix_xs_modules", "interbotix_xs_modules.xs_robot", "interbotix_xs_modules.xs_robot.arm",
                   "interbotix_common_modules", "interbotix_common_modules.common_robot",
@@ -72,6 +75,7 @@ class UpstreamCore:
     def robot_torque_enable(self, cmd_type, name, enable): ...
     def robot_reboot_motors(self, cmd_type, name, enable, smart_reboot=False): ...
     def robot_write_commands(self, group_name, commands): ...
+    def robot_set_motor_registers(self, cmd_type, name, reg, value): ...
 
 
 def upstream_manipulator(robot_model, group_name="arm", gripper_name="gripper", robot_name=None, moving_time=2.0,
@@ -120,6 +124,10 @@ class FakeCore:
         if self.world.torque:
             self.world.q = np.array(commands, float)
 
+    def robot_set_motor_registers(self, cmd_type, name, reg, value):
+        assert isinstance(value, int)
+        self.world.log.append(("robot_set_motor_registers", cmd_type, name, reg, value))
+
 
 class FakeArmInterface:
     """Mirrors the driver's rules: limits and |goal - last command| / stored moving_time <= velocity limit."""
@@ -130,7 +138,8 @@ class FakeArmInterface:
         self.group_info = SimpleNamespace(joint_names=list(robot.joint_names), joint_lower_limits=list(robot.lower),
                                           joint_upper_limits=list(robot.upper),
                                           joint_velocity_limits=list(robot.velocity),
-                                          joint_sleep_positions=list(robot.sleep), num_joints=5)
+                                          joint_sleep_positions=list(robot.sleep), num_joints=5,
+                                          mode="position", profile_type="time")
         self.moving_time, self.accel_time = moving_time, accel_time
         self.joint_commands = list(world.q)
 
@@ -174,6 +183,7 @@ class FakeArmInterface:
 class FakeGripper:
     left_finger_lower_limit = FINGER_LOWER_M
     left_finger_upper_limit = FINGER_UPPER_M
+    gripper_info = SimpleNamespace(mode="pwm")
 
     def __init__(self, world: FakeWorld):
         self.world = world
@@ -332,6 +342,8 @@ def install_fakes(setitem, log: list) -> SimpleNamespace:
                            robot_shutdown=robot_shutdown)
     arm_module = _module("interbotix_xs_modules.xs_robot.arm",
                          InterbotixManipulatorXS=lambda **kwargs: FakeManipulator(world, **kwargs))
+    for name, module in fake_ros.Ros(fake_ros.XsSdk()).modules.items():     # rclpy and the messages
+        setitem(name, module)
     for module in (_module("interbotix_xs_modules"), _module("interbotix_xs_modules.xs_robot"), arm_module,
                    _module("interbotix_common_modules"), _module("interbotix_common_modules.common_robot"),
                    robot_module, make_fake_rs(log)):
@@ -346,9 +358,13 @@ def vendors(monkeypatch):
     fakes = install_fakes(lambda name, module: monkeypatch.setitem(sys.modules, name, module), [])
     monkeypatch.setattr(armlab.hardware, "atexit", SimpleNamespace(register=lambda f: None,
                                                                    unregister=lambda f: None))
-    sigterm = signal.getsignal(signal.SIGTERM)
+    monkeypatch.setattr(ros_session, "atexit", SimpleNamespace(register=lambda f: None, unregister=lambda f: None))
+    monkeypatch.setattr(ros_session, "_session", None)
+    monkeypatch.setenv("ROS_DOMAIN_ID", "3")
+    handlers = signal.getsignal(signal.SIGTERM), signal.getsignal(signal.SIGINT)
     yield fakes
-    signal.signal(signal.SIGTERM, sigterm)
+    signal.signal(signal.SIGTERM, handlers[0])
+    signal.signal(signal.SIGINT, handlers[1])
 
 
 def calls(log, *names):
@@ -482,13 +498,13 @@ def test_default_moving_and_accel_times_are_sent(arm, vendors):
     T = default_moving_time(start, Q_READY)
     Ta = pytest.approx(T / 3, rel=1e-12)
     assert calls(vendors.log) == [("set_trajectory_time", T, Ta), ("set_trajectory_time", T, Ta),
-                                  ("set_joint_positions", list(Q_READY), T, Ta, True)]
+                                  ("set_joint_positions", list(Q_READY), T, Ta, False)]   # armlab waits itself
     vendors.log.clear()
     arm.move_to(rx200().home, moving_time=3.0)
-    assert calls(vendors.log)[-1] == ("set_joint_positions", [0.0] * 5, 3.0, 1.0, True)
+    assert calls(vendors.log)[-1] == ("set_joint_positions", [0.0] * 5, 3.0, 1.0, False)
     vendors.log.clear()
     arm.move_to(Q_READY, moving_time=3.0, accel_time=1.5)
-    assert calls(vendors.log)[-1] == ("set_joint_positions", list(Q_READY), 3.0, 1.5, True)
+    assert calls(vendors.log)[-1] == ("set_joint_positions", list(Q_READY), 3.0, 1.5, False)
     np.testing.assert_allclose(arm.joint_positions(), Q_READY)
 
 
@@ -534,7 +550,8 @@ def test_malformed_target_is_refused_and_sends_nothing(arm, vendors):
 
 
 def test_reset_after_a_stop_while_teaching_returns_torque_without_a_jump(arm, vendors):
-    arm.set_torque(False)
+    with pytest.warns(RuntimeWarning, match="falls unless supported"):
+        arm.set_torque(False)
     vendors.world.q = Q_READY.copy()                            # moved by hand, then the stop button is hit
     arm.emergency_stop()
     assert calls(vendors.log) == []                             # nothing to hold with torque off
@@ -661,7 +678,8 @@ def test_emergency_stop_holds_position_and_refuses_motion_until_reset(arm, vendo
 
 def test_torque_off_teaching_reads_the_hand_moved_arm(arm, vendors):
     arm.move_to(Q_READY)
-    arm.set_torque(False)
+    with pytest.warns(RuntimeWarning, match="falls unless supported"):
+        arm.set_torque(False)
     assert vendors.log[-1] == ("robot_torque_enable", "group", "arm", False)
     taught = np.array([0.4, 0.2, -0.1, 0.9, 0.3])
     vendors.world.q = taught                                   # a student moves the arm by hand
@@ -685,10 +703,14 @@ def test_torque_off_teaching_reads_the_hand_moved_arm(arm, vendors):
 # Shutdown order
 # ---------------------------------------------------------------------------------------------------------------
 
-def _sleep_then_shutdown(log):
+def _sleep_then_shutdown(log, at_exit=True):
+    """The arm parked, then the camera stopped; ROS (robot_shutdown) only when the process ends (at_exit: run what
+    the interpreter runs at exit first)."""
+    if at_exit:
+        ros_session.shutdown_session()
     order = [c for c in log if c[0] in ("set_joint_positions", "robot_shutdown", "pipeline.stop")]
     assert order[-3][:2] == ("set_joint_positions", list(rx200().sleep))
-    assert order[-2:] == [("robot_shutdown",), ("pipeline.stop",)]
+    assert order[-2:] == [("pipeline.stop",), ("robot_shutdown",)]
 
 
 def test_context_manager_sleeps_before_shutdown(vendors):
@@ -722,8 +744,10 @@ def test_atexit_closes_a_station_left_open(vendors, monkeypatch):
 def test_close_after_teaching_torques_on_then_sleeps(vendors):
     with make_station("real", camera=False) as st:
         st.arm.move_to(Q_READY)
-        st.arm.set_torque(False)
+        with pytest.warns(RuntimeWarning, match="falls unless supported"):
+            st.arm.set_torque(False)
         vendors.world.q = np.array([0.3, 0.1, 0.2, 0.8, 0.0])
+    ros_session.shutdown_session()
     names = [c[0] for c in vendors.log]
     torque_on = names.index("robot_torque_enable", names.index("robot_torque_enable") + 1)
     assert vendors.log[torque_on] == ("robot_torque_enable", "group", "arm", True)
@@ -738,6 +762,8 @@ def test_close_while_emergency_stopped_does_not_move_but_shuts_down(vendors):
     vendors.log.clear()
     with pytest.warns(RuntimeWarning, match="emergency-stopped"):
         st.close()
+    assert vendors.log == []                                     # not moved; ROS stays up until exit
+    ros_session.shutdown_session()
     assert [c[0] for c in vendors.log] == ["robot_shutdown"]
 
 
@@ -747,6 +773,8 @@ def test_a_refused_sleep_still_shuts_down_and_says_so(vendors):
     st.arm.board_margin_mm = 200.0                              # the sleep pose's tool point is 74 mm high
     with pytest.raises(RuntimeError, match="could not go to its sleep pose"):
         st.close()
+    assert calls(vendors.log)[-1][:2] != ("set_joint_positions", list(rx200().sleep))
+    ros_session.shutdown_session()
     assert calls(vendors.log, "robot_shutdown") == [("robot_shutdown",)]
 
 
@@ -797,12 +825,12 @@ def test_sigterm_puts_the_arm_to_sleep_before_shutdown_then_ends_the_process(tmp
     log = [tuple(c) for c in map(json.loads, log_file.read_text().splitlines())]
     names = [c[0] for c in log]
     assert names.count("robot_shutdown") == 1 and names.count("pipeline.stop") == 1 and "driver_refused" not in names
-    _sleep_then_shutdown(log)
-    assert names[-2:] == ["robot_shutdown", "pipeline.stop"]
+    _sleep_then_shutdown(log, at_exit=False)
+    assert names[-2:] == ["pipeline.stop", "robot_shutdown"]
     np.testing.assert_allclose(log[names.index("set_joint_positions")][1], Q_READY)   # the move before the kill
 
 
-def test_sigterm_handler_chains_to_the_previous_one_and_is_restored_on_close(vendors):
+def test_sigterm_handler_chains_to_the_previous_one_and_is_restored_on_close(vendors, monkeypatch):
     seen = []
 
     def previous_handler(signum, frame):
@@ -814,10 +842,12 @@ def test_sigterm_handler_chains_to_the_previous_one_and_is_restored_on_close(ven
             assert signal.getsignal(signal.SIGTERM) is not previous_handler
             st.arm.move_to(Q_READY)
             os.kill(os.getpid(), signal.SIGTERM)
-            assert seen == [signal.SIGTERM]               # after the station closed: sleep, shutdown, camera off
-            _sleep_then_shutdown(vendors.log)
+            assert seen == [signal.SIGTERM]               # after the station closed: sleep, camera off, ROS down
+            _sleep_then_shutdown(vendors.log, at_exit=False)
             assert signal.getsignal(signal.SIGTERM) is previous_handler
         assert len(calls(vendors.log, "robot_shutdown")) == 1               # leaving the block adds nothing
+
+        install_fakes(lambda name, module: monkeypatch.setitem(sys.modules, name, module), vendors.log)  # new process
 
         st = make_station("real", camera=False)
         st.close()                                        # a normal close restores the previous handler too
@@ -889,5 +919,7 @@ def test_camera_failure_after_start_stops_the_pipeline(vendors, monkeypatch):
     monkeypatch.setattr(rs, "align", lambda to: (_ for _ in ()).throw(RuntimeError("usb reset")))
     with pytest.raises(RuntimeError, match="usb reset"):
         make_station("real")
-    assert vendors.log[-1] == ("pipeline.stop",)
-    assert calls(vendors.log, "robot_startup") == []            # the arm was never started
+    names = [c[0] for c in vendors.log]
+    assert calls(vendors.log, "robot_startup") == [("robot_startup",)]     # the arm connects first ...
+    assert "pipeline.stop" in names                                         # ... the camera is released ...
+    assert calls(vendors.log)[-1][:2] == ("set_joint_positions", list(rx200().sleep))  # ... and the arm parked

@@ -2,50 +2,63 @@
 
 Safety, in the order a move is handled:
 - Every move is checked BEFORE anything is sent (armlab.hardware.safety.check_move): position limits of
-  armlab.robot.rx200(), the driver's velocity rule (armlab.profile.velocity_violations), a valid time profile, and
-  the board-collision check of the straight joint-space path. A refused move raises MotionRefused naming the joint
-  or the reason and sends nothing (not even the trajectory times).
+  armlab.robot.rx200(), the driver's velocity rule (armlab.profile.velocity_violations), a valid time profile
+  (moving time at most MAX_MOVING_TIME_S = 32.737 s, the servos' Profile_Velocity limit), and the board-collision
+  check of the straight joint-space path. A refused move raises MotionRefused naming the reason and sends nothing.
 - Moving time defaults to armlab.profile.default_moving_time and accel time to moving time / 3 (<= moving / 2).
   The trajectory time is set before set_joint_positions because the driver checks velocities against its stored
   moving time and its last command, not the new ones; if the driver still refuses, MotionRefused says so.
+- Moves are sent non-blocking (set_joint_positions(blocking=False)); armlab waits on an event that
+  emergency_stop() sets. The check-then-publish of a move, the hold and the register writes run under one lock, and
+  emergency_stop() marks the arm stopped before taking it: a stop from another thread (the state machine's) either
+  prevents the move's goal from being published or sends its hold after it, never before.
 - Emergency stop: torque is NOT cut (the arm would fall onto the board). emergency_stop() commands the measured
   position (the arm stops within HOLD_TIME_S and holds there under torque) and every further motion, gripper
   included, raises EmergencyStopped until reset(). The gripper keeps its state (a held block is not dropped).
-  Closing the station while stopped leaves the arm holding where it is (it is not moved to sleep: whatever caused
-  the stop may still be in the way) and warns; robot_shutdown() still runs.
-- Teaching: set_torque(False) lets the arm be moved by hand and joint_positions() reads it; moves are refused until
-  set_torque(True), which first commands the measured position so the arm does not jump back when torque returns.
-- Shutdown (see connect_arm): the arm goes to its sleep pose BEFORE robot_shutdown(), or it falls onto the board.
+  Closing the station while stopped leaves the arm holding where it is (it is not moved to sleep) and warns.
+- Ctrl+C: armlab.hardware.sigint calls hold() (the measured position, not an e-stop), then KeyboardInterrupt.
+- Teaching: set_torque(False) lets the arm be moved by hand (it warns: the arm falls unless supported) and
+  joint_positions() reads it; moves are refused until set_torque(True), which first commands the measured position.
+- Servo reboots (reboot_motors) reset the servos' RAM registers: Profile_Velocity 0 means no profile at all. The
+  vendor writes the profile registers only when a value differs from its Python-side cache (arm.moving_time,
+  arm.accel_time), so armlab writes both registers itself after every reboot and at connect, and sets that cache to
+  the values written.
+- Connect checks the driver's modes: the arm group in 'position' mode with the 'time' profile (with a velocity
+  profile moving_time would mean something else), the gripper in 'pwm' or 'current' mode.
+- Shutdown (see connect_arm and armlab.hardware.ros_session): the arm goes to its sleep pose; robot_shutdown() runs
+  once per process, at exit, after that.
 
 Holding detection: after grasp(), the measured left finger position (the gripper's joint state 'left_finger',
 metres from the gripper centre) is compared with the driver's fully-closed limit (gripper.left_finger_lower_limit):
-the fingers stopped more than HELD_THRESHOLD_MM before fully closed means something is held. The driver stops the
-motor when the finger reaches that limit, so an empty close reads at (or, by overshoot, just below) it. Fingers still
-within HELD_THRESHOLD_MM of fully open (gripper.left_finger_upper_limit) after grasp() mean the gripper did not close
-at all (no power, wrong operating mode, or a 2022 release of xs_robot/gripper.py, whose grasp() and release() are
-swapped): close_gripper() raises RuntimeError saying so rather than report a block that is not there.
+the fingers stopped more than HELD_THRESHOLD_MM before fully closed means something is held. Fingers still within
+HELD_THRESHOLD_MM of fully open (gripper.left_finger_upper_limit) after grasp() mean the gripper did not close at all
+(no power, wrong operating mode, or a 2022 release of xs_robot/gripper.py, whose grasp() and release() are swapped):
+close_gripper() raises RuntimeError saying so rather than report a block that is not there.
 
-The vendor calls, checked against Interbotix/interbotix_ros_toolboxes (ROS 2: xs_robot/arm.py, core.py, gripper.py,
-interbotix_common_modules/common_robot/robot.py); tests/test_hardware.py holds their signatures and checks every
-call against them:
+The vendor calls (Interbotix/interbotix_ros_toolboxes, branch humble: xs_robot/arm.py, core.py, gripper.py,
+interbotix_common_modules/common_robot/robot.py; tests/test_hardware_vendor.py runs this module through those files
+at a pinned commit, tests/vendor/facts.py lists the vendor facts relied on):
     InterbotixManipulatorXS(robot_model, group_name, gripper_name, robot_name, moving_time, accel_time,
                             gripper_pressure); robot_startup(); robot_shutdown()
     bot.arm.set_trajectory_time(moving_time, accel_time); bot.arm.set_joint_positions(joint_positions, moving_time,
         accel_time, blocking) -> bool; bot.arm.capture_joint_positions(); bot.arm.get_joint_commands();
-        bot.arm.group_info.joint_names
-    bot.gripper.grasp(delay); bot.gripper.release(delay); bot.gripper.left_finger_lower_limit / _upper_limit (m)
+        bot.arm.group_info (joint_names, mode, profile_type); bot.arm.moving_time / accel_time (its register cache)
+    bot.gripper.grasp(delay); bot.gripper.release(delay); bot.gripper.set_pressure(pressure);
+        bot.gripper.gripper_info.mode; bot.gripper.left_finger_lower_limit / _upper_limit (m)
     bot.core.robot_get_joint_states() -> JointState; bot.core.robot_torque_enable(cmd_type, name, enable);
         bot.core.robot_write_commands(group_name, commands); bot.core.robot_reboot_motors(cmd_type, name, enable,
-        smart_reboot)
-There is no arm.get_joint_positions() in the ROS 2 API: measured joints come from core.robot_get_joint_states()
-(by joint name). Only ROS 2 is supported: the ROS 1 API (bot.dxl, no robot_startup) is detected and refused with a
-clear message, and so is a ROS 2 toolbox older than robot_startup()/robot_shutdown() (2024).
+        smart_reboot); bot.core.robot_set_motor_registers(cmd_type, name, reg, value)
+Every value put into a ROS message is a Python float (rosidl asserts the type of float32 fields). Measured joints come
+from core.robot_get_joint_states() (arm.get_joint_positions() exists only in 2024-11 and later toolboxes). Only ROS 2
+is supported: the ROS 1 API (bot.dxl, no robot_startup) and a ROS 2 toolbox older than robot_startup() (2024) are
+refused with a clear message.
 Units: rad, s, mm in every public method.
 """
 
 from __future__ import annotations
 
 import importlib.util
+import threading
 import time
 import warnings
 from collections.abc import Callable
@@ -54,13 +67,13 @@ from typing import Any
 import numpy as np
 
 from armlab.hardware import HardwareUnavailable
+from armlab.hardware.ros_session import DRIVER_TIMEOUT_S, RosApi, get_bot
 from armlab.hardware.safety import DEFAULT_BOARD_MARGIN_MM, check_move
 from armlab.profile import MIN_MOVING_TIME_S
 from armlab.robot import RobotModel, rx200
 from armlab.station import EmergencyStopped, MotionRefused
 
-__all__ = ["HELD_THRESHOLD_MM", "HOLD_TIME_S", "import_interbotix", "RealArm", "connect_arm",
-           "park_and_shutdown"]
+__all__ = ["HELD_THRESHOLD_MM", "HOLD_TIME_S", "import_interbotix", "RealArm", "connect_arm", "park"]
 
 HELD_THRESHOLD_MM = 2.0          # fingers stopped > 2 mm short of fully closed -> holding something
 HOLD_TIME_S = MIN_MOVING_TIME_S  # moving time of the stop-and-hold command (accel = half of it)
@@ -87,21 +100,43 @@ def _has_module(name: str) -> bool:
         return False
 
 
-def import_interbotix() -> tuple[Any, Callable[..., None], Callable[..., None]]:
-    """(InterbotixManipulatorXS, robot_startup, robot_shutdown) from the ROS 2 API.
+def import_interbotix() -> RosApi:
+    """The vendor callables from the ROS 2 API (InterbotixManipulatorXS, robot_startup, robot_shutdown, rclpy).
 
     Raises HardwareUnavailable saying what to install when it is missing, or that ROS 1 is not supported.
     """
     try:
+        import rclpy
         from interbotix_common_modules.common_robot.robot import robot_shutdown, robot_startup
         from interbotix_xs_modules.xs_robot.arm import InterbotixManipulatorXS
+        from interbotix_xs_msgs.srv import RobotInfo
+        from rclpy.signals import SignalHandlerOptions, uninstall_signal_handlers
     except ImportError as e:
         if _has_module("interbotix_xs_modules.arm"):
             raise HardwareUnavailable(ROS1_HINT) from e
         if _has_module("interbotix_xs_modules.xs_robot.arm"):
             raise HardwareUnavailable(f"{OLD_ROS2_HINT} ({e})") from e
         raise HardwareUnavailable(f"{INSTALL_HINT} ({e})") from e
-    return InterbotixManipulatorXS, robot_startup, robot_shutdown
+    return RosApi(InterbotixManipulatorXS, robot_startup, robot_shutdown, rclpy, SignalHandlerOptions.NO,
+                  uninstall_signal_handlers, RobotInfo)
+
+
+def check_driver_modes(bot: Any) -> None:
+    """RuntimeError unless the arm group runs 'position' mode with a 'time' profile and the gripper 'pwm' or
+    'current' mode (the driver's motor config, e.g. interbotix_xsarm_control/config/modes.yaml)."""
+    info = bot.arm.group_info
+    problems = []
+    if getattr(info, "mode", None) != "position" or getattr(info, "profile_type", None) != "time":
+        problems.append(f"the arm group runs mode {getattr(info, 'mode', None)!r} with profile "
+                        f"{getattr(info, 'profile_type', None)!r}, armlab needs 'position' with 'time' (moving_time "
+                        "would mean something else)")
+    gripper_mode = getattr(getattr(bot.gripper, "gripper_info", None), "mode", None)
+    if gripper_mode not in ("pwm", "current"):
+        problems.append(f"the gripper runs mode {gripper_mode!r}, armlab needs 'pwm' or 'current'")
+    if problems:
+        raise RuntimeError("the xs_sdk driver is configured wrongly: " + "; ".join(problems) + ". Launch it with "
+                           "the stock modes (`ros2 launch interbotix_xsarm_control xsarm_control.launch.py "
+                           "robot_model:=rx200` without a custom mode_configs file)")
 
 
 class RealArm:
@@ -113,28 +148,37 @@ class RealArm:
         board_margin_mm: height above the board every joint and the tool point must keep along a move.
         grasp_delay_s: how long grasp()/release() drive the fingers before the position is read.
         held_threshold_mm: see HELD_THRESHOLD_MM.
-        clock, sleep: monotonic time source and sleep function (s), replaceable for tests.
+        clock: monotonic time source (s). sleep: how to wait dt s for a move to end; default: wait on the stop
+            event, which emergency_stop() and hold() set (replaceable for tests).
     """
 
     def __init__(self, bot: Any, robot: RobotModel | None = None,
                  board_margin_mm: float = DEFAULT_BOARD_MARGIN_MM, grasp_delay_s: float = 1.0,
                  held_threshold_mm: float = HELD_THRESHOLD_MM, clock: Callable[[], float] = time.monotonic,
-                 sleep: Callable[[float], None] = time.sleep):
+                 sleep: Callable[[float], None] | None = None):
         self.robot = robot or rx200()
         self._bot = bot
         names = tuple(bot.arm.group_info.joint_names)
         if names != self.robot.joint_names:
             raise RuntimeError(f"the driver's arm group has joints {names}, expected {self.robot.joint_names}: "
                                "is the driver running robot_model:=rx200?")
+        check_driver_modes(bot)
         self.board_margin_mm = float(board_margin_mm)
         self.grasp_delay_s = float(grasp_delay_s)
         self.held_threshold_mm = float(held_threshold_mm)
         self.finger_closed_mm = 1000.0 * float(bot.gripper.left_finger_lower_limit)
         self.finger_open_mm = 1000.0 * float(bot.gripper.left_finger_upper_limit)
-        self._clock, self._sleep = clock, sleep
+        self._clock = clock
+        self._lock = threading.RLock()       # check-then-publish, hold, register writes; re-entrant for SIGINT
+        self._stop = threading.Event()       # set by emergency_stop() and hold(): ends a wait for a move
+        self._sleep = sleep if sleep is not None else self._stop.wait
         self._move_ends = clock()
         self._estopped = False
         self._torque_on = True
+        self.closed = False
+        with self._lock:
+            bot.arm.capture_joint_positions()          # a reused bot: its last command may be stale
+            self._write_profile(bot.arm.moving_time, bot.arm.accel_time)
 
     # --- reading -------------------------------------------------------------------------------------------------
     def _joint_state(self) -> dict[str, float]:
@@ -171,6 +215,8 @@ class RealArm:
 
     # --- motion --------------------------------------------------------------------------------------------------
     def _require_motion_allowed(self) -> None:
+        if self.closed:
+            raise RuntimeError("the station is closed: open a new one with make_station('real')")
         if self._estopped:
             raise EmergencyStopped("the arm is emergency-stopped (holding position): call reset() before moving it")
         if not self._torque_on:
@@ -180,30 +226,37 @@ class RealArm:
                 blocking: bool = True) -> None:
         """Move to q (5,) rad with the time-based profile (default times: see module docstring).
 
-        Waits for a running non-blocking move to end first. Raises MotionRefused (nothing sent) or EmergencyStopped.
+        Waits for a running non-blocking move to end first. Raises MotionRefused (nothing sent) or EmergencyStopped
+        (also when the stop comes while a blocking move runs).
         """
         self._require_motion_allowed()
         self.wait()
-        self._require_motion_allowed()
-        moving_time, accel_time = check_move(self.joint_positions(), q, moving_time, accel_time, self.robot,
-                                             self.board_margin_mm)
-        arm = self._bot.arm
-        arm.set_trajectory_time(moving_time, accel_time)
-        self._move_ends = self._clock() + moving_time
-        sent = arm.set_joint_positions([float(x) for x in np.asarray(q, float)], moving_time=moving_time,
-                                       accel_time=accel_time, blocking=blocking)
-        if blocking or not sent:
-            self._move_ends = self._clock()
-        if not sent:
-            raise MotionRefused("move refused by the Interbotix driver (nothing was sent): its joint or velocity "
-                                "limits, which it checks against its last command rather than the measured position")
+        with self._lock:
+            self._require_motion_allowed()
+            moving_time, accel_time = check_move(self.joint_positions(), q, moving_time, accel_time, self.robot,
+                                                 self.board_margin_mm)
+            arm = self._bot.arm
+            arm.set_trajectory_time(moving_time, accel_time)
+            self._require_motion_allowed()        # a stop that came during the register writes wins
+            self._stop.clear()
+            sent = arm.set_joint_positions([float(x) for x in np.asarray(q, float)], moving_time=moving_time,
+                                           accel_time=accel_time, blocking=False)
+            if not sent:
+                raise MotionRefused("move refused by the Interbotix driver (nothing was sent): its joint or velocity "
+                                    "limits, which it checks against its last command rather than the measured "
+                                    "position")
+            self._move_ends = self._clock() + moving_time
+        if blocking:
+            self.wait()
+            if self._estopped:
+                raise EmergencyStopped("the arm was emergency-stopped during the move (holding position)")
 
     def is_moving(self) -> bool:
-        """True while a non-blocking move is under way (until its moving time has passed)."""
+        """True while a move is under way (until its moving time has passed or a stop/hold ended it)."""
         return self._clock() < self._move_ends
 
     def wait(self) -> None:
-        """Block until the current move's moving time has passed."""
+        """Block until the current move's moving time has passed, or until emergency_stop()/hold() ends it."""
         remaining = self._move_ends - self._clock()
         if remaining > 0:
             self._sleep(remaining)
@@ -221,7 +274,7 @@ class RealArm:
         """Open the gripper (releasing anything held); refused while emergency-stopped."""
         if self._estopped:
             raise EmergencyStopped("the arm is emergency-stopped: call reset() before using the gripper")
-        self._bot.gripper.release(self.grasp_delay_s)
+        self._bot.gripper.release(float(self.grasp_delay_s))
 
     def close_gripper(self) -> bool:
         """Close the gripper; True when the fingers stopped more than held_threshold_mm before fully closed.
@@ -230,7 +283,7 @@ class RealArm:
         """
         if self._estopped:
             raise EmergencyStopped("the arm is emergency-stopped: call reset() before using the gripper")
-        self._bot.gripper.grasp(self.grasp_delay_s)
+        self._bot.gripper.grasp(float(self.grasp_delay_s))
         finger = self.finger_position_mm()
         if finger >= self.finger_open_mm - self.held_threshold_mm:
             raise RuntimeError(f"gripper.grasp() did not close the gripper: the left finger is at {finger:.1f} mm, "
@@ -241,64 +294,96 @@ class RealArm:
         return finger > self.finger_closed_mm + self.held_threshold_mm
 
     # --- torque, stop, reset -------------------------------------------------------------------------------------
+    def _write_profile(self, moving_time: float, accel_time: float) -> None:
+        """Write Profile_Velocity / Profile_Acceleration (ms) to the arm group and set the vendor's cache to match
+        (the vendor skips a register write when its cache already holds the value)."""
+        core, arm = self._bot.core, self._bot.arm
+        core.robot_set_motor_registers("group", GROUP, "Profile_Velocity", int(round(float(moving_time) * 1000)))
+        core.robot_set_motor_registers("group", GROUP, "Profile_Acceleration", int(round(float(accel_time) * 1000)))
+        arm.moving_time, arm.accel_time = float(moving_time), float(accel_time)
+
     def _hold(self) -> None:
         """Command the measured position (the driver's last command is re-synchronised to it first)."""
-        arm = self._bot.arm
-        arm.capture_joint_positions()
-        arm.set_trajectory_time(HOLD_TIME_S, HOLD_TIME_S / 2)
-        self._bot.core.robot_write_commands(GROUP, [float(x) for x in arm.get_joint_commands()])
-        self._move_ends = self._clock()
-
-    def set_torque(self, enabled: bool) -> None:
-        """Torque on (holding the measured position: no jump back) or off (move the arm by hand to teach)."""
-        core = self._bot.core
-        if enabled:
-            if not self._torque_on:
-                self._hold()
-            core.robot_torque_enable("group", GROUP, True)
-            self._torque_on = True
-        else:
-            core.robot_torque_enable("group", GROUP, False)
-            self._torque_on = False
+        with self._lock:
+            arm = self._bot.arm
+            arm.capture_joint_positions()
+            arm.set_trajectory_time(HOLD_TIME_S, HOLD_TIME_S / 2)
+            self._bot.core.robot_write_commands(GROUP, [float(x) for x in arm.get_joint_commands()])
             self._move_ends = self._clock()
 
+    def hold(self) -> None:
+        """Stop the current move and hold the measured position (not an emergency stop: moves stay allowed)."""
+        self._stop.set()
+        with self._lock:
+            if self._torque_on and not self.closed:
+                self._hold()
+            self._move_ends = self._clock()
+
+    def set_torque(self, enabled: bool) -> None:
+        """Torque on (holding the measured position: no jump back) or off (move the arm by hand to teach).
+
+        Torque off warns: the arm falls onto the board unless someone holds it.
+        """
+        core = self._bot.core
+        with self._lock:
+            if enabled:
+                if not self._torque_on:
+                    self._hold()
+                core.robot_torque_enable("group", GROUP, True)
+                self._torque_on = True
+            else:
+                warnings.warn("torque off: the arm falls unless supported; hold it before this call",
+                              RuntimeWarning, stacklevel=2)
+                self._stop.set()
+                core.robot_torque_enable("group", GROUP, False)
+                self._torque_on = False
+                self._move_ends = self._clock()
+
     def emergency_stop(self) -> None:
-        """Stop now and hold the measured position under torque; motion raises EmergencyStopped until reset()."""
+        """Stop now and hold the measured position under torque; motion raises EmergencyStopped until reset().
+
+        Safe from any thread: the stop is marked before the lock is taken, so a move being sent either sees it and
+        publishes nothing, or has published and the hold goes out after it."""
         self._estopped = True
-        if self._torque_on:
-            self._hold()
-        self._move_ends = self._clock()
+        self._stop.set()
+        with self._lock:
+            if self._torque_on:
+                self._hold()
+            self._move_ends = self._clock()
 
     def reboot_motors(self, gripper: bool = False) -> None:
         """Reboot the arm's servos that are in an error state (e.g. an overload after a collision: their LEDs blink
-        and they stop answering), torque them on again and hold the measured position. gripper=True also reboots
-        the gripper's servo (it lets go of a held block while it restarts).
+        and they stop answering), torque them on again, rewrite their profile registers (a reboot resets them to 0,
+        which means no profile) and hold the measured position. gripper=True also reboots the gripper's servo (it
+        lets go of a held block while it restarts).
 
         Refused while emergency-stopped (reset() first) or torqued off for teaching.
         """
         self._require_motion_allowed()
         core = self._bot.core
-        core.robot_reboot_motors("group", GROUP, True, smart_reboot=True)
-        if gripper:
-            core.robot_reboot_motors("single", "gripper", True)
-        self._hold()
+        with self._lock:
+            core.robot_reboot_motors("group", GROUP, True, smart_reboot=True)
+            if gripper:
+                core.robot_reboot_motors("single", "gripper", True)
+            self._write_profile(HOLD_TIME_S, HOLD_TIME_S / 2)
+            self._hold()
 
     def reset(self) -> None:
         """Leave the emergency stop: the arm stays where it is, torque on, the driver's command re-synchronised."""
-        if self._torque_on:
-            self._bot.arm.capture_joint_positions()
-        else:
-            self.set_torque(True)
-        self._estopped = False
+        with self._lock:
+            if self._torque_on:
+                self._bot.arm.capture_joint_positions()
+            else:
+                self.set_torque(True)
+            self._estopped = False
 
 
-def park_and_shutdown(arm: RealArm, robot_shutdown: Callable[[], None]) -> None:
-    """Put the arm to sleep (torque on first if it was off), then robot_shutdown() in every case.
-
-    While emergency-stopped the arm is not moved (it keeps holding its position) and a RuntimeWarning says so.
-    A refused or failed sleep move still shuts down, then raises RuntimeError telling to put the arm down by hand.
-    """
-    failure = None
+def park(arm: RealArm) -> None:
+    """Put the arm to sleep (torque on first if it was off) and close it; ROS stays up (armlab.hardware.ros_session
+    shuts it down at exit). While emergency-stopped the arm is not moved (it keeps holding its position) and a
+    RuntimeWarning says so. A refused or failed sleep move raises RuntimeError telling to put the arm down by hand."""
+    if arm.closed:
+        return
     try:
         if arm.estopped:
             warnings.warn("the arm is emergency-stopped: it was not moved to its sleep pose and holds its position; "
@@ -308,29 +393,22 @@ def park_and_shutdown(arm: RealArm, robot_shutdown: Callable[[], None]) -> None:
                 arm.set_torque(True)
             arm.sleep()
     except Exception as e:
-        failure = e
+        raise RuntimeError(f"the arm could not go to its sleep pose ({e}); support it before powering it "
+                           "off") from e
     finally:
-        robot_shutdown()
-    if failure is not None:
-        raise RuntimeError(f"the arm could not go to its sleep pose before shutdown ({failure}); "
-                           "support it before powering it off") from failure
+        arm.closed = True
 
 
 def connect_arm(robot_name: str | None = None, gripper_pressure: float = 0.5,
-                **arm_options) -> tuple[RealArm, Callable[[], None]]:
-    """Start the Interbotix ROS 2 API for the RX200; return (RealArm, closer). The closer = park_and_shutdown.
+                driver_timeout_s: float = DRIVER_TIMEOUT_S, **arm_options) -> tuple[RealArm, Callable[[], None]]:
+    """The RX200 on the process's Interbotix session (started on first use: armlab.hardware.ros_session); return
+    (RealArm, closer). The closer = park (ROS stays up for the next station; it shuts down at exit).
 
+    gripper_pressure: 0..1 (sent as a float). driver_timeout_s: how long to wait for the xs_sdk driver.
     arm_options go to RealArm (board_margin_mm, grasp_delay_s, held_threshold_mm).
     """
     if not 0.0 <= gripper_pressure <= 1.0:
         raise ValueError(f"gripper_pressure must lie in [0, 1], got {gripper_pressure}")
-    manipulator, robot_startup, robot_shutdown = import_interbotix()
-    bot = manipulator(robot_model="rx200", group_name=GROUP, gripper_name="gripper", robot_name=robot_name,
-                      moving_time=2.0, accel_time=0.3, gripper_pressure=gripper_pressure)
-    robot_startup()
-    try:
-        arm = RealArm(bot, **arm_options)
-    except BaseException:
-        robot_shutdown()
-        raise
-    return arm, lambda: park_and_shutdown(arm, robot_shutdown)
+    bot = get_bot(import_interbotix(), robot_name, float(gripper_pressure), driver_timeout_s)
+    arm = RealArm(bot, **arm_options)
+    return arm, lambda: park(arm)

@@ -20,13 +20,17 @@ from armlab.profile import default_moving_time, velocity_violations
 from armlab.robot import RobotModel, rx200
 from armlab.station import MotionRefused
 
-__all__ = ["TRACKED_POINTS", "DEFAULT_BOARD_MARGIN_MM", "PATH_STEP_RAD", "ACCEL_FRACTION", "path_heights",
+__all__ = ["TRACKED_POINTS", "DEFAULT_BOARD_MARGIN_MM", "PATH_STEP_RAD", "ACCEL_FRACTION", "MAX_MOVING_TIME_S",
+           "path_heights",
            "board_collision", "check_move"]
 
 TRACKED_POINTS: tuple[str, ...] = ("shoulder", "elbow", "wrist", "wrist_rotate", "tool point")  # joint_positions 2..6
 DEFAULT_BOARD_MARGIN_MM = 10.0      # the tool point of a top-down grasp of a 25 mm cube sits at 12.5 mm
 PATH_STEP_RAD = np.radians(0.25)    # largest joint change between two checked samples of the path
 ACCEL_FRACTION = 1 / 3              # accel_time = moving_time / 3 unless the caller chooses
+# In time-based profile mode the servos' Profile_Velocity register holds the moving time in ms, at most 32737
+# (ROBOTIS e-manual, X-series control table); the driver passes a larger value on and the servo ignores it.
+MAX_MOVING_TIME_S = 32.737
 
 
 def _refuse(reason: str) -> MotionRefused:
@@ -71,7 +75,8 @@ def check_move(q_from, q_to, moving_time: float | None = None, accel_time: float
 
     Defaults: moving_time = armlab.profile.default_moving_time, accel_time = moving_time / 3. Raises MotionRefused
     (a ValueError) naming the problem: a malformed q_to, a joint limit (which joint), an impossible time profile
-    (accel_time must lie in [0, moving_time / 2]), a joint faster than its velocity limit, or a board collision.
+    (moving_time in (0, MAX_MOVING_TIME_S], accel_time in [0, moving_time / 2]), a joint faster than its velocity
+    limit, or a board collision.
     """
     robot = robot or rx200()
     q_from = check_joints(q_from, robot, check_limits=False)
@@ -89,6 +94,9 @@ def check_move(q_from, q_to, moving_time: float | None = None, accel_time: float
     moving_time = float(moving_time)
     if not np.isfinite(moving_time) or moving_time <= 0:
         raise _refuse(f"moving_time must be a positive number of seconds, got {moving_time}")
+    if moving_time > MAX_MOVING_TIME_S:
+        raise _refuse(f"moving_time {moving_time:g} s is longer than the servos' time profile allows "
+                      f"({MAX_MOVING_TIME_S} s): split the move")
     accel_time = moving_time * ACCEL_FRACTION if accel_time is None else float(accel_time)
     if not np.isfinite(accel_time) or not 0 <= accel_time <= moving_time / 2:
         raise _refuse(f"accel_time {accel_time} s must lie in [0, moving_time / 2] = [0, {moving_time / 2:g}] s")
