@@ -94,8 +94,14 @@ def vendor(monkeypatch):
     clock = FakeClock()
     monkeypatch.setattr(interbotix, "RealArm", functools.partial(interbotix.RealArm, clock=clock, sleep=clock.sleep))
     handlers = signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)
+    threads = set(threading.enumerate())
     yield SimpleNamespace(sdk=sdk, ros=world, modules=modules, clock=clock)
-    world.stopped.set()                                  # ends the vendor's executor thread
+    # End the vendor's executor thread: robot.py spins `while rclpy.ok(): executor.spin()`, so the context must
+    # report not ok (else the loop spins on at full speed and starves every later test), then spin() returns.
+    world._shutdown_contexts()
+    for t in set(threading.enumerate()) - threads:
+        t.join(timeout=5)
+        assert not t.is_alive(), f"the vendor thread {t.name} outlived its test"
     signal.signal(signal.SIGINT, handlers[0])
     signal.signal(signal.SIGTERM, handlers[1])
 
