@@ -127,17 +127,19 @@ _DEFAULT: dict[tuple, ColorModel] = {}
 
 
 def default_color_model() -> ColorModel:
-    """The calibrated model in data/color_model.json when the file exists (validated: a corrupt file raises
-    ValueError naming it), else ColorModel.from_reference(). Loaded once per file version."""
+    """The calibrated model of the data folder's color_model.json (armlab._paths.data_path: the packaged file, or a
+    lab's own in $ARMLAB_DATA), validated: a missing or corrupt file raises ValueError naming it (never a silent
+    fallback to other colours; ColorModel.from_reference() is there to be asked for). Loaded once per file version."""
     path = data_path(COLOR_MODEL_FILE)
     try:
         stamp = path.stat()
-        key = (str(path), stamp.st_mtime_ns, stamp.st_size)
     except FileNotFoundError:
-        key = ("reference",)
+        raise ValueError(f"{path}: colour model file not found (refit it with `python -m armlab.sim.scoring`, or "
+                         f"pass detection settings with a ColorModel)") from None
+    key = (str(path), stamp.st_mtime_ns, stamp.st_size)
     if key not in _DEFAULT:
         _DEFAULT.clear()
-        _DEFAULT[key] = ColorModel.from_reference() if key == ("reference",) else ColorModel.load(path)
+        _DEFAULT[key] = ColorModel.load(path)
     return _DEFAULT[key]
 
 

@@ -23,7 +23,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from armlab._paths import data_path
+from armlab._paths import data_path, data_write_path
 from armlab.calibration.intrinsics import IntrinsicsResult, calibrate_intrinsics
 from armlab.calibration.views import load_checkerboard_set, save_checkerboard_set
 from armlab.camera import Camera
@@ -211,7 +211,7 @@ def save_dataset(out_dir: Path | str | None = None, n: int = SET_SIZE, seed: int
         "seed": seed, "true_K": camera.K.tolist(), "true_dist": camera.dist.tolist(),
     }
     return save_checkerboard_set(render_checkerboard_set(camera, realism, seed, n, board),
-                                 out_dir if out_dir is not None else data_path("checkerboard"),
+                                 out_dir if out_dir is not None else data_write_path("checkerboard"),
                                  board.pattern_size, board.square_mm, notes)
 
 

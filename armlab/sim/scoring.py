@@ -248,10 +248,10 @@ def fit_color_model(seeds=TRAIN_SEEDS):
 
 
 if __name__ == "__main__":   # python -m armlab.sim.scoring: refit data/color_model.json
-    from armlab._paths import data_path
+    from armlab._paths import data_write_path
     from armlab.detection.color import COLOR_MODEL_FILE
 
     model, n = fit_color_model()
-    model.save(data_path(COLOR_MODEL_FILE), note=f"fitted on {n} simulated block faces, seeds "
-                                                 f"{TRAIN_SEEDS.start}-{TRAIN_SEEDS.stop - 1}")
-    print(f"wrote {data_path(COLOR_MODEL_FILE)} from {n} faces")
+    model.save(data_write_path(COLOR_MODEL_FILE), note=f"fitted on {n} simulated block faces, seeds "
+                                                       f"{TRAIN_SEEDS.start}-{TRAIN_SEEDS.stop - 1}")
+    print(f"wrote {data_write_path(COLOR_MODEL_FILE)} from {n} faces")

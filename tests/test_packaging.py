@@ -1,0 +1,122 @@
+"""`pip install .` gives a package that works from any folder: the wheel carries the data files (read through
+importlib.resources), declares compatible version ranges for what it imports, and a lab's own data folder
+($ARMLAB_DATA) overrides the packaged files one by one.
+"""
+
+from __future__ import annotations
+
+import ast
+import os
+import re
+import subprocess
+import sys
+import sysconfig
+import zipfile
+from pathlib import Path
+
+import pytest
+
+from armlab import _paths
+
+tomllib = pytest.importorskip("tomllib")        # Python 3.11+
+
+REPO = Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture(scope="module")
+def wheel(tmp_path_factory) -> Path:
+    out = tmp_path_factory.mktemp("wheel")
+    run = subprocess.run([sys.executable, "-m", "pip", "wheel", "--quiet", "--no-deps", "-w", str(out), str(REPO)],
+                         capture_output=True, text=True, timeout=600)
+    if run.returncode != 0:
+        pytest.fail(f"pip wheel failed: {run.stderr[-2000:]}")
+    (path,) = out.glob("armlab-*.whl")
+    return path
+
+
+def test_the_wheel_carries_every_data_file(wheel):
+    names = set(zipfile.ZipFile(wheel).namelist())
+    shipped = sorted(p.relative_to(REPO).as_posix() for p in (REPO / "armlab" / "data").rglob("*") if p.is_file())
+    assert len(shipped) >= 20
+    missing = [n for n in shipped if n not in names]
+    assert not missing, f"data files left out of the wheel: {missing}"
+    assert not any(n.startswith(("tests/", "notebooks/", "benchmarks/")) for n in names)
+
+
+def test_the_installed_wheel_works_from_another_folder(wheel, tmp_path):
+    """Installed (no repository on the path) and run from an empty folder: station, frame, detection, FK, IK."""
+    target = tmp_path / "site"
+    subprocess.run([sys.executable, "-m", "pip", "install", "--quiet", "--no-deps", "--target", str(target),
+                    str(wheel)], check=True, capture_output=True, timeout=600)
+    deps = sysconfig.get_paths()["purelib"]          # the dependencies, from the test's own environment
+    code = """
+import numpy as np, armlab
+from armlab import make_station, kinematics, detection, tasks
+assert armlab.__file__.startswith(TARGET), armlab.__file__
+station = make_station("sim", seed=0, scene="swap")
+frame = station.camera.capture()                                # a frame
+assert frame.rgb.shape == (720, 1280, 3)
+ctx = tasks.context(station)                                    # calibration from the packaged checkerboard set
+blocks = detection.detect_blocks(frame.rgb, ctx.calibration.depth_correction.apply(frame.depth),
+                                 ctx.calibration.camera, arm_q=station.arm.joint_positions())
+q = kinematics.ik([100.0, 250.0, 19.0], np.pi / 2)[0]
+print(sorted(b.color for b in blocks), kinematics.fk(q)[:3, 3].round(1).tolist())
+""".replace("TARGET", repr(str(target)))
+    work = tmp_path / "elsewhere"
+    work.mkdir()
+    env = {"PATH": os.environ.get("PATH", "/usr/bin:/bin"), "PYTHONPATH": os.pathsep.join([str(target), deps]),
+           "MPLBACKEND": "Agg", "HOME": str(tmp_path)}
+    base_python = Path(sys.base_prefix) / "bin" / "python3"
+    run = subprocess.run([str(base_python), "-s", "-c", code], cwd=work, env=env, capture_output=True, text=True,
+                         timeout=600)
+    assert run.returncode == 0, run.stderr[-3000:]
+    assert run.stdout.strip() == "['blue', 'red'] [100.0, 250.0, 19.0]", run.stdout
+
+
+def test_every_imported_package_has_a_declared_version_range():
+    project = tomllib.loads((REPO / "pyproject.toml").read_text())["project"]
+    declared = {re.split(r"[<>=!~; \[]", d, maxsplit=1)[0].lower(): d for d in project["dependencies"]}
+    for spec in declared.values():
+        assert "<" in spec and ">=" in spec, f"{spec!r}: give a compatible range (>= tested, < next major)"
+    imported_as = {"numpy": "numpy", "cv2": "opencv-python-headless", "pupil_apriltags": "pupil-apriltags",
+                   "meshcat": "meshcat", "zmq": "pyzmq", "matplotlib": "matplotlib", "ipywidgets": "ipywidgets",
+                   "ipyevents": "ipyevents"}
+    third_party = set()
+    for path in (REPO / "armlab").rglob("*.py"):
+        if "hardware" in path.parts:            # vendor modules, imported lazily (HardwareUnavailable if missing)
+            continue
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.Import):
+                names = [a.name for a in node.names]
+            elif isinstance(node, ast.ImportFrom) and node.level == 0:
+                names = [node.module]
+            else:
+                continue
+            third_party.update(n.split(".")[0] for n in names if n.split(".")[0] not in sys.stdlib_module_names
+                               and n.split(".")[0] != "armlab")
+    unknown = third_party - set(imported_as)
+    assert not unknown, f"armlab imports {sorted(unknown)}: declare them in pyproject.toml and in this table"
+    for module in third_party:
+        assert imported_as[module] in declared, f"armlab imports {module} but pyproject.toml does not declare " \
+                                                f"{imported_as[module]}"
+    assert "opencv-python-headless>=4.10,<5" in project["dependencies"]   # 5.x drops undistortPointsIter
+
+
+def test_a_lab_data_folder_overrides_packaged_files_one_by_one(tmp_path, monkeypatch):
+    packaged = _paths.packaged_data_dir()
+    assert (packaged / "lab.json").is_file() and packaged.parent.name == "armlab"
+    monkeypatch.setenv(_paths.DATA_ENV, str(tmp_path))
+    assert _paths.data_path("lab.json") == packaged / "lab.json"          # not in the lab's folder: the package's
+    (tmp_path / "lab.json").write_text("{}")
+    assert _paths.data_path("lab.json") == tmp_path / "lab.json"          # the lab's own wins
+    assert _paths.data_path("checkerboard_real") == tmp_path / "checkerboard_real"   # missing: where to put it
+    assert _paths.data_write_path("color_model.json") == tmp_path / "color_model.json"
+
+
+def test_a_missing_colour_model_is_an_error_not_other_colours(tmp_path, monkeypatch):
+    from armlab.detection import color
+
+    monkeypatch.setattr(_paths, "packaged_data_dir", lambda: tmp_path)
+    monkeypatch.delenv(_paths.DATA_ENV, raising=False)
+    with pytest.raises(ValueError, match="color_model.json: colour model file not found"):
+        color.default_color_model()
