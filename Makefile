@@ -1,5 +1,8 @@
 # armlab: every target creates .venv and installs requirements.txt + the package on first use.
 PY      := .venv/bin/python
+# A student release (make student) carries this marker: its `make test` runs the kit's tests, not the notebooks'
+# checks, whose exercises are still blank there.
+RELEASE := $(wildcard .student-release)
 STAMP   := .venv/.installed
 NBVAL   := --nbval --nbval-sanitize-with tests/nbval_sanitize.cfg --nbval-cell-timeout=600
 
@@ -19,11 +22,15 @@ demo: $(STAMP)
 ## make test: lint + unit tests + every notebook under nbval, natively and under other CPUs' numerics
 ## (installs headless Chromium for the browser checks)
 test: $(STAMP) browser camera lint
+ifeq ($(RELEASE),)
 	$(PY) -m pytest -q tests notebooks $(NBVAL)
 	bash tools/nbval-numerics $(PY) $(NBVAL)
+else
+	MPLBACKEND=Agg $(PY) -m pytest -q tests
+endif
 
 lint: $(STAMP)
-	$(PY) -m ruff check armlab tests benchmarks notebooks tools/build-notebook tools/student-release
+	$(PY) -m ruff check armlab tests notebooks $(wildcard benchmarks tools/build-notebook tools/student-release)
 
 unit: $(STAMP) camera
 	MPLBACKEND=Agg $(PY) -m pytest -q tests

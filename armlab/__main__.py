@@ -17,6 +17,7 @@ def main(argv: list[str] | None = None) -> int:
                       help="the competition event to run (default: sort_stack)")
     demo.add_argument("--level", type=int, default=3, help="the event's level, 1-3 (default: 3; sky: 1)")
     demo.add_argument("--no-html", action="store_true", help="skip the meshcat replay page")
+    sub.add_parser("exercises", help="list the exercises: id, points, notebook, where to write them")
     sub.add_parser("record", add_help=False,
                    help="record the RealSense camera to a .bag (replay: make_station('real', arm=False, playback=...))")
     args, rest = parser.parse_known_args(argv)
@@ -26,6 +27,11 @@ def main(argv: list[str] | None = None) -> int:
         return record_main(rest)
     if rest:
         parser.error(f"unrecognized arguments: {' '.join(rest)}")
+    if args.command == "exercises":
+        from armlab.exercises import exercises_table
+
+        print(exercises_table())
+        return 0
     if args.command == "demo":
         from armlab.demo import run_demo
 

@@ -90,10 +90,13 @@ def _check_angle(value, name: str) -> np.ndarray:
 # ---------------------------------------------------------------------------------------------------------------
 
 def dh_link_transform(theta, d, a, alpha) -> np.ndarray:
-    """Standard DH link transform(s) (..., 4, 4) = Rz(theta) Tz(d) Tx(a) Rx(alpha); lengths in mm, angles in rad."""
+    """Standard DH link transform(s) (..., 4, 4) = Rz(theta) Tz(d) Tx(a) Rx(alpha); lengths in mm, angles in rad.
+
+    Exercise fk.dh_link_transform (notebook 02: the kit's batched DH link transform).
+    """
     theta, d, a, alpha = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in (theta, d, a, alpha)))
     A = np.zeros(theta.shape + (4, 4))
-    # BEGIN SOLUTION
+    # BEGIN SOLUTION fk.dh_link_transform
     ct, st, ca, sa = np.cos(theta), np.sin(theta), np.cos(alpha), np.sin(alpha)
     A[..., 0, 0], A[..., 0, 1], A[..., 0, 2], A[..., 0, 3] = ct, -st * ca, st * sa, a * ct
     A[..., 1, 0], A[..., 1, 1], A[..., 1, 2], A[..., 1, 3] = st, ct * ca, -ct * sa, a * st
@@ -239,7 +242,10 @@ _ELBOW_DOWN = np.array([e == "elbow down" for _, e in _BRANCHES], float)
 
 
 def _ik_candidates(P: np.ndarray, pitch: np.ndarray, roll: np.ndarray, robot: RobotModel) -> _Candidates:
-    """Every IK branch for targets P (N, 3) with pitch (N,) and roll (N,), vectorised over targets and branches."""
+    """Every IK branch for targets P (N, 3) with pitch (N,) and roll (N,), vectorised over targets and branches.
+
+    Exercise ik.candidates (notebook 03: the kit's closed-form IK: all four branches).
+    """
     dh = robot.dh
     h0, L1, L2, Lt = _planar_geometry(robot)
     o1, o2, o3 = dh[0, 0], dh[1, 0], dh[2, 0]
@@ -249,7 +255,7 @@ def _ik_candidates(P: np.ndarray, pitch: np.ndarray, roll: np.ndarray, robot: Ro
     heading = np.where(r > 1e-9, np.arctan2(y, x), o1)  # on the base axis any heading works: keep the waist at 0
     flipped = _FLIPPED                                       # (4,): 1 where the waist turns away from the target
     side = 1.0 - 2.0 * flipped                               # +1 facing, -1 flipped
-    # BEGIN SOLUTION
+    # BEGIN SOLUTION ik.candidates
     q1 = heading - o1 + np.pi * flipped
     r_plane = side * r                                      # target's distance along the arm's forward direction
     psi = np.pi * flipped + side * pitch                    # approach angle below the arm's forward horizontal

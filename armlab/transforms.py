@@ -9,6 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = [
+    "wrap_quarter",
     "rot_x",
     "rot_y",
     "rot_z",
@@ -192,3 +193,9 @@ def matrix_from_rpy(rpy) -> np.ndarray:
     """Rotation (..., 3, 3) = Rz(yaw) Ry(pitch) Rx(roll) from (roll, pitch, yaw) (..., 3) in rad."""
     rpy = np.asarray(rpy, dtype=float)
     return rot_z(rpy[..., 2]) @ rot_y(rpy[..., 1]) @ rot_x(rpy[..., 0])
+
+
+def wrap_quarter(angle) -> np.ndarray:
+    """An angle (rad) reduced modulo pi/2 into [-pi/4, pi/4): how far a square is turned from another (a cube's yaw
+    looks the same every quarter turn). Works elementwise on arrays."""
+    return np.mod(np.asarray(angle, dtype=float) + np.pi / 4, np.pi / 2) - np.pi / 4

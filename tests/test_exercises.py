@@ -1,21 +1,33 @@
-"""Exercise markers and the student release (armlab.exercises, tools/student-release).
+"""Exercises (armlab.exercises): the registry, the solution markers, and the student release (tools/student-release).
 
-The release must keep the kit usable while the exercises are blank: the simulator and the viewer run on the
-manufacturer's model, never on a student's code, and each stub names its exercise.
+The registry is the one place an exercise is declared; the markers in the package and the notebooks must agree with
+it; the release must be a student's repository: stubs naming their exercise, student-facing files only, no solution
+text anywhere, and a kit that still runs while the exercises are blank.
 """
 
 from __future__ import annotations
 
 import json
+import re
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
 
-from armlab.exercises import ExerciseMarkerError, find_regions, make_student_release, stub_regions
+from armlab.exercises import (
+    EXERCISES,
+    ExerciseMarkerError,
+    exercise,
+    exercises_table,
+    find_regions,
+    make_student_release,
+    released,
+    stub_regions,
+)
 
 REPO = Path(__file__).resolve().parents[1]
+CHECK_TAG = re.compile(r"^# CHECK (?P<ids>.+)$", re.M)
 
 
 def tracked(*suffixes: str) -> list[Path]:
@@ -23,57 +35,157 @@ def tracked(*suffixes: str) -> list[Path]:
     return [REPO / n for n in names.split() if n.endswith(suffixes) and (REPO / n).is_file()]
 
 
-def test_markers_pair_up_everywhere_and_check_cells_stay_outside():
+def notebook_code_cells(stem: str) -> list[str]:
+    nb = json.loads((REPO / "notebooks" / f"{stem}.ipynb").read_text())
+    return ["".join(c["source"]) for c in nb["cells"] if c["cell_type"] == "code"]
+
+
+@pytest.fixture(scope="module")
+def git_checkout():
     if not (REPO / ".git").exists():
         pytest.skip("not a git checkout")
-    count = 0
+
+
+def test_every_region_names_a_registered_exercise_and_every_exercise_has_its_regions(git_checkout):
+    seen: dict[str, set[str]] = {}
     for path in tracked(".py"):
-        count += len(find_regions(path.read_text(), str(path.relative_to(REPO))))
+        name = path.relative_to(REPO).as_posix()
+        for region in find_regions(path.read_text(), name):
+            seen.setdefault(region.exercise_id, set()).add(name)
+    for e in EXERCISES:
+        assert seen.get(e.id) == {e.where}, f"{e.id}: registered in {e.where}, regions found in {seen.get(e.id)}"
+        if not e.in_package:           # the built notebook holds the same exercise
+            cells = notebook_code_cells(e.notebook)
+            assert any(r.exercise_id == e.id for c in cells for r in find_regions(c, e.notebook)), \
+                f"{e.id}: notebooks/{e.notebook}.ipynb has no region for it (rebuild the notebook)"
+    assert sum(e.points for e in EXERCISES) == 100 and len({e.id for e in EXERCISES}) == len(EXERCISES)
+
+
+def test_package_exercises_say_which_notebook_teaches_them():
+    import importlib
+
+    for e in (e for e in EXERCISES if e.in_package):
+        module = importlib.import_module(e.where[:-3].replace("/", "."))
+        for name in e.functions:
+            obj = module
+            for part in name.split("."):
+                obj = getattr(obj, part)
+            assert f"Exercise {e.id} (notebook {e.notebook_number}" in (obj.__doc__ or ""), \
+                f"{e.where}: {name}'s docstring must say 'Exercise {e.id} (notebook {e.notebook_number}: ...)'"
+
+
+def test_every_exercise_is_graded_by_a_tagged_check_cell(git_checkout):
+    tagged: dict[str, set[str]] = {}
+    for path in sorted((REPO / "notebooks").glob("*.ipynb")):
+        for cell in notebook_code_cells(path.stem):
+            for m in CHECK_TAG.finditer(cell):
+                for exercise_id in m["ids"].split():
+                    exercise(exercise_id)                     # KeyError for an unregistered id
+                    tagged.setdefault(exercise_id, set()).add(path.stem)
+                assert "assert " in cell and "BEGIN SOLUTION" not in cell, f"{path.name}: a CHECK tag on a " \
+                                                                            f"cell that is not a check cell"
+    for e in EXERCISES:
+        assert e.notebook in tagged.get(e.id, set()), f"{e.id}: no '# CHECK {e.id}' cell in {e.notebook}"
+
+
+def test_markers_pair_up_and_check_cells_stay_outside(git_checkout):
     for path in tracked(".ipynb"):
-        for cell in json.loads(path.read_text())["cells"]:
-            text = "".join(cell["source"])
-            for region in find_regions(text, path.name):
-                body = "\n".join(text.splitlines()[region.begin:region.end])
-                assert "assert " not in body, f"{path.name}: a check sits inside an exercise region"
-                count += 1
-    assert count >= 20      # the DH, IK, calibration, detection and planning exercises at least
+        for cell in notebook_code_cells(path.stem):
+            for region in find_regions(cell, path.name):
+                body = "\n".join(cell.splitlines()[region.begin:region.end])
+                assert "assert " not in body, f"{path.name}: a check sits inside the region of {region.exercise_id}"
 
 
 def test_bad_markers_are_named_with_file_and_line():
-    begin, end = "# BEGIN SOLUTION", "# END SOLUTION"
+    begin, end = "# BEGIN SOLUTION fk.dh_transform", "# END SOLUTION"
     cases = {
         f"{begin}\nx = 1\n{begin}\n{end}\n": "f.py:3: BEGIN SOLUTION inside the region opened at line 1",
         f"x = 1\n{end}\n": "f.py:2: END SOLUTION without a BEGIN",
         f"def f():\n    {begin}\n    x = 1\n": "f.py:2: BEGIN SOLUTION never closed",
         f"def f():\n    {begin}\n    return 1\n{end}\n": "f.py:4: END SOLUTION indented differently",
         f"{begin}\n{end}\n": "f.py:2: empty solution region",
+        "# BEGIN SOLUTION\nx = 1\n# END SOLUTION\n": "f.py:1: BEGIN SOLUTION names no exercise",
+        "# BEGIN SOLUTION fk.nope\nx = 1\n# END SOLUTION\n": "f.py:1: no exercise 'fk.nope'; registered: ",
     }
     for text, message in cases.items():
-        with pytest.raises(ExerciseMarkerError, match=message):
+        with pytest.raises(ExerciseMarkerError, match=re.escape(message)):
             find_regions(text, "f.py")
 
 
-def test_a_stub_keeps_the_markers_and_raises_naming_the_exercise():
-    text = "def area(r):\n    # BEGIN SOLUTION\n    a = 3.14159 * r * r\n    # END SOLUTION\n    return a\n"
-    stub = stub_regions(text, "geometry.py")
-    assert "3.14159" not in stub and stub.count("SOLUTION") == 2
+def test_a_stub_keeps_the_markers_and_names_the_exercise_and_the_function():
+    text = "def dh_transform(theta, d, a, alpha):\n    # BEGIN SOLUTION fk.dh_transform\n    T = 42\n" \
+           "    # END SOLUTION\n    return T\n"
+    stub = stub_regions(text, "nb.py")
+    assert "42" not in stub and stub.count("SOLUTION") == 2
     scope: dict = {}
-    exec(compile(stub, "geometry.py", "exec"), scope)          # the stubbed module still imports
-    with pytest.raises(NotImplementedError, match="exercise 1 of geometry.py"):
-        scope["area"](1.0)
+    exec(compile(stub, "nb.py", "exec"), scope)          # the stubbed code still runs up to the point of use
+    with pytest.raises(NotImplementedError, match=r"^exercise fk\.dh_transform \(notebook 02\): write dh_transform$"):
+        scope["dh_transform"](0, 0, 0, 0)
+    assert exercise("grab.heights").message() == ("exercise grab.heights (notebook 05): write default_grasp_depth, "
+                                                  "grasp_height and place_tool_height in armlab/planning/pickplace.py")
 
 
-def test_the_student_release_runs_the_simulator_without_any_solution(tmp_path):
-    if not (REPO / ".git").exists():
-        pytest.skip("not a git checkout")
-    out = tmp_path / "student"
+def test_the_exercise_list_command():
+    run = subprocess.run([sys.executable, "-m", "armlab", "exercises"], capture_output=True, text=True, cwd=REPO)
+    assert run.returncode == 0 and run.stdout.strip() == exercises_table()
+    assert "fk.dh_transform" in run.stdout and run.stdout.strip().endswith("22 exercises, 100 points")
+
+
+@pytest.fixture(scope="module")
+def release(git_checkout, tmp_path_factory):
+    out = tmp_path_factory.mktemp("release") / "student"
     stubbed = make_student_release(REPO, out)
-    assert "armlab/kinematics.py" in stubbed and any(n.endswith(".ipynb") for n in stubbed)
+    return out, stubbed
+
+
+def test_the_release_is_a_students_repository(release):
+    out, stubbed = release
+    assert "armlab/kinematics.py" in stubbed and "notebooks/02_forward_kinematics.ipynb" in stubbed
     with pytest.raises(FileExistsError):
         make_student_release(REPO, out)
+    for gone in ("benchmarks", ".ci", "notebooks/src", "tools/student-release", "tools/student"):
+        assert not (out / gone).exists(), f"{gone} is instructor-only"
+    readme = (out / "README.md").read_text()
+    assert readme == (REPO / "tools/student/README.md").read_text() and "## Submit" in readme
+    assert "make bench" not in readme and (out / ".student-release").is_file()
     nb = json.loads((out / "notebooks/02_forward_kinematics.ipynb").read_text())
     assert all(c.get("outputs", []) == [] for c in nb["cells"])
-    assert "NotImplementedError" in json.dumps(nb) and "BEGIN SOLUTION" in json.dumps(nb)
+    assert "exercise fk.dh_transform (notebook 02): write dh_transform" in json.dumps(nb)
+    assert all(released(p.relative_to(out).as_posix()) or p.name == "README.md"
+               for p in out.rglob("*") if p.is_file())
+
+
+def _solution_signatures() -> set[str]:
+    """What would give a solution away (whitespace folded): every pair of consecutive code lines of every region of
+    the instructor's sources, and a one-line solution's line itself (generic single lines such as
+    `for _ in range(iterations):` are not a solution; two of a solution's lines in a row are)."""
+    signatures = set()
+    for path in tracked(".py"):
+        text = path.read_text()
+        for region in find_regions(text, path.name):
+            body = [" ".join(line.split()) for line in text.splitlines()[region.begin + 1:region.end]]
+            body = [line for line in body if line and not line.startswith("#")]
+            if len(body) == 1 and len(body[0]) >= 24:
+                signatures.add(body[0])
+            signatures.update(f"{a} {b}" for a, b in zip(body, body[1:]) if len(a) + len(b) >= 30)
+    return signatures
+
+
+def test_no_solution_text_anywhere_in_the_release(release):
+    out, _ = release
+    solutions = _solution_signatures()
+    assert len(solutions) >= 60
+    leaks = []
+    for path in out.rglob("*"):
+        if path.is_file() and path.suffix in (".py", ".ipynb", ".md", ".txt", ".cfg", ".toml", ".json", ""):
+            text = path.read_text(errors="ignore")
+            folded = " ".join(text.replace("\\n", "\n").replace('\\"', '"').split())
+            leaks += [f"{path.relative_to(out)}: {s}" for s in solutions if s in folded]
+    assert not leaks, "solution text in the release:\n" + "\n".join(leaks[:20])
+
+
+def test_the_release_runs_the_simulator_without_any_solution(release):
+    out, _ = release
     code = """
 import numpy as np
 from armlab import kinematics, make_station
@@ -93,4 +205,5 @@ except NotImplementedError as e:
     env = {"PYTHONPATH": str(out), "PATH": "/usr/bin:/bin", "MPLBACKEND": "Agg"}
     run = subprocess.run([sys.executable, "-c", code], cwd=out, env=env, capture_output=True, text=True)
     assert run.returncode == 0, run.stderr[-2000:]
-    assert "fk: exercise 1 of armlab/kinematics.py" in run.stdout
+    assert "fk: exercise fk.dh_link_transform (notebook 02): write dh_link_transform in armlab/kinematics.py" \
+        in run.stdout

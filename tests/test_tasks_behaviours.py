@@ -129,9 +129,14 @@ def test_machine_states_and_busy_refusals(station):
 
 
 def _swap_program(seed=0):
+    """Notebook 06's teaching, done by hand on the simulator (the exercise teach.record: instructor-only test)."""
     st = make_station("sim", seed=seed, scene="swap")
     poses, grip = teach.swap_waypoints()
-    return teach.teach_by_hand(st.arm, poses, grip, "swap")
+    recorder = teach.Recorder(st.arm, "swap")
+    for q, g in zip(poses, grip, strict=True):
+        st.arm.move_by_hand(q)
+        recorder.record(g)
+    return recorder.finish()
 
 
 def test_teach_file_round_trip(tmp_path):

@@ -92,13 +92,15 @@ def fit_depth_correction(depth_mm, camera: Camera, step: int = 4, inlier_mm: flo
         iterations: rounds of refit-and-reject.
         exclude: optional (H, W) bool mask of pixels to ignore (e.g. the arm).
     Raises ValueError when too few board pixels have depth.
+
+    Exercise calib.depth_plane (notebook 01: fit the depth camera's planar bias).
     """
     u, v, measured, expected, usable, keep = board_samples(depth_mm, camera, step, exclude)
     residual = measured - expected
     A_all = np.column_stack([u.ravel(), v.ravel(), np.ones(u.size)]).astype(float)
     r_all = residual.ravel()
     coef = np.zeros(3)
-    # BEGIN SOLUTION
+    # BEGIN SOLUTION calib.depth_plane
     for _ in range(iterations):
         idx = keep.ravel()
         coef, *_ = np.linalg.lstsq(A_all[idx], r_all[idx], rcond=None)

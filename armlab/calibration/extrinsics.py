@@ -37,6 +37,8 @@ def extrinsics_from_detections(detections: list[TagDetection], K, dist,
     (IPPE when only one tag is seen). Tags that are not on the board are ignored.
 
     Raises ValueError when no tag of the layout was detected.
+
+    Exercise calib.tag_extrinsics (notebook 01: the camera's pose from the AprilTag corners (PnP)).
     """
     K, dist = check_intrinsics(K, dist)
     layout = layout or lab_config().tags
@@ -52,7 +54,7 @@ def extrinsics_from_detections(detections: list[TagDetection], K, dist,
                          f"detected: check the board is in view and lit, and the tag family")
     world = np.concatenate([layout.corners_world(d.tag_id) for d in known])
     pixels = np.concatenate([d.corners for d in known])
-    # BEGIN SOLUTION
+    # BEGIN SOLUTION calib.tag_extrinsics
     if len(known) == 1:
         ok, rvec, tvec = cv2.solvePnP(world, pixels, K, dist, flags=cv2.SOLVEPNP_IPPE)
     else:

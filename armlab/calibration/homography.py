@@ -66,7 +66,10 @@ class BoardView:
 
 def tag_homography(detections: list[TagDetection], view: BoardView, layout: TagLayout | None = None) -> np.ndarray:
     """The lab report's method: the 3x3 homography (cv2.getPerspectiveTransform) taking the image centres of the four
-    board tags to their places in the top-down view. Ignores lens distortion; use with cv2.warpPerspective."""
+    board tags to their places in the top-down view. Ignores lens distortion; use with cv2.warpPerspective.
+
+    Exercise calib.tag_homography (notebook 01: the homography from the image to the board).
+    """
     layout = layout or lab_config().tags
     by_id = {d.tag_id: d for d in detections}
     missing = [i for i in sorted(layout.centres_mm) if i not in by_id]
@@ -75,6 +78,6 @@ def tag_homography(detections: list[TagDetection], view: BoardView, layout: TagL
     ids = sorted(layout.centres_mm)[:4]
     src = np.array([by_id[i].center for i in ids], np.float32)
     dst = view.from_world(np.array([layout.centres_mm[i] for i in ids])).astype(np.float32)
-    # BEGIN SOLUTION
+    # BEGIN SOLUTION calib.tag_homography
     return cv2.getPerspectiveTransform(src, dst)
     # END SOLUTION

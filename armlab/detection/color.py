@@ -88,8 +88,11 @@ class ColorModel:
         return np.sqrt((((X[:, None, :] - self.means[None]) / self.stds[None]) ** 2).sum(-1))
 
     def classify(self, rgb_means) -> tuple[list[str], np.ndarray]:
-        """Nearest class name per mean colour (N, 3), and the margin (N,): second-best minus best distance."""
-        # BEGIN SOLUTION
+        """Nearest class name per mean colour (N, 3), and the margin (N,): second-best minus best distance.
+
+        Exercise detect.classify (notebook 04: nearest colour class with per-class spreads).
+        """
+        # BEGIN SOLUTION detect.classify
         d = self.distances(rgb_means)
         order = np.argsort(d, axis=1)
         best = [self.names[i] for i in order[:, 0]]

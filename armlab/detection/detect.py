@@ -21,6 +21,7 @@ from armlab.detection.masks import arm_mask
 from armlab.detection.segment import Face, segment_faces
 from armlab.images import check_depth, check_rgb
 from armlab.lab import lab_config
+from armlab.transforms import wrap_quarter
 
 __all__ = ["Block", "detect_blocks", "detect_objects", "DetectionSettings", "stack_levels"]
 
@@ -91,11 +92,6 @@ class DetectionSettings:
         if not 0 < self.min_height < self.max_height:
             raise ValueError(f"DetectionSettings needs 0 < min_height < max_height, got {self.min_height}, "
                              f"{self.max_height}")
-
-
-def _wrap_yaw(angle: float) -> float:
-    """Wrap an angle to [-pi/4, pi/4): a square looks the same every quarter turn."""
-    return float((angle + np.pi / 4) % (np.pi / 2) - np.pi / 4)
 
 
 def stack_levels(top_z: float, edge_mm: float, edges=None, max_levels: int = 6) -> int:
@@ -579,7 +575,8 @@ def _describe(measured: list[_Measured], f: _Frame, settings: DetectionSettings,
             rectangularity = float(np.mean(off < 2.5))
         is_cube = m.cube_sized and rectangularity >= settings.min_rectangularity
         size = "large" if edge > settings.size_split else "small"
-        out.append(Block(color=name, size=size, position=centre, yaw=_wrap_yaw(theta), pixel=(float(u), float(v)),
+        out.append(Block(color=name, size=size, position=centre, yaw=float(wrap_quarter(theta)),
+                         pixel=(float(u), float(v)),
                          edge_mm=edge, shape="cube" if is_cube else "distractor",
                          levels=stack_levels(m.face.height_mm, block_edges[size], max_levels=settings.max_levels),
                          color_margin=float(margin), contour=m.contour, mean_rgb=m.mean_rgb, white_balance=gains))

@@ -8,13 +8,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from armlab.transforms import wrap_quarter
+
 __all__ = ["polygons_overlap", "point_in_convex", "convex_hull", "separation_along", "boxes_overlap",
            "box_corners", "wrap_quarter", "prism_features", "convex_penetration"]
-
-
-def wrap_quarter(angle) -> np.ndarray:
-    """An angle (rad) reduced modulo pi/2 into [-pi/4, pi/4): how far a square is turned from another."""
-    return np.mod(np.asarray(angle, dtype=float) + np.pi / 4, np.pi / 2) - np.pi / 4
 
 
 def _edge_normals(poly: np.ndarray) -> np.ndarray:

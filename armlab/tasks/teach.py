@@ -25,7 +25,7 @@ from armlab.files import read_json, write_json_atomic
 from armlab.robot import JOINT_NAMES, RobotModel, rx200
 
 __all__ = ["GRIPPER_STATES", "TeachProgram", "TeachFileError", "Recorder", "save_teach", "load_teach", "repeat",
-           "plot_teach", "swap_waypoints", "teach_by_hand"]
+           "plot_teach", "swap_waypoints"]
 
 GRIPPER_STATES = ("open", "closed")
 _FORMAT = "armlab-teach/1"
@@ -181,15 +181,3 @@ def swap_waypoints(hover_mm: float = 100.0, release_gap_mm: float = 6.0) -> tupl
         at(dst, hover_mm, "open")
     return np.array(poses), tuple(grip)
 
-
-def teach_by_hand(arm, poses, gripper, name: str = "") -> TeachProgram:
-    """Simulated teaching: torque off, pose the arm by hand (arm.move_by_hand) at each physical pose (N, 5) rad,
-    record the reading with its gripper state, torque back on."""
-    rec = Recorder(arm, name)
-    try:
-        for q, g in zip(np.asarray(poses, dtype=float), gripper):
-            arm.move_by_hand(q)
-            rec.record(g)
-    finally:
-        arm.set_torque(True)
-    return rec.finish()

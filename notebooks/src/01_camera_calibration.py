@@ -74,7 +74,7 @@ print(f"{len(views)} checkerboard views; frame rgb {frame.rgb.shape} {frame.rgb.
 # %%
 def project_pinhole(K, T_cam_world, points_world):
     """Pixels (N, 2) of world points (N, 3) mm through a distortion-free pinhole camera."""
-    # BEGIN SOLUTION
+    # BEGIN SOLUTION calib.project_pinhole
     p_cam = points_world @ T_cam_world[:3, :3].T + T_cam_world[:3, 3]
     uvw = p_cam @ K.T
     return uvw[:, :2] / uvw[:, 2:3]
@@ -91,6 +91,7 @@ print(project_pinhole(lab.factory_K, T_hand, tag_centres).round(1))
 # distortion is zero.
 
 # %%
+# CHECK calib.project_pinhole
 reference = Camera(lab.factory_K, np.zeros(5), T_hand).project(tag_centres)
 err = np.abs(project_pinhole(lab.factory_K, T_hand, tag_centres) - reference).max()
 assert err < 1e-9, f"project_pinhole is {err:.2g} px off Camera.project: check K @ (R p + t) and the division by Z"
@@ -139,6 +140,7 @@ print("distortion k1 k2 p1 p2 k3:", intrinsics.dist.round(4), " true:", np.round
 # the whole lens model (K and distortion) sends every ray within 1.5 px of where the true lens does.
 
 # %%
+# CHECK calib.subpixel_corners calib.zhang
 d = cal.compare_intrinsics(intrinsics.K, K_true)
 v, u = np.mgrid[0:720:20, 0:1280:20]
 grid_px = np.column_stack([u.ravel(), v.ravel()]).astype(float)
@@ -177,6 +179,7 @@ for name, (K, dist) in [("our photos", (intrinsics.K, intrinsics.dist)), ("its o
 # 5 mm away.
 
 # %%
+# CHECK calib.zhang
 own_mm, borrowed_mm = borrowed_vs_own["its own photos"]["position_mm"], borrowed_vs_own["our photos"]["position_mm"]
 assert own_mm < 1.5, f"with its own photos the camera is {own_mm:.1f} mm off (expected < 1.5 mm)"
 assert borrowed_mm > 5.0, f"another camera's K placed it only {borrowed_mm:.1f} mm off: the two cameras look alike"
@@ -234,6 +237,7 @@ print("AprilTag T_cam_world (checkerboard K):\n", T_tags.round(3) + 0.0)
 # with the factory intrinsics it is more than 10 mm off.
 
 # %%
+# CHECK calib.tag_extrinsics
 good = cal.compare_extrinsics(T_tags, truth.T_cam_world)
 bad = cal.compare_extrinsics(extrinsics["factory K"].T_cam_world, truth.T_cam_world)
 assert good["position_mm"] < 1.0 and good["angle_deg"] < 0.1, \
@@ -279,6 +283,7 @@ print(f"homography error: {err_h.mean():.2f} mm mean, {err_h.max():.2f} mm max (
 # homography, exact at the tags, is off by more than 2 mm somewhere near the board's border.
 
 # %%
+# CHECK calib.tag_homography
 again = cal.detect_tags(top_b)
 offset = max(np.abs(t.center - view.from_world([lab.tags.centres_mm[t.tag_id]])[0]).max() for t in again)
 far = np.linalg.norm(grid[:, :2] - [0, 150], axis=1) > 400
@@ -299,7 +304,7 @@ print(f"OK: BoardView tags within {offset:.2f} mm; homography off by up to {err_
 # %%
 def pixel_to_world_pinhole(K, T_cam_world, uv, depth_mm):
     """World point (3,) mm seen at pixel uv (2,) with depth Z depth_mm, distortion-free."""
-    # BEGIN SOLUTION
+    # BEGIN SOLUTION calib.pixel_to_world_pinhole
     x = (uv[0] - K[0, 2]) / K[0, 0]
     y = (uv[1] - K[1, 2]) / K[1, 1]
     p_cam = depth_mm * np.array([x, y, 1.0])
@@ -341,6 +346,7 @@ display(PixelReadout([u_slider, v_slider, text]))
 # back-projection matches `Camera.pixel_to_world` for a distortion-free camera.
 
 # %%
+# CHECK calib.pixel_to_world_pinhole
 round_trip = camera.pixel_to_world(camera.project(grid), camera.depth_of(grid))
 pinhole = Camera(intrinsics.K, np.zeros(5), T_tags)
 p = grid[100]
@@ -379,6 +385,7 @@ print(f"bias plane: a = {correction.a:.4f} mm/px, b = {correction.b:.4f} mm/px, 
 # (before: several mm), and the fitted plane matches the simulator's bias within 1 mm (simulation only).
 
 # %%
+# CHECK calib.depth_plane
 def quarter_medians(residual):
     h, w = residual.shape
     masked = np.where(on_board, residual, np.nan)
@@ -439,6 +446,7 @@ fig.tight_layout()
 # grows towards the borders (less than 0.2 mm per 100 mm).
 
 # %%
+# CHECK calib.zhang calib.tag_extrinsics calib.depth_plane
 assert after.mean_mm < 2.0 and after.max_mm < 5.0, \
     f"grid error {after.mean_mm:.2f} mm mean, {after.max_mm:.2f} mm max after calibration"
 assert abs(after.border_growth()) < 0.2, \

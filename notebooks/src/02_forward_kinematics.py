@@ -126,7 +126,7 @@ print("OK: the hand-built DH table equals the kit's data/rx200_dh.csv")
 # %%
 def dh_transform(theta, d, a, alpha):
     """4x4 DH link transform Rz(theta) Tz(d) Tx(a) Rx(alpha); lengths in mm, angles in rad."""
-    # BEGIN SOLUTION
+    # BEGIN SOLUTION fk.dh_transform
     ct, st, ca, sa = np.cos(theta), np.sin(theta), np.cos(alpha), np.sin(alpha)
     return np.array([[ct, -st * ca, st * sa, a * ct],
                      [st, ct * ca, -ct * sa, a * st],
@@ -137,7 +137,7 @@ def dh_transform(theta, d, a, alpha):
 
 def fk_from_table(q, table):
     """Tool pose (4, 4) in the world for joint angles q (5,) rad and a DH table (5, 4)."""
-    # BEGIN SOLUTION
+    # BEGIN SOLUTION fk.fk_from_table
     T = np.eye(4)
     for qi, (offset, d, a, alpha) in zip(q, table):
         T = T @ dh_transform(qi + offset, d, a, alpha)
@@ -148,6 +148,7 @@ def fk_from_table(q, table):
 print("tool point at home (mm):", fk_from_table(robot.home, table)[:3, 3].round(1))
 
 # %%
+# CHECK fk.dh_transform fk.fk_from_table
 Q = random_q(1000)
 ours = np.stack([fk_from_table(q, table) for q in Q])
 err = np.abs(ours[:, :3, 3] - kinematics.fk(Q)[:, :3, 3]).max()
@@ -191,6 +192,7 @@ fig.tight_layout()
 # manufacturer's lengths, and everything below the waist stays in the arm's plane.
 
 # %%
+# CHECK fk.dh_link_transform
 Q = random_q(1000)
 P = kinematics.joint_positions(Q)
 lengths = np.linalg.norm(np.diff(P, axis=1), axis=-1)
@@ -234,6 +236,7 @@ print("screw axes in the world frame (w, v in mm):")
 print(S_world + 0.0)  # + 0.0 turns -0 into 0
 
 # %%
+# CHECK fk.dh_link_transform
 Q = random_q(1000)
 T_dh, T_pox = kinematics.fk(Q), fk_pox(Q)
 err_p = np.abs(T_dh[:, :3, 3] - T_pox[:, :3, 3]).max()

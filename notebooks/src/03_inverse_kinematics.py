@@ -75,7 +75,7 @@ print(f"h0 = {h0:.2f} mm, L1 = {L1:.3f} mm, L2 = {L2:.1f} mm, Lt = {Lt:.3f} mm, 
 # %%
 def planar_ik(r, z, psi, elbow_up=True):
     """(q2, q3, q4) rad in the arm's plane; NaN where the wrist centre is out of reach. r, z mm; psi rad."""
-    # BEGIN SOLUTION
+    # BEGIN SOLUTION ik.planar_ik
     rw = r - Lt * np.cos(psi)
     zw = z - h0 + Lt * np.sin(psi)
     cos_delta = (rw**2 + zw**2 - L1**2 - L2**2) / (2 * L1 * L2)
@@ -116,6 +116,7 @@ print(np.round(four_branches([150.0, 200.0, 60.0], 0.8), 3) + 0.0)  # + 0.0 turn
 # targets (made by FK of random joint angles, so they are reachable).
 
 # %%
+# CHECK ik.planar_ik
 Q = rng.uniform(robot.lower, robot.upper, (2000, 5))
 T = kinematics.fk(Q)
 P, approach = T[:, :3, 3], T[:, :3, 0]
@@ -163,6 +164,7 @@ axes[0].set_ylabel("z (mm)")
 fig.tight_layout()
 
 # %%
+# CHECK ik.candidates
 solutions = kinematics.ik(target, pitch)
 order = ["facing, elbow up", "flipped, elbow up", "facing, elbow down"]   # elbow up first, then least motion
 assert [name for name, q in zip(BRANCHES, cand) if not robot.limit_violations(q)] == sorted(order, key=BRANCHES.index)
@@ -218,6 +220,7 @@ fig.tight_layout()
 # `kinematics.steepest_pitch(p)` finds the boundary for one target to $10^{-7}$ rad by bisection.
 
 # %%
+# CHECK ik.candidates
 r_cells = np.hypot(X, Y)
 behind = (X == 0) & (Y < 0)
 assert np.all(top_down[(r_cells < r_max - 15) & ~behind]) and not np.any(top_down[r_cells > r_max + 1e-9])
@@ -285,6 +288,7 @@ print(f"cells the report misses: {(~right).sum()}, all behind the base (y < 0): 
       f"worst tool error there {err[~right & finite].max():.0f} mm")
 
 # %%
+# CHECK ik.candidates
 assert ours.ok.all(), f"kinematics.ik fails at {(~ours.ok).sum()} reachable cells"
 assert np.abs(kinematics.fk(ours.q)[:, :3, 3] - pts).max() < 1e-6, "an IK solution misses its cell"
 assert np.all(right[pts[:, 1] > 0]) and not np.any(right[pts[:, 1] < 0]), "the report's equations fail in front"

@@ -93,6 +93,7 @@ for ax, labels, title, cols in [(axes[0], hsv_labels, "lab HSV table", list(COLO
 fig.tight_layout()
 
 # %%
+# CHECK detect.classify
 hsv_acc = np.mean(np.array(hsv_labels) == np.array(truth))
 model_acc = np.mean(np.array(model_labels) == np.array(truth))
 assert model_acc == 1.0, f"the colour model names {model_acc:.0%} of the faces right (expected all)"
@@ -124,7 +125,7 @@ _ = ax.set_title("height map (arm in yellow: it is high)")
 # %%
 def centroid(mask: np.ndarray) -> tuple[float, float]:
     """Pixel centroid (u, v) of a binary mask (H, W) from its image moments."""
-    # BEGIN SOLUTION
+    # BEGIN SOLUTION detect.centroid
     m = cv2.moments(mask.astype(np.uint8), binaryImage=True)
     return m["m10"] / m["m00"], m["m01"] / m["m00"]
     # END SOLUTION
@@ -139,6 +140,7 @@ print(f"{block.color} {block.size}: moment centroid ({u:.1f}, {v:.1f}) px, "
       f"projected face centre ({block.pixel[0]:.1f}, {block.pixel[1]:.1f}) px")
 
 # %%
+# CHECK detect.centroid
 off = np.hypot(u - block.pixel[0], v - block.pixel[1])
 assert off < 2.0, f"your centroid is {off:.1f} px from the face centre: sum u and v over the mask, divide by its area"
 print("OK: the moment centroid lies within 2 px of the projected top-face centre")
@@ -159,7 +161,7 @@ print("OK: the moment centroid lies within 2 px of the projected top-face centre
 # %%
 def wrap_yaw(angle: float) -> float:
     """angle (rad) wrapped to [-pi/4, pi/4)."""
-    # BEGIN SOLUTION
+    # BEGIN SOLUTION detect.wrap_yaw
     return float((angle + np.pi / 4) % (np.pi / 2) - np.pi / 4)
     # END SOLUTION
 
@@ -190,6 +192,7 @@ for b in found:
 # Every frame above is scored against the simulator's ground truth (faces at least half visible must be found).
 
 # %%
+# CHECK detect.wrap_yaw detect.classify
 score = Score()
 for c in cases:
     score.add(score_frame(detect_objects(c.rgb, corrected_depth(c), c.camera, c.arm_q), c.truth))

@@ -40,7 +40,7 @@ for o in station.world.blocks:
 # %%
 poses, gripper = teach.swap_waypoints()
 recorder = teach.Recorder(station.arm, name="swap")
-# BEGIN SOLUTION
+# BEGIN SOLUTION teach.record
 for q, g in zip(poses, gripper):
     station.arm.move_by_hand(q)
     recorder.record(g)
@@ -50,6 +50,7 @@ print(f"{len(program)} waypoints; gripper states: {' '.join(g[0] for g in progra
 print("first waypoint (rad):", program.q[0].round(3))
 
 # %%
+# CHECK teach.record
 tool = kinematics.fk(program.q)[:, :3, 3]
 assert len(program) == 18, f"{len(program)} waypoints recorded, expected one per pose (18)"
 assert station.arm.torque_enabled, "the torque is still off after finish()"
@@ -105,6 +106,7 @@ print(f"red block now at {red.position} mm, blue block now at {blue.position} mm
 # ## 4 · Did they swap?
 
 # %%
+# CHECK teach.record
 peak = max(float(np.max(s.trajectory.peak_speed() / station.arm.robot.velocity)) for s in plan.steps
            if hasattr(s, "trajectory"))
 assert result.grasps == (True, True, True), f"grasps {result.grasps}: a block was not held"

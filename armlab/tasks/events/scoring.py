@@ -284,9 +284,7 @@ def score_line_up(objects: Iterable[ObjectState], level: int, held: Iterable[int
 def sky_points(n_blocks: int) -> int:
     """Points for a tower of n large blocks: 30 each for the first 8, 50 for each one above."""
     n = int(n_blocks)
-    # BEGIN SOLUTION
     return SKY_FIRST_POINTS * min(n, SKY_FIRST) + SKY_LATER_POINTS * max(n - SKY_FIRST, 0)
-    # END SOLUTION
 
 
 def score_sky(objects: Iterable[ObjectState], level: int = 1, held: Iterable[int] = (), clicked: bool = False,
