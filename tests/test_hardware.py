@@ -8,14 +8,18 @@ pipeline delivers 1024x768 depth that only rs.align(rs.stream.color) brings to t
 
 from __future__ import annotations
 
+import functools
 import importlib.machinery
 import importlib.util
 import inspect
 import json
 import os
+import select
 import signal
 import subprocess
 import sys
+import threading
+import time
 import types
 import warnings
 from pathlib import Path
@@ -45,8 +49,9 @@ FINGER_LOWER_M, FINGER_UPPER_M = 0.015, 0.037
 
 
 # ---------------------------------------------------------------------------------------------------------------
-# The real Interbotix ROS 2 API: the signatures the fakes must have (copied from Interbotix/interbotix_ros_toolboxes,
-# interbotix_xs_modules/xs_robot/{arm,gripper,core}.py and interbotix_common_modules/common_robot/robot.py)
+# The real Interbotix ROS 2 API: the signatures the fakes must have (Interbotix/interbotix_ros_toolboxes,
+# interbotix_xs_modules/xs_robot/{arm,gripper,core}.py and interbotix_common_modules/common_robot/robot.py at the
+# commit of tests/vendor/facts.py; tests/test_hardware_vendor.py checks them against those files where cached)
 # ---------------------------------------------------------------------------------------------------------------
 
 class UpstreamArm:
@@ -80,8 +85,9 @@ class UpstreamCore:
 
 def upstream_manipulator(robot_model, group_name="arm", gripper_name="gripper", robot_name=None, moving_time=2.0,
                          accel_time=0.3, gripper_pressure=0.5, gripper_pressure_lower_limit=150,
-                         gripper_pressure_upper_limit=350, logging_level=None, node_name="robot_manipulation",
-                         args=None): ...
+                         gripper_pressure_upper_limit=350, topic_joint_states="joint_states",
+                         logging_level=fake_ros.LoggingSeverity.INFO, node_name="robot_manipulation", node=None,
+                         iterative_update_fk=True, args=None): ...
 def upstream_robot_startup(node=None, node_name="interbotix_robot_manipulation", namespace=None): ...
 def upstream_robot_shutdown(node=None): ...
 
@@ -231,16 +237,28 @@ DEPTH_SCALE_M = 0.00025
 COEFFS = [0.11, -0.23, 0.0012, -0.0008, 0.05]
 
 
+def _read_only(a: np.ndarray) -> np.ndarray:
+    a.setflags(write=False)
+    return a
+
+
+@functools.cache
 def _colour_bgr() -> np.ndarray:
     v, u = np.mgrid[0:720, 0:1280]
-    return np.stack([u % 256, v % 256, (u + v) % 7 * 30], axis=-1).astype(np.uint8)   # B, G, R planes differ
+    return _read_only(np.stack([u % 256, v % 256, (u + v) % 7 * 30], axis=-1).astype(np.uint8))  # B, G, R differ
 
 
+@functools.cache
 def _aligned_depth() -> np.ndarray:
     raw = np.full((720, 1280), 4000, np.uint16)        # 4000 units * 0.25 mm = 1000 mm
     raw[100:200, 300:400] = 0                           # no return
     raw[0, 0], raw[0, 1], raw[0, 2] = 1, 3962, 65535
-    return raw
+    return _read_only(raw)
+
+
+@functools.cache
+def _unaligned_depth() -> np.ndarray:
+    return _read_only(np.full((768, 1024), 4000, np.uint16))
 
 
 class FakeFrame:
@@ -297,8 +315,8 @@ def make_fake_rs(log: list, model: str = "brown_conrady") -> types.ModuleType:
         def wait_for_frames(self, timeout_ms=5000):
             counter["frames"] += 1
             log.append(("wait_for_frames", timeout_ms))
-            unaligned = np.full((768, 1024), 4000, np.uint16)
-            return FakeFrameset(FakeFrame(_colour_bgr(), 1.5e6 + 33.3 * counter["frames"]), FakeFrame(unaligned, 0))
+            return FakeFrameset(FakeFrame(_colour_bgr(), 1.5e6 + 33.3 * counter["frames"]),
+                                FakeFrame(_unaligned_depth(), 0))
 
         def stop(self):
             log.append(("pipeline.stop",))
@@ -351,29 +369,9 @@ def install_fakes(setitem, log: list) -> SimpleNamespace:
     return SimpleNamespace(log=log, world=world)
 
 
-@pytest.fixture
-def vendors(monkeypatch):
-    """Fake vendor modules in sys.modules; returns (log, world). A station a test leaves open does not leave its
-    SIGTERM handler behind."""
-    fakes = install_fakes(lambda name, module: monkeypatch.setitem(sys.modules, name, module), [])
-    monkeypatch.setattr(armlab.hardware, "atexit", SimpleNamespace(register=lambda f: None,
-                                                                   unregister=lambda f: None))
-    monkeypatch.setattr(ros_session, "atexit", SimpleNamespace(register=lambda f: None, unregister=lambda f: None))
-    monkeypatch.setattr(ros_session, "_session", None)
-    monkeypatch.setenv("ROS_DOMAIN_ID", "3")
-    handlers = signal.getsignal(signal.SIGTERM), signal.getsignal(signal.SIGINT)
-    yield fakes
-    signal.signal(signal.SIGTERM, handlers[0])
-    signal.signal(signal.SIGINT, handlers[1])
-
-
-def calls(log, *names):
-    """The logged calls whose name is in names (all motion-related ones by default)."""
-    names = names or MOTION_CALLS
-    return [c for c in log if c[0] in names]
-
-
 class FakeClock:
+    """armlab's waiting for moves, in simulated seconds (RealArm's clock and sleep)."""
+
     def __init__(self):
         self.t = 100.0
         self.slept = []
@@ -384,6 +382,40 @@ class FakeClock:
     def sleep(self, dt):
         self.slept.append(dt)
         self.t += dt
+
+
+def simulate_armlab_time(setattr_) -> FakeClock:
+    """Make every RealArm that connect_arm builds wait on a FakeClock (through setattr_(obj, name, value))."""
+    clock = FakeClock()
+    setattr_(interbotix, "RealArm", functools.partial(RealArm, clock=clock, sleep=clock.sleep))
+    return clock
+
+
+@pytest.fixture
+def vendors(monkeypatch):
+    """Fake vendor modules in sys.modules; returns (log, world, clock): armlab's waits for moves are simulated on
+    clock. A station a test leaves open does not leave its SIGTERM handler behind, nor a thread."""
+    fakes = install_fakes(lambda name, module: monkeypatch.setitem(sys.modules, name, module), [])
+    monkeypatch.setattr(armlab.hardware, "atexit", SimpleNamespace(register=lambda f: None,
+                                                                   unregister=lambda f: None))
+    monkeypatch.setattr(ros_session, "atexit", SimpleNamespace(register=lambda f: None, unregister=lambda f: None))
+    monkeypatch.setattr(ros_session, "_session", None)
+    monkeypatch.setenv("ROS_DOMAIN_ID", "3")
+    fakes.clock = simulate_armlab_time(monkeypatch.setattr)
+    handlers = signal.getsignal(signal.SIGTERM), signal.getsignal(signal.SIGINT)
+    threads = set(threading.enumerate())
+    yield fakes
+    signal.signal(signal.SIGTERM, handlers[0])
+    signal.signal(signal.SIGINT, handlers[1])
+    for t in set(threading.enumerate()) - threads:
+        t.join(timeout=5)
+        assert not t.is_alive(), f"the thread {t.name} outlived its test"
+
+
+def calls(log, *names):
+    """The logged calls whose name is in names (all motion-related ones by default)."""
+    names = names or MOTION_CALLS
+    return [c for c in log if c[0] in names]
 
 
 @pytest.fixture
@@ -403,13 +435,42 @@ Q_READY = np.array([0.0, -0.5, 0.3, 1.2, 0.0])   # tool well above the board, re
 # Lazy imports and clear errors
 # ---------------------------------------------------------------------------------------------------------------
 
+# the vendor's packages and the ROS ones they need: none may be imported (nor tried) before a real station connects
+IMPORT_GUARDED = ("interbotix_xs_modules", "interbotix_common_modules", "pyrealsense2", "rclpy", "interbotix_xs_msgs",
+                  "sensor_msgs", "trajectory_msgs", "modern_robotics")
+IMPORT_CHECK = r'''
+import sys
+GUARDED = set(sys.argv[1].split(","))
+tried = []
+
+
+class Guard:
+    """Notes every attempt to import a guarded package, whether it is installed or not."""
+
+    def find_spec(self, name, path=None, target=None):
+        if name.split(".")[0] in GUARDED:
+            tried.append(name)
+        return None
+
+
+sys.meta_path.insert(0, Guard())
+import armlab, armlab.station, armlab.hardware, armlab.hardware.interbotix, armlab.hardware.realsense
+import armlab.hardware.safety, armlab.hardware.ros_session, armlab.hardware.sigint, armlab.hardware.sigterm
+import armlab.hardware.record
+from armlab import make_station
+print(sorted(set(tried) | {m for m in sys.modules if m.split(".")[0] in GUARDED}))
+import importlib.util
+for name in ("rclpy", "pyrealsense2"):          # the guard does see a lookup, of an installed package or not
+    importlib.util.find_spec(name)
+print(sorted(set(tried)))
+'''
+
+
 def test_importing_armlab_imports_no_vendor_module():
-    roots = sorted({m.split(".")[0] for m in VENDOR_MODULES})
-    code = ("import sys, armlab, armlab.station, armlab.hardware, armlab.hardware.interbotix, "
-            "armlab.hardware.realsense, armlab.hardware.safety\n"
-            f"print(sorted(m for m in sys.modules if m.split('.')[0] in {roots}))")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
-    assert out.strip() == "[]"
+    assert {m.split(".")[0] for m in VENDOR_MODULES} <= set(IMPORT_GUARDED)
+    out = subprocess.run([sys.executable, "-c", IMPORT_CHECK, ",".join(IMPORT_GUARDED)], capture_output=True,
+                         text=True, check=True, timeout=60).stdout
+    assert out.splitlines() == ["[]", "['pyrealsense2', 'rclpy']"]
 
 
 def test_no_module_outside_armlab_hardware_imports_a_vendor_package():
@@ -486,6 +547,52 @@ def test_connect_passes_the_manufacturer_arguments_and_starts_up(vendors):
         assert calls(vendors.log, "robot_startup") == [("robot_startup",)]
         assert calls(vendors.log) == []     # connecting moves nothing
         assert isinstance(st.arm, Arm) and isinstance(st.camera, RGBDCamera)
+
+
+def _replace_constructor(monkeypatch, constructor) -> None:
+    monkeypatch.setattr(sys.modules["interbotix_xs_modules.xs_robot.arm"], "InterbotixManipulatorXS", constructor)
+
+
+def test_the_constructor_runs_on_a_worker_thread_and_its_error_comes_through(vendors, monkeypatch):
+    seen = []
+
+    def fails(**kwargs):
+        seen.append(threading.current_thread().name)
+        raise KeyError("no such group")
+
+    _replace_constructor(monkeypatch, fails)
+    with pytest.raises(KeyError, match="no such group"):
+        make_station("real", camera=False)
+    assert seen == ["armlab-interbotix-connect"]
+
+
+def test_a_constructor_that_calls_sys_exit_is_an_error_not_an_exit(vendors, monkeypatch):
+    def exits(**kwargs):
+        sys.exit(1)                 # the vendor's arm interface on a joint-count mismatch (fact joint_count_exit)
+
+    _replace_constructor(monkeypatch, exits)
+    with pytest.raises(RuntimeError, match=r"gave up connecting to '/rx200' \(it called sys.exit\(1\)"):
+        make_station("real", camera=False)
+
+
+def test_ctrl_c_while_the_toolbox_connects_ends_its_wait(vendors, monkeypatch):
+    rclpy = sys.modules["rclpy"]
+    ended = threading.Event()
+
+    def waits_for_the_driver(**kwargs):
+        os.kill(os.getpid(), signal.SIGINT)                   # Ctrl+C while the constructor waits
+        deadline = time.monotonic() + 5.0
+        while rclpy.ok() and time.monotonic() < deadline:     # its waits last only while ROS is up
+            time.sleep(0.001)
+        ended.set()
+        raise AttributeError("'NoneType' object has no attribute 'name'")    # what it does once ROS is down
+
+    _replace_constructor(monkeypatch, waits_for_the_driver)
+    with pytest.raises(KeyboardInterrupt):
+        make_station("real", camera=False)
+    assert ended.is_set() and not rclpy.ok()                 # ROS was shut down to end the wait, which ended
+    with pytest.raises(RuntimeError, match="restart the Python process"):
+        make_station("real", camera=False)
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -799,6 +906,7 @@ class FileLog(list):
 
 
 th.install_fakes(sys.modules.__setitem__, FileLog(sys.argv[1]))
+th.simulate_armlab_time(setattr)
 from armlab import make_station
 station = make_station("real", warmup_frames=0)
 station.arm.move_to(th.Q_READY)
@@ -813,7 +921,8 @@ def test_sigterm_puts_the_arm_to_sleep_before_shutdown_then_ends_the_process(tmp
     proc = subprocess.Popen([sys.executable, "-c", SIGTERM_CHILD, str(log_file), str(Path(__file__).parent)],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
-        ready = proc.stdout.readline()
+        readable, _, _ = select.select([proc.stdout], [], [], 60)           # never wait for ever
+        ready = proc.stdout.readline() if readable else "(nothing within 60 s)"
         assert ready == "ready\n", proc.stderr.read() if proc.poll() is not None else ready
         proc.send_signal(signal.SIGTERM)                  # `kill <pid>`
         proc.wait(timeout=60)

@@ -44,10 +44,12 @@ def make_real_station(arm: bool = True, camera: bool = True, robot_model: str = 
         warmup_frames: frames dropped at start while auto-exposure settles (default 30; none in playback).
         playback: a RealSense recording (.bag, from `python -m armlab record`) to replay instead of the camera;
             needs arm=False.
-        driver_timeout_s: how long to wait for the xs_sdk driver (default ros_session.DRIVER_TIMEOUT_S).
+        driver_timeout_s: how long to wait for the xs_sdk driver to answer (default ros_session.DRIVER_TIMEOUT_S),
+            and, at least ros_session.MIN_CONNECT_S, for the Interbotix API to connect to it.
 
     Raises HardwareUnavailable (an ImportError) naming what to install when a vendor package is missing, before
-    anything is connected; armlab.hardware.ros_session.DriverNotFound when the arm's driver does not answer.
+    anything is connected; armlab.hardware.ros_session.DriverNotFound when the arm's driver does not answer (or
+    stops answering while the Interbotix API connects: ROS is then shut down, restart the Python process).
     """
     from armlab.hardware import interbotix, realsense
     from armlab.hardware.ros_session import shutdown_session

@@ -37,7 +37,8 @@ close_gripper() raises RuntimeError saying so rather than report a block that is
 
 The vendor calls (Interbotix/interbotix_ros_toolboxes, branch humble: xs_robot/arm.py, core.py, gripper.py,
 interbotix_common_modules/common_robot/robot.py; tests/test_hardware_vendor.py runs this module through those files
-at a pinned commit, tests/vendor/facts.py lists the vendor facts relied on):
+at a pinned commit and through a behaviour fake of them that is checked against them, tests/vendor/facts.py lists
+the vendor facts relied on):
     InterbotixManipulatorXS(robot_model, group_name, gripper_name, robot_name, moving_time, accel_time,
                             gripper_pressure); robot_startup(); robot_shutdown()
     bot.arm.set_trajectory_time(moving_time, accel_time); bot.arm.set_joint_positions(joint_positions, moving_time,
@@ -404,7 +405,8 @@ def connect_arm(robot_name: str | None = None, gripper_pressure: float = 0.5,
     """The RX200 on the process's Interbotix session (started on first use: armlab.hardware.ros_session); return
     (RealArm, closer). The closer = park (ROS stays up for the next station; it shuts down at exit).
 
-    gripper_pressure: 0..1 (sent as a float). driver_timeout_s: how long to wait for the xs_sdk driver.
+    gripper_pressure: 0..1 (sent as a float). driver_timeout_s: how long to wait for the xs_sdk driver (see
+    armlab.hardware.ros_session.construct_bot for the constructor's own bound).
     arm_options go to RealArm (board_margin_mm, grasp_delay_s, held_threshold_mm).
     """
     if not 0.0 <= gripper_pressure <= 1.0:

@@ -9,27 +9,37 @@ exit (atexit) or when the process is asked to stop (SIGTERM), always after the a
 Why no rclpy signal handlers: rclpy's default SIGINT handler shuts every ROS context down, so after a Ctrl+C (or a
 Jupyter interrupt) the sleep move could not be sent. armlab initialises rclpy with SignalHandlerOptions.NO (before the
 Interbotix API would initialise it with the defaults) and installs its own SIGINT handler while a station is open
-(armlab.hardware.signals).
+(armlab.hardware.sigint).
 
 Why a probe: InterbotixManipulatorXS(...) waits forever for the driver's services and joint states. The probe waits
 at most `timeout_s` for them on a node of its own and names the missing driver; it also refuses a second driver
 publishing the same joint states (two stations sharing one ROS_DOMAIN_ID).
+
+Why the constructor runs on a worker thread: a driver that stops between the probe and the constructor (or answers
+but publishes no joint states) would still block the constructor forever. armlab waits for it at most
+max(timeout_s, MIN_CONNECT_S); past that, or on Ctrl+C meanwhile, it shuts ROS down, which ends the constructor's
+waits (rclpy's waits and the constructor's loops run only while ROS is up) and so the worker thread, and raises.
+The process cannot start ROS again, which it could not anyway: the constructor had already created the vendor's
+process-global node, which refuses a second creation.
 """
 
 from __future__ import annotations
 
 import atexit
 import os
+import threading
 import time
 import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-__all__ = ["DRIVER_TIMEOUT_S", "DriverNotFound", "RosApi", "start_rclpy", "wait_for_driver", "get_bot",
-           "shutdown_session"]
+__all__ = ["DRIVER_TIMEOUT_S", "MIN_CONNECT_S", "DriverNotFound", "RosApi", "start_rclpy", "wait_for_driver",
+           "construct_bot", "get_bot", "shutdown_session"]
 
 DRIVER_TIMEOUT_S = 10.0
+MIN_CONNECT_S = 5.0       # the constructor's own work: two service calls, a 0.5 s sleep, the first joint state
+ABANDON_JOIN_S = 2.0      # how long an abandoned constructor gets to end once ROS is shut down (rclpy polls at 4 Hz)
 LAUNCH = "ros2 launch interbotix_xsarm_control xsarm_control.launch.py robot_model:=rx200"
 
 
@@ -105,6 +115,63 @@ def wait_for_driver(api: RosApi, namespace: str, timeout_s: float = DRIVER_TIMEO
         node.destroy_node()
 
 
+def _abandon(api: RosApi, worker: threading.Thread) -> None:
+    """End a constructor that still waits: shut ROS down (its waits run only while ROS is up), let the worker end."""
+    try:
+        if api.rclpy.ok():
+            api.rclpy.shutdown()
+    except Exception:              # ROS went down meanwhile: the worker ends all the same
+        pass
+    worker.join(ABANDON_JOIN_S)
+
+
+def construct_bot(api: RosApi, namespace: str, robot_name: str | None, gripper_pressure: float,
+                  timeout_s: float = DRIVER_TIMEOUT_S) -> Any:
+    """InterbotixManipulatorXS(...) for rx200, built on a worker thread and waited for at most
+    max(timeout_s, MIN_CONNECT_S) (see the module docstring).
+
+    Raises DriverNotFound when it did not finish in time (ROS is then shut down in this process), the constructor's
+    own exception when it failed, and RuntimeError when it called sys.exit() (the vendor does on a joint-count
+    mismatch) instead of ending the process. On an interrupt while waiting, ROS is shut down and it propagates.
+    """
+    outcome: dict[str, Any] = {}
+    done = threading.Event()
+
+    def construct() -> None:
+        try:
+            outcome["bot"] = api.manipulator(robot_model="rx200", group_name="arm", gripper_name="gripper",
+                                             robot_name=robot_name, moving_time=2.0, accel_time=0.3,
+                                             gripper_pressure=float(gripper_pressure))
+        except BaseException as e:         # handed to the caller, SystemExit included
+            outcome["error"] = e
+        finally:
+            done.set()
+
+    limit = max(float(timeout_s), MIN_CONNECT_S)
+    worker = threading.Thread(target=construct, name="armlab-interbotix-connect", daemon=True)
+    try:
+        worker.start()
+        finished = done.wait(limit)
+    except BaseException:                  # Ctrl+C while connecting: do not leave the constructor waiting
+        _abandon(api, worker)
+        raise
+    if not finished:
+        _abandon(api, worker)
+        raise DriverNotFound(
+            f"the xs_sdk driver under '{namespace}' answered, but the Interbotix API did not finish connecting to it "
+            f"within {limit:g} s (the driver stopped, or publishes no joint states). ROS was shut down in this "
+            f"Python process to end the wait: restart `{LAUNCH}`, then restart the Python process (Jupyter: restart "
+            "the kernel)")
+    error = outcome.get("error")
+    if isinstance(error, SystemExit):
+        raise RuntimeError(f"the Interbotix API gave up connecting to '{namespace}' (it called sys.exit({error.code})"
+                           "; its log above says why: is the driver running robot_model:=rx200?). Restart the "
+                           "Python process (Jupyter: restart the kernel)") from error
+    if error is not None:
+        raise error
+    return outcome["bot"]
+
+
 def get_bot(api: RosApi, robot_name: str | None, gripper_pressure: float,
             timeout_s: float = DRIVER_TIMEOUT_S) -> Any:
     """The process's started InterbotixManipulatorXS for rx200 under robot_name (default 'rx200'), created on the
@@ -130,8 +197,7 @@ def get_bot(api: RosApi, robot_name: str | None, gripper_pressure: float,
                       RuntimeWarning, stacklevel=3)
     start_rclpy(api)
     wait_for_driver(api, namespace, timeout_s)
-    bot = api.manipulator(robot_model="rx200", group_name="arm", gripper_name="gripper", robot_name=robot_name,
-                          moving_time=2.0, accel_time=0.3, gripper_pressure=float(gripper_pressure))
+    bot = construct_bot(api, namespace, robot_name, gripper_pressure, timeout_s)
     api.robot_startup()
     _session = _Session(api, namespace, bot)
     atexit.register(shutdown_session)

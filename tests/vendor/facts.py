@@ -2,8 +2,10 @@
 
 tests/test_hardware_vendor.py loads the Interbotix Python files below, unmodified, at TOOLBOXES_COMMIT (through
 tests/vendor/sources.py, never from this repository) and runs armlab.hardware through them over the fake ROS layer of
-tests/vendor/ros.py. The fake ROS layer models the rclpy, rosidl and xs_sdk facts listed here; test_vendor_facts
-checks each `evidence` pattern against the pinned file whenever that file is available.
+tests/vendor/ros.py; it runs the same tests through the behaviour fake of tests/vendor/behaviour/, which models the
+toolbox facts listed here (and is compared with the vendor files call by call where they are cached). The fake ROS
+layer models the rclpy, rosidl and xs_sdk facts. test_vendor_facts_hold_in_the_pinned_files checks each `evidence`
+pattern against the pinned file whenever that file is available.
 """
 
 from __future__ import annotations
@@ -95,6 +97,30 @@ FACTS: tuple[Fact, ...] = (
          "sleeps moving_time only when blocking",
          r"self\.set_trajectory_time\(moving_time, accel_time\)\s*self\.joint_commands = list\(positions\)"
          r"[\s\S]*self\.core\.pub_group\.publish\(joint_commands\)\s*if blocking:"),
+    Fact("limit_check_uses_cached_time", TOOLBOXES, TOOLBOXES_COMMIT, f"{_XS}/arm.py",
+         "set_joint_positions checks |goal - last command| / the cached self.moving_time against the velocity limits "
+         "(goals truncated to 1 mrad) before _publish_commands sets the new trajectory time, and returns False "
+         "without sending anything when the check fails",
+         r"speed_list = \[\s*abs\(goal - current\) / float\(self\.moving_time\)[\s\S]*"
+         r"if self\._check_joint_limits\(joint_positions\):\s*self\._publish_commands\([\s\S]*return False"),
+    Fact("startup_once", TOOLBOXES, TOOLBOXES_COMMIT, f"{_CM}/common_robot/robot.py",
+         "robot_startup() raises InterbotixException when interbotix_is_up(), which stays True after "
+         "robot_shutdown(); it spins the node on a daemon thread 'while rclpy.ok()'",
+         r"if interbotix_is_up\(\):\s*raise InterbotixException\('Startup has already been requested\.'\)"
+         r"[\s\S]*while rclpy\.ok\(\):\s*__interbotix_executor\.add_node"),
+    Fact("gripper_stops_at_limit", TOOLBOXES, TOOLBOXES_COMMIT, f"{_XS}/gripper.py",
+         "grasp() publishes -effort and release() +effort only when the left finger is short of that limit, then "
+         "sleep delay s; a 0.02 s timer publishes cmd 0.0 once the moving finger reaches it",
+         r"timer_period_sec=0\.02, callback=self\.gripper_state[\s\S]*self\.gripper_command\.cmd = float\(0\.0\)"
+         r"[\s\S]*self\.gripper_controller\(-self\.gripper_value, delay\)"),
+    Fact("wait_returns_on_shutdown", RCLPY, RCLPY_COMMIT, "rclpy/rclpy/client.py",
+         "Client.wait_for_service (timeout None: forever) polls every 0.25 s only while the context is ok: shutting "
+         "ROS down ends the vendor constructor's waits (armlab.hardware.ros_session.construct_bot relies on it)",
+         r"while self\.context\.ok\(\) and not self\.service_is_ready\(\) and timeout_sec > 0\.0:"),
+    Fact("joint_count_exit", TOOLBOXES, TOOLBOXES_COMMIT, f"{_XS}/arm.py",
+         "the arm interface calls sys.exit(1) when the driver's group has another number of joints than the model "
+         "(armlab.hardware.ros_session.construct_bot turns that into a RuntimeError)",
+         r"if self\.group_info\.num_joints != self\.robot_des\.Slist\.shape\[1\]:[\s\S]*?sys\.exit\(1\)"),
     Fact("mode_only_warned", TOOLBOXES, TOOLBOXES_COMMIT, f"{_XS}/arm.py",
          "a group whose profile_type is not 'time' or mode not 'position' only gets a log warning",
          r"if self\.group_info\.profile_type != 'time':\s*self\.core\.get_node\(\)\.get_logger\(\)\.warn"),

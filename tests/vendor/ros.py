@@ -8,7 +8,11 @@ What is modelled (the rest is the least that lets the vendor code run):
   initialised twice (context_init_once); publishing or calling a service after shutdown raises RCLError, and so does
   a second rclpy.shutdown() ("rcl_shutdown already called");
 - a wait for a service that is not there: a timed wait returns False, an untimed one, or more than HANG_WAITS timed
-  ones in a row, raises Hang (the vendor's constructor would block forever: constructor_blocks);
+  ones in a row, raises Hang (the vendor's constructor would block forever: constructor_blocks); with
+  Ros.blocking set, waits really block as rclpy's do (timed ones for their timeout, untimed ones until ROS shuts
+  down), for at most BLOCK_LIMIT_S of real time in all, then raise Hang; once ROS is shut down every wait returns at
+  once (rclpy's waits loop only while the context is ok: wait_returns_on_shutdown); spin_once without a driver
+  raises Hang after HANG_SPINS calls in a row (the constructor's joint-state loop would spin forever);
 - the xs_sdk: per-servo Profile_Velocity / Profile_Acceleration registers that a reboot resets to 0
   (reboot_no_restore), every executed group goal recorded with the profile registers it ran with, joint states that
   follow goals while torque is on, a gripper that moves to its limits or stops on an object.
@@ -20,6 +24,7 @@ from __future__ import annotations
 import enum
 import signal
 import threading
+import time
 import types
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -32,6 +37,8 @@ UPPER = (3.141583, 1.972222, 1.623156, 2.146755, 3.141583)
 VELOCITY = (3.141592, 1.0, 3.141592, 3.141592, 3.141592)
 FINGER_LOWER_M, FINGER_UPPER_M = 0.015, 0.037
 HANG_WAITS = 20
+HANG_SPINS = 1000
+BLOCK_LIMIT_S = 5.0
 
 
 class Hang(AssertionError):
@@ -232,10 +239,15 @@ class Ros:
         self.initialized = False
         self.is_ok = False
         self.stopped = threading.Event()
+        self.blocking = False          # waits for a missing service block (real time) as rclpy's do
+        self.waiting = threading.Event()   # set when such a wait starts blocking
+        self.blocked_s = 0.0
+        self.idle_spins = 0
         self.sim_ns = 0
         self.timers: list[Callable[[], None]] = []
         self.subscriptions: list[tuple[str, Callable]] = []
         self.previous_sigint = None
+        self.sigint_installs = 0       # how often rclpy.init() installed rclpy's SIGINT handler
         self.logs: list[tuple[str, str]] = []
         self.nodes: list[Any] = []
         self.modules = self._modules()
@@ -250,6 +262,7 @@ class Ros:
         if signal_handler_options in (SignalHandlerOptions.ALL, SignalHandlerOptions.SIGINT):
             self.previous_sigint = signal.getsignal(signal.SIGINT)
             signal.signal(signal.SIGINT, self._rclpy_sigint)
+            self.sigint_installs += 1
 
     def _rclpy_sigint(self, signum, frame):
         self._shutdown_contexts()
@@ -292,6 +305,9 @@ class Ros:
         self.deliver()
 
     def spin_once(self, node, *, executor=None, timeout_sec=None):
+        self.idle_spins = 0 if self.sdk.up else self.idle_spins + 1
+        if self.idle_spins > HANG_SPINS:
+            raise Hang("spin_once() would spin forever: no xs_sdk publishes joint states")
         self.deliver()
 
     def spin_until_future_complete(self, node, future, executor=None, timeout_sec=None):
@@ -328,10 +344,28 @@ class Ros:
             def wait_for_service(self, timeout_sec=None):
                 if ros.sdk.up:
                     return True
+                if not ros.is_ok:                   # rclpy waits only while the context is ok
+                    return False
+                if ros.blocking:
+                    return self._block(timeout_sec)
                 self.waits += 1
                 if timeout_sec is None or self.waits > HANG_WAITS:
                     raise Hang(f"wait_for_service({self.srv_name!r}) would block forever: no xs_sdk is running")
                 ros.sim_ns += int(timeout_sec * 1e9)
+                return False
+
+            def _block(self, timeout_sec):
+                budget = BLOCK_LIMIT_S - ros.blocked_s
+                wait = budget if timeout_sec is None else min(float(timeout_sec), budget)
+                start = time.monotonic()
+                ros.waiting.set()
+                stopped = ros.stopped.wait(max(0.0, wait))
+                ros.blocked_s += time.monotonic() - start
+                if stopped:
+                    return ros.sdk.up
+                if timeout_sec is None or ros.blocked_s >= BLOCK_LIMIT_S:
+                    raise Hang(f"wait_for_service({self.srv_name!r}) blocked {ros.blocked_s:.1f} s: no xs_sdk is "
+                               "running and ROS was not shut down")
                 return False
 
             def call_async(self, request):
