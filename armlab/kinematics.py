@@ -15,6 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from armlab.exercises.fallback import reference_fallback
 from armlab.robot import DH_TOOL_ROTATION, RobotModel, rx200
 from armlab.transforms import exp_se3, homogeneous, log_so3, rot_x, rot_y, rot_z
 
@@ -158,8 +159,10 @@ def fk_pox(q, robot: RobotModel | None = None, check_limits: bool = True) -> np.
     return T if q.ndim == 2 else T[0]
 
 
+@reference_fallback("fk.dh_link_transform", fk_pox, "forward kinematics uses the manufacturer's PoX model")
 def fk(q, robot: RobotModel | None = None, check_limits: bool = True) -> np.ndarray:
-    """Tool pose in the world: (4, 4) for q (5,) rad, (N, 4, 4) for q (N, 5); translation in mm.
+    """Tool pose in the world: (4, 4) for q (5,) rad, (N, 4, 4) for q (N, 5); translation in mm. By the DH table
+    (fk_dh); while the exercise fk.dh_link_transform is blank, by the manufacturer's PoX model (fk_pox).
 
     Raises ValueError for a wrong shape, NaN, or (with check_limits) a joint outside its limits.
     """
@@ -241,6 +244,70 @@ _DELTA_SIGN = np.where(np.array([e == "elbow up" for _, e in _BRANCHES]) != _FLI
 _ELBOW_DOWN = np.array([e == "elbow down" for _, e in _BRANCHES], float)
 
 
+_NUMERICAL_ITERATIONS = 40     # Gauss-Newton steps of the reference IK (quadratic convergence: ~6 from a seed)
+_APPROACH_WEIGHT_MM = 100.0    # the approach direction's error counts as this many mm per unit
+_NUMERICAL_SEEDS = ((0.0, 1.0), (-0.6, 2.2), (0.8, 0.3))     # (shoulder, elbow bend) rad of the reference IK's seeds
+
+
+def _numerical_candidates(P: np.ndarray, pitch: np.ndarray, roll: np.ndarray, robot: RobotModel) -> _Candidates:
+    """The reference path while the exercise ik.candidates is blank: every branch solved numerically on the
+    manufacturer's PoX model (link_frames, jacobian). The waist faces the target or turns away from it, the wrist
+    rotates by `roll`; shoulder, elbow and wrist_angle follow by damped Gauss-Newton on the tool point and the
+    approach direction, from a seed with the elbow on the branch's side. A branch counts where it converges onto the
+    target (1e-6 mm) and stays on its elbow's side. Slower than the closed form (about 40 batched PoX evaluations)."""
+    dh = robot.dh
+    h0, L1, L2, Lt = _planar_geometry(robot)
+    o1, o3 = dh[0, 0], dh[2, 0]
+    n = len(P)
+    planar = np.hypot(P[:, 0], P[:, 1])
+    heading = np.where(planar > 1e-9, np.arctan2(P[:, 1], P[:, 0]), o1)
+    approach = tool_orientation(heading, pitch, roll)[:, :, 0]                       # (N, 3) tool x axis
+    wrist_distance = np.linalg.norm(P - Lt * approach - [0.0, 0.0, h0], axis=1)
+    in_reach = (wrist_distance <= L1 + L2 + 1e-9) & (wrist_distance >= abs(L1 - L2) - 1e-9)
+    branch_side = np.tile(_DELTA_SIGN, n)
+    target, aim = np.repeat(P, 4, axis=0), np.repeat(approach, 4, axis=0)
+    flat = np.zeros((4 * n, 5))
+    flat[:, 0] = (heading[:, None] - o1 + np.pi * _FLIPPED).ravel()
+    flat[:, 4] = np.repeat(roll, 4)
+    ok = np.zeros(4 * n, bool)
+    for shoulder, bend in _NUMERICAL_SEEDS:               # later seeds only where the earlier ones did not land
+        todo = np.flatnonzero(~ok & np.repeat(in_reach, 4))
+        if not todo.size:
+            break
+        q = flat[todo].copy()
+        q[:, 1], q[:, 2] = shoulder, -branch_side[todo] * bend - o3        # the elbow bent to the branch's side
+        q[:, 3] = 0.0
+        active = np.ones(len(todo), bool)
+        for _ in range(_NUMERICAL_ITERATIONS):
+            idx = np.flatnonzero(active)
+            if not idx.size:
+                break
+            T = link_frames(q[idx], robot, check_limits=False)[:, 6]
+            J = jacobian(q[idx], robot)[:, :, 1:4]                                       # (M, 6, 3)
+            e = np.concatenate([target[todo[idx]] - T[:, :3, 3],
+                                _APPROACH_WEIGHT_MM * (aim[todo[idx]] - T[:, :3, 0])], axis=1)
+            d_aim = np.swapaxes(np.cross(np.swapaxes(J[:, 3:], 1, 2), T[:, None, :3, 0]), 1, 2)  # omega x approach
+            A = np.concatenate([J[:, :3], _APPROACH_WEIGHT_MM * d_aim], axis=1)
+            At = np.swapaxes(A, 1, 2)
+            step = np.linalg.solve(At @ A + 1e-9 * np.eye(3), At @ e[..., None])[..., 0]
+            q[idx, 1:4] += step / np.maximum(1.0, np.abs(step).max(axis=1, keepdims=True) / 0.5)
+            active[idx[np.abs(e).max(axis=1) < 1e-7]] = False
+        T = link_frames(q, robot, check_limits=False)[:, 6]
+        landed = (np.linalg.norm(T[:, :3, 3] - target[todo], axis=1) < 1e-6) & \
+            (np.abs(T[:, :3, 0] - aim[todo]).max(axis=1) < 1e-9)
+        on_branch = np.sign(_wrap(-(q[:, 2] + o3))) == branch_side[todo]    # the forearm's turn from the upper arm
+        good = landed & on_branch
+        flat[todo[good]] = q[good]
+        ok[todo[good]] = True
+    q = _wrap(flat.reshape(n, 4, 5))
+    ok = ok.reshape(n, 4)
+    q[~ok] = np.nan
+    valid = ok & robot.within_limits(q)
+    return _Candidates(q, np.repeat(in_reach[:, None], 4, axis=1), valid, np.repeat(wrist_distance[:, None], 4, axis=1))
+
+
+@reference_fallback("ik.candidates", _numerical_candidates, "inverse kinematics is solved numerically on the PoX "
+                                                            "model (slower)")
 def _ik_candidates(P: np.ndarray, pitch: np.ndarray, roll: np.ndarray, robot: RobotModel) -> _Candidates:
     """Every IK branch for targets P (N, 3) with pitch (N,) and roll (N,), vectorised over targets and branches.
 

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from armlab.camera import Camera
+from armlab.exercises.fallback import reference_fallback
 from armlab.images import check_depth
 from armlab.lab import lab_config
 
@@ -80,6 +81,18 @@ def board_samples(depth_mm, camera: Camera, step: int = 4, exclude=None) -> tupl
     return u, v, measured, expected, usable, keep
 
 
+def _constant_offset(depth_mm, camera: Camera, step: int = 4, inlier_mm: float = 6.0, iterations: int = 6,
+                     exclude=None) -> DepthCorrection:
+    """The reference path while calib.depth_plane is blank: a constant offset, the median of the board's residual
+    (its tilt across the image stays)."""
+    u, v, measured, expected, usable, keep = board_samples(depth_mm, camera, step, exclude)
+    residual = (measured - expected)[keep]
+    c = float(np.median(residual))
+    return DepthCorrection(0.0, 0.0, c, float(np.sqrt(np.mean((residual - c) ** 2))), int(keep.sum()))
+
+
+@reference_fallback("calib.depth_plane", _constant_offset, "the depth is corrected by a constant offset only "
+                                                           "(the bias plane's tilt stays)")
 def fit_depth_correction(depth_mm, camera: Camera, step: int = 4, inlier_mm: float = 6.0,
                          iterations: int = 6, exclude=None) -> DepthCorrection:
     """Fit the planar depth bias over the board.

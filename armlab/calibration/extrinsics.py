@@ -12,6 +12,7 @@ import numpy as np
 
 from armlab.calibration.tags import TagDetection, detect_tags
 from armlab.camera import check_intrinsics, look_at
+from armlab.exercises.fallback import reference_fallback
 from armlab.images import check_rgb
 from armlab.lab import TagLayout, lab_config
 from armlab.transforms import homogeneous, invert_transform, log_so3
@@ -31,14 +32,39 @@ class ExtrinsicsResult:
     detections: list[TagDetection]
 
 
-def extrinsics_from_detections(detections: list[TagDetection], K, dist,
-                               layout: TagLayout | None = None) -> ExtrinsicsResult:
-    """Board pose from tag detections: solvePnP (SQPNP, then Levenberg-Marquardt refinement) over every corner
-    (IPPE when only one tag is seen). Tags that are not on the board are ignored.
+def _tape_measured_pose(world_mm, pixels, K, dist) -> np.ndarray:
+    """The reference path while calib.tag_extrinsics is blank: the tape-measured mount (hand_measured_extrinsic)."""
+    return hand_measured_extrinsic()
 
-    Raises ValueError when no tag of the layout was detected.
+
+@reference_fallback("calib.tag_extrinsics", _tape_measured_pose, "the camera pose is the tape-measured mount of "
+                                                                 "lab.json (about 5 mm off)")
+def pose_from_corners(world_mm, pixels, K, dist) -> np.ndarray:
+    """T_cam_world (4, 4) that maps the board points world_mm (N, 3) mm onto their image corners pixels (N, 2) px
+    through K (3, 3) and dist: solvePnP (SQPNP, IPPE for one tag's four corners) refined by Levenberg-Marquardt.
+    Raises ValueError when the solver fails.
 
     Exercise calib.tag_extrinsics (notebook 01: the camera's pose from the AprilTag corners (PnP)).
+    """
+    world, pixels = np.asarray(world_mm, dtype=np.float64), np.asarray(pixels, dtype=np.float64)
+    # BEGIN SOLUTION calib.tag_extrinsics
+    if len(world) == 4:
+        ok, rvec, tvec = cv2.solvePnP(world, pixels, K, dist, flags=cv2.SOLVEPNP_IPPE)
+    else:
+        ok, rvec, tvec = cv2.solvePnP(world, pixels, K, dist, flags=cv2.SOLVEPNP_SQPNP)
+    if not ok:
+        raise ValueError("solvePnP failed on the detected tag corners")
+    rvec, tvec = cv2.solvePnPRefineLM(world, pixels, K, dist, rvec, tvec)
+    return homogeneous(cv2.Rodrigues(rvec)[0], tvec.ravel())
+    # END SOLUTION
+
+
+def extrinsics_from_detections(detections: list[TagDetection], K, dist,
+                               layout: TagLayout | None = None) -> ExtrinsicsResult:
+    """Board pose from tag detections: pose_from_corners over every corner of the board's tags (the most confident
+    detection of each; tags not on the board are ignored), and the corners' RMS reprojection error (px).
+
+    Raises ValueError when no tag of the layout was detected.
     """
     K, dist = check_intrinsics(K, dist)
     layout = layout or lab_config().tags
@@ -54,17 +80,8 @@ def extrinsics_from_detections(detections: list[TagDetection], K, dist,
                          f"detected: check the board is in view and lit, and the tag family")
     world = np.concatenate([layout.corners_world(d.tag_id) for d in known])
     pixels = np.concatenate([d.corners for d in known])
-    # BEGIN SOLUTION calib.tag_extrinsics
-    if len(known) == 1:
-        ok, rvec, tvec = cv2.solvePnP(world, pixels, K, dist, flags=cv2.SOLVEPNP_IPPE)
-    else:
-        ok, rvec, tvec = cv2.solvePnP(world, pixels, K, dist, flags=cv2.SOLVEPNP_SQPNP)
-    if not ok:
-        raise ValueError("solvePnP failed on the detected tag corners")
-    rvec, tvec = cv2.solvePnPRefineLM(world, pixels, K, dist, rvec, tvec)
-    T = homogeneous(cv2.Rodrigues(rvec)[0], tvec.ravel())
-    # END SOLUTION
-    proj, _ = cv2.projectPoints(world, rvec, tvec, K, dist)
+    T = pose_from_corners(world, pixels, K, dist)
+    proj, _ = cv2.projectPoints(world, cv2.Rodrigues(T[:3, :3])[0], T[:3, 3], K, dist)
     rms = float(np.sqrt(np.mean(np.sum((proj.reshape(-1, 2) - pixels) ** 2, axis=1))))
     return ExtrinsicsResult(T, rms, [d.tag_id for d in known], missing, known)
 

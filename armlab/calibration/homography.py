@@ -11,6 +11,7 @@ import numpy as np
 
 from armlab.calibration.tags import TagDetection
 from armlab.camera import Camera
+from armlab.exercises.fallback import reference_fallback
 from armlab.images import check_rgb
 from armlab.lab import TagLayout, lab_config
 
@@ -64,6 +65,18 @@ class BoardView:
         return cv2.remap(rgb, self._map_u, self._map_v, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT)
 
 
+def _least_squares_homography(detections, view: BoardView, layout: TagLayout | None = None) -> np.ndarray:
+    """The reference path while calib.tag_homography is blank: OpenCV's least-squares fit over the tag centres."""
+    layout = layout or lab_config().tags
+    ids = sorted(layout.centres_mm)[:4]
+    by_id = {d.tag_id: d for d in detections}
+    src = np.array([by_id[i].center for i in ids], np.float64)
+    dst = view.from_world(np.array([layout.centres_mm[i] for i in ids]))
+    return cv2.findHomography(src, dst, 0)[0]
+
+
+@reference_fallback("calib.tag_homography", _least_squares_homography, "the board homography comes from "
+                                                                       "cv2.findHomography")
 def tag_homography(detections: list[TagDetection], view: BoardView, layout: TagLayout | None = None) -> np.ndarray:
     """The lab report's method: the 3x3 homography (cv2.getPerspectiveTransform) taking the image centres of the four
     board tags to their places in the top-down view. Ignores lens distortion; use with cv2.warpPerspective.

@@ -67,8 +67,6 @@ def checkerboard_points(pattern_size: tuple[int, int], square_mm: float) -> np.n
 
 def find_checkerboard(image, pattern_size: tuple[int, int] = (9, 6)) -> np.ndarray | None:
     """Sub-pixel inner-corner positions (N, 2) px of a checkerboard in a uint8 gray or RGB image, or None.
-
-    Exercise calib.subpixel_corners (notebook 01: refine checkerboard corners to sub-pixel accuracy).
     """
     gray = check_gray_or_rgb(image)
     pattern_size, _ = _check_pattern(pattern_size, 1.0)
@@ -76,9 +74,7 @@ def find_checkerboard(image, pattern_size: tuple[int, int] = (9, 6)) -> np.ndarr
         gray, pattern_size, flags=cv2.CALIB_CB_ADAPTIVE_THRESH | cv2.CALIB_CB_NORMALIZE_IMAGE)
     if not found:
         return None
-    # BEGIN SOLUTION calib.subpixel_corners
     corners = cv2.cornerSubPix(gray, corners, (5, 5), (-1, -1), _SUBPIX_CRITERIA)
-    # END SOLUTION
     return corners.reshape(-1, 2)
 
 
@@ -95,8 +91,6 @@ def calibrate_intrinsics(images, pattern_size: tuple[int, int] = (9, 6), square_
         min_views: fewest views in which the board must be found (at least 3).
 
     Raises ValueError for bad images, mixed sizes, or too few views with a board.
-
-    Exercise calib.zhang (notebook 01: calibrate K and distortion from the checkerboard views).
     """
     pattern_size, square_mm = _check_pattern(pattern_size, square_mm)
     if isinstance(images, np.ndarray) and (images.ndim == 2 or (images.ndim == 3 and images.shape[2] == 3)):
@@ -127,9 +121,7 @@ def calibrate_intrinsics(images, pattern_size: tuple[int, int] = (9, 6), square_
                          f"are needed (check pattern_size={tuple(pattern_size)} counts INNER corners)")
     flags = cv2.CALIB_FIX_K3 if fix_k3 else 0
     with opencv_single_thread():          # the threaded solver's sums are not repeatable (armlab.repeatable)
-        # BEGIN SOLUTION calib.zhang
         rms, K, dist, rvecs, tvecs = cv2.calibrateCamera(obj, img, size, None, None, flags=flags)
-        # END SOLUTION
     per_view = []
     for o, m, r, t in zip(obj, img, rvecs, tvecs):
         proj, _ = cv2.projectPoints(o, r, t, K, dist)

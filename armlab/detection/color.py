@@ -19,6 +19,7 @@ import numpy as np
 
 from armlab._paths import data_path
 from armlab.blocks import COLORS, LAB_RGB
+from armlab.exercises.fallback import reference_fallback
 from armlab.files import read_json, write_json_atomic
 
 __all__ = ["ColorModel", "color_features", "white_balance_gains", "default_color_model", "COLOR_MODEL_FILE",
@@ -87,6 +88,18 @@ class ColorModel:
         X = color_features(rgb_means)
         return np.sqrt((((X[:, None, :] - self.means[None]) / self.stds[None]) ** 2).sum(-1))
 
+    def _nearest_reference_colour(self, rgb_means) -> tuple[list[str], np.ndarray]:
+        """The reference path while detect.classify is blank: the nearest of the lab's reference colours (LAB_RGB)
+        in plain RGB, ignoring the fitted spreads; margin: the second-nearest's distance minus the nearest's."""
+        rgb = np.asarray(rgb_means, dtype=float).reshape(-1, 3)
+        reference = np.array([LAB_RGB[name] for name in self.names], dtype=float)
+        dist = np.linalg.norm(rgb[:, None, :] - reference[None], axis=-1)
+        ranked = np.sort(dist, axis=1)
+        margin = ranked[:, 1] - ranked[:, 0] if len(self.names) > 1 else np.full(len(rgb), np.inf)
+        return [self.names[i] for i in dist.argmin(axis=1)], margin
+
+    @reference_fallback("detect.classify", _nearest_reference_colour, "colours are the nearest reference colour "
+                                                                      "in RGB")
     def classify(self, rgb_means) -> tuple[list[str], np.ndarray]:
         """Nearest class name per mean colour (N, 3), and the margin (N,): second-best minus best distance.
 

@@ -64,12 +64,8 @@ class GraspPose:
 def face_roll(heading: float, yaw: float) -> float:
     """Wrist roll (rad, in [-pi/4, pi/4)) that closes top-down fingers across two opposite faces of a block of
     yaw `yaw` (rad) seen from an arm plane at `heading` (rad): roll = heading - yaw (mod pi/2), the smaller turn.
-
-    Exercise grab.face_roll (notebook 05: the wrist roll that closes the fingers across two faces).
     """
-    # BEGIN SOLUTION grab.face_roll
     return float(np.mod(heading - yaw + np.pi / 4, np.pi / 2) - np.pi / 4)
-    # END SOLUTION
 
 
 def face_misalignment(heading: float, pitch: float, roll: float, yaw: float) -> float:

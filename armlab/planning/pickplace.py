@@ -62,32 +62,20 @@ def _check_edge_depth(edge: float, grasp_depth: float | None) -> float:
 def default_grasp_depth(edge: float) -> float:
     """Tool point depth (mm) below a cube's top face: its centre, or higher so the finger tips stay TIP_MARGIN_MM
     above the surface under the cube.
-
-    Exercise grab.heights (notebook 05: grasp and release heights of the tool point).
     """
-    # BEGIN SOLUTION grab.heights
     return float(min(edge / 2, edge - FINGERTIP_MM - TIP_MARGIN_MM))
-    # END SOLUTION
 
 
 def grasp_height(top_z: float, edge: float, grasp_depth: float | None = None) -> float:
     """Tool point height (world mm) to grasp a block whose top face is at top_z: top_z - grasp_depth.
-
-    Exercise grab.heights (notebook 05: grasp and release heights of the tool point).
     """
-    # BEGIN SOLUTION grab.heights
     return float(top_z - _check_edge_depth(edge, grasp_depth))
-    # END SOLUTION
 
 
 def place_tool_height(place_z: float, edge: float, grasp_depth: float | None = None) -> float:
     """Tool point height (world mm) that puts a held block's bottom face at place_z: place_z + edge - grasp_depth.
-
-    Exercise grab.heights (notebook 05: grasp and release heights of the tool point).
     """
-    # BEGIN SOLUTION grab.heights
     return float(place_z + edge - _check_edge_depth(edge, grasp_depth))
-    # END SOLUTION
 
 
 def _near_segment(obstacles: list[Obstacle], a: np.ndarray, b: np.ndarray) -> list[Obstacle]:

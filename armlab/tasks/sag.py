@@ -109,8 +109,6 @@ def fit_sag(q_cmd, p_measured, robot: RobotModel | None = None, iterations: int 
     Linear least squares on J(q) dq(q) = p_measured - fk(q) (linearised at the commanded joints), refined by
     relinearising at the predicted physical joints. Needs N >= 9 poses that differ in reach and height; raises
     ValueError for bad shapes, non-finite values or too few / degenerate poses.
-
-    Exercise grab.fit_sag (notebook 05: fit the joint-compliance sag model by least squares).
     """
     robot = robot or rx200()
     q = np.asarray(q_cmd, dtype=float)
@@ -121,7 +119,6 @@ def fit_sag(q_cmd, p_measured, robot: RobotModel | None = None, iterations: int 
         raise ValueError("fit_sag: q_cmd and p_measured must be finite")
     if q.shape[0] < _N_PARAMS:
         raise ValueError(f"fit_sag needs at least {_N_PARAMS} poses, got {q.shape[0]}")
-    # BEGIN SOLUTION grab.fit_sag
     model = SagModel()
     for _ in range(iterations):
         q_lin = model.physical(q, robot)       # linearise where the arm really is (the commanded pose at first)
@@ -137,7 +134,6 @@ def fit_sag(q_cmd, p_measured, robot: RobotModel | None = None, iterations: int 
             raise ValueError(f"fit_sag: the {q.shape[0]} poses do not determine the model (rank {rank} < "
                              f"{_N_PARAMS}): spread them over reach, height and heading")
         model = SagModel(params)
-    # END SOLUTION
     resid = p - kinematics.fk(model.physical(q, robot), robot, check_limits=False)[:, :3, 3]
     return SagModel(model.params, float(np.sqrt(np.mean(np.sum(resid**2, axis=1)))), int(q.shape[0]))
 

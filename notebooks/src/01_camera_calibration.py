@@ -140,7 +140,6 @@ print("distortion k1 k2 p1 p2 k3:", intrinsics.dist.round(4), " true:", np.round
 # the whole lens model (K and distortion) sends every ray within 1.5 px of where the true lens does.
 
 # %%
-# CHECK calib.subpixel_corners calib.zhang
 d = cal.compare_intrinsics(intrinsics.K, K_true)
 v, u = np.mgrid[0:720:20, 0:1280:20]
 grid_px = np.column_stack([u.ravel(), v.ravel()]).astype(float)
@@ -179,7 +178,6 @@ for name, (K, dist) in [("our photos", (intrinsics.K, intrinsics.dist)), ("its o
 # 5 mm away.
 
 # %%
-# CHECK calib.zhang
 own_mm, borrowed_mm = borrowed_vs_own["its own photos"]["position_mm"], borrowed_vs_own["our photos"]["position_mm"]
 assert own_mm < 1.5, f"with its own photos the camera is {own_mm:.1f} mm off (expected < 1.5 mm)"
 assert borrowed_mm > 5.0, f"another camera's K placed it only {borrowed_mm:.1f} mm off: the two cameras look alike"
@@ -446,7 +444,7 @@ fig.tight_layout()
 # grows towards the borders (less than 0.2 mm per 100 mm).
 
 # %%
-# CHECK calib.zhang calib.tag_extrinsics calib.depth_plane
+# CHECK calib.tag_extrinsics calib.depth_plane
 assert after.mean_mm < 2.0 and after.max_mm < 5.0, \
     f"grid error {after.mean_mm:.2f} mm mean, {after.max_mm:.2f} mm max after calibration"
 assert abs(after.border_growth()) < 0.2, \

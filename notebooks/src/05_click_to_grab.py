@@ -90,7 +90,7 @@ print("grasp point", grasp_point, "mm -> joints", np.degrees(q), "deg")
 print("FK of those joints puts the tool at", kinematics.fk(q)[:3, 3], "mm")
 
 # %%
-# CHECK grab.face_roll ik.candidates
+# CHECK ik.candidates
 assert np.allclose(kinematics.fk(q)[:3, 3], grasp_point, atol=1e-6), "FK(IK(p)) misses the grasp point"
 print("OK: world -> joints: FK(IK(p)) = p")
 
@@ -143,7 +143,7 @@ ax.legend(fontsize=7)
 _ = ax.set_title("sag against reach: two heights per reach, so a line cannot fit both", fontsize=9)
 
 # %%
-# CHECK grab.sag_line grab.fit_sag
+# CHECK grab.sag_line
 line_rms = np.sqrt(np.mean((slope * reach + offset + dz) ** 2))
 model_rms = np.sqrt(np.mean((predicted - dz) ** 2))
 assert model_rms < 1.5, f"the joint model leaves {model_rms:.1f} mm of z error (expected < 1.5 mm)"
@@ -169,7 +169,6 @@ print(format_table(["loc", "want x", "y", "z", "got x", "y", "z", "lab |dx|", "|
                     "|dz|", "comp |dx|", "|dy|", "|dz|"], rows))
 
 # %%
-# CHECK grab.fit_sag grab.heights
 assert np.all(avg(comp) < 3.0), f"mean error {avg(comp).round(1)} mm with sag compensation (expected < 3 mm)"
 assert np.all(avg(comp) < LAB_TABLE_III_ERROR_MM.mean(axis=0)), "no better than the lab report's arm"
 print(f"OK: six locations: mean error {avg(comp).round(1)} mm with sag compensation (lab report: 7.5 / 9.2 / 2.5 mm)")
@@ -195,7 +194,6 @@ held_turned = tasks.pick(station, green)
 print(f"roll from the yaw ({np.degrees(green.yaw):.1f} deg): held = {held_turned}")
 
 # %%
-# CHECK grab.face_roll
 assert held_turned, f"the turned wrist did not grasp the green block: {station.arm.last_grasp}"
 assert not held_unturned or abs(green_truth.yaw - yaw_before) > np.radians(5), "roll 0 grasped a turned block cleanly"
 print("OK: misaligned wrist: roll 0 fails or shoves the block; the roll from the block's yaw grasps it")
@@ -249,7 +247,6 @@ drop_event = panel.handle_event({"type": "click", "dataX": int(round(x)), "dataY
 print(drop_event.message)
 
 # %%
-# CHECK grab.heights
 green_err = np.abs(green_truth.position - [0, 0, green_truth.edge / 2] - [-200.0, 80.0, 0.0])
 red_truth = next(o for o in station.world.blocks if o.color == "red")
 red_err = np.abs(red_truth.position - [0, 0, red_truth.edge / 2] - spot)
