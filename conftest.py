@@ -4,15 +4,25 @@ ONE meshcat server serves the whole pytest session: it starts before the first t
 zmq URL goes into os.environ[ARMLAB_MESHCAT_ZMQ] (so every Viewer(), including those in notebook kernels, which
 inherit the environment, connects to it instead of starting a server), and it is killed and reaped when the session
 ends. If ARMLAB_MESHCAT_ZMQ is already set, that server is used and left alone.
+
+Tests that need an exercise carry `@pytest.mark.exercise("<id>", ...)`. In the instructor's repository they always
+run; in a student release (RELEASE_MARKER present) a test whose exercise is still blank is skipped with a reason
+naming it, and runs as soon as the student has written it.
 """
 
 from __future__ import annotations
 
 import os
+from pathlib import Path
 
 import pytest
 
+from armlab.exercises import exercise
+from armlab.exercises.markers import is_blank
+from armlab.exercises.release import RELEASE_MARKER
 from armlab.viz.server import ZMQ_ENV, ServerProcess, start_server
+
+ROOT = Path(__file__).resolve().parent
 
 _state: dict[str, ServerProcess | None] = {"server": None}
 
@@ -23,6 +33,25 @@ def _ensure_shared_server() -> str:
         _state["server"] = start_server()
         os.environ[ZMQ_ENV] = _state["server"].zmq_url
     return os.environ[ZMQ_ENV]
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    config.addinivalue_line("markers", "exercise(*ids): the test needs these exercises (armlab.exercises) written")
+
+
+def _blank(exercise_id: str) -> bool:
+    source = ROOT / exercise(exercise_id).where
+    return not source.is_file() or is_blank(source.read_text(), exercise_id, exercise(exercise_id).where)
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    if not (ROOT / RELEASE_MARKER).is_file():
+        return
+    for item in items:
+        marker = item.get_closest_marker("exercise")
+        blank = [i for i in (marker.args if marker else ()) if _blank(i)]
+        if blank:
+            item.add_marker(pytest.mark.skip(reason=f"needs exercise {', '.join(blank)}, still blank here"))
 
 
 def pytest_collection_finish(session: pytest.Session) -> None:

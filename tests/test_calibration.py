@@ -118,6 +118,7 @@ def test_too_few_views_or_the_wrong_pattern_say_so(dataset):
 
 
 # -- a station's own intrinsics -----------------------------------------------------------------------------------
+@pytest.mark.exercise("calib.tag_extrinsics", "calib.depth_plane")
 def test_a_station_is_calibrated_with_its_own_cameras_checkerboard_set():
     from armlab.tasks import perception
 
@@ -172,6 +173,7 @@ def test_decodes_with_corrected_bits_are_dropped():
     assert [(t.tag_id, t.hamming) for t in cal.detect_tags(image, max_hamming=2)] == [(7, 1)]
 
 
+@pytest.mark.exercise("calib.tag_extrinsics")
 def test_tag_extrinsic_accuracy_depends_on_the_intrinsics(station, tags, intrinsics):
     truth = station.camera.truth
     with_true = cal.extrinsics_from_detections(tags, truth.K, truth.dist)
@@ -199,6 +201,7 @@ def test_calibrate_extrinsics_from_the_frame_ignores_foreign_tags(frame, tags, i
     assert np.allclose(direct.T_cam_world, noisy.T_cam_world) and 509 not in noisy.tag_ids
 
 
+@pytest.mark.exercise("calib.tag_extrinsics")
 def test_one_tag_still_gives_a_pose_and_names_the_missing_ones(tags, intrinsics):
     result = cal.extrinsics_from_detections(tags[:1], intrinsics.K, intrinsics.dist)
     assert result.tag_ids == [1] and result.missing_ids == [2, 3, 4] and result.rms_px < 1.0
@@ -272,6 +275,7 @@ def test_pixel_and_depth_round_trip_through_a_calibration(station):
 
 
 # -- depth correction ---------------------------------------------------------------------------------------------
+@pytest.mark.exercise("calib.depth_plane")
 def test_depth_correction_recovers_a_known_plane_exactly(station):
     truth = station.camera.truth
     depth, _ = cal.board_depth(truth)
@@ -288,6 +292,7 @@ def test_depth_correction_recovers_a_known_plane_exactly(station):
     assert np.nanmax(np.abs(corrected - depth)[400:, 100:]) < 0.05
 
 
+@pytest.mark.exercise("calib.depth_plane")
 def test_depth_correction_recovers_the_simulated_bias(station, frame):
     truth = station.camera.truth
     bu, bv, b0 = station.camera.realism.depth_bias_mm
@@ -353,6 +358,7 @@ def test_refinement_cannot_see_along_the_board(station):
     assert np.abs(ref.T_cam_world - slid).max() < 1e-3          # nothing to correct that depth can see
 
 
+@pytest.mark.exercise("calib.depth_plane")
 def test_a_planar_depth_bias_is_read_as_a_tilt(station, frame, tags, intrinsics):
     # the realistic L515 depth is tilted ~20 mm across the image: the refinement turns the board by about a degree
     # and the grid error after depth correction grows (the refinement does not help on biased depth)
@@ -371,6 +377,7 @@ def test_a_planar_depth_bias_is_read_as_a_tilt(station, frame, tags, intrinsics)
     assert errors[1] > 1.5 * errors[0], errors
 
 
+@pytest.mark.exercise("calib.tag_extrinsics", "calib.depth_plane")
 def test_refinement_fixes_the_height_of_a_factory_k_extrinsic_on_unbiased_depth():
     from dataclasses import replace
 
@@ -409,6 +416,7 @@ def test_bad_refinement_input_is_named(station):
 
 
 # -- validation on the 50 mm grid ---------------------------------------------------------------------------------
+@pytest.mark.exercise("calib.tag_extrinsics", "calib.depth_plane")
 def test_grid_error_before_and_after_calibration(station, frame, tags, intrinsics):
     truth = station.camera.truth
     grid = LAB.grid_points()

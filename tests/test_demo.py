@@ -6,11 +6,13 @@ import re
 
 import cv2
 import numpy as np
+import pytest
 
 from armlab.__main__ import main
 from armlab.tasks.events import Replay
 
 
+@pytest.mark.exercise("calib.tag_extrinsics", "calib.depth_plane", "detect.classify")
 def test_demo_runs_end_to_end(tmp_path, capsys):
     code = main(["demo", "--out", str(tmp_path), "--seed", "0"])
     out = capsys.readouterr().out

@@ -84,6 +84,7 @@ def test_exact_frames_give_yaw_and_position_to_the_pixel_grid_limit():
     assert pos.mean() < 0.1 and pos.max() < 0.5
 
 
+@pytest.mark.exercise("calib.tag_extrinsics", "calib.depth_plane", "detect.classify")
 def test_realistic_frames_meet_the_goals(case):
     found = detect_objects(case.rgb, corrected_depth(case), case.camera, case.arm_q)
     score = Score()
@@ -96,6 +97,7 @@ def test_realistic_frames_meet_the_goals(case):
     assert m["yaw_max_deg"] < 2.0
 
 
+@pytest.mark.exercise("calib.tag_extrinsics", "calib.depth_plane", "detect.classify")
 def test_stacks_report_their_height_and_not_the_hidden_faces():
     case = sim_case("stacks", 201)
     found = detect_blocks(case.rgb, corrected_depth(case), case.camera, case.arm_q)
@@ -250,6 +252,7 @@ def test_arm_mask_covers_the_finger_tips():
     assert (arm_mask(cam, q) != arm_mask(cam, q + [0.6, 0, 0, 0, 0])).sum() > 1000
 
 
+@pytest.mark.exercise("calib.tag_extrinsics", "calib.depth_plane", "detect.classify")
 def test_arm_over_the_board_is_not_a_block():
     case = sim_case("random", 204, arm_over_board=True)
     found = detect_objects(case.rgb, corrected_depth(case), case.camera, case.arm_q)

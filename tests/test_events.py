@@ -208,6 +208,7 @@ def test_handover_supplies_one_block_at_a_time():
 
 
 # ------------------------------------------------------------------------------------------------ full runs
+@pytest.mark.exercise("calib.tag_extrinsics", "calib.depth_plane", "detect.classify")
 def test_sort_stack_level_3_runs_to_full_marks_within_the_time_limit(tmp_path):
     station = event_station("sort_stack", 3, seed=0)
     result = run_event(station, "sort_stack", 3)
@@ -236,6 +237,7 @@ def test_sort_stack_level_3_runs_to_full_marks_within_the_time_limit(tmp_path):
         np.testing.assert_allclose(r.object_poses[-1, j, :3], final[int(oid)], atol=1e-9)
 
 
+@pytest.mark.exercise("calib.tag_extrinsics", "calib.depth_plane", "detect.classify")
 def test_line_up_level_3_places_its_own_small_blocks_and_scores_full_marks():
     """The line 'em up level-3 run that lost 50 points: its placed small orange cube read 22 x 25 mm (the renderer's
     side face took the top face's edge row), was taken for a distractor blocking the yellow slot, and the line
@@ -276,6 +278,7 @@ def test_time_limit_scores_the_board_at_the_limit():
     assert result.score.points == 30                  # one block placed before 20 s; the rest came too late
 
 
+@pytest.mark.exercise("calib.tag_extrinsics", "calib.depth_plane", "detect.classify")
 def test_sky_tower_grows_as_high_as_the_arm_reaches_over_the_best_spot():
     from armlab.tasks import RELEASE_GAP_MM
     from armlab.tasks.events.sky import SKY_CLEARANCE_MM, TOWER_XY, highest_tool_z

@@ -211,6 +211,7 @@ except NotImplementedError as e:
 
 
 def test_a_reference_path_stands_in_only_for_its_own_blank_stub(capsys):
+    """The kit's function runs the student's code when written; the reference only for that exercise's blank stub."""
     from armlab.exercises import exercise as registered
     from armlab.exercises.fallback import reference_fallback
 
@@ -225,7 +226,7 @@ def test_a_reference_path_stands_in_only_for_its_own_blank_stub(capsys):
     assert kit(1) == ("student", 1)                                   # written: the reference never runs
     assert kit(2, NotImplementedError(blank)) == ("reference", 2)
     assert kit(3, NotImplementedError(blank)) == ("reference", 3)
-    assert capsys.readouterr().out.count("the reference is used") <= 1  # one line, once per exercise
+    assert capsys.readouterr().err.count("the reference is used") <= 1  # one line, once per exercise
     for other in (NotImplementedError(registered("ik.candidates").message()), NotImplementedError("todo"),
                   ValueError(blank)):
         with pytest.raises(type(other)):                             # anything else propagates
@@ -266,7 +267,31 @@ print("error", float(np.abs(truth.position[:2] - [0.0, 300.0]).max()))
     env = {"PYTHONPATH": str(out), "PATH": "/usr/bin:/bin", "MPLBACKEND": "Agg"}
     run = subprocess.run([sys.executable, "-c", code], cwd=out, env=env, capture_output=True, text=True, timeout=600)
     assert run.returncode == 0, run.stderr[-2000:]
-    notes = [line for line in run.stdout.splitlines() if line.startswith("note: exercise ")]
+    notes = [line for line in run.stderr.splitlines() if line.startswith("note: exercise ")]
     assert {n.split()[2] for n in notes} == {"fk.dh_link_transform", "ik.candidates", "calib.tag_extrinsics",
-                                             "calib.depth_plane", "detect.classify"}, run.stdout
+                                             "calib.depth_plane", "detect.classify"}, run.stderr
     assert float(run.stdout.split("error")[-1]) < 3.0, run.stdout
+
+
+def test_in_the_release_a_test_of_a_blank_exercise_skips_until_it_is_written(release, tmp_path):
+    """The release's own `make test` tests what the student can rely on: a test marked with an exercise skips,
+    naming it, while the exercise is blank, and runs once the student has written it."""
+    out, _ = release
+    (out / "tests" / "test_probe.py").write_text(
+        "import pytest\n\n\n@pytest.mark.exercise('calib.depth_plane')\ndef test_probe():\n    assert True\n")
+    try:
+        def run():
+            return subprocess.run([sys.executable, "-m", "pytest", "-q", "-rs", "tests/test_probe.py",
+                                   "-p", "no:cacheprovider"], cwd=out, capture_output=True, text=True, timeout=300,
+                                  env={"PYTHONPATH": str(out), "PATH": "/usr/bin:/bin", "MPLBACKEND": "Agg"})
+        blank = run()
+        assert "1 skipped" in blank.stdout and "needs exercise calib.depth_plane, still blank here" in blank.stdout
+        source = out / "armlab/calibration/depth.py"
+        text = source.read_text()
+        stub = f"raise NotImplementedError({exercise('calib.depth_plane').message()!r})"
+        source.write_text(text.replace(stub, "coef = np.zeros(3)"))          # a student's (poor) answer
+        written = run()
+        assert "1 passed" in written.stdout, written.stdout
+        source.write_text(text)
+    finally:
+        (out / "tests" / "test_probe.py").unlink()

@@ -62,6 +62,7 @@ def elbow_up(q, target):
 # Forward kinematics
 # ---------------------------------------------------------------------------------------------------------------
 
+@pytest.mark.exercise("fk.dh_link_transform")
 def test_dh_matches_pox_at_random_poses():
     q = random_q(10_000, seed=1)
     T_dh, T_pox = k.fk_dh(q), k.fk_pox(q)
@@ -110,6 +111,7 @@ def test_vectorised_fk_equals_loop():
     np.testing.assert_allclose(k.fk_pox(q), np.stack([k.fk_pox(qi) for qi in q]), atol=1e-12)
 
 
+@pytest.mark.exercise("fk.dh_link_transform")
 def test_dh_link_transform_is_rz_tz_tx_rx():
     theta, d, a, alpha = 0.7, 12.0, 34.0, -1.1
     expected = (homogeneous(rot_z(theta)) @ homogeneous(None, [0, 0, d]) @ homogeneous(None, [a, 0, 0])
@@ -119,6 +121,7 @@ def test_dh_link_transform_is_rz_tz_tx_rx():
     assert A.shape == (2, 3, 4, 4)
 
 
+@pytest.mark.exercise("fk.dh_link_transform")
 def test_link_frames_and_joint_positions():
     q = random_q(200, seed=4)
     F = k.link_frames(q)
@@ -171,6 +174,7 @@ def test_jacobian_matches_finite_differences():
 # Closed-form inverse kinematics
 # ---------------------------------------------------------------------------------------------------------------
 
+@pytest.mark.exercise("ik.candidates")
 def test_ik_round_trip_over_thousands_of_reachable_targets():
     q = random_q(3000, seed=7)
     P, pitch, roll = target_of(q)
@@ -185,6 +189,7 @@ def test_ik_round_trip_over_thousands_of_reachable_targets():
     assert found == len(q)  # the pose's own joint angles are always among the branches
 
 
+@pytest.mark.exercise("ik.candidates")
 @SETTINGS
 @given(st.tuples(*[st.floats(lo, hi) for lo, hi in zip(ROBOT.lower, ROBOT.upper)]).map(np.array))
 def test_ik_round_trip_property(q):
@@ -196,6 +201,7 @@ def test_ik_round_trip_property(q):
     assert np.abs(wrapped(sols - q)).max(axis=1).min() < 1e-6
 
 
+@pytest.mark.exercise("ik.candidates")
 def test_solutions_within_limits_and_elbow_up_first():
     q = random_q(3000, seed=8)
     P, pitch, roll = target_of(q)

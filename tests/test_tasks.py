@@ -90,6 +90,7 @@ def test_fit_sag_refuses_bad_input():
     assert np.abs(fit_sag(q, p).params).max() < 1e-9    # an arm that does not sag fits to zero
 
 
+@pytest.mark.exercise("calib.tag_extrinsics", "calib.depth_plane", "detect.classify")
 def test_pick_and_place_aligned_and_yawed_blocks_of_both_sizes(station):
     ctx = tasks.context(station)
     seen = sorted(ctx.last.blocks, key=lambda b: b.color)
@@ -106,6 +107,7 @@ def test_pick_and_place_aligned_and_yawed_blocks_of_both_sizes(station):
     assert not station.arm.holding
 
 
+@pytest.mark.exercise("calib.tag_extrinsics", "calib.depth_plane", "detect.classify")
 def test_every_command_sent_respects_the_velocity_limits(station):
     sent = tasks.context(station).arm.sent
     assert len(sent) > 50

@@ -30,6 +30,7 @@ def station():
     return st
 
 
+@pytest.mark.exercise("calib.tag_extrinsics", "calib.depth_plane", "detect.classify")
 def test_click_grab_then_click_drop_moves_the_clicked_block(station):
     red = _truth(station, "red")
     assert tasks.click_grab(station, _pixel(station, red.position + [0, 0, red.edge / 2]))
@@ -41,6 +42,7 @@ def test_click_grab_then_click_drop_moves_the_clicked_block(station):
     assert np.abs(err).max() < 4.0, err                     # click-to-world through the camera + placing
 
 
+@pytest.mark.exercise("calib.tag_extrinsics", "calib.depth_plane", "detect.classify")
 def test_click_drop_on_a_block_stacks_on_it(station):
     red, green = _truth(station, "red"), _truth(station, "green")
     assert tasks.click_grab(station, _pixel(station, green.position + [0, 0, green.edge / 2]))

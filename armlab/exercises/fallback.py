@@ -12,6 +12,7 @@ instructor's repository, and once the student has written the exercise, the refe
 from __future__ import annotations
 
 import functools
+import sys
 from collections.abc import Callable
 from typing import TypeVar
 
@@ -35,7 +36,8 @@ def fallbacks_used() -> set[str]:
 
 def reference_fallback(exercise_id: str, reference: Callable, instead: str) -> Callable[[F], F]:
     """Decorate a kit function whose work includes the package exercise `exercise_id`: when the exercise's blank
-    stub raises, print one line (once per exercise) saying `instead` is used, and return reference(*args, **kwargs).
+    stub raises, print one line to stderr (once per exercise) saying `instead` is used, and return
+    reference(*args, **kwargs).
     Any other error, including one from a student's own attempt, propagates."""
     exercise(exercise_id)                                  # KeyError now for an unregistered id
 
@@ -50,7 +52,7 @@ def reference_fallback(exercise_id: str, reference: Callable, instead: str) -> C
                 if exercise_id not in _announced:
                     _announced.add(exercise_id)
                     print(f"note: exercise {exercise_id} (notebook {exercise(exercise_id).notebook_number}) is not "
-                          f"written yet: {instead}")
+                          f"written yet: {instead}", file=sys.stderr)
                 return reference(*args, **kwargs)
 
         wrapper.__wrapped_exercise__ = exercise_id

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 from .registry import exercise
 
-__all__ = ["Region", "ExerciseMarkerError", "find_regions", "stub_regions"]
+__all__ = ["Region", "ExerciseMarkerError", "find_regions", "stub_regions", "is_blank"]
 
 _BEGIN = re.compile(r"^(?P<indent>[ \t]*)# BEGIN SOLUTION(?:[ \t]+(?P<id>\S+))?[ \t]*$")
 _END = re.compile(r"^(?P<indent>[ \t]*)# END SOLUTION[ \t]*$")
@@ -63,6 +63,16 @@ def find_regions(text: str, where: str = "<text>") -> list[Region]:
     if open_at is not None:
         raise ExerciseMarkerError(f"{where}:{open_at + 1}: BEGIN SOLUTION never closed")
     return regions
+
+
+def is_blank(text: str, exercise_id: str, where: str = "<text>") -> bool:
+    """True when every region of exercise `exercise_id` in a source text still holds only its stub (or the text has
+    no region of it): the student has not written it yet."""
+    stub = f"raise NotImplementedError({exercise(exercise_id).message()!r})"
+    lines = text.splitlines()
+    bodies = [[line.strip() for line in lines[r.begin + 1:r.end] if line.strip()]
+              for r in find_regions(text, where) if r.exercise_id == exercise_id]
+    return all(body == [stub] for body in bodies)
 
 
 def stub_regions(text: str, where: str = "<text>") -> str:

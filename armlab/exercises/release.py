@@ -37,6 +37,7 @@ RELEASE_EXCLUDES = (
     "tests/test_exercises.py",     # the release tool's own tests (they look for solutions)
     "tests/test_packaging.py",     # builds wheels of the instructor's checkout
     "tests/test_repeatable.py",    # teaches by hand (the teach.record exercise) to test the simulator's rounding
+    "tests/test_notebook_outputs.py",   # checks the instructor's executed notebooks (the release's have no outputs)
 )
 
 
