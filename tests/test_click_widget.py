@@ -171,9 +171,9 @@ def test_a_stopped_arm_is_reported_not_raised(panel):
 
 def test_widget_wires_the_image_clicks_to_the_handler(panel, capsys):
     box = panel.widget()
-    assert repr(box) == ("click-to-grab: 1280x720 frame shown at 640x360 px; click a block to grab it, then a spot to "
-                         "drop it")
+    assert repr(box) == "click-to-grab panel (1280x720 frame shown at 640x360 px): run the cell, then click a block"
     assert len(repr(box)) <= 110                            # ipywidgets cuts a longer text form
+    assert "holding nothing: the next click grabs" in box.children[0].value
     image = box.children[1]
     assert image.format == "jpeg" and bytes(image.value[:2]) == b"\xff\xd8"
     assert panel._events.source is image and panel._events.watched_events == ["click"]
@@ -185,3 +185,62 @@ def test_widget_wires_the_image_clicks_to_the_handler(panel, capsys):
     assert shown_text["name"] == "stdout" and "holding the red large block" in shown_text["text"]
     assert capsys.readouterr().out == ""                    # the message goes to the panel, not the cell
     assert bytes(image.value) != shown                      # the view was refreshed after the grab
+    assert "holding the red large block: the next click drops it" in box.children[0].value   # and the state
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# Stale views (notebook 05's trap) and the state machine
+# ---------------------------------------------------------------------------------------------------------------
+
+SCENE3 = {"objects": [
+    {"color": "red", "size": "large", "position_mm": [-150.0, 200.0], "yaw_rad": 0.0},
+    {"color": "green", "size": "large", "position_mm": [60.0, 300.0], "yaw_rad": -0.5},
+]}
+
+
+def test_a_panel_opened_after_a_pick_starts_from_a_fresh_look_and_says_what_is_held():
+    station = make_station("sim", seed=0, scene=SCENE3)
+    green = next(b for b in tasks.look(station).blocks if b.color == "green")
+    assert tasks.pick(station, green)                       # picked outside the panel: the last look is stale
+    assert not tasks.click_widget.view_is_current(station)
+    panel = ClickToGrab(station)
+    box = panel.widget()
+    assert tasks.click_widget.view_is_current(station)      # widget() looked again
+    assert [b.color for b in tasks.context(station).last.blocks] == ["red"]   # the green block is in the gripper
+    assert "holding the green large block: the next click drops it where you click" in box.children[0].value
+    assert panel.next_action == "drop"
+
+
+def test_a_click_on_a_stale_picture_is_refused_after_a_new_look():
+    station = make_station("sim", seed=0, scene=SCENE3)
+    obs = tasks.look(station)
+    panel = ClickToGrab(station)
+    red = next(b for b in obs.blocks if b.color == "red")
+    station.arm.home()                                      # moved by other code: the picture is out of date
+    before = [o.position.copy() for o in station.world.blocks]
+    result = panel.click(red.pixel)
+    assert not result.ok and "out of date" in result.message and "nothing moved" in result.message
+    assert tasks.context(station).last is not obs and tasks.click_widget.view_is_current(station)
+    for o, p in zip(station.world.blocks, before):
+        np.testing.assert_array_equal(o.position, p)        # only the arm moved (out of view)
+    again = panel.click(red.pixel)                          # a click on the new picture acts
+    assert again.ok and panel.holding.color == "red"
+
+
+def test_clicks_through_the_state_machine():
+    station = make_station("sim", seed=0, scene=SCENE3)
+    machine = tasks.TaskMachine(station)
+    obs = tasks.look(station)
+    panel = ClickToGrab(station, machine=machine)
+    red = next(b for b in obs.blocks if b.color == "red")
+    grab = panel.click(red.pixel)
+    assert grab.ok and machine.history[-2:] == ["click-grab", "idle"]
+    machine.estop()
+    stopped = panel.click(station.camera.truth.project(np.array([[-200.0, 80.0, 0.0]]))[0])
+    assert not stopped.ok and not stopped.moved and "EmergencyStopped" in stopped.message
+    assert panel.holding.color == "red" and machine.state == "estop"
+    machine.reset()
+    drop = panel.click(station.camera.truth.project(np.array([[-200.0, 80.0, 0.0]]))[0])
+    assert drop.ok and machine.history[-2:] == ["click-drop", "idle"]
+    with pytest.raises(ValueError, match="another station"):
+        ClickToGrab(make_station("sim", seed=1, scene="empty"), machine=machine)

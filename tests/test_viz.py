@@ -312,7 +312,7 @@ def test_animation_moves_objects_too(viewer):
 
 def test_joint_sliders_move_the_arm(viewer):
     box = viewer.joint_sliders()
-    sliders = box.children
+    sliders = [*box.sliders, box.gripper]
     assert [s.description for s in sliders] == [*rx200().joint_names, "gripper mm"]
     np.testing.assert_allclose([s.min for s in sliders[:5]], rx200().lower)
     sliders[1].value = -0.5
@@ -322,8 +322,88 @@ def test_joint_sliders_move_the_arm(viewer):
     transforms = by_path(scene_commands(viewer.static_html()), "set_transform")
     np.testing.assert_allclose(matrix(transforms[f"{ROOT}/arm/gripper/tool_point"]),
                                kinematics.fk([0, -0.5, 0, 0, 0]), atol=1e-9)
-    # nbval compares a displayed widget's text/plain: it must not change from run to run
-    assert repr(box) == "JointSliders(waist, shoulder, elbow, wrist_angle, wrist_rotate, gripper mm)"
+    # nbval compares a displayed widget's text/plain: it must not change from run to run, and it tells the student
+    # who opens a committed notebook what to do (the widget itself appears only in a running kernel)
+    assert repr(box) == ("JointSliders(waist, shoulder, elbow, wrist_angle, wrist_rotate, gripper mm): run the cell "
+                         "to use them")
+    assert len(repr(box)) <= 110                                   # ipywidgets cuts a longer text form
+
+
+def test_joint_sliders_start_from_and_follow_the_viewers_pose(viewer):
+    viewer.show([0.3, -0.2, 0.1, 0.4, 0.2], 25.0)
+    box = viewer.joint_sliders()
+    np.testing.assert_allclose([s.value for s in box.sliders], [0.3, -0.2, 0.1, 0.4, 0.2])
+    assert box.gripper.value == 25.0
+    robot = rx200()
+    viewer.animate([0.0, 1.0], np.array([robot.sleep, robot.home]))     # the viewer ends at home ...
+    np.testing.assert_allclose([s.value for s in box.sliders], robot.home)   # ... and so do the sliders
+    np.testing.assert_allclose(viewer.q, robot.home)                   # following moved nothing back
+    box.sliders[0].value = 0.25                                        # the first touch moves from there
+    np.testing.assert_allclose(viewer.q, [0.25, 0, 0, 0, 0])
+
+
+def test_joint_sliders_drive_the_arm_within_its_limits(viewer):
+    from armlab import make_station
+
+    station = make_station("sim", seed=0, scene="empty")
+    station.arm.home()
+    box = viewer.joint_sliders(arm=station.arm)
+    np.testing.assert_allclose(viewer.q, station.arm.joint_positions(), atol=0.005)  # the viewer shows the arm first
+    np.testing.assert_allclose([s.value for s in box.sliders], viewer.q)
+    assert [(s.min, s.max) for s in box.sliders] == list(zip(rx200().lower, rx200().upper))
+    assert not box.sliders[0].continuous_update                       # the arm moves when a slider is released
+    box.sliders[0].value = 0.4
+    np.testing.assert_allclose(station.arm.joint_positions(), [0.4, 0, 0, 0, 0], atol=0.005)
+    np.testing.assert_allclose(viewer.q, station.arm.joint_positions(), atol=0.005)   # encoder ticks
+    assert box.note.value == ""
+    box.sliders[1].value = 1.2                                        # tips the arm into the board: refused
+    box.sliders[2].value = 1.0
+    assert "not moved: MotionRefused" in box.note.value and "board" in box.note.value
+    assert station.arm.joint_positions()[2] < 0.05                    # the arm did not go there
+    np.testing.assert_allclose([s.value for s in box.sliders], viewer.q)   # the sliders went back to the arm
+    box.gripper.value = "closed"
+    assert station.arm.gripper_opening_mm < 74.0
+
+
+def test_close_tells_what_is_still_open(viewer):
+    pane = viewer.widget(height_px=300)
+    assert 'src="http://127.0.0.1:' in pane.value and "height:300px" in pane.value and "<iframe" in pane.value
+    assert repr(pane) == "ViewerPane(live 3D view of the station; run the cell to see it)"
+    box = viewer.joint_sliders()
+    viewer.close()
+    assert "<iframe" not in pane.value and "closed" in pane.value
+    assert all(s.disabled for s in box.sliders) and "viewer closed" in box.note.value
+    box.sliders[0].value = 0.3                                        # no RuntimeError in the log console
+    assert viewer.closed
+    with pytest.raises(RuntimeError, match="closed"):
+        viewer.widget()
+
+
+def test_close_puts_a_sign_on_an_open_page(monkeypatch):
+    sent = []
+    with Viewer() as viewer:
+        real = viewer._vis.window.send
+        monkeypatch.setattr(viewer._vis.window, "send", lambda cmd: (sent.append(cmd.lower()), real(cmd))[1])
+    sky = [c for c in sent if c["type"] == "set_property" and c["path"] == "/Background"]
+    assert {c["property"] for c in sky} == {"top_color", "bottom_color"}
+    assert all(max(c["value"]) - min(c["value"]) < 0.01 for c in sky)      # grey
+    sign = [c for c in sent if c["type"] == "set_object" and c["path"].endswith("_closed")]
+    assert len(sign) == 1
+    obj = sign[0]["object"]
+    assert obj["object"]["type"] == "Sprite" and obj["textures"][0]["text"] == "viewer closed"
+    with Viewer() as again:                                            # the next viewer on the same server ...
+        commands = scene_commands(again.static_html())
+    assert not [c for c in commands if c["type"] == "set_object" and c["path"].endswith("_closed")]   # ... no sign
+    sky = {c["property"]: c["value"] for c in commands if c.get("path") == "/Background"}
+    assert max(sky["top_color"]) - min(sky["top_color"]) > 0.3                                       # ... blue sky
+
+
+def test_point_size_is_given_to_meshcat_in_metres(viewer):
+    points = np.array([[0.0, 0.0, 0.0], [100.0, 50.0, 20.0]])
+    viewer.draw_point_cloud(points, np.full((2, 3), 200, np.uint8), point_size_mm=4.0)
+    cloud = by_path(scene_commands(viewer.static_html()), "set_object")[f"{ROOT}/clouds/cloud"]
+    assert material_of(cloud)["size"] == pytest.approx(0.004)          # 4 mm, not 4 m
+    np.testing.assert_allclose(array(geometry_of(cloud)["data"]["attributes"]["position"]), points)  # in mm
 
 
 # -- server lifecycle ----------------------------------------------------------------------------------------------
@@ -429,3 +509,77 @@ def test_browser_draws_the_arm_where_the_model_says(tmp_path):
     tag = np.round(camera.project(np.array([[250.0, 275.0, 0.0]]))).astype(int)[0]
     assert not changed[tag[1] - 3:tag[1] + 4, tag[0] - 3:tag[0] + 4].any()
     assert with_arm[tag[1], tag[0]].max() < 60                               # the black tag square
+
+
+@pytest.mark.skipif(browser.find_chromium() is None, reason="no chromium on PATH (tools/ensure-chromium installs it)")
+def test_browser_shows_the_station_and_its_point_cloud(tmp_path):
+    """The whole station (notebook 00's "draw the whole station" cell): blocks, camera frustum and a 14 000-point
+    cloud. With the point size passed in mm where meshcat wants metres every point was 4 m across and the view one
+    uniform wall (a software-rendered frame took over a minute)."""
+    from armlab import make_station
+
+    station = make_station("sim", seed=0, scene="random", n=6)
+    frame = station.camera.capture()
+    shots = {}
+    with Viewer(frames=False) as viewer:
+        viewer.look_from([600.0, -450.0, 500.0])
+        viewer.draw_objects(station.world.objects)
+        viewer.draw_camera(station.camera.truth)
+        n = viewer.draw_rgbd(frame.rgb, frame.depth, station.camera.truth, stride=8)
+        assert n > 10_000
+        start = time.monotonic()
+        shots["all"] = browser.screenshot(viewer.save_html(tmp_path / "all.html"), tmp_path / "all.png", SIZE)
+        seconds = time.monotonic() - start
+        for part in ("clouds", "objects"):
+            viewer.set_visible(part, False)
+            shots[part] = browser.screenshot(viewer.save_html(tmp_path / f"no_{part}.html"), tmp_path /
+                                             f"no_{part}.png", SIZE)
+            viewer.set_visible(part, True)
+    full = shots["all"]
+    _, counts = np.unique((full // 16).reshape(-1, 3), axis=0, return_counts=True)
+    assert counts.max() / counts.sum() < 0.6 and len(counts) > 40, "the view is (nearly) one colour"
+    assert seconds < 60, f"one snapshot took {seconds:.0f} s to render"
+    cloud = (np.abs(full.astype(int) - shots["clouds"].astype(int)).max(axis=2) > 40).sum()
+    blocks = (np.abs(full.astype(int) - shots["objects"].astype(int)).max(axis=2) > 40).sum()
+    assert 1500 < cloud < 0.5 * full.shape[0] * full.shape[1], f"the cloud changes {cloud} pixels"
+    assert blocks > 100, f"the blocks change only {blocks} pixels"
+
+
+# -- readable figures ----------------------------------------------------------------------------------------------
+def test_figure_readability_rule():
+    import matplotlib
+    import matplotlib.pyplot as plt
+
+    from armlab.viz.figures import check_readable, readability_problems, readable
+
+    with matplotlib.rc_context():
+        fig, ax = plt.subplots(figsize=(10, 2.3), dpi=60)          # notebook 01's old calibration figure
+        ax.plot([0, 1], [0, 1], label="a")
+        ax.legend(fontsize=8)
+        ax.set(title="per-view error", xlabel="view")
+        problems = readability_problems(fig)
+        assert not any("px wide" in p for p in problems)           # 600 px: not shrunk, just small
+        assert any("'per-view error' is 12 pt at dpi 60: 10.0 px" in p for p in problems), problems
+        assert any("'a' is 8 pt" in p for p in problems)
+        plt.close(fig)
+        readable()
+        fig, ax = plt.subplots(figsize=(9, 3))
+        ax.plot([0, 1], [0, 1], label="a")
+        ax.legend()
+        ax.set(title="t", xlabel="x (mm)", ylabel="y (mm)")
+        check_readable(fig)                                       # dpi 100, fonts >= 9.5 pt, 900 px wide
+        fig.set_figwidth(12)
+        with pytest.raises(ValueError, match="1200 px wide"):
+            check_readable(fig)
+        plt.close("all")
+
+
+def test_close_after_the_server_died_is_quick(monkeypatch):
+    monkeypatch.delenv(ZMQ_ENV)
+    viewer = Viewer()
+    pane = viewer.widget()
+    viewer.server.proc.kill()                                      # e.g. killed from outside
+    viewer.server.proc.wait()
+    start = time.monotonic()
+    viewer.close()
+    assert time.monotonic() - start < 5.0 and viewer.closed and "closed" in pane.value

@@ -22,8 +22,8 @@ def draw_detections(rgb, blocks, camera=None, axis_mm: float = 25.0) -> np.ndarr
             cv2.polylines(out, [b.contour.astype(np.int32).reshape(-1, 1, 2)], True, colour, 2, cv2.LINE_AA)
         u, v = (int(round(c)) for c in b.pixel)
         label = f"{b.color} {b.size}" if b.shape == "cube" else "distractor"
-        cv2.putText(out, label, (u + 12, v - 12), cv2.FONT_HERSHEY_SIMPLEX, 0.45, (255, 255, 255), 3, cv2.LINE_AA)
-        cv2.putText(out, label, (u + 12, v - 12), cv2.FONT_HERSHEY_SIMPLEX, 0.45, (0, 0, 0), 1, cv2.LINE_AA)
+        cv2.putText(out, label, (u + 12, v - 12), cv2.FONT_HERSHEY_SIMPLEX, 0.8, (255, 255, 255), 4, cv2.LINE_AA)
+        cv2.putText(out, label, (u + 12, v - 12), cv2.FONT_HERSHEY_SIMPLEX, 0.8, (0, 0, 0), 2, cv2.LINE_AA)
         if camera is not None:
             c, s = np.cos(b.yaw), np.sin(b.yaw)
             ends = b.position + axis_mm * np.array([[c, s, 0.0], [-s, c, 0.0]])

@@ -205,7 +205,7 @@ def plot_plan(plan: Plan, ax=None, dt: float = 0.02):
     import matplotlib.pyplot as plt
 
     if ax is None:
-        _, ax = plt.subplots(figsize=(7, 3.2), dpi=80)
+        _, ax = plt.subplots(figsize=(8, 3.6))
     s = sample_plan(plan, dt)
     for j, name in enumerate(JOINT_NAMES):
         ax.plot(s.t, s.q[:, j], label=name)
@@ -219,5 +219,5 @@ def plot_plan(plan: Plan, ax=None, dt: float = 0.02):
                         label="gripper closed")
     ax.set_xlabel("time (s)")
     ax.set_ylabel("joint angle (rad)")
-    ax.legend(loc="upper right", fontsize=7, ncol=2)
+    ax.legend(loc="upper right", fontsize=9, ncol=2)
     return ax

@@ -9,6 +9,7 @@ from .machine import STATES, MachineBusy, TaskMachine
 from .perception import Observation, calibrate_camera, clear_view, surface_point
 from .pickplace import RELEASE_GAP_MM, TaskContext, calibrate_sag, context, look, pick, place
 from .sag import LAB_BASELINE, SagModel, calibration_poses, fit_sag
+from .station_panel import StationPanel, station_panel
 from .teach import TeachFileError, TeachProgram, load_teach, plot_teach, repeat, save_teach
 
 __all__ = ["teach", "ClickRefused", "click_drop", "click_grab", "click_world", "current_view",
@@ -16,4 +17,4 @@ __all__ = ["teach", "ClickRefused", "click_drop", "click_grab", "click_world", "
            "GuardedArm", "Observation", "calibrate_camera", "clear_view", "surface_point", "RELEASE_GAP_MM",
            "TaskContext", "calibrate_sag", "context", "look", "pick", "place", "LAB_BASELINE", "SagModel",
            "calibration_poses", "fit_sag", "TeachProgram", "TeachFileError", "load_teach", "save_teach",
-           "repeat", "plot_teach"]
+           "repeat", "plot_teach", "StationPanel", "station_panel"]

@@ -7,7 +7,13 @@ whatever size the browser draws it at; relativeX/relativeY over the drawn size i
 ClickToGrab.click((u, v)) -- the same call a headless notebook or a test makes. A click grabs when the gripper is
 empty (tasks.click_grab) and drops the held block when it is not (tasks.click_drop); every click returns a
 ClickResult whose message says the world point, what the arm did (its commands and motion time) or why the click
-was refused (nothing moved then). The view is refreshed after each action (click_grab/click_drop look again).
+was refused (nothing moved then). The view is refreshed after each action (click_grab/click_drop look again), and
+the panel's title says what the gripper holds and what the next click will do.
+
+A view is current while the arm has not moved since it was taken (view_is_current); widget() looks again first when
+it is not (e.g. after a pick made outside the panel, whose frame still shows the block on the board), and a click
+on a stale view is refused (nothing moves) after a new look, so no click ever acts on an old picture. Given a
+tasks.TaskMachine, clicks run through it (its click-grab / click-drop states and its emergency stop).
 
 Pixels: OpenCV convention (u right, v down, integer = pixel centre) in the camera's full-resolution frame.
 Units: mm, rad, s; world (board) frame. ipywidgets and ipyevents are imported only by ClickToGrab.widget().
@@ -24,11 +30,32 @@ import numpy as np
 from armlab.station import EmergencyStopped, MotionRefused
 
 from .click import ClickRefused, click_drop, click_grab, click_world, current_view
-from .pickplace import context
+from .machine import MachineBusy
+from .pickplace import context, look
 
-__all__ = ["ClickResult", "ClickToGrab", "event_pixel", "encode_view", "scaled_size"]
+__all__ = ["ClickResult", "ClickToGrab", "event_pixel", "encode_view", "scaled_size", "view_is_current",
+           "holding_text", "STALE_VIEW_RAD"]
 
 MARKER_RGB = (255, 0, 255)     # the last click, drawn on the shown frame
+STALE_VIEW_RAD = 0.02          # a look is out of date once any joint has moved more than this since it was taken
+
+
+def view_is_current(station) -> bool:
+    """True when the station has a last look (tasks.context(station).last) and the arm has not moved since it was
+    taken (every joint within STALE_VIEW_RAD of the look's reading): the frame then shows the board as it is."""
+    ctx = context(station)
+    if ctx.last is None:
+        return False
+    moved = np.abs(np.asarray(ctx.arm.joint_positions(), float) - np.asarray(ctx.last.arm_q, float)).max()
+    return bool(moved <= STALE_VIEW_RAD)
+
+
+def holding_text(station) -> str:
+    """What the gripper holds and what the next click does, in one line."""
+    held = context(station).held
+    if held is None:
+        return "holding nothing: the next click grabs the block under it"
+    return f"holding the {held.color} {held.size} block: the next click drops it where you click"
 
 
 def event_pixel(event: Mapping, frame_size: tuple[int, int], image_size: tuple[int, int]) -> tuple[float, float]:
@@ -125,6 +152,14 @@ class _Recorder:
         self.log.append(("close", bool(held)))
         return held
 
+    @property
+    def should_stop(self):          # a TaskMachine sets its stop flag on the context's arm: pass it through
+        return self._arm.should_stop
+
+    @should_stop.setter
+    def should_stop(self, value):
+        self._arm.should_stop = value
+
     def __getattr__(self, name):
         return getattr(self._arm, name)
 
@@ -154,15 +189,21 @@ class ClickToGrab:
         yaw: the yaw (rad) the dropped block is put down with.
         display_width: CSS width of the shown image in px (default: its encoded width); the browser may draw it at
             any size, the click mapping does not depend on it.
+        machine: a tasks.TaskMachine over the same station: clicks then run as its click-grab / click-drop commands
+            (refused while it is busy or emergency-stopped); default: tasks.click_grab / click_drop directly.
     """
 
-    def __init__(self, station, scale: float = 0.5, yaw: float = 0.0, display_width: int | None = None):
+    def __init__(self, station, scale: float = 0.5, yaw: float = 0.0, display_width: int | None = None,
+                 machine=None):
         if not 0.05 <= scale <= 1.0:
             raise ValueError(f"scale must lie in [0.05, 1], got {scale}")
+        if machine is not None and machine.station is not station:
+            raise ValueError("the TaskMachine given drives another station")
         self.station, self.scale, self.yaw = station, float(scale), float(yaw)
         self.display_width = display_width
+        self.machine = machine
         self.history: list[ClickResult] = []
-        self._image = self._out = None
+        self._image = self._out = self._title = None
         self._marker: tuple[float, float] | None = None
 
     @property
@@ -188,9 +229,14 @@ class ClickToGrab:
         """The shown image: (JPEG bytes, (w, h) px) of the current frame with the last click marked."""
         return encode_view(current_view(self.station).frame.rgb, self.scale, self._marker)
 
-    def click(self, uv) -> ClickResult:
+    def click(self, uv, check_view: bool = True) -> ClickResult:
         """Act on a click at camera pixel uv = (u, v): grab when the gripper is empty, else drop. Never raises for
-        a refused click or a refused/stopped motion: the result says why (and records what was sent, if anything)."""
+        a refused click or a refused/stopped motion: the result says why (and records what was sent, if anything).
+
+        With check_view (default), a click on a view that is no longer current (the arm moved since the look, see
+        view_is_current) is refused after a new look (the arm moves out of view, nothing else): the user clicked a
+        picture of the past. A caller that has just shown a frame taken now passes check_view=False (the station
+        panel does, after looking again itself)."""
         uv = tuple(float(c) for c in np.asarray(uv, dtype=float).reshape(-1))
         action = self.next_action
         ctx = context(self.station)
@@ -201,23 +247,27 @@ class ClickToGrab:
         try:
             if not valid:
                 raise ClickRefused(f"a click is a pixel (u, v) of 2 finite numbers, got {uv}")
+            if check_view and not view_is_current(self.station):
+                self._look()
+                raise ClickRefused("the picture was out of date (the arm had moved since it was taken): the camera "
+                                   "looked again, click on the new picture")
             world = click_world(self.station, uv, current_view(self.station).frame)
             where += f" -> world {_fmt(world)} mm"
             ctx.arm = recorder
             try:
                 if action == "grab":
-                    ok = click_grab(self.station, uv)
+                    ok = self._grab(uv)
                     block = ctx.held
                     did = (f"holding the {block.color} {block.size} block (top face {_fmt(block.position)} mm, "
                            f"yaw {_num(np.degrees(block.yaw))} deg)" if ok else "the gripper closed empty (missed)")
                 else:
                     held = ctx.held
-                    ok = click_drop(self.station, uv, self.yaw)
+                    ok = self._drop(uv)
                     did = f"put the {held.color} block down there"
             finally:
                 ctx.arm = recorder._arm
             message = f"{where}: {did}; {_summary(recorder.log)}"
-        except ClickRefused as e:
+        except (ClickRefused, MachineBusy) as e:
             message = f"{where}: refused, nothing moved: {e}"
         except (MotionRefused, EmergencyStopped) as e:
             message = (f"{where}: stopped by the arm after {_summary(recorder.log)}: "
@@ -228,6 +278,22 @@ class ClickToGrab:
             self._marker = uv
         self._refresh()
         return result
+
+    def _grab(self, uv) -> bool:
+        if self.machine is not None:
+            return self.machine.click_grab(uv)
+        return click_grab(self.station, uv)
+
+    def _drop(self, uv) -> bool:
+        if self.machine is not None:
+            return self.machine.click_drop(uv)
+        return click_drop(self.station, uv, self.yaw)
+
+    def _look(self) -> None:
+        if self.machine is not None:
+            self.machine.detect()
+        else:
+            look(self.station)
 
     def handle_event(self, event: Mapping) -> ClickResult | None:
         """The ipyevents callback: a "click" event dict -> click(pixel); other event types are ignored (None).
@@ -248,10 +314,19 @@ class ClickToGrab:
     def _refresh(self) -> None:
         if self._image is not None:
             self._image.value = self.view()[0]
+        if self._title is not None:
+            self._title.value = self._title_html()
 
-    def widget(self):
-        """The live panel: a title, the clickable image and an output area for the messages (an ipywidgets.VBox whose
-        text form is one deterministic line under 110 characters, which nbval compares). Needs ipywidgets and
+    def _title_html(self) -> str:
+        W, H = self.frame_size()
+        iw, ih = self.image_size()
+        return (f"<b>click-to-grab</b> ({W}x{H} frame shown at {iw}x{ih} px): <b>{holding_text(self.station)}</b>")
+
+    def widget(self, fresh: bool = True):
+        """The live panel: a title saying what is held and what the next click does, the clickable image and an
+        output area for the messages (an ipywidgets.VBox whose text form is one deterministic line under 110
+        characters, which nbval compares). With fresh (default), the camera looks again first when the last look
+        is out of date (view_is_current), so the panel never opens on a picture of the past. Needs ipywidgets and
         ipyevents."""
         try:
             import ipywidgets as w
@@ -259,6 +334,8 @@ class ClickToGrab:
         except ImportError as e:
             raise ImportError(f"the click panel needs ipywidgets and ipyevents (pip install -r requirements.txt): "
                               f"{e}") from e
+        if fresh and not view_is_current(self.station):
+            self._look()
         data, (iw, ih) = self.view()
         width = self.display_width or iw
         self._image = w.Image(value=data, format="jpeg", layout=w.Layout(width=f"{width}px", height="auto"))
@@ -266,10 +343,11 @@ class ClickToGrab:
         self._events = Event(source=self._image, watched_events=["click"], prevent_default_action=True)
         self._events.on_dom_event(self.handle_event)
         W, H = self.frame_size()
-        label = f"click-to-grab: {W}x{H} frame shown at {iw}x{ih} px; click a block to grab it, then a spot to drop it"
+        label = f"click-to-grab panel ({W}x{H} frame shown at {iw}x{ih} px): run the cell, then click a block"
+        self._title = w.HTML(self._title_html())
 
         class ClickPanel(w.VBox):
             def __repr__(self) -> str:      # the text form nbval compares: no image bytes, no widget ids
                 return label
 
-        return ClickPanel([w.HTML(f"<b>{label}</b>"), self._image, self._out])
+        return ClickPanel([self._title, self._image, self._out])

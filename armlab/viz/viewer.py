@@ -1,14 +1,25 @@
 """The meshcat viewer: the RX200 drawn from primitives, the board, frames, objects, the camera and point clouds.
 
 Every public method takes world (board-frame) millimetres and radians. Inside meshcat the kit's scene hangs under one
-node scaled by 1/1000, so meshcat sees metres (its camera, grid and lights assume metres).
+node scaled by 1/1000, so meshcat sees metres (its camera, grid and lights assume metres). Sizes that three.js does
+not scale with the node -- a point cloud's point size -- are given to meshcat in metres.
+
+In a notebook: `viewer.widget()` (or `viewer` as a cell's last line) shows the live scene inline (an iframe of the
+running meshcat server); `viewer.joint_sliders(arm=station.arm)` gives sliders that start from the viewer's pose,
+follow every later show()/animate(), and (with an arm) move the arm within its joint limits. close() tells what is
+still open that the viewer is gone: inline views say so, sliders are disabled with a note, and a browser tab on the
+server gets a grey background and a "viewer closed" sign before the server stops. Every method is thread-safe (one
+lock around the server connection), so a control panel may redraw from a worker thread.
 """
 
 from __future__ import annotations
 
 import contextlib
+import functools
+import html
 import io
 import os
+import threading
 import warnings
 import weakref
 from pathlib import Path
@@ -32,12 +43,16 @@ from armlab.transforms import homogeneous
 from armlab.viz import geometry as geo
 from armlab.viz.server import ZMQ_ENV, ServerProcess, probe, start_server
 
-__all__ = ["Viewer", "ROOT", "DEFAULT_EYE_MM"]
+__all__ = ["Viewer", "ROOT", "DEFAULT_EYE_MM", "CLOSED_TEXT"]
 
 ROOT = "armlab"                                  # the kit's node: /meshcat/armlab
 DEFAULT_EYE_MM = (900.0, -650.0, 700.0)          # where the browser's camera starts (it looks at the world origin)
+CLOSED_TEXT = "viewer closed"                    # the sign an open browser tab shows after close()
 _TIMEOUT_MS = 30_000                             # a dead server raises instead of hanging forever
+_CLOSE_TIMEOUT_MS = 2_000                        # ... and close() gives it less
 _ARM, _JOINT, _GRIPPER, _TOOL = 0x303030, 0x606060, 0x8a8a8a, 0xd02020
+_SKY = ([135 / 255, 206 / 255, 250 / 255], [25 / 255, 25 / 255, 112 / 255])   # meshcat's background (top, bottom)
+_CLOSED_SKY = ([0.62, 0.62, 0.62], [0.45, 0.45, 0.45])
 
 
 def _rgb_hex(rgb) -> int:
@@ -56,6 +71,31 @@ def _lines(points_mm: np.ndarray, color: int) -> mg.LineSegments:
 def _stop(server: ServerProcess | None) -> None:
     if server is not None:
         server.stop()
+
+
+def _serialized(method):
+    """Run a Viewer method under the viewer's lock: one zmq REQ socket must not be used by two threads at once."""
+    @functools.wraps(method)
+    def locked(self, *args, **kwargs):
+        with self._lock:
+            return method(self, *args, **kwargs)
+    return locked
+
+
+class _Sprite(mg.Object):
+    """A three.js Sprite (always faces the camera); its geometry is ignored by three.js."""
+
+    _type = "Sprite"
+
+
+class _SpriteMaterial(mg.GenericMaterial):
+    _type = "SpriteMaterial"
+
+
+def _text_sprite(text: str) -> _Sprite:
+    """A sprite showing `text` (meshcat's "_text" canvas texture: 256 x 256 px, black, shrunk to fit the width)."""
+    texture = mg.GenericTexture({"type": "_text", "text": text, "font_size": 40, "font_face": "sans-serif"})
+    return _Sprite(mg.Box([1.0, 1.0, 1.0]), _SpriteMaterial(map=texture, transparent=True, depthTest=False))
 
 
 class Viewer:
@@ -78,6 +118,9 @@ class Viewer:
         self._server: ServerProcess | None = None
         self._vis: meshcat.Visualizer | None = None
         self._animated = False
+        self._lock = threading.RLock()
+        self._slider_sets: list = []          # joint_sliders() boxes to keep in step with the shown pose
+        self._panes: list = []                # widget() iframes to tell when the viewer closes
         url = zmq_url or os.environ.get(ZMQ_ENV) or None
         if url is None:
             self._server = start_server()
@@ -94,11 +137,13 @@ class Viewer:
             self._objects: dict[int, tuple] = {}
             self._root = self._vis[ROOT]
             self._root.delete()                       # a fresh scene, whatever an earlier user left behind
+            self._vis[f"{ROOT}_closed"].delete()      # ... and no "viewer closed" sign of an earlier close()
             self._animated = True
             self._clear_animation()                   # meshcat keeps animations on its global /meshcat node
             self._root.set_transform(_mm_to_m_root())
             self._vis["/Grid"].set_property("visible", False)
             self._vis["/Axes"].set_property("visible", False)
+            self._set_sky(self._vis, _SKY)            # an earlier viewer's close() greyed it
             self.look_from(DEFAULT_EYE_MM)
             self._draw_board()
             self._draw_arm(frames)
@@ -125,16 +170,55 @@ class Viewer:
         return self._vis is None
 
     def close(self) -> None:
-        """Stop an owned server (kill + wait), or remove the kit's scene from a shared one. Idempotent."""
-        vis, self._vis = self._vis, None
-        if vis is not None:
-            if self._server is None:
+        """Stop an owned server (kill + wait), or remove the kit's scene from a shared one. Idempotent.
+
+        What is still open is told first: a browser tab on the server turns grey with a "viewer closed" sign (it keeps
+        the last picture), inline views (widget()) say that the viewer is closed, and sliders are disabled with a note
+        (moving them does nothing and raises nothing)."""
+        with self._lock:
+            vis, self._vis = self._vis, None
+            if vis is not None:
+                socket = vis.window.zmq_socket
+                socket.setsockopt(zmq.RCVTIMEO, _CLOSE_TIMEOUT_MS)    # a dead server must not hold close() up
+                socket.setsockopt(zmq.SNDTIMEO, _CLOSE_TIMEOUT_MS)
+                alive = self._server is None or self._server.alive()
                 with contextlib.suppress(zmq.ZMQError):
-                    vis[ROOT].delete()
-                    if self._animated:
-                        vis.set_animation(Animation(), play=False)
-            vis.window.zmq_socket.close(linger=0)
-        self._finalizer()
+                    if not alive:
+                        raise zmq.Again()
+                    if self._server is None:
+                        vis[ROOT].delete()
+                        if self._animated:
+                            vis.set_animation(Animation(), play=False)
+                    self._farewell(vis)
+                vis.window.zmq_socket.close(linger=0)
+            self._finalizer()
+        self._tell_widgets_closed()
+
+    @staticmethod
+    def _set_sky(vis: meshcat.Visualizer, colors) -> None:
+        top, bottom = colors
+        vis["/Background"].set_property("top_color", list(top))
+        vis["/Background"].set_property("bottom_color", list(bottom))
+
+    def _farewell(self, vis: meshcat.Visualizer) -> None:
+        """Grey background and a camera-facing "viewer closed" sign over the board (meshcat units: metres)."""
+        self._set_sky(vis, _CLOSED_SKY)
+        sign = vis[f"{ROOT}_closed"]
+        sign.set_object(_text_sprite(CLOSED_TEXT))
+        sign.set_transform(homogeneous(None, [0.0, 0.15, 0.35]) @ np.diag([0.9, 0.9, 0.9, 1.0]))
+
+    def _tell_widgets_closed(self) -> None:
+        note = ("the 3D viewer is closed (viewer.close() stopped it): run the notebook's viewer cells again for a "
+                "live one")
+        for pane in self._panes:
+            with contextlib.suppress(Exception):
+                pane.value = (f'<div style="padding:1em;border:1px solid #999;background:#eee;color:#333">'
+                              f'{html.escape(note)}</div>')
+        for box in self._slider_sets:
+            with contextlib.suppress(Exception):
+                for child in box.children:
+                    child.disabled = True
+                box.note.value = "viewer closed: these sliders no longer move anything"
 
     def __enter__(self) -> Viewer:
         return self
@@ -145,12 +229,43 @@ class Viewer:
     def __repr__(self) -> str:
         return f"Viewer({'closed' if self.closed else self.url})"
 
+    def _ipython_display_(self) -> None:
+        """`viewer` as a cell's last line shows the live scene inline."""
+        from IPython.display import display
+
+        display(self.widget())
+
+    # -- inline in a notebook -----------------------------------------------------------------------------------
+    def iframe_html(self, height_px: int = 420) -> str:
+        """An HTML iframe of the live scene (the server's page; the browser must reach 127.0.0.1 of the kernel)."""
+        if self._vis is None:
+            raise RuntimeError("this Viewer is closed")
+        if not 100 <= int(height_px) <= 4000:
+            raise ValueError(f"height_px must lie in [100, 4000] px, got {height_px}")
+        return (f'<iframe class="armlab-viewer" src="{html.escape(self.url)}" title="armlab 3D viewer" '
+                f'style="width:100%;height:{int(height_px)}px;border:1px solid #ccc"></iframe>')
+
+    def widget(self, height_px: int = 420):
+        """The live 3D view as an ipywidgets.HTML (an iframe of the running meshcat server), for a notebook or a
+        panel. Its text form (what a notebook that was not run shows, and what nbval compares) is one fixed line.
+        close() replaces the view with a note saying the viewer is closed."""
+        import ipywidgets as widgets
+
+        class ViewerPane(widgets.HTML):
+            def __repr__(self) -> str:     # short and deterministic: no URL, no port, no widget id
+                return "ViewerPane(live 3D view of the station; run the cell to see it)"
+
+        pane = ViewerPane(value=self.iframe_html(height_px), layout=widgets.Layout(width="100%"))
+        self._panes.append(pane)
+        return pane
+
     def _node(self, path: str) -> meshcat.Visualizer:
         if self._vis is None:
             raise RuntimeError("this Viewer is closed")
         return self._root[path]
 
     # -- static parts -------------------------------------------------------------------------------------------
+    @_serialized
     def look_from(self, eye_mm) -> None:
         """Put the browser's camera at world point eye_mm (3,) mm, looking at the world origin with +z up."""
         eye = np.asarray(eye_mm, dtype=float)
@@ -194,6 +309,7 @@ class Viewer:
                 self._node(f"arm/frames/{geo.frame_name(i)}").set_object(mg.triad(60.0))
 
     # -- the arm ------------------------------------------------------------------------------------------------
+    @_serialized
     def show(self, q, gripper_opening_mm: float | None = None) -> None:
         """Draw the arm at joints q (5,) rad with the finger pads gripper_opening_mm apart (default: unchanged).
 
@@ -209,12 +325,14 @@ class Viewer:
         for path, pose in parts.poses.items():
             arm[path].set_transform(pose)
         self.q, self.gripper_opening_mm = q.copy(), float(opening)
+        self._sync_sliders()
 
     def _clear_animation(self) -> None:
         if self._animated:
             self._vis.set_animation(Animation(), play=False)
             self._animated = False
 
+    @_serialized
     def animate(self, times_s, qs, gripper_opening_mm=None, fps: int = 30, repetitions: int = 1,
                 objects=None) -> None:
         """Load a joint trajectory as a meshcat animation (it plays in the browser and in saved snapshots).
@@ -285,31 +403,82 @@ class Viewer:
         for object_id in missing:
             node[str(object_id)].set_property("visible", object_id in per_frame[-1])
 
-    def joint_sliders(self):
-        """ipywidgets sliders (one per joint, rad, within the limits, plus the gripper opening in mm) that move
-        the arm. Returns a VBox; display it in a live notebook."""
+    def joint_sliders(self, arm=None):
+        """ipywidgets sliders, one per joint (rad, within the joint limits), that start from the viewer's pose and
+        follow it (every later show() or animate() moves them too, without moving anything back).
+
+        Without an arm they move the drawn arm (and a "gripper mm" slider opens the drawn fingers). With an arm
+        (e.g. station.arm) the viewer first shows the arm's reading, each released slider moves the ARM there
+        (arm.move_to; a refused move, e.g. into the board, is reported under the sliders and they return to the
+        arm's pose) and the viewer then shows where the arm is; the gripper is an open/close toggle. Blocking
+        moves run in the kernel: for an emergency stop during motions, use the station panel
+        (armlab.tasks.station_panel). After close() the sliders are disabled with a note. Returns a VBox
+        (attributes sliders, gripper, note); display it in a live notebook."""
         import ipywidgets as widgets
 
         robot = rx200()
-        sliders = [widgets.FloatSlider(value=float(v), min=float(lo), max=float(hi), step=0.01, description=name,
-                                       readout_format=".2f", continuous_update=True)
-                   for name, v, lo, hi in zip(robot.joint_names, self.q, robot.lower, robot.upper)]
-        gripper = widgets.FloatSlider(value=self.gripper_opening_mm, min=0.0, max=geo.MAX_GRIPPER_OPENING_MM, step=1.0,
-                                      description="gripper mm", readout_format=".0f", continuous_update=True)
+        lo, hi = np.asarray(robot.lower, float), np.asarray(robot.upper, float)
+        if arm is not None:
+            self.show(np.clip(np.asarray(arm.joint_positions(), float), lo, hi),
+                      getattr(arm, "gripper_opening_mm", None))
+        sliders = [widgets.FloatSlider(value=float(v), min=float(a), max=float(b), step=0.01, description=name,
+                                       readout_format=".2f", continuous_update=arm is None)
+                   for name, v, a, b in zip(robot.joint_names, self.q, lo, hi)]
+        if arm is None:
+            gripper = widgets.FloatSlider(value=self.gripper_opening_mm, min=0.0, max=geo.MAX_GRIPPER_OPENING_MM,
+                                          step=1.0, description="gripper mm", readout_format=".0f",
+                                          continuous_update=True)
+        else:
+            gripper = widgets.ToggleButtons(options=["open", "closed"], value="open", description="gripper")
+        note = widgets.Label(value="")
+        viewer_ref = weakref.ref(self)
 
         def update(_change=None):
-            self.show([s.value for s in sliders], gripper.value)
+            viewer = viewer_ref()
+            if viewer is None or viewer.closed or box.syncing:
+                return
+            q = np.array([s.value for s in sliders])
+            if arm is None:
+                viewer.show(q, gripper.value)
+                return
+            try:
+                if _change is not None and _change["owner"] is gripper:
+                    arm.close_gripper() if gripper.value == "closed" else arm.open_gripper()
+                else:
+                    arm.move_to(q)
+                note.value = ""
+            except Exception as e:   # a refused or stopped move: say why, never raise into the widget's comm
+                note.value = f"not moved: {type(e).__name__}: {str(e).splitlines()[0][:160]}"
+            viewer.show(np.clip(np.asarray(arm.joint_positions(), float), lo, hi),
+                        getattr(arm, "gripper_opening_mm", None))
 
         for s in [*sliders, gripper]:
             s.observe(update, names="value")
 
         class JointSliders(widgets.VBox):
             def __repr__(self) -> str:  # short and deterministic: nbval compares a displayed widget's text
-                return f"JointSliders({', '.join(c.description for c in self.children)})"
+                names = ", ".join(c.description for c in [*self.sliders, self.gripper])
+                return f"JointSliders({names}): run the cell to use them"
 
-        return JointSliders([*sliders, gripper])
+        box = JointSliders([*sliders, gripper, note])
+        box.sliders, box.gripper, box.note, box.syncing, box.arm = sliders, gripper, note, False, arm
+        self._slider_sets.append(box)
+        return box
+
+    def _sync_sliders(self) -> None:
+        """Set every slider set to the shown pose (their observers see box.syncing and move nothing)."""
+        for box in self._slider_sets:
+            box.syncing = True
+            try:
+                for s, v in zip(box.sliders, self.q):
+                    s.value = float(np.clip(v, s.min, s.max))
+                if box.arm is None:
+                    box.gripper.value = float(np.clip(self.gripper_opening_mm, 0.0, geo.MAX_GRIPPER_OPENING_MM))
+            finally:
+                box.syncing = False
 
     # -- the station --------------------------------------------------------------------------------------------
+    @_serialized
     def draw_objects(self, objects: list[ObjectState]) -> None:
         """Draw blocks and distractors (armlab.blocks.ObjectState) in their LAB_RGB colours; objects drawn earlier
         and missing from `objects` are removed. Geometry is sent once per object; later calls only move it."""
@@ -330,6 +499,7 @@ class Viewer:
                 self._objects[obj.id] = key
             node.set_transform(geo.object_pose(obj))
 
+    @_serialized
     def draw_camera(self, camera: Camera, depth_mm: float | None = None, name: str = "camera") -> None:
         """Draw a camera's view frustum (centre to the image corners at depth_mm, default: the depth at which it
         sees the board centre) and its frame (x right, y down, z optical axis) at its pose."""
@@ -343,8 +513,10 @@ class Viewer:
         node["frame"].set_object(mg.triad(80.0))
         node["frame"].set_transform(camera.T_world_cam)
 
+    @_serialized
     def draw_point_cloud(self, points_world, colors, name: str = "cloud", point_size_mm: float = 4.0) -> None:
-        """Draw points (N, 3) world mm with colours (N, 3) uint8 RGB; rows with NaN are skipped."""
+        """Draw points (N, 3) world mm with colours (N, 3) uint8 RGB, each point_size_mm across; rows with NaN are
+        skipped."""
         P = np.asarray(points_world, dtype=float)
         C = np.asarray(colors)
         if P.ndim != 2 or P.shape[1] != 3:
@@ -354,16 +526,21 @@ class Viewer:
         if not point_size_mm > 0:
             raise ValueError(f"point_size_mm must be positive, got {point_size_mm}")
         keep = np.all(np.isfinite(P), axis=1)
+        # three.js sizes points in world units without the node's scale: metres here, not the kit's millimetres
         cloud = mg.PointCloud(P[keep].T.astype(np.float32), (C[keep].T / 255.0).astype(np.float32),
-                              size=float(point_size_mm))
+                              size=float(point_size_mm) / 1000.0)
         self._node(f"clouds/{name}").set_object(cloud)
 
-    def draw_rgbd(self, rgb, depth_mm, camera: Camera, stride: int = 4, name: str = "cloud") -> int:
-        """Draw an RGB-D frame as a world point cloud (every stride-th pixel); returns the number of points."""
+    @_serialized
+    def draw_rgbd(self, rgb, depth_mm, camera: Camera, stride: int = 4, name: str = "cloud",
+                  point_size_mm: float = 4.0) -> int:
+        """Draw an RGB-D frame as a world point cloud (every stride-th pixel, each point point_size_mm across);
+        returns the number of points."""
         points, colors = geo.rgbd_to_point_cloud(rgb, depth_mm, camera, stride)
-        self.draw_point_cloud(points, colors, name=name)
+        self.draw_point_cloud(points, colors, name=name, point_size_mm=point_size_mm)
         return len(points)
 
+    @_serialized
     def delete(self, path: str) -> None:
         """Remove a drawn item, e.g. "objects", "cameras/camera" or "clouds/cloud"."""
         path = str(path).strip("/")
@@ -375,6 +552,7 @@ class Viewer:
             if path == "objects" or path == f"objects/{object_id}":
                 del self._objects[object_id]
 
+    @_serialized
     def set_visible(self, path: str, visible: bool) -> None:
         """Show or hide a part of the scene: "arm", "arm/frames", "board", "objects", "cameras", "clouds", ..."""
         path = str(path).strip("/")
@@ -383,6 +561,7 @@ class Viewer:
         self._node(path).set_property("visible", bool(visible))
 
     # -- snapshots ----------------------------------------------------------------------------------------------
+    @_serialized
     def static_html(self) -> str:
         """The whole scene as one self-contained HTML page (about 0.9 MB, animations included, no network)."""
         if self._vis is None:

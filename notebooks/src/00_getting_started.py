@@ -25,6 +25,9 @@ from armlab.robot import rx200
 from armlab.viz import Viewer
 
 get_ipython().run_line_magic("matplotlib", "inline")  # figures appear below their cell
+from armlab.viz.figures import readable
+
+readable()                                             # figure size and fonts readable at 100 % zoom
 np.set_printoptions(precision=3, suppress=True)
 robot = rx200()
 lab = lab_config()
@@ -78,12 +81,15 @@ print("OK: world -> pixel -> board plane round trip of the 4 tag centres within 
 # ## 2 · The arm in the viewer
 #
 # `Viewer()` starts a meshcat server and draws the board, the tags, the arm (links between the joint positions, the
-# joint drums along their axes, the gripper) and the frames of every link. Open the printed URL in your browser to
-# rotate and zoom. Use it in a `with` block, or call `viewer.close()` when done: that stops its server.
+# joint drums along their axes, the gripper) and the frames of every link. The 3D view appears below (drag to turn,
+# scroll to zoom); `viewer.url` opens it in its own tab.
 
 # %%
 viewer = Viewer()
 print(viewer)
+
+# %%
+viewer.widget()
 
 # %% [markdown]
 # `viewer.show(q, gripper_opening_mm=...)` moves the drawn arm to joint angles `q` (waist, shoulder, elbow,
@@ -107,7 +113,7 @@ for name, q in poses.items():
 # draws its links between): a top view of the board and a side view along the arm.
 
 # %%
-fig, (top, side) = plt.subplots(1, 2, figsize=(9, 3.6), dpi=70)
+fig, (top, side) = plt.subplots(1, 2, figsize=(9, 3.8))
 top.add_patch(plt.Rectangle((lab.board_x[0], lab.board_y[0]), 1000, 650, color="wheat"))
 top.plot(tag_centres[:, 0], tag_centres[:, 1], "ks", ms=4)
 for name, q in poses.items():
@@ -118,7 +124,7 @@ for name, q in poses.items():
 top.set(xlabel="x (mm)", ylabel="y (mm)", title="top view (world)", aspect="equal")
 side.set(xlabel="along the arm's heading (mm)", ylabel="z (mm)", title="side view", aspect="equal")
 side.axhline(0, color="peru")
-side.legend(fontsize=7)
+side.legend()
 fig.tight_layout()
 
 # %% [markdown]
@@ -188,7 +194,7 @@ print("the camera reports its factory intrinsics: fx =", station.camera.K[0, 0],
 # (darker-blue) patches; the arm at its sleep pose is in the picture too.
 
 # %%
-fig, (ax_rgb, ax_depth) = plt.subplots(1, 2, figsize=(10, 3), dpi=70)
+fig, (ax_rgb, ax_depth) = plt.subplots(1, 2, figsize=(9, 2.9))
 ax_rgb.imshow(frame.rgb)
 ax_rgb.set_title("RGB")
 im = ax_depth.imshow(frame.depth, cmap="viridis", vmin=850, vmax=1100)
@@ -213,6 +219,14 @@ try:
 except MotionRefused as refusal:
     print("refused:", str(refusal).split(":")[0])
 print("still at home:", bool(np.allclose(station.arm.joint_positions(), robot.home, atol=0.01)))
+
+# %% [markdown]
+# These sliders move the station's arm (within its joint limits; a move the arm refuses is reported and they return
+# to its pose).
+
+# %%
+arm_sliders = viewer.joint_sliders(arm=station.arm)
+arm_sliders
 
 # %% [markdown]
 # The viewer can draw the whole station: the blocks of the world, the camera's frustum and the depth image turned into
@@ -248,9 +262,9 @@ print(f"OK: {len(tops)} block tops seen where they are: error {err.min():.0f}-{e
 # ROS 2 packages and `pyrealsense2`). Use it in a `with` block, so that the arm goes to its sleep pose before the
 # driver shuts down, even when your code raises. There is no `world` there: the truth is what you measure.
 
-# %%
-viewer.close()
-print(viewer)
+# %% [markdown]
+# The viewer stays live while the kernel runs; `viewer.close()` (or shutting the kernel down) stops it, and open
+# views then say so.
 
 # %% [markdown]
 # ## 4 · How to check your work

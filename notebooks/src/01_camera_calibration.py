@@ -41,6 +41,9 @@ from armlab.sim.checkerboard import load_dataset
 from armlab.tasks.perception import station_intrinsics
 
 get_ipython().run_line_magic("matplotlib", "inline")
+from armlab.viz.figures import readable
+
+readable()                                             # figure size and fonts readable at 100 % zoom
 np.set_printoptions(precision=3, suppress=True)
 lab = lab_config()
 views, meta = load_dataset()       # 16 checkerboard photos taken by the station's camera (data/checkerboard/)
@@ -107,7 +110,7 @@ print("OK: project_pinhole matches Camera.project on the 4 tag centres (within 1
 # %%
 intrinsics = cal.calibrate_intrinsics(views, tuple(meta["pattern_size"]), meta["square_mm"])
 print(intrinsics.summary())
-fig, axes = plt.subplots(1, 3, figsize=(10, 2.3), dpi=60)
+fig, axes = plt.subplots(1, 3, figsize=(9, 2.6))
 for ax, i in zip(axes[:2], (0, 7)):
     corners = cal.find_checkerboard(views[i], (9, 6))
     ax.imshow(views[i], cmap="gray")
@@ -193,7 +196,7 @@ print(f"OK: each camera needs its own checkerboard photos: {own_mm:.1f} mm with 
 
 # %%
 tags = cal.detect_tags(frame.rgb)
-fig, ax = plt.subplots(figsize=(6, 3.4), dpi=50)
+fig, ax = plt.subplots(figsize=(7, 4.2))
 ax.imshow(frame.rgb)
 for t in tags:
     ax.plot(*np.vstack([t.corners, t.corners[:1]]).T, "-", color="lime", lw=1)
@@ -264,7 +267,7 @@ grid_uv = truth.project(grid)          # where the image shows each grid point (
 mapped = view.to_world(cv2.perspectiveTransform(grid_uv.reshape(-1, 1, 2), H).reshape(-1, 2))
 err_h = np.linalg.norm(mapped - grid[:, :2], axis=1)
 err_b = np.linalg.norm(view.to_world(view.from_world(camera.pixel_to_plane(grid_uv))) - grid[:, :2], axis=1)
-fig, axes = plt.subplots(1, 3, figsize=(11, 2.6), dpi=60)
+fig, axes = plt.subplots(1, 3, figsize=(9, 3.2))
 extent = (*lab.board_x, *lab.board_y)
 for ax, img, title in [(axes[0], top_h, "four-tag homography"), (axes[1], top_b, "BoardView (with distortion)")]:
     ax.imshow(img, extent=extent)
@@ -369,7 +372,7 @@ correction = cal.fit_depth_correction(frame.depth, camera)
 expected, on_board = cal.board_depth(camera, step=4)
 raw = frame.depth[::4, ::4] - expected
 fixed = correction.apply(frame.depth)[::4, ::4] - expected
-fig, axes = plt.subplots(1, 2, figsize=(10, 2.8), dpi=60)
+fig, axes = plt.subplots(1, 2, figsize=(9, 2.9))
 for ax, image, title in [(axes[0], raw, "measured - expected depth"), (axes[1], fixed, "after the correction")]:
     im = ax.imshow(np.where(on_board, image, np.nan), cmap="coolwarm", vmin=-25, vmax=25)
     ax.set(title=title, xticks=[], yticks=[])
@@ -425,7 +428,7 @@ for name, g in [("before", before), ("after", after)]:
           f"growth {g.border_growth():+.2f} mm per 100 mm from the centre")
 
 # %%
-fig, axes = plt.subplots(1, 3, figsize=(12, 2.9), dpi=60)
+fig, axes = plt.subplots(1, 3, figsize=(9, 3.2))
 for ax, g, title in [(axes[0], before, "before"), (axes[1], after, "after")]:
     sc = ax.scatter(g.world[:, 0], g.world[:, 1], c=g.norm, cmap="magma", marker="s", s=22)
     fig.colorbar(sc, ax=ax, label="world error (mm)")
@@ -436,7 +439,7 @@ for g, name in [(before, "before"), (after, "after")]:
     axes[2].plot(r, g.norm, ".", ms=3, label=f"{name} ({g.border_growth():+.2f} mm/100 mm)")
     axes[2].plot(np.sort(r), np.polyval(np.polyfit(r, g.norm, 1), np.sort(r)), "k-", lw=1)
 axes[2].set(xlabel="distance from the board centre (mm)", ylabel="error (mm)", title="error vs distance")
-axes[2].legend(fontsize=8)
+axes[2].legend()
 fig.tight_layout()
 
 # %% [markdown]
@@ -486,13 +489,13 @@ for name, cam, depth, correct in cases:
     refine_rows[name] = errors
     print(f"{name:<40} {errors[0].mean_mm:6.2f} / {errors[0].max_mm:4.1f} {errors[1].mean_mm:6.2f} / "
           f"{errors[1].max_mm:4.1f}   tilt {ref.tilt_deg:.2f} deg, height {ref.height_change_mm:+.1f} mm")
-fig, ax = plt.subplots(figsize=(7, 2.2), dpi=60)
+fig, ax = plt.subplots(figsize=(8, 2.6))
 y = np.arange(len(cases))
 ax.barh(y - 0.2, [r[0].mean_mm for r in refine_rows.values()], 0.4, label="tags")
 ax.barh(y + 0.2, [r[1].mean_mm for r in refine_rows.values()], 0.4, label="tags + depth refinement")
 ax.set(yticks=y, yticklabels=list(refine_rows), xlabel="mean grid world error (mm)")
 ax.invert_yaxis()
-ax.legend(fontsize=8)
+ax.legend()
 fig.tight_layout()
 
 # %% [markdown]

@@ -21,6 +21,9 @@ from armlab.robot import DH_TOOL_ROTATION, rx200
 from armlab.transforms import exp_se3, homogeneous, rot_z
 
 get_ipython().run_line_magic("matplotlib", "inline")  # figures appear below their cell
+from armlab.viz.figures import readable
+
+readable()                                             # figure size and fonts readable at 100 % zoom
 np.set_printoptions(precision=3, suppress=True)
 robot = rx200()
 rng = np.random.default_rng(2)
@@ -169,7 +172,7 @@ print("OK: your FK matches armlab.kinematics.fk at 1000 random poses within 1e-9
 
 # %%
 poses = {"home": robot.home, "sleep": robot.sleep, "grasp at (0, 280, 19)": np.array([0.0, 0.308, 0.23, 1.033, 0.0])}
-fig, axes = plt.subplots(1, 3, figsize=(12, 3.8), dpi=80, sharey=True)
+fig, axes = plt.subplots(1, 3, figsize=(9, 3.4), sharey=True)
 for ax, (title, q) in zip(axes, poses.items()):
     pts = kinematics.joint_positions(q)
     frames = kinematics.link_frames(q)
@@ -283,7 +286,7 @@ for name, tab in report_tables.items():
           f"(mean {np.nanmean(e):.1f}); 1000 random poses: {e_any.min():.1f} to {e_any.max():.1f} mm")
 
 # %%
-fig, axes = plt.subplots(1, 2, figsize=(11, 3.6), dpi=80)
+fig, axes = plt.subplots(1, 2, figsize=(9, 3.2))
 for ax, (name, e) in zip(axes, errors.items()):
     im = ax.pcolormesh(X, Y, e, shading="nearest", cmap="viridis")
     ax.plot(0, 0, "r^", ms=8)

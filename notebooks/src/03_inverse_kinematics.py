@@ -23,6 +23,9 @@ from armlab.lab import lab_config
 from armlab.robot import rx200
 
 get_ipython().run_line_magic("matplotlib", "inline")  # figures appear below their cell
+from armlab.viz.figures import readable
+
+readable()                                             # figure size and fonts readable at 100 % zoom
 np.set_printoptions(precision=3, suppress=True)
 robot = rx200()
 lab = lab_config()
@@ -149,7 +152,8 @@ print(f"OK: planar_ik: every branch lands on its target (within 1e-9 mm) and the
 target, pitch = np.array([60.0, 380.0, 60.0]), np.pi / 2
 cand = four_branches(target, pitch)
 u = np.append(target[:2] / np.linalg.norm(target[:2]), 0.0)
-fig, axes = plt.subplots(1, 4, figsize=(13, 3.4), dpi=80, sharey=True)
+fig, axes = plt.subplots(2, 2, figsize=(9, 6.6), sharey=True)
+axes = axes.ravel()
 for ax, name, q in zip(axes, BRANCHES, cand):
     pts = kinematics.joint_positions(q)
     bad = robot.limit_violations(q)
@@ -158,9 +162,10 @@ for ax, name, q in zip(axes, BRANCHES, cand):
     ax.axhline(0, color="peru", lw=4)
     verdict = "OK" if not bad else "breaks " + ", ".join(b.split(" = ")[0] for b in bad)
     degrees = np.round(np.degrees(q[:4])).astype(int)
-    ax.set_title(f"{name}\nq1-4 = {degrees} deg\n{verdict}", fontsize=9)
+    ax.set_title(f"{name}\nq1-4 = {degrees} deg\n{verdict}")
     ax.set(xlabel="towards the target (mm)", aspect="equal", xlim=(-120, 430), ylim=(-40, 330))
-axes[0].set_ylabel("z (mm)")
+for ax in axes[::2]:
+    ax.set_ylabel("z (mm)")
 fig.tight_layout()
 
 # %%
@@ -200,7 +205,7 @@ print(f"{len(cells)} cells x {len(ladder)} pitches solved in one call; r_max for
 print(f"top-down: {top_down.mean():.0%} of the board; some pitch: {np.isfinite(steepest).mean():.0%}")
 
 # %%
-fig, ax = plt.subplots(figsize=(8, 5), dpi=80)
+fig, ax = plt.subplots(figsize=(8, 5))
 im = ax.pcolormesh(X, Y, np.degrees(steepest), shading="nearest", cmap="viridis", vmin=0, vmax=90)
 ax.contour(X, Y, top_down.astype(float), levels=[0.5], colors="white", linewidths=1.5)
 a = np.linspace(0, np.pi, 100)

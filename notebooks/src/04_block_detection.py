@@ -24,7 +24,9 @@ from armlab.detection.color import LAB_HSV_TABLE
 from armlab.sim.scoring import Score, corrected_depth, score_frame, sim_case
 
 get_ipython().run_line_magic("matplotlib", "inline")
-plt.rcParams["figure.dpi"] = 60
+from armlab.viz.figures import readable
+
+readable()                                             # figure size and fonts readable at 100 % zoom
 case = sim_case("line_up_3", 300, arm_over_board=True)      # seeded: the same frame every run
 depth = corrected_depth(case)                                   # depth-plane correction of notebook 01
 print(f"{case.scene}: {sum(t.is_block for t in case.truth)} blocks, "
@@ -78,7 +80,7 @@ def confusion(truth, labels, columns):
     return m
 
 
-fig, axes = plt.subplots(1, 2, figsize=(11, 4.5))
+fig, axes = plt.subplots(1, 2, figsize=(9, 4.2))
 for ax, labels, title, cols in [(axes[0], hsv_labels, "lab HSV table", list(COLORS) + ["none"]),
                                 (axes[1], model_labels, "white balance + chromaticity", list(COLORS))]:
     m = confusion(truth, labels, cols)
@@ -169,7 +171,7 @@ def wrap_yaw(angle: float) -> float:
 assert np.isclose(wrap_yaw(np.pi / 2 + 0.1), 0.1), \
     "wrap_yaw(pi/2 + 0.1) should be 0.1: a cube turned 90 deg looks the same"
 assert np.isclose(wrap_yaw(np.pi / 4), -np.pi / 4), "wrap_yaw must return angles in [-pi/4, pi/4)"
-fig, ax = plt.subplots(figsize=(10, 5.6))
+fig, ax = plt.subplots(figsize=(9, 5.1))
 ax.imshow(draw_detections(case.rgb, found, case.camera))
 ax.set_axis_off()
 _ = ax.set_title("detections: outline, label, yaw axes (x red, y green)")

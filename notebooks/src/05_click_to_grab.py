@@ -24,6 +24,9 @@ from armlab.tasks.experiments import LAB_TABLE_III_ERROR_MM, format_table, reach
 from armlab.tasks.sag import LAB_BASELINE, calibration_poses, hover_pose
 
 get_ipython().run_line_magic("matplotlib", "inline")
+from armlab.viz.figures import readable
+
+readable()                                             # figure size and fonts readable at 100 % zoom
 np.set_printoptions(precision=1, suppress=True)
 station = make_station("sim", seed=0, scene={"objects": [
     {"color": "red", "size": "large", "position_mm": [-150.0, 200.0], "yaw_rad": 0.0},
@@ -131,7 +134,7 @@ slope, offset = np.polyfit(reach, -dz, 1)
 print(f"measured sag: {-dz.min():.1f} mm at most; the lab's line z += {LAB_BASELINE[0]} r + {LAB_BASELINE[1]:.0f} mm, "
       f"fitted line z += {slope:.4f} r + {offset:.1f} mm; joint model fit RMS {model.rms_mm:.2f} mm")
 predicted = model.tool_error(poses)[:, 2]
-fig, ax = plt.subplots(figsize=(6, 3), dpi=80)
+fig, ax = plt.subplots(figsize=(7.5, 3.6))
 ax.plot(reach, -dz, "o", label="measured sag (tool z below target)")
 ax.plot(reach, -predicted, "x", label="joint compliance model")
 r_line = np.linspace(150, 450, 2)
@@ -139,7 +142,7 @@ ax.plot(r_line, slope * r_line + offset, "--", label="fitted line")
 ax.plot(r_line, LAB_BASELINE[0] * r_line + LAB_BASELINE[1], ":", label="lab rule 0.068 r + 3")
 ax.set_xlabel("reach r (mm)")
 ax.set_ylabel("sag (mm)")
-ax.legend(fontsize=7)
+ax.legend()
 _ = ax.set_title("sag against reach: two heights per reach, so a line cannot fit both", fontsize=9)
 
 # %%

@@ -23,6 +23,9 @@ from armlab import kinematics, make_station, tasks
 from armlab.tasks import teach
 
 get_ipython().run_line_magic("matplotlib", "inline")
+from armlab.viz.figures import readable
+
+readable()                                             # figure size and fonts readable at 100 % zoom
 np.set_printoptions(precision=1, suppress=True)
 station = make_station("sim", seed=0, scene="swap")
 for o in station.world.blocks:
@@ -89,7 +92,7 @@ print("OK: save/load: the program round-trips (to 1e-6 rad) and a bad gripper va
 # where the hand held it (notebook 05). The whole replay is a `planning.Plan`, so we can plot it before running it.
 
 # %%
-fig, ax = plt.subplots(figsize=(7, 3.2), dpi=80)
+fig, ax = plt.subplots(figsize=(8, 3.6))
 teach.plot_teach(loaded, ax=ax)
 plan = loaded.to_plan()
 print(f"replay: {len(plan.steps)} steps, {plan.duration:.1f} s")

@@ -29,6 +29,9 @@ from armlab.tasks.events import scoring
 from armlab.tasks.events.sky import TOWER_XY, highest_tool_z
 
 get_ipython().run_line_magic("matplotlib", "inline")
+from armlab.viz.figures import readable
+
+readable()                                             # figure size and fonts readable at 100 % zoom
 np.set_printoptions(precision=2, suppress=True)
 
 
@@ -41,14 +44,13 @@ def draw_board(ax, objects, title):
                 ax.add_patch(plt.Polygon(poly, closed=True, fc=np.array(LAB_RGB[o.color]) / 255,
                                          ec="k", lw=0.5, hatch=None if o.is_block else "///"))
         if len(col) > 1:
-            ax.annotate(str(len(col)), col[-1].position[:2], color="w", ha="center", va="center", fontsize=7)
+            ax.annotate(str(len(col)), col[-1].position[:2], color="w", ha="center", va="center", fontsize=9)
     ax.add_patch(plt.Rectangle((-55, -60), 110, 120, fc="0.4", zorder=1))   # the arm's base plate
     ax.set(xlim=(-500, 500), ylim=(-175, 475), aspect="equal", title=title)
-    ax.tick_params(labelsize=7)
 
 
 def before_after(result):
-    fig, axes = plt.subplots(1, 2, figsize=(9, 3.2), dpi=70)
+    fig, axes = plt.subplots(1, 2, figsize=(9, 3.4))
     snaps = result.replay.snapshots
     draw_board(axes[0], objects_from_snapshot(snaps[0][2]), "start")
     draw_board(axes[1], objects_from_snapshot(snaps[-1][2]), f"end ({result.time_s:.0f} s simulated)")
@@ -124,12 +126,12 @@ before_after(sort3)
 
 # %%
 r = sort3.replay
-fig, ax = plt.subplots(figsize=(9, 3), dpi=70)
+fig, ax = plt.subplots(figsize=(9, 3.2))
 for j, name in enumerate(JOINT_NAMES):
     ax.plot(r.times, r.q[:, j], lw=1, label=name)
 ax.fill_between(r.times, 0, 1, where=r.gripper < 50, transform=ax.get_xaxis_transform(), color="0.85", zorder=0)
 ax.set(xlabel="simulated time (s)", ylabel="joint angle (rad)")
-_ = ax.legend(fontsize=7, ncol=5, loc="lower right")
+_ = ax.legend(fontsize=9, ncol=5, loc="lower right")
 
 # %%
 assert sort3.score.full_marks, f"sort 'n stack scored {sort3.score.points:g}/{sort3.score.max_points}"
@@ -185,7 +187,7 @@ heights = [o.top_z for o in max(columns(station.world.objects), key=len)]
 print(f"tower: {tower} blocks, top at {heights[-1]:.0f} mm; {sky.score.points:g} points")
 
 # %%
-fig, ax = plt.subplots(figsize=(3.5, 4), dpi=70)
+fig, ax = plt.subplots(figsize=(3.8, 4.6))
 col = max(columns(station.world.objects), key=len)
 for o in col:
     ax.add_patch(plt.Rectangle((o.position[0] - 19, o.bottom_z), 38, 38, fc=np.array(LAB_RGB[o.color]) / 255,
@@ -193,7 +195,6 @@ for o in col:
 ax.axhline(heights[-1], color="0.5", ls=":")
 ax.set(xlim=(TOWER_XY[0] - 80, TOWER_XY[0] + 80), ylim=(0, 520), aspect="equal", xlabel="x (mm)",
        ylabel="z (mm)", title="the tower, side view")
-ax.tick_params(labelsize=7)
 
 # %%
 assert tower >= 12, f"the tower has {tower} blocks (expected at least 12)"

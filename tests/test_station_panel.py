@@ -1,0 +1,265 @@
+"""The control-station panel (armlab.tasks.station_panel) headless, on the simulator with its ground truth as the known
+answer: the handlers the widgets call, the worker thread that keeps the kernel free, the emergency stop during a
+motion, fresh views after moves, the mouse-over readout, teach/record/repeat, and the 3D view that follows the arm.
+The same panel in a real browser: tests/test_station_panel_browser.py."""
+
+from __future__ import annotations
+
+import re
+import threading
+import time
+
+import numpy as np
+import pytest
+
+from armlab import make_station, tasks
+from armlab.robot import rx200
+from armlab.tasks.station_panel import StationPanel, depth_rgb, station_panel
+from armlab.viz import Viewer
+
+SCENE = {"objects": [
+    {"color": "red", "size": "large", "position_mm": [-150.0, 200.0], "yaw_rad": 0.0},
+    {"color": "blue", "size": "small", "position_mm": [200.0, 150.0], "yaw_rad": 0.3},
+    {"color": "green", "size": "large", "position_mm": [60.0, 300.0], "yaw_rad": -0.5},
+]}
+READOUT = re.compile(r"pixel \((-?[\d.]+), (-?[\d.]+)\): world x (-?[\d.]+), y (-?[\d.]+), z (-?[\d.]+) mm")
+
+
+@pytest.fixture(scope="module")
+def viewer():
+    with Viewer() as v:
+        yield v
+
+
+@pytest.fixture
+def panel(viewer):
+    station = make_station("sim", seed=0, scene=SCENE)
+    p = station_panel(station, viewer=viewer)
+    p.widget()
+    yield p
+    p.close()
+    assert not p.busy
+
+
+def truth_block(station, color):
+    return next(o for o in station.world.blocks if o.color == color)
+
+
+def top_pixel(station, color):
+    o = truth_block(station, color)
+    return station.camera.truth.project((o.position + [0, 0, o.edge / 2])[None])[0]
+
+
+def board_pixel(station, xy):
+    return station.camera.truth.project(np.array([[xy[0], xy[1], 0.0]]))[0]
+
+
+def readout(text):
+    m = READOUT.search(text)
+    assert m, text
+    values = [float(g) for g in m.groups()]
+    return np.array(values[:2]), np.array(values[2:])
+
+
+def test_click_grabs_the_block_under_it_then_drops_it_where_clicked(panel):
+    station = panel.station
+    assert panel.next_click == "grab" and "holding nothing" in panel.status_text()
+    assert panel.click(top_pixel(station, "blue"))
+    message = panel.wait()
+    assert "holding the blue small block" in message
+    blue = truth_block(station, "blue")
+    assert blue.id in station.world.held and blue.position[2] > 30.0        # in the gripper, off the board
+    assert panel.next_click == "drop" and "holding the blue small block: the next click drops it" in \
+        panel.status_text()
+    assert panel.frame_is_look and sorted(b.color for b in panel.ctx.last.blocks) == ["green", "red"]
+    spot = np.array([-200.0, 80.0, 0.0])
+    assert panel.click(board_pixel(station, spot[:2]))
+    assert "put the blue block down" in panel.wait()
+    bottom = blue.position - [0, 0, blue.edge / 2]
+    assert np.abs(bottom - spot).max() < 3.0 and not station.world.held
+    assert panel.machine.history[-4:] == ["click-grab", "idle", "click-drop", "idle"]    # through the machine
+
+
+def test_mouse_over_reads_world_coordinates_within_2_mm(panel):
+    station, truth = panel.station, panel.station.camera.truth
+    rng = np.random.default_rng(3)
+    for xy in rng.uniform([-400, 0], [400, 420], (40, 2)):
+        near = min(np.hypot(*(xy - o.position[:2])) for o in station.world.blocks)
+        if near < 45 or np.hypot(*xy) < 130:                   # bare board only: away from blocks and the robot
+            continue
+        uv, p = readout(panel.mouse(np.round(board_pixel(station, xy) * 2) / 2))
+        assert np.linalg.norm(p - truth.pixel_to_plane(uv[None], 0.0)[0]) < 2.0, (xy, p)
+    for color in ("red", "green"):
+        o = truth_block(station, color)
+        uv, p = readout(panel.mouse(top_pixel(station, color)))
+        assert np.linalg.norm(p - truth.pixel_to_plane(uv[None], o.position[2] + o.edge / 2)[0]) < 2.0, (color, p)
+    assert "outside the 1280x720 image" in panel.mouse((2000.0, 10.0))
+    assert panel._w["mouse"].value.startswith("pixel (2000.0, 10.0)")      # shown under the image
+
+
+def test_the_emergency_stop_halts_a_running_motion(panel):
+    station = panel.station
+    panel.set_real_time(True)                   # motions take wall-clock time, as on the real arm
+    try:
+        target = rx200().sleep
+        start = station.arm.joint_positions()
+        assert panel.sleep()
+        deadline = time.monotonic() + 10
+        while not station.arm.is_moving() and time.monotonic() < deadline:
+            time.sleep(0.01)
+        time.sleep(0.4)
+        assert panel.busy and station.arm.is_moving()
+        assert not panel.detect() and "detect refused: sleep runs" in panel.messages[-1]   # one at a time
+        t0 = time.monotonic()
+        panel.estop()                            # from this (the "kernel's main") thread while the worker moves
+        message = panel.wait(timeout_s=10)
+        assert time.monotonic() - t0 < 1.0, "the stopped command did not end at once"
+        assert "sleep stopped: EmergencyStopped" in message and panel.machine.state == "estop"
+        q_stop = station.arm.joint_positions()
+        time.sleep(0.5)
+        np.testing.assert_allclose(station.arm.joint_positions(), q_stop, atol=0.005)   # and it stays there
+        assert np.abs(q_stop - target).max() > 0.2 and np.abs(q_stop - start).max() > 0.02   # halfway
+        assert panel.status_text().startswith("state estop") and any("EMERGENCY STOP" in m for m in panel.messages)
+        assert not panel.home() or "refused" in panel.wait()          # everything is refused until reset
+        assert panel.machine.state == "estop"
+        assert panel._w["reset"].disabled is False and panel._w["home"].disabled is True
+        assert "reset" in panel.reset() and panel.machine.state == "idle"
+    finally:
+        panel.set_real_time(False)
+
+
+def test_every_move_leaves_a_fresh_view_and_the_next_click_looks_first(panel):
+    station = panel.station
+    before = panel._frame.timestamp
+    sliders = panel._w["sliders"]
+    sliders[0].value = 0.5                                  # what a released slider does
+    assert "sliders: moved" in panel.wait()
+    np.testing.assert_allclose(panel.ctx.arm.joint_positions()[0], 0.5, atol=0.01)
+    assert not panel.frame_is_look and panel._frame.timestamp > before   # a frame captured after the move
+    assert "the next click looks again first" in panel._w["caption"].value
+    np.testing.assert_allclose([s.value for s in sliders], np.clip(panel.ctx.arm.joint_positions(), rx200().lower,
+                                                                   rx200().upper), atol=0.005)   # encoder ticks
+    looks = panel.machine.history.count("detect")
+    assert panel.click(top_pixel(station, "red"))
+    assert "holding the red large block" in panel.wait()
+    assert panel.machine.history.count("detect") == looks + 1   # it looked (arm out of view) before grabbing
+
+
+def test_sliders_are_the_joint_limits_and_a_move_outside_is_refused(panel):
+    robot = rx200()
+    assert [(s.min, s.max) for s in panel._w["sliders"]] == list(zip(robot.lower, robot.upper))
+    q = panel.station.arm.joint_positions()
+    bad = robot.home.copy()
+    bad[1] = 2.5
+    assert not panel.move(bad) and "shoulder" in panel.messages[-1] and "nothing moved" in panel.messages[-1]
+    np.testing.assert_allclose(panel.station.arm.joint_positions(), q, atol=0.005)
+
+
+def test_teach_record_and_repeat(panel):
+    station = panel.station
+    w = panel._w
+    w["teach"].click()                                       # the button, as a click in the browser calls it
+    assert panel.machine.state == "teach" and not station.arm.torque_enabled
+    assert w["teach"].description == "finish teaching" and not w["record"].disabled
+    waypoints = [[0.3, -0.3, 0.3, 0.6, 0.0], [-0.3, -0.2, 0.2, 0.7, 0.0]]
+    for q in waypoints:
+        for s, v in zip(w["sliders"], q):                    # in teach mode the sliders are the simulator's hand
+            s.value = v
+        w["record"].click()
+    assert "waypoint 2 recorded" in panel.messages[-1]
+    w["teach"].click()
+    assert panel.machine.state == "idle" and station.arm.torque_enabled and len(panel.machine.program) == 2
+    station.arm.home()
+    w["repeat"].click()
+    assert "repeated the program" in panel.wait()
+    np.testing.assert_allclose(panel.ctx.arm.joint_positions(), panel.machine.program.q[-1], atol=0.02)
+
+
+def test_widget_events_reach_the_handlers(panel):
+    station = panel.station
+    (W, H), (w, h) = panel.frame_size(), panel.image_size()
+    uv = board_pixel(station, (250.0, 80.0))
+    x, y = (uv + 0.5) * [w / W, h / H]
+    move = {"type": "mousemove", "dataX": int(round(x)), "dataY": int(round(y))}
+    panel._events._handle_mouse_msg(None, move, None)       # what ipyevents does with the browser's message
+    pix, p = readout(panel._w["mouse"].value)
+    assert np.abs(p[:2] - [250.0, 80.0]).max() < 3.0        # the shown image's pixel: 2 camera pixels per step
+    panel._events._handle_mouse_msg(None, {**move, "type": "click"}, None)
+    assert "refused" in panel.wait() and "no block" in panel.messages[-1]     # bare board: nothing to grab
+    panel._w["mode"].value = "depth"
+    assert panel.view_mode == "depth" and bytes(panel._w["image"].value[:2]) == b"\xff\xd8"
+    panel._w["estop"].click()
+    assert panel.machine.state == "estop"
+    panel._w["reset"].click()
+    assert panel.machine.state == "idle"
+
+
+def test_the_3d_view_follows_the_arm_during_a_real_time_motion(panel, viewer, monkeypatch):
+    shown = []
+    real_show = viewer.show
+    monkeypatch.setattr(viewer, "show", lambda q, g=None: (shown.append(np.array(q)), real_show(q, g))[1])
+    panel.set_real_time(True)
+    try:
+        panel.home()
+        panel.wait()
+        shown.clear()
+        assert panel.sleep()
+        panel.wait(timeout_s=30)
+    finally:
+        panel.set_real_time(False)
+    path = np.array(shown)
+    assert len(path) >= 8, f"the view was redrawn {len(path)} times during a 2+ s motion"
+    sleep = rx200().sleep
+    far = np.abs(path - sleep).max(axis=1)
+    assert np.sum((far > 0.1) & (np.abs(path).max(axis=1) > 0.1)) >= 3       # poses between home and sleep
+    np.testing.assert_allclose(viewer.q, panel.station.arm.joint_positions(), atol=0.005)
+
+
+def test_panel_text_form_and_no_thread_left(panel):
+    box = panel.widget()
+    assert repr(box) == ("StationPanel(camera, world readout, click-to-grab/drop, teach/repeat, E-STOP, joints): run "
+                         "the cell")
+    assert len(repr(box)) <= 110
+    assert "ViewerPane" in repr(box.children[-1])
+    panel.detect()
+    panel.wait()
+    time.sleep(0.1)
+    assert not [t for t in threading.enumerate() if t.name.startswith("armlab-panel")]
+
+
+def test_live_camera_refreshes_and_stops(panel):
+    n = panel.refreshes
+    panel._w["live"].value = True
+    time.sleep(1.6)
+    panel.stop_live()
+    assert panel.refreshes - n >= 2
+    assert not panel._live_thread.is_alive()
+
+
+def test_depth_view_and_bad_options():
+    d = np.full((4, 6), 900.0, np.float32)
+    d[0, 0] = np.nan
+    rgb = depth_rgb(d)
+    assert rgb.shape == (4, 6, 3) and rgb.dtype == np.uint8 and rgb[0, 0].max() == 0 and rgb[1, 1].max() > 0
+    station = make_station("sim", seed=0, scene="empty")
+    with pytest.raises(ValueError, match="another station"):
+        StationPanel(station, machine=tasks.TaskMachine(make_station("sim", seed=1, scene="empty")))
+    with pytest.raises(ValueError, match="live_period_s"):
+        StationPanel(station, live_period_s=0.0)
+
+
+def test_teaching_a_real_arm_the_sliders_follow_the_hand(panel, monkeypatch):
+    station = panel.station
+    monkeypatch.setattr(panel, "_hand", lambda: None)          # as on the real arm: no simulated hand to drive
+    assert "pose the arm by hand" in panel.teach()
+    try:
+        assert all(s.disabled for s in panel._w["sliders"])     # the sliders show the arm, they do not move it
+        station.arm.move_by_hand([0.4, -0.3, 0.3, 0.5, 0.0])    # the student's hand
+        deadline = time.monotonic() + 5
+        while abs(panel._w["sliders"][0].value - station.arm.joint_positions()[0]) > 0.01 and \
+                time.monotonic() < deadline:
+            time.sleep(0.05)
+        np.testing.assert_allclose([s.value for s in panel._w["sliders"]], station.arm.joint_positions(), atol=0.01)
+    finally:
+        panel.teach()
+    assert panel.machine.state == "idle" and station.arm.torque_enabled
