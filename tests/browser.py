@@ -161,7 +161,16 @@ class JupyterLab:
         return f"{self.url}/lab/tree/{path}?token={self.token}"
 
     def kernel_ids(self) -> list[str]:
-        return [k["id"] for k in self.api("/api/kernels")]
+        """The running kernels' ids; [] while the server cannot list them yet (jupyter_server 2.21 answers 500 to
+        /api/kernels while a kernel is still starting: its last_activity is None then), so a poll tries again."""
+        import urllib.error
+
+        try:
+            return [k["id"] for k in self.api("/api/kernels")]
+        except urllib.error.HTTPError as e:
+            if e.code == 500:
+                return []
+            raise
 
     def note_processes(self) -> None:
         """Remember the server's child processes (its kernels) so that __exit__ can check them gone."""
