@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 from .registry import exercise
 
-__all__ = ["Region", "ExerciseMarkerError", "find_regions", "stub_regions", "is_blank"]
+__all__ = ["Region", "ExerciseMarkerError", "find_regions", "stub_regions", "stub_line", "is_blank"]
 
 _BEGIN = re.compile(r"^(?P<indent>[ \t]*)# BEGIN SOLUTION(?:[ \t]+(?P<id>\S+))?[ \t]*$")
 _END = re.compile(r"^(?P<indent>[ \t]*)# END SOLUTION[ \t]*$")
@@ -65,10 +65,15 @@ def find_regions(text: str, where: str = "<text>") -> list[Region]:
     return regions
 
 
+def stub_line(exercise_id: str) -> str:
+    """The one line (without indentation) a blank region of the exercise holds in the student release."""
+    return f"raise NotImplementedError({exercise(exercise_id).message()!r})"
+
+
 def is_blank(text: str, exercise_id: str, where: str = "<text>") -> bool:
     """True when every region of exercise `exercise_id` in a source text still holds only its stub (or the text has
     no region of it): the student has not written it yet."""
-    stub = f"raise NotImplementedError({exercise(exercise_id).message()!r})"
+    stub = stub_line(exercise_id)
     lines = text.splitlines()
     bodies = [[line.strip() for line in lines[r.begin + 1:r.end] if line.strip()]
               for r in find_regions(text, where) if r.exercise_id == exercise_id]
@@ -82,7 +87,7 @@ def stub_regions(text: str, where: str = "<text>") -> str:
     out, last = [], 0
     for region in find_regions(text, where):
         out += lines[last:region.begin + 1]
-        out.append(f"{region.indent}raise NotImplementedError({exercise(region.exercise_id).message()!r})")
+        out.append(region.indent + stub_line(region.exercise_id))
         last = region.end
     out += lines[last:]
     return "\n".join(out) + ("\n" if text.endswith("\n") else "")
