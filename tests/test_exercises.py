@@ -197,17 +197,18 @@ assert frame.rgb.shape == (720, 1280, 3) and np.isfinite(frame.depth).mean() > 0
 station.arm.open_gripper()
 assert station.arm.close_gripper() in (True, False)
 assert arm_part_poses(station.arm.joint_positions()) is not None
-assert np.allclose(kinematics.fk(np.zeros(5))[:3, 3], [0.0, 408.575, 304.57])     # by the PoX reference path
+assert np.allclose(kinematics.fk(np.zeros(5))[:3, 3], [0.0, 408.575, 304.57])     # by the reference DH links
 try:
-    kinematics.fk_dh(np.zeros(5))
+    kinematics.dh_link_transform.__wrapped__(0.0, 1.0, 2.0, 0.5)                     # the blank stub itself
 except NotImplementedError as e:
-    print("fk_dh:", e)
+    print("dh_link_transform:", e)
 """
     env = {"PYTHONPATH": str(out), "PATH": "/usr/bin:/bin", "MPLBACKEND": "Agg"}
     run = subprocess.run([sys.executable, "-c", code], cwd=out, env=env, capture_output=True, text=True)
     assert run.returncode == 0, run.stderr[-2000:]
-    assert "fk_dh: exercise fk.dh_link_transform (notebook 02): write dh_link_transform in armlab/kinematics.py" \
-        in run.stdout
+    assert "dh_link_transform: exercise fk.dh_link_transform (notebook 02): write dh_link_transform in " \
+        "armlab/kinematics.py" in run.stdout
+    assert "note: exercise fk.dh_link_transform (notebook 02) is not written yet" in run.stderr
 
 
 def test_a_reference_path_stands_in_only_for_its_own_blank_stub(capsys):

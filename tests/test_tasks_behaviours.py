@@ -131,14 +131,16 @@ def test_machine_states_and_busy_refusals(station):
 
 
 def _swap_program(seed=0):
-    """Notebook 06's teaching, done by hand on the simulator (the exercise teach.record: instructor-only test)."""
+    """Notebook 06's teaching, done on the simulator through the task machine's teach mode (the notebook's own
+    exercise teach.record writes this loop with a Recorder)."""
     st = make_station("sim", seed=seed, scene="swap")
+    machine = tasks.TaskMachine(st)
     poses, grip = teach.swap_waypoints()
-    recorder = teach.Recorder(st.arm, "swap")
-    for q, g in zip(poses, grip, strict=True):
-        st.arm.move_by_hand(q)
-        recorder.record(g)
-    return recorder.finish()
+    machine.teach_start("swap")
+    for pose, state in zip(poses, grip, strict=True):
+        st.arm.move_by_hand(pose)
+        machine.teach_record(state)
+    return machine.teach_finish()
 
 
 def test_teach_file_round_trip(tmp_path):

@@ -1,4 +1,4 @@
-"""Extrinsic calibration: the camera's pose over the board from the board's AprilTags (solvePnP on all corners).
+"""Extrinsic calibration: the camera's pose over the board from the board's AprilTags (a planar pose from all corners).
 
 Result: T_cam_world (4, 4) mapping world (board) points in mm into the camera frame in mm.
 """
@@ -32,31 +32,58 @@ class ExtrinsicsResult:
     detections: list[TagDetection]
 
 
-def _tape_measured_pose(world_mm, pixels, K, dist) -> np.ndarray:
-    """The reference path while calib.tag_extrinsics is blank: the tape-measured mount (hand_measured_extrinsic)."""
-    return hand_measured_extrinsic()
-
-
-@reference_fallback("calib.tag_extrinsics", _tape_measured_pose, "the camera pose is the tape-measured mount of "
-                                                                 "lab.json (about 5 mm off)")
-def pose_from_corners(world_mm, pixels, K, dist) -> np.ndarray:
-    """T_cam_world (4, 4) that maps the board points world_mm (N, 3) mm onto their image corners pixels (N, 2) px
-    through K (3, 3) and dist: solvePnP (SQPNP, IPPE for one tag's four corners) refined by Levenberg-Marquardt.
-    Raises ValueError when the solver fails.
-
-    Exercise calib.tag_extrinsics (notebook 01: the camera's pose from the AprilTag corners (PnP)).
-    """
-    world, pixels = np.asarray(world_mm, dtype=np.float64), np.asarray(pixels, dtype=np.float64)
-    # BEGIN SOLUTION calib.tag_extrinsics
-    if len(world) == 4:
-        ok, rvec, tvec = cv2.solvePnP(world, pixels, K, dist, flags=cv2.SOLVEPNP_IPPE)
-    else:
-        ok, rvec, tvec = cv2.solvePnP(world, pixels, K, dist, flags=cv2.SOLVEPNP_SQPNP)
+def _opencv_pose(world_mm, pixels, K, dist) -> np.ndarray:
+    """The reference path while calib.tag_extrinsics is blank: OpenCV's solvePnP (IPPE for one tag's four corners,
+    SQPNP otherwise), then the same Levenberg-Marquardt refinement."""
+    world, pixels = np.asarray(world_mm, np.float64), np.asarray(pixels, np.float64)
+    ok, rvec, tvec = cv2.solvePnP(world, pixels, K, dist,
+                                  flags=cv2.SOLVEPNP_IPPE if len(world) == 4 else cv2.SOLVEPNP_SQPNP)
     if not ok:
         raise ValueError("solvePnP failed on the detected tag corners")
     rvec, tvec = cv2.solvePnPRefineLM(world, pixels, K, dist, rvec, tvec)
     return homogeneous(cv2.Rodrigues(rvec)[0], tvec.ravel())
+
+
+def _refined(world, pixels, K, dist, R, t) -> np.ndarray:
+    """T_cam_world after Levenberg-Marquardt on the reprojection error (with the lens distortion), from R, t."""
+    rvec, tvec = cv2.solvePnPRefineLM(world, pixels, K, dist, cv2.Rodrigues(np.asarray(R, np.float64))[0],
+                                      np.asarray(t, np.float64).reshape(3, 1))
+    return homogeneous(cv2.Rodrigues(rvec)[0], tvec.ravel())
+
+
+@reference_fallback("calib.tag_extrinsics", _opencv_pose, "the camera pose comes from cv2.solvePnP")
+def pose_from_corners(world_mm, pixels, K, dist) -> np.ndarray:
+    """T_cam_world (4, 4) that maps the board points world_mm (N, 3) mm (N >= 4, all on the board: z = 0) onto their
+    image corners pixels (N, 2) px through K (3, 3) and dist.
+
+    Zhang's planar pose: with the pixels undistorted to normalised image points (x, y) = K^-1 (u, v, 1), a board
+    point (X, Y, 0) maps by the homography H = lambda [r1 r2 t] (r1, r2: R's first two columns). So the pose comes
+    from dlt_homography(board XY, normalised points): scale H so r1 and r2 have unit length, take the sign that
+    puts the board in front of the camera (t_z > 0), r3 = r1 x r2, and the nearest rotation to [r1 r2 r3] (SVD).
+    Levenberg-Marquardt on the reprojection error then refines it. Raises ValueError for points off the board.
+
+    Exercise calib.tag_extrinsics (notebook 01: the camera's pose from the AprilTag corners).
+    """
+    from armlab.calibration.homography import dlt_homography
+
+    world, pixels = np.asarray(world_mm, dtype=np.float64), np.asarray(pixels, dtype=np.float64)
+    if world.ndim != 2 or world.shape[1] != 3 or pixels.shape != (len(world), 2) or len(world) < 4:
+        raise ValueError(f"pose_from_corners needs N >= 4 board points (N, 3) and pixels (N, 2), got "
+                         f"{world.shape} and {pixels.shape}")
+    if np.abs(world[:, 2]).max() > 1e-9:
+        raise ValueError(f"pose_from_corners needs points on the board (z = 0); the highest is at "
+                         f"{np.abs(world[:, 2]).max():.3g} mm")
+    normalised = cv2.undistortPoints(pixels.reshape(-1, 1, 2), K, dist).reshape(-1, 2)
+    # BEGIN SOLUTION calib.tag_extrinsics
+    H = dlt_homography(world[:, :2], normalised)
+    scale = 2.0 / (np.linalg.norm(H[:, 0]) + np.linalg.norm(H[:, 1]))
+    if H[2, 2] * scale < 0:                     # t_z = scale * H[2, 2] must be positive: the board is in front
+        scale = -scale
+    r1, r2, t = H[:, 0] * scale, H[:, 1] * scale, H[:, 2] * scale
+    U, _, Vt = np.linalg.svd(np.column_stack([r1, r2, np.cross(r1, r2)]))
+    R = U @ np.diag([1.0, 1.0, np.linalg.det(U @ Vt)]) @ Vt
     # END SOLUTION
+    return _refined(world, pixels, K, dist, R, t)
 
 
 def extrinsics_from_detections(detections: list[TagDetection], K, dist,

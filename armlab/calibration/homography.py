@@ -15,7 +15,7 @@ from armlab.exercises.fallback import reference_fallback
 from armlab.images import check_rgb
 from armlab.lab import TagLayout, lab_config
 
-__all__ = ["BoardView", "tag_homography"]
+__all__ = ["BoardView", "tag_homography", "dlt_homography"]
 
 
 class BoardView:
@@ -65,23 +65,68 @@ class BoardView:
         return cv2.remap(rgb, self._map_u, self._map_v, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT)
 
 
-def _least_squares_homography(detections, view: BoardView, layout: TagLayout | None = None) -> np.ndarray:
-    """The reference path while calib.tag_homography is blank: OpenCV's least-squares fit over the tag centres."""
-    layout = layout or lab_config().tags
-    ids = sorted(layout.centres_mm)[:4]
-    by_id = {d.tag_id: d for d in detections}
-    src = np.array([by_id[i].center for i in ids], np.float64)
-    dst = view.from_world(np.array([layout.centres_mm[i] for i in ids]))
-    return cv2.findHomography(src, dst, 0)[0]
+def _opencv_homography(src_px, dst_px) -> np.ndarray:
+    """The reference path while calib.tag_homography is blank: OpenCV's least-squares fit (cv2.findHomography)."""
+    return cv2.findHomography(np.asarray(src_px, np.float64), np.asarray(dst_px, np.float64), 0)[0]
 
 
-@reference_fallback("calib.tag_homography", _least_squares_homography, "the board homography comes from "
-                                                                       "cv2.findHomography")
+def _check_correspondences(src, dst) -> tuple[np.ndarray, np.ndarray]:
+    src, dst = np.asarray(src, np.float64), np.asarray(dst, np.float64)
+    if src.ndim != 2 or src.shape[1] != 2 or src.shape != dst.shape:
+        raise ValueError(f"a homography needs two (N, 2) point arrays of the same shape, got {src.shape} and "
+                         f"{dst.shape}")
+    if len(src) < 4:
+        raise ValueError(f"a homography needs at least 4 point pairs, got {len(src)}")
+    if not (np.isfinite(src).all() and np.isfinite(dst).all()):
+        raise ValueError("the homography's points contain NaN or infinity")
+    return src, dst
+
+
+def _normalising_similarity(points: np.ndarray) -> np.ndarray:
+    """Hartley's normalisation: the 3x3 similarity moving `points` (N, 2) to their centroid and scaling them to a
+    mean distance of sqrt(2) from it (conditions the DLT's linear system)."""
+    centre = points.mean(axis=0)
+    spread = np.sqrt(((points - centre) ** 2).sum(axis=1)).mean()
+    if spread == 0:
+        raise ValueError("the homography's points all coincide")
+    s = np.sqrt(2) / spread
+    return np.array([[s, 0, -s * centre[0]], [0, s, -s * centre[1]], [0, 0, 1.0]])
+
+
+@reference_fallback("calib.tag_homography", _opencv_homography, "homographies come from cv2.findHomography")
+def dlt_homography(src, dst) -> np.ndarray:
+    """The 3x3 homography H (H[2, 2] = 1) taking the points src (N, 2) to dst (N, 2), N >= 4, any units (pixels,
+    mm): the normalised direct linear transform (Hartley & Zisserman, alg. 4.2). Exact for four points in general
+    position; the algebraic least-squares fit for more. Raises ValueError for too few, mismatched or degenerate
+    points.
+
+    Each pair (x, y) -> (u, v) gives two rows of A h = 0 (h: H's entries, row by row):
+    [-x, -y, -1, 0, 0, 0, u x, u y, u] and [0, 0, 0, -x, -y, -1, v x, v y, v]; h is A's right singular vector of
+    the smallest singular value. Normalising both point sets first (T_src, T_dst) and undoing it after
+    (H = T_dst^-1 H_n T_src) keeps the system well conditioned for pixel coordinates in the hundreds.
+
+    Exercise calib.tag_homography (notebook 01: the homography by the direct linear transform).
+    """
+    src, dst = _check_correspondences(src, dst)
+    T_src, T_dst = _normalising_similarity(src), _normalising_similarity(dst)
+    # BEGIN SOLUTION calib.tag_homography
+    a = (np.column_stack([src, np.ones(len(src))]) @ T_src.T)[:, :2]
+    b = (np.column_stack([dst, np.ones(len(dst))]) @ T_dst.T)[:, :2]
+    x, y, u, v = a[:, 0], a[:, 1], b[:, 0], b[:, 1]
+    zero, one = np.zeros(len(a)), np.ones(len(a))
+    A = np.concatenate([np.column_stack([-x, -y, -one, zero, zero, zero, u * x, u * y, u]),
+                        np.column_stack([zero, zero, zero, -x, -y, -one, v * x, v * y, v])])
+    H_normalised = np.linalg.svd(A)[2][-1].reshape(3, 3)
+    H = np.linalg.solve(T_dst, H_normalised @ T_src)
+    # END SOLUTION
+    if not np.isfinite(H).all() or abs(H[2, 2]) < 1e-12 * np.abs(H).max():
+        raise ValueError("the homography's points are degenerate (three or more on one line?)")
+    return H / H[2, 2]
+
+
 def tag_homography(detections: list[TagDetection], view: BoardView, layout: TagLayout | None = None) -> np.ndarray:
-    """The lab report's method: the 3x3 homography (cv2.getPerspectiveTransform) taking the image centres of the four
-    board tags to their places in the top-down view. Ignores lens distortion; use with cv2.warpPerspective.
-
-    Exercise calib.tag_homography (notebook 01: the homography from the image to the board).
+    """The lab report's method: the 3x3 homography (dlt_homography of four point pairs) taking the image centres of
+    the four board tags to their places in the top-down view. Ignores lens distortion; use with cv2.warpPerspective.
     """
     layout = layout or lab_config().tags
     by_id = {d.tag_id: d for d in detections}
@@ -89,8 +134,6 @@ def tag_homography(detections: list[TagDetection], view: BoardView, layout: TagL
     if missing:
         raise ValueError(f"the four-tag homography needs every board tag; missing ids {missing}")
     ids = sorted(layout.centres_mm)[:4]
-    src = np.array([by_id[i].center for i in ids], np.float32)
-    dst = view.from_world(np.array([layout.centres_mm[i] for i in ids])).astype(np.float32)
-    # BEGIN SOLUTION calib.tag_homography
-    return cv2.getPerspectiveTransform(src, dst)
-    # END SOLUTION
+    src = np.array([by_id[i].center for i in ids], np.float64)
+    dst = view.from_world(np.array([layout.centres_mm[i] for i in ids]))
+    return dlt_homography(src, dst)

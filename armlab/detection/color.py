@@ -88,18 +88,18 @@ class ColorModel:
         X = color_features(rgb_means)
         return np.sqrt((((X[:, None, :] - self.means[None]) / self.stds[None]) ** 2).sum(-1))
 
-    def _nearest_reference_colour(self, rgb_means) -> tuple[list[str], np.ndarray]:
-        """The reference path while detect.classify is blank: the nearest of the lab's reference colours (LAB_RGB)
-        in plain RGB, ignoring the fitted spreads; margin: the second-nearest's distance minus the nearest's."""
-        rgb = np.asarray(rgb_means, dtype=float).reshape(-1, 3)
-        reference = np.array([LAB_RGB[name] for name in self.names], dtype=float)
-        dist = np.linalg.norm(rgb[:, None, :] - reference[None], axis=-1)
-        ranked = np.sort(dist, axis=1)
-        margin = ranked[:, 1] - ranked[:, 0] if len(self.names) > 1 else np.full(len(rgb), np.inf)
-        return [self.names[i] for i in dist.argmin(axis=1)], margin
+    def _nearest_mean(self, rgb_means) -> tuple[list[str], np.ndarray]:
+        """The reference path while detect.classify is blank: the nearest class mean in feature space with one
+        common spread for every class (the mean of the fitted spreads), ignoring each class's own; margin: the
+        second-nearest's distance minus the nearest's, in those common units."""
+        X = color_features(rgb_means)
+        d = np.linalg.norm(X[:, None, :] - self.means[None], axis=-1) / float(self.stds.mean())
+        ranked = np.sort(d, axis=1)
+        margin = ranked[:, 1] - ranked[:, 0] if len(self.names) > 1 else np.full(len(d), np.inf)
+        return [self.names[i] for i in d.argmin(axis=1)], margin
 
-    @reference_fallback("detect.classify", _nearest_reference_colour, "colours are the nearest reference colour "
-                                                                      "in RGB")
+    @reference_fallback("detect.classify", _nearest_mean, "colours are the nearest class mean, with one spread "
+                                                          "for every class")
     def classify(self, rgb_means) -> tuple[list[str], np.ndarray]:
         """Nearest class name per mean colour (N, 3), and the margin (N,): second-best minus best distance.
 

@@ -4,13 +4,14 @@
     python tools/student-release OUT  # or: make student
 """
 
+from .fallback import reference_fallback, require_written, with_reference
 from .markers import ExerciseMarkerError, Region, find_regions, stub_regions
 from .registry import EXERCISES, Exercise, exercise, notebook_of
 from .release import RELEASE_EXCLUDES, make_student_release, released, student_notebook
 
 __all__ = ["EXERCISES", "Exercise", "ExerciseMarkerError", "Region", "exercise", "find_regions", "notebook_of",
            "make_student_release", "released", "stub_regions", "student_notebook", "RELEASE_EXCLUDES",
-           "exercises_table"]
+           "exercises_table", "reference_fallback", "require_written", "with_reference"]
 
 
 def exercises_table() -> str:

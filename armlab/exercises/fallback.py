@@ -18,10 +18,11 @@ from typing import TypeVar
 
 from .registry import exercise
 
-__all__ = ["reference_fallback", "is_blank_stub", "fallbacks_used"]
+__all__ = ["reference_fallback", "with_reference", "require_written", "is_blank_stub", "fallbacks_used"]
 
 F = TypeVar("F", bound=Callable)
 _announced: set[str] = set()
+_standing_in: set[str] = set()     # exercises whose last call went to the reference
 
 
 def is_blank_stub(error: BaseException, exercise_id: str) -> bool:
@@ -45,17 +46,34 @@ def reference_fallback(exercise_id: str, reference: Callable, instead: str) -> C
         @functools.wraps(function)
         def wrapper(*args, **kwargs):
             try:
-                return function(*args, **kwargs)
+                result = function(*args, **kwargs)
             except NotImplementedError as e:
                 if not is_blank_stub(e, exercise_id):
                     raise
+                _standing_in.add(exercise_id)
                 if exercise_id not in _announced:
                     _announced.add(exercise_id)
                     print(f"note: exercise {exercise_id} (notebook {exercise(exercise_id).notebook_number}) is not "
                           f"written yet: {instead}", file=sys.stderr)
                 return reference(*args, **kwargs)
+            _standing_in.discard(exercise_id)
+            return result
 
         wrapper.__wrapped_exercise__ = exercise_id
         return wrapper  # type: ignore[return-value]
 
     return decorate
+
+
+def with_reference(function: Callable, exercise_id: str, reference: Callable, instead: str) -> Callable:
+    """For a notebook: the student's `function` for exercise `exercise_id`, with `reference` standing in (after one
+    line on stderr saying `instead`) while the exercise's stub is still blank. The notebook's demonstrations call
+    this; its check cells call the student's function itself, so they fail until it is written."""
+    return reference_fallback(exercise_id, reference, instead)(function)
+
+
+def require_written(exercise_id: str) -> None:
+    """For a check cell that tests a value computed earlier: raise the exercise's own NotImplementedError message
+    when the last call of its function went to the kit's reference (the exercise is still blank)."""
+    if exercise_id in _standing_in:
+        raise NotImplementedError(exercise(exercise_id).message())

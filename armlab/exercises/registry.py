@@ -55,10 +55,11 @@ def _src(number: str) -> str:
 EXERCISES: tuple[Exercise, ...] = (
     Exercise("calib.project_pinhole", "project world points through the pinhole model", 5, _NB["01"], _src("01"),
              ("project_pinhole",)),
-    Exercise("calib.tag_extrinsics", "the camera's pose from the AprilTag corners (PnP)", 8, _NB["01"],
+    Exercise("calib.tag_extrinsics", "the camera's pose from the AprilTag corners (planar pose from a homography)", 8,
+             _NB["01"],
              "armlab/calibration/extrinsics.py", ("pose_from_corners",)),
-    Exercise("calib.tag_homography", "the homography from the image to the board", 6, _NB["01"],
-             "armlab/calibration/homography.py", ("tag_homography",)),
+    Exercise("calib.tag_homography", "the homography by the normalised direct linear transform (DLT)", 6,
+             _NB["01"], "armlab/calibration/homography.py", ("dlt_homography",)),
     Exercise("calib.pixel_to_world_pinhole", "back-project a pixel with its depth into the world", 5, _NB["01"],
              _src("01"), ("pixel_to_world_pinhole",)),
     Exercise("calib.depth_plane", "fit the depth camera's planar bias", 4, _NB["01"],
@@ -79,10 +80,10 @@ EXERCISES: tuple[Exercise, ...] = (
              "armlab/detection/color.py", ("ColorModel.classify",)),
     Exercise("grab.pixel_to_world", "a clicked pixel and its depth to a world point", 10, _NB["05"], _src("05"),
              ("pixel_to_world",)),
-    Exercise("grab.sag_line", "fit the lab's straight-line sag rule", 3, _NB["05"], _src("05"),
-             ("slope", "offset")),
+    Exercise("grab.sag_line", "fit the lab's straight-line sag rule (least squares)", 3, _NB["05"], _src("05"),
+             ("sag_line",)),
     Exercise("teach.record", "the teaching loop: pose by hand, record a waypoint", 9, _NB["06"], _src("06"),
-             ("the recording loop",)),
+             ("teach_program",)),
     Exercise("events.sky_points", "the 'to the sky' scoring rule", 4, _NB["07"], _src("07"), ("sky_points",)),
 )
 

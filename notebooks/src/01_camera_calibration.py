@@ -7,7 +7,7 @@
 #
 # 1. the **pinhole model** (intrinsics $K$, distortion, extrinsic $T_{cam,world}$),
 # 2. **intrinsics** from a set of checkerboard photos, against the factory $K$,
-# 3. the **extrinsic** from the board's four AprilTags (solvePnP), against a tape-measured one,
+# 3. the **extrinsic** from the board's four AprilTags (a planar pose), against a tape-measured one,
 # 4. a **top-down view** of the board: the report's four-tag homography and a distortion-aware one,
 # 5. **pixel + depth → world** (and back), with a live readout,
 # 6. the depth camera's **planar bias** and its correction,
@@ -191,8 +191,19 @@ print(f"OK: each camera needs its own checkerboard photos: {own_mm:.1f} mm with 
 # ## 3 · The extrinsic from the board's AprilTags
 #
 # The four tags sit at known board positions; pupil-apriltags finds their 16 corners in the image (shifted by
-# −0.5 px into OpenCV's pixel convention; decodes that needed corrected bits are dropped). `cv2.solvePnP` then finds
-# the pose $T_{cam,world}$ that projects the known corners onto the found ones — with whichever intrinsics we give it.
+# −0.5 px into OpenCV's pixel convention; decodes that needed corrected bits are dropped). The corners lie on the
+# board ($Z = 0$), so after undistorting the pixels to normalised image points $x = K^{-1}(u, v, 1)^\top$ a board
+# point maps by a homography (Zhang's observation):
+#
+# $$ s\,x = K^{-1}\!\begin{bmatrix} u \\ v \\ 1 \end{bmatrix} = [\,r_1\ r_2\ t\,]\begin{bmatrix} X \\ Y \\ 1
+# \end{bmatrix} = H \begin{bmatrix} X \\ Y \\ 1 \end{bmatrix} $$
+#
+# **Package exercises** (in `armlab/calibration/`): `dlt_homography` (`calib.tag_homography`), the normalised direct
+# linear transform: two rows of $A h = 0$ per point pair, $h$ the singular vector of $A$'s smallest singular value;
+# and `pose_from_corners` (`calib.tag_extrinsics`): scale $H$ so that $\lVert r_1 \rVert = \lVert r_2 \rVert = 1$
+# with $t_z > 0$, $r_3 = r_1 \times r_2$, the nearest rotation by SVD; the kit then refines the pose by
+# Levenberg–Marquardt on the reprojection error — with whichever intrinsics we give it. While they are blank,
+# `cv2.findHomography` and `cv2.solvePnP` stand in (the kit says so in one line).
 
 # %%
 tags = cal.detect_tags(frame.rgb)
@@ -251,7 +262,7 @@ print(f"OK: tag extrinsic {good['position_mm']:.1f} mm / {good['angle_deg']:.2f}
 # ## 4 · A top-down view of the board
 #
 # The camera is tilted, so the rectangular board looks like a trapezoid. The lab report fixed this with a
-# homography $H$ (its eq. 3): `cv2.getPerspectiveTransform` from the four tag centres in the image to where they
+# homography $H$ (its eq. 3): your `dlt_homography` from the four tag centres in the image to where they
 # belong in a top-down view, then `cv2.warpPerspective`. A homography is exact for a pinhole camera looking at a
 # plane — but the lens is not a pinhole. `BoardView` instead projects every view pixel's board point through the
 # calibrated camera (distortion included) and samples there (`cv2.remap`).

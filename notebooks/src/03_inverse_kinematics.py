@@ -19,6 +19,7 @@ import matplotlib.pyplot as plt
 from IPython import get_ipython
 
 from armlab import kinematics
+from armlab.exercises import references, with_reference
 from armlab.lab import lab_config
 from armlab.robot import rx200
 
@@ -96,8 +97,9 @@ def wrap(a):
     return np.pi - np.mod(np.pi - np.asarray(a), 2 * np.pi)
 
 
-def four_branches(p, pitch, roll=0.0):
-    """All four candidate joint vectors (4, 5) for target p (mm): facing/flipped x elbow up/down (NaN = no reach).
+def four_branches(p, pitch, roll=0.0, solve=None):
+    """All four candidate joint vectors (4, 5) for target p (mm): facing/flipped x elbow up/down (NaN = no reach),
+    each from solve(r, z, psi, elbow_up) (default: your planar_ik).
 
     Flipping the waist mirrors the arm's plane: the target is then at -r, the approach at pi - pitch from the arm's
     forward horizontal, and what looks like elbow up from the target's side is the arm's elbow-down solution."""
@@ -107,7 +109,7 @@ def four_branches(p, pitch, roll=0.0):
     for flipped in (False, True):
         for up in (True, False):
             args = (-r, z, np.pi - pitch, not up) if flipped else (r, z, pitch, up)
-            rows.append([q1 + np.pi * flipped, *planar_ik(*args), roll])
+            rows.append([q1 + np.pi * flipped, *(solve or planar_ik)(*args), roll])
     return wrap(np.array(rows))
 
 
@@ -149,8 +151,11 @@ print(f"OK: planar_ik: every branch lands on its target (within 1e-9 mm) and the
 # the shoulder leaning back past vertical and the wrist rolled over. Only the joint limits tell them apart.
 
 # %%
+# your planar_ik; while it is blank the kit's numerical reference draws the branches (it says so once)
+planar = with_reference(planar_ik, "ik.planar_ik", references.planar_ik_numerical,
+                        "the branches come from a numerical solve on the kit's FK")
 target, pitch = np.array([60.0, 380.0, 60.0]), np.pi / 2
-cand = four_branches(target, pitch)
+cand = four_branches(target, pitch, solve=planar)
 u = np.append(target[:2] / np.linalg.norm(target[:2]), 0.0)
 fig, axes = plt.subplots(2, 2, figsize=(9, 6.6), sharey=True)
 axes = axes.ravel()
@@ -274,7 +279,7 @@ def report_ik(p, psi):
     x, y, z = np.asarray(p, dtype=float).T
     theta1 = np.arctan(-x / y)                                # (4); (5) dropped
     r_e = np.sqrt((-x) ** 2 + y**2)                           # (6)
-    q2, q3, q4 = planar_ik(r_e, z, psi, elbow_up=True)        # (7)-(14)
+    q2, q3, q4 = planar(r_e, z, psi, elbow_up=True)           # (7)-(14), your planar_ik
     return np.stack([theta1, q2, q3, q4, np.zeros_like(x)], -1)
 
 

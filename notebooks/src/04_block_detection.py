@@ -21,6 +21,7 @@ from armlab.blocks import COLORS
 from armlab.detection import default_color_model, detect_objects, draw_detections, height_from_depth
 from armlab.detection import hsv_table_classify
 from armlab.detection.color import LAB_HSV_TABLE
+from armlab.exercises import references, with_reference
 from armlab.sim.scoring import Score, corrected_depth, score_frame, sim_case
 
 get_ipython().run_line_magic("matplotlib", "inline")
@@ -137,12 +138,14 @@ found = detect_objects(case.rgb, depth, case.camera, case.arm_q)
 block = next(b for b in found if b.shape == "cube")
 mask = np.zeros(depth.shape, np.uint8)
 cv2.fillPoly(mask, [block.contour.astype(np.int32)], 1)
-u, v = centroid(mask)
+# your centroid; while it is blank scipy's centre of mass stands in (it says so once)
+u, v = with_reference(centroid, "detect.centroid", references.centroid_by_scipy, "centroids come from scipy")(mask)
 print(f"{block.color} {block.size}: moment centroid ({u:.1f}, {v:.1f}) px, "
       f"projected face centre ({block.pixel[0]:.1f}, {block.pixel[1]:.1f}) px")
 
 # %%
 # CHECK detect.centroid
+u, v = centroid(mask)
 off = np.hypot(u - block.pixel[0], v - block.pixel[1])
 assert off < 2.0, f"your centroid is {off:.1f} px from the face centre: sum u and v over the mask, divide by its area"
 print("OK: the moment centroid lies within 2 px of the projected top-face centre")
@@ -171,6 +174,9 @@ def wrap_yaw(angle: float) -> float:
 assert np.isclose(wrap_yaw(np.pi / 2 + 0.1), 0.1), \
     "wrap_yaw(pi/2 + 0.1) should be 0.1: a cube turned 90 deg looks the same"
 assert np.isclose(wrap_yaw(np.pi / 4), -np.pi / 4), "wrap_yaw must return angles in [-pi/4, pi/4)"
+print("OK: wrap_yaw folds a quarter turn onto [-pi/4, pi/4)")
+
+# %%
 fig, ax = plt.subplots(figsize=(9, 5.1))
 ax.imshow(draw_detections(case.rgb, found, case.camera))
 ax.set_axis_off()

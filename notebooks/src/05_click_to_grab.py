@@ -21,6 +21,7 @@ from IPython import get_ipython
 
 from armlab import kinematics, make_station, planning, tasks
 from armlab.tasks.experiments import LAB_TABLE_III_ERROR_MM, format_table, reach_experiment
+from armlab.exercises import references, with_reference
 from armlab.tasks.sag import LAB_BASELINE, calibration_poses, hover_pose
 
 get_ipython().run_line_magic("matplotlib", "inline")
@@ -63,15 +64,20 @@ def pixel_to_world(uv, depth_image, camera, radius=3):
 
 
 red = next(b for b in obs.blocks if b.color == "red")
-p = pixel_to_world(red.pixel, obs.depth, ctx.calibration.camera)
+# your pixel_to_world; while it is blank the kit's tasks.surface_point stands in (it says so once)
+clicked = with_reference(pixel_to_world, "grab.pixel_to_world",
+                         lambda uv, depth, camera, radius=3: tasks.surface_point(ctx.calibration, depth, uv, radius),
+                         "clicked points come from tasks.surface_point")
+p = clicked(red.pixel, obs.depth, ctx.calibration.camera)
 truth = next(o for o in station.world.blocks if o.color == "red")
 print("clicked the red block at pixel", np.round(red.pixel, 1), "-> world", p, "mm; true top-face centre",
       truth.position + [0, 0, truth.edge / 2])
 
 # %%
 # CHECK grab.pixel_to_world
-err = np.abs(p - (truth.position + [0, 0, truth.edge / 2]))
-assert np.allclose(p, tasks.surface_point(ctx.calibration, obs.depth, red.pixel), atol=1e-6), \
+mine = pixel_to_world(red.pixel, obs.depth, ctx.calibration.camera)
+err = np.abs(mine - (truth.position + [0, 0, truth.edge / 2]))
+assert np.allclose(mine, tasks.surface_point(ctx.calibration, obs.depth, red.pixel), atol=1e-6), \
     "your point differs from tasks.surface_point: median depth of the window, Z (x, y, 1), then camera_to_world"
 assert err.max() < 3.0, f"the clicked point is {err.max():.1f} mm from the true block top"
 print(f"OK: pixel_to_world matches tasks.surface_point, {err.max():.1f} mm from the true block top")
@@ -128,9 +134,19 @@ reach = np.hypot(commanded[:, 0], commanded[:, 1])
 dz = measured[:, 2] - commanded[:, 2]
 model = tasks.fit_sag(poses, measured)
 
-# BEGIN SOLUTION grab.sag_line
-slope, offset = np.polyfit(reach, -dz, 1)
-# END SOLUTION
+
+
+def sag_line(reach, sag):
+    """Slope (mm per mm of reach) and offset (mm) of the least-squares line sag = slope * reach + offset."""
+    # BEGIN SOLUTION grab.sag_line
+    slope, offset = np.polyfit(reach, sag, 1)
+    return float(slope), float(offset)
+    # END SOLUTION
+
+
+# your sag_line; while it is blank scipy's linregress stands in (it says so once)
+slope, offset = with_reference(sag_line, "grab.sag_line", references.line_by_scipy,
+                               "the sag line comes from scipy.stats.linregress")(reach, -dz)
 print(f"measured sag: {-dz.min():.1f} mm at most; the lab's line z += {LAB_BASELINE[0]} r + {LAB_BASELINE[1]:.0f} mm, "
       f"fitted line z += {slope:.4f} r + {offset:.1f} mm; joint model fit RMS {model.rms_mm:.2f} mm")
 predicted = model.tool_error(poses)[:, 2]
@@ -147,7 +163,12 @@ _ = ax.set_title("sag against reach: two heights per reach, so a line cannot fit
 
 # %%
 # CHECK grab.sag_line
-line_rms = np.sqrt(np.mean((slope * reach + offset + dz) ** 2))
+slope, offset = sag_line(reach, -dz)
+line_residual = slope * reach + offset + dz          # the line's sag minus the measured sag (mm)
+assert abs(line_residual.mean()) < 1e-9 and abs(np.mean(line_residual * (reach - reach.mean()))) < 1e-6, \
+    (f"the line is not the least-squares fit: its residual has mean {line_residual.mean():.3g} mm and covariance "
+     f"{np.mean(line_residual * (reach - reach.mean())):.3g} mm^2 with the reach (both should be 0)")
+line_rms = np.sqrt(np.mean(line_residual ** 2))
 model_rms = np.sqrt(np.mean((predicted - dz) ** 2))
 assert model_rms < 1.5, f"the joint model leaves {model_rms:.1f} mm of z error (expected < 1.5 mm)"
 assert model_rms < line_rms, "a straight line in r fits the sag better than the joint model: check your polyfit"

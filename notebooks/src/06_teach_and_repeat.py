@@ -20,6 +20,8 @@ from pathlib import Path
 from IPython import get_ipython
 
 from armlab import kinematics, make_station, tasks
+from armlab._paths import data_path
+from armlab.exercises import require_written, with_reference
 from armlab.tasks import teach
 
 get_ipython().run_line_magic("matplotlib", "inline")
@@ -41,19 +43,37 @@ for o in station.world.blocks:
 # **Exercise:** record one waypoint per pose with the `Recorder` (torque goes off when it is created).
 
 # %%
+def teach_program(arm, poses, gripper, name="swap"):
+    """Teach by hand: hold the arm (torque off) in each pose of `poses` (N, 5) rad, record a waypoint with the
+    gripper state `gripper[i]`, and return the TeachProgram (the torque comes back on)."""
+    recorder = teach.Recorder(arm, name=name)
+    try:
+        # BEGIN SOLUTION teach.record
+        for q, g in zip(poses, gripper):
+            arm.move_by_hand(q)
+            recorder.record(g)
+        # END SOLUTION
+    except BaseException:
+        arm.set_torque(True)      # never leave the arm limp
+        raise
+    return recorder.finish()
+
+
+def kit_recording(arm, poses, gripper, name="swap"):
+    """The reference while teach.record is blank: the kit's own recording of the swap (data/teach/swap.json)."""
+    return teach.load_teach(data_path("teach/swap.json"))
+
+
 poses, gripper = teach.swap_waypoints()
-recorder = teach.Recorder(station.arm, name="swap")
-# BEGIN SOLUTION teach.record
-for q, g in zip(poses, gripper):
-    station.arm.move_by_hand(q)
-    recorder.record(g)
-# END SOLUTION
-program = recorder.finish()
+# your teach_program; while it is blank the kit's recording of the swap stands in (it says so once)
+program = with_reference(teach_program, "teach.record", kit_recording,
+                         "the program is the kit's recording of the swap")(station.arm, poses, gripper)
 print(f"{len(program)} waypoints; gripper states: {' '.join(g[0] for g in program.gripper)} (o = open, c = closed)")
 print("first waypoint (rad):", program.q[0].round(3))
 
 # %%
 # CHECK teach.record
+require_written("teach.record")          # the program above must be yours, not the kit's recording
 tool = kinematics.fk(program.q)[:, :3, 3]
 assert len(program) == 18, f"{len(program)} waypoints recorded, expected one per pose (18)"
 assert station.arm.torque_enabled, "the torque is still off after finish()"
