@@ -128,7 +128,7 @@ def test_a_stub_keeps_the_markers_and_names_the_exercise_and_the_function():
 def test_the_exercise_list_command():
     run = subprocess.run([sys.executable, "-m", "armlab", "exercises"], capture_output=True, text=True, cwd=REPO)
     assert run.returncode == 0 and run.stdout.strip() == exercises_table()
-    assert "fk.dh_transform" in run.stdout and run.stdout.strip().endswith("17 exercises, 100 points")
+    assert "fk.dh_transform" in run.stdout and run.stdout.strip().endswith("20 exercises, 100 points")
 
 
 @pytest.fixture(scope="module")
@@ -296,3 +296,35 @@ def test_in_the_release_a_test_of_a_blank_exercise_skips_until_it_is_written(rel
         source.write_text(text)
     finally:
         (out / "tests" / "test_probe.py").unlink()
+
+
+def test_the_student_readme_names_every_exercise_with_its_points():
+    readme = (REPO / "tools/student/README.md").read_text()
+    for e in EXERCISES:
+        assert f"(`{e.id}`, {e.points}" in readme, f"the student README does not list {e.id} with {e.points} points"
+        row = next(line for line in readme.splitlines() if line.startswith(f"| `{e.notebook}`"))
+        assert e.id in row, f"{e.id} is listed in another notebook's row than {e.notebook}'s"
+
+
+def test_a_package_exercises_check_cells_refuse_to_pass_on_its_reference_path(git_checkout):
+    """Its check cells call require_written first: otherwise they would pass on the kit's reference path while the
+    exercise is blank."""
+    for e in EXERCISES:
+        if not e.in_package:
+            continue
+        for stem in {x.notebook for x in EXERCISES}:
+            for cell in notebook_code_cells(stem):
+                tags = CHECK_TAG.findall(cell)
+                if tags and e.id in tags[0].split():
+                    assert f'require_written("{e.id}")' in cell, \
+                        f"a check cell of {e.id} in {stem} does not call require_written({e.id!r}):\n{cell[:300]}"
+
+
+def test_require_written_names_the_blank_exercise(monkeypatch):
+    from armlab.exercises import fallback, require_written
+
+    require_written("fk.dh_link_transform")                # written in the instructor's checkout: no error
+    monkeypatch.setattr(fallback, "_standing_in", {"grab.pixel_to_world"})
+    with pytest.raises(NotImplementedError, match=r"exercise grab\.pixel_to_world \(notebook 05\): write "
+                                                  r"pixel_to_world"):
+        require_written("grab.pixel_to_world")

@@ -81,18 +81,28 @@ def board_samples(depth_mm, camera: Camera, step: int = 4, exclude=None) -> tupl
     return u, v, measured, expected, usable, keep
 
 
-def _constant_offset(depth_mm, camera: Camera, step: int = 4, inlier_mm: float = 6.0, iterations: int = 6,
-                     exclude=None) -> DepthCorrection:
-    """The reference path while calib.depth_plane is blank: a constant offset, the median of the board's residual
-    (its tilt across the image stays)."""
+def _robust_plane(depth_mm, camera: Camera, step: int = 4, inlier_mm: float = 6.0, iterations: int = 6,
+                  exclude=None) -> DepthCorrection:
+    """The reference path while calib.depth_plane is blank: one robust fit of the bias plane over all usable board
+    samples (scipy.optimize.least_squares with a Cauchy loss of scale inlier_mm / 3, so blocks and the arm barely
+    pull it), instead of refitting and rejecting."""
+    from scipy.optimize import least_squares
+
     u, v, measured, expected, usable, keep = board_samples(depth_mm, camera, step, exclude)
-    residual = (measured - expected)[keep]
-    c = float(np.median(residual))
-    return DepthCorrection(0.0, 0.0, c, float(np.sqrt(np.mean((residual - c) ** 2))), int(keep.sum()))
+    A = np.column_stack([u[usable], v[usable], np.ones(int(usable.sum()))]).astype(float)
+    r = (measured - expected)[usable]
+    start = np.array([0.0, 0.0, float(np.median(r))])
+    coef = least_squares(lambda c: A @ c - r, start, loss="cauchy", f_scale=inlier_mm / 3,
+                         x_scale=[1e-3, 1e-3, 1.0]).x
+    fit_residual = (measured - expected) - (coef[0] * u + coef[1] * v + coef[2])
+    inliers = usable & (np.abs(fit_residual) < inlier_mm)
+    final = fit_residual[inliers]
+    return DepthCorrection(float(coef[0]), float(coef[1]), float(coef[2]), float(np.sqrt(np.mean(final**2))),
+                           int(inliers.sum()))
 
 
-@reference_fallback("calib.depth_plane", _constant_offset, "the depth is corrected by a constant offset only "
-                                                           "(the bias plane's tilt stays)")
+@reference_fallback("calib.depth_plane", _robust_plane, "the depth's bias plane comes from one robust fit "
+                                                         "(scipy least squares, Cauchy loss)")
 def fit_depth_correction(depth_mm, camera: Camera, step: int = 4, inlier_mm: float = 6.0,
                          iterations: int = 6, exclude=None) -> DepthCorrection:
     """Fit the planar depth bias over the board.

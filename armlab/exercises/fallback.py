@@ -73,7 +73,19 @@ def with_reference(function: Callable, exercise_id: str, reference: Callable, in
 
 
 def require_written(exercise_id: str) -> None:
-    """For a check cell that tests a value computed earlier: raise the exercise's own NotImplementedError message
-    when the last call of its function went to the kit's reference (the exercise is still blank)."""
-    if exercise_id in _standing_in:
-        raise NotImplementedError(exercise(exercise_id).message())
+    """For a check cell: raise the exercise's own NotImplementedError message while it is blank, so that the check
+    cannot pass on the kit's reference path. A package exercise is blank when its region in the imported package's
+    source still holds only the stub; a notebook exercise when the last call of its function (through
+    with_reference) went to the reference."""
+    from pathlib import Path
+
+    from .markers import is_blank
+
+    e = exercise(exercise_id)
+    if e.in_package:
+        source = Path(__file__).resolve().parents[2] / e.where
+        blank = is_blank(source.read_text(encoding="utf-8"), exercise_id, e.where)
+    else:
+        blank = exercise_id in _standing_in
+    if blank:
+        raise NotImplementedError(e.message())

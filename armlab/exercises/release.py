@@ -35,6 +35,7 @@ RELEASE_EXCLUDES = (
     "tools/student-release",
     "tools/student/*",
     "tests/test_exercises.py",     # the release tool's own tests (they look for solutions)
+    "tests/test_blank_release_runs.py",   # builds a release from the instructor's checkout and runs it blank
     "tests/test_packaging.py",     # builds wheels of the instructor's checkout
     "tests/test_repeatable.py",    # teaches by hand (the teach.record exercise) to test the simulator's rounding
     "tests/test_notebook_outputs.py",   # checks the instructor's executed notebooks (the release's have no outputs)

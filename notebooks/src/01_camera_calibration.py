@@ -33,6 +33,7 @@ from IPython import get_ipython
 from IPython.display import display
 
 from armlab import calibration as cal
+from armlab.exercises import require_written
 from armlab import make_station
 from armlab.camera import Camera
 from armlab.lab import lab_config
@@ -250,6 +251,7 @@ print("AprilTag T_cam_world (checkerboard K):\n", T_tags.round(3) + 0.0)
 
 # %%
 # CHECK calib.tag_extrinsics
+require_written("calib.tag_extrinsics")
 good = cal.compare_extrinsics(T_tags, truth.T_cam_world)
 bad = cal.compare_extrinsics(extrinsics["factory K"].T_cam_world, truth.T_cam_world)
 assert good["position_mm"] < 1.0 and good["angle_deg"] < 0.1, \
@@ -296,6 +298,7 @@ print(f"homography error: {err_h.mean():.2f} mm mean, {err_h.max():.2f} mm max (
 
 # %%
 # CHECK calib.tag_homography
+require_written("calib.tag_homography")
 again = cal.detect_tags(top_b)
 offset = max(np.abs(t.center - view.from_world([lab.tags.centres_mm[t.tag_id]])[0]).max() for t in again)
 far = np.linalg.norm(grid[:, :2] - [0, 150], axis=1) > 400
@@ -398,6 +401,7 @@ print(f"bias plane: a = {correction.a:.4f} mm/px, b = {correction.b:.4f} mm/px, 
 
 # %%
 # CHECK calib.depth_plane
+require_written("calib.depth_plane")
 def quarter_medians(residual):
     h, w = residual.shape
     masked = np.where(on_board, residual, np.nan)
@@ -459,6 +463,8 @@ fig.tight_layout()
 
 # %%
 # CHECK calib.tag_extrinsics calib.depth_plane
+require_written("calib.tag_extrinsics")
+require_written("calib.depth_plane")
 assert after.mean_mm < 2.0 and after.max_mm < 5.0, \
     f"grid error {after.mean_mm:.2f} mm mean, {after.max_mm:.2f} mm max after calibration"
 assert abs(after.border_growth()) < 0.2, \

@@ -17,7 +17,7 @@ import matplotlib.pyplot as plt
 from IPython import get_ipython
 
 from armlab import kinematics
-from armlab.exercises import references, with_reference
+from armlab.exercises import references, require_written, with_reference
 from armlab.robot import DH_TOOL_ROTATION, rx200
 from armlab.transforms import exp_se3, homogeneous, rot_z
 
@@ -197,6 +197,7 @@ fig.tight_layout()
 
 # %%
 # CHECK fk.dh_link_transform
+require_written("fk.dh_link_transform")
 Q = random_q(1000)
 P = kinematics.joint_positions(Q)
 lengths = np.linalg.norm(np.diff(P, axis=1), axis=-1)
@@ -241,6 +242,7 @@ print(S_world + 0.0)  # + 0.0 turns -0 into 0
 
 # %%
 # CHECK fk.dh_link_transform
+require_written("fk.dh_link_transform")
 Q = random_q(1000)
 T_dh, T_pox = kinematics.fk(Q), fk_pox(Q)
 err_p = np.abs(T_dh[:, :3, 3] - T_pox[:, :3, 3]).max()

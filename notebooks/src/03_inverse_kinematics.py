@@ -19,7 +19,7 @@ import matplotlib.pyplot as plt
 from IPython import get_ipython
 
 from armlab import kinematics
-from armlab.exercises import references, with_reference
+from armlab.exercises import references, require_written, with_reference
 from armlab.lab import lab_config
 from armlab.robot import rx200
 
@@ -175,6 +175,7 @@ fig.tight_layout()
 
 # %%
 # CHECK ik.candidates
+require_written("ik.candidates")
 solutions = kinematics.ik(target, pitch)
 order = ["facing, elbow up", "flipped, elbow up", "facing, elbow down"]   # elbow up first, then least motion
 assert [name for name, q in zip(BRANCHES, cand) if not robot.limit_violations(q)] == sorted(order, key=BRANCHES.index)
@@ -231,6 +232,7 @@ fig.tight_layout()
 
 # %%
 # CHECK ik.candidates
+require_written("ik.candidates")
 r_cells = np.hypot(X, Y)
 behind = (X == 0) & (Y < 0)
 assert np.all(top_down[(r_cells < r_max - 15) & ~behind]) and not np.any(top_down[r_cells > r_max + 1e-9])
@@ -299,6 +301,7 @@ print(f"cells the report misses: {(~right).sum()}, all behind the base (y < 0): 
 
 # %%
 # CHECK ik.candidates
+require_written("ik.candidates")
 assert ours.ok.all(), f"kinematics.ik fails at {(~ours.ok).sum()} reachable cells"
 assert np.abs(kinematics.fk(ours.q)[:, :3, 3] - pts).max() < 1e-6, "an IK solution misses its cell"
 assert np.all(right[pts[:, 1] > 0]) and not np.any(right[pts[:, 1] < 0]), "the report's equations fail in front"
@@ -311,6 +314,8 @@ print(f"OK: kinematics.ik reaches all {len(pts)} reachable board cells; the repo
 # waist reaches:
 
 # %%
+# CHECK ik.candidates
+require_written("ik.candidates")
 Q = rng.uniform(robot.lower, robot.upper, (3000, 5))
 T = kinematics.fk(Q)
 P, approach = T[:, :3, 3], T[:, :3, 0]

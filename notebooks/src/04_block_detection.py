@@ -17,11 +17,11 @@ import matplotlib.pyplot as plt
 import numpy as np
 from IPython import get_ipython
 
-from armlab.blocks import COLORS
+from armlab.blocks import COLORS, LAB_RGB
 from armlab.detection import default_color_model, detect_objects, draw_detections, height_from_depth
 from armlab.detection import hsv_table_classify
-from armlab.detection.color import LAB_HSV_TABLE
-from armlab.exercises import references, with_reference
+from armlab.detection.color import LAB_HSV_TABLE, white_balance_gains
+from armlab.exercises import references, require_written, with_reference
 from armlab.sim.scoring import Score, corrected_depth, score_frame, sim_case
 
 get_ipython().run_line_magic("matplotlib", "inline")
@@ -97,11 +97,114 @@ fig.tight_layout()
 
 # %%
 # CHECK detect.classify
+require_written("detect.classify")
 hsv_acc = np.mean(np.array(hsv_labels) == np.array(truth))
 model_acc = np.mean(np.array(model_labels) == np.array(truth))
 assert model_acc == 1.0, f"the colour model names {model_acc:.0%} of the faces right (expected all)"
 assert hsv_acc < 0.8, f"the lab's HSV table got {hsv_acc:.0%}: this scene should show its failures"
 print(f"OK: on {len(truth)} faces the colour model is right on {model_acc:.0%}, the HSV table on {hsv_acc:.0%}")
+
+# %% [markdown]
+# ## 1b. Your own HSV segmentation
+#
+# Thresholds are not hopeless once the light's tint is gone. Take the white-balanced image (gains from the board
+# pixels, found by their height), convert it to HSV, and give each colour a box $[H_{lo}, H_{hi}] \times [S_{lo},
+# 255] \times [V_{lo}, 255]$:
+# - the board is grey, so a **saturation floor** separates it from every block;
+# - **red wraps around** $H = 0$: a box with $H_{lo} > H_{hi}$ means $H \ge H_{lo}$ or $H \le H_{hi}$;
+# - the first box (in `COLORS` order) that holds a pixel names it; no box: $-1$.
+#
+# **Exercise:** write `segment_colours(rgb, ranges)` and tune `tuned_hsv_ranges()` on this frame with the picture:
+# every block face one solid colour, the board, the arm and the distractors black.
+
+
+# %%
+def balanced_frame(c):
+    """A case's RGB image white-balanced on its board pixels (height within 3 mm of the board), and those pixels."""
+    h = height_from_depth(corrected_depth(c), c.camera)
+    board = np.isfinite(h) & (np.abs(h) < 3.0)
+    gains = white_balance_gains(c.rgb[board].mean(axis=0))
+    return np.clip(c.rgb * gains, 0, 255).astype(np.uint8), board
+
+
+def tuned_hsv_ranges():
+    """{colour: ((H_lo, S_lo, V_lo), (H_hi, S_hi, V_hi))} in OpenCV's HSV (H 0-180) for white-balanced images."""
+    # BEGIN SOLUTION detect.segment
+    return {"red": ((170, 120, 60), (5, 255, 255)), "orange": ((7, 120, 60), (17, 255, 255)),
+            "yellow": ((19, 120, 60), (30, 255, 255)), "green": ((40, 100, 30), (85, 255, 255)),
+            "blue": ((98, 120, 60), (118, 255, 255)), "violet": ((122, 100, 60), (150, 255, 255))}
+    # END SOLUTION
+
+
+def segment_colours(rgb, ranges):
+    """Label image (H, W) int of an RGB uint8 image (H, W, 3): the index in COLORS of the first colour (in COLORS
+    order) whose HSV box holds the pixel, -1 for none. A box with H_lo > H_hi wraps around H = 0."""
+    # BEGIN SOLUTION detect.segment
+    hsv = cv2.cvtColor(rgb, cv2.COLOR_RGB2HSV)
+    labels = np.full(rgb.shape[:2], -1, int)
+    for name in [c for c in COLORS if c in ranges]:
+        (h0, s0, v0), (h1, s1, v1) = ranges[name]
+        if h0 <= h1:
+            inside = cv2.inRange(hsv, (h0, s0, v0), (h1, s1, v1)) > 0
+        else:
+            inside = ((cv2.inRange(hsv, (h0, s0, v0), (180, s1, v1)) > 0)
+                      | (cv2.inRange(hsv, (0, s0, v0), (h1, s1, v1)) > 0))
+        labels[inside & (labels < 0)] = COLORS.index(name)
+    return labels
+    # END SOLUTION
+
+
+def label_picture(labels):
+    """An RGB picture of a label image: each colour's reference RGB, black for -1."""
+    palette = np.array([LAB_RGB[c] for c in COLORS] + [(0, 0, 0)], np.uint8)
+    return palette[np.where(labels < 0, len(COLORS), labels)]
+
+
+# your segmentation; while it is blank the kit's colour model labels the pixels (it says so once)
+segment = with_reference(lambda rgb: segment_colours(rgb, tuned_hsv_ranges()), "detect.segment",
+                         references.segment_by_colour_model, "pixels are labelled by the kit's colour model")
+balanced, board_px = balanced_frame(case)
+fig, axes = plt.subplots(1, 2, figsize=(10, 3.2))
+axes[0].imshow(label_picture(segment(balanced)))
+axes[0].set_title("your HSV boxes, white-balanced")
+axes[1].imshow(label_picture(segment_colours(case.rgb, LAB_HSV_TABLE)))
+axes[1].set_title("the lab report's table, raw image")
+for ax in axes:
+    ax.set_axis_off()
+fig.tight_layout()
+
+# %%
+# CHECK detect.segment
+def face_labels(c, labels):
+    """The majority label of the 7 x 7 pixels at each visible true block face's centre, and the true colour."""
+    out = []
+    for t in c.truth:
+        if t.is_block and t.visible >= 0.5:
+            u, v = np.round(c.camera.project(t.centre[None])[0]).astype(int)
+            values, counts = np.unique(labels[v - 3:v + 4, u - 3:u + 4], return_counts=True)
+            out.append((int(values[counts.argmax()]), COLORS.index(t.obj.color)))
+    return out
+
+
+held_out = [sim_case(s, seed) for s, seed in [("random", 401), ("sky", 402), ("line_up_2", 403), ("stacks", 404),
+                                              ("sort_stack_3", 405)]]
+pairs, board_hits, lab_pairs = [], [], []
+for c in held_out:
+    rgb_b, board = balanced_frame(c)
+    labels = segment_colours(rgb_b, tuned_hsv_ranges())
+    assert labels.shape == c.rgb.shape[:2] and labels.dtype.kind == "i", \
+        f"segment_colours returned {labels.dtype} {labels.shape}: expected an int label image {c.rgb.shape[:2]}"
+    pairs += face_labels(c, labels)
+    board_hits.append(np.mean(labels[board] >= 0))
+    lab_pairs += face_labels(c, segment_colours(c.rgb, LAB_HSV_TABLE))
+face_acc = np.mean([p == t for p, t in pairs])
+lab_acc = np.mean([p == t for p, t in lab_pairs])
+missed = sorted({COLORS[t] for p, t in pairs if p != t})
+assert face_acc >= 0.95, f"your boxes name {face_acc:.0%} of {len(pairs)} held-out faces right; wrong: {missed}"
+assert max(board_hits) < 0.005, f"{max(board_hits):.1%} of the board's pixels fall in a colour box: raise S_lo"
+assert face_acc > lab_acc + 0.3, f"the lab's table gets {lab_acc:.0%}: yours should do far better"
+print(f"OK: HSV segmentation: {face_acc:.0%} of {len(pairs)} held-out faces right, under 0.5 % of the board's "
+      f"pixels labelled (the lab's table on raw images: {lab_acc:.0%})")
 
 # %% [markdown]
 # ## 2. Depth segmentation
@@ -171,10 +274,17 @@ def wrap_yaw(angle: float) -> float:
     # END SOLUTION
 
 
+# %%
+# CHECK detect.wrap_yaw
 assert np.isclose(wrap_yaw(np.pi / 2 + 0.1), 0.1), \
     "wrap_yaw(pi/2 + 0.1) should be 0.1: a cube turned 90 deg looks the same"
 assert np.isclose(wrap_yaw(np.pi / 4), -np.pi / 4), "wrap_yaw must return angles in [-pi/4, pi/4)"
-print("OK: wrap_yaw folds a quarter turn onto [-pi/4, pi/4)")
+angles = np.random.default_rng(4).uniform(-20, 20, 500)
+wrapped = np.array([wrap_yaw(a) for a in angles])
+quarters = (angles - wrapped) / (np.pi / 2)
+assert np.all((wrapped >= -np.pi / 4) & (wrapped < np.pi / 4)), "a wrapped yaw is outside [-pi/4, pi/4)"
+assert np.allclose(quarters, np.round(quarters), atol=1e-9), "wrap_yaw must only remove whole quarter turns"
+print("OK: wrap_yaw folds 500 random angles onto [-pi/4, pi/4) by whole quarter turns")
 
 # %%
 fig, ax = plt.subplots(figsize=(9, 5.1))
@@ -200,7 +310,8 @@ for b in found:
 # Every frame above is scored against the simulator's ground truth (faces at least half visible must be found).
 
 # %%
-# CHECK detect.wrap_yaw detect.classify
+# CHECK detect.classify
+require_written("detect.classify")
 score = Score()
 for c in cases:
     score.add(score_frame(detect_objects(c.rgb, corrected_depth(c), c.camera, c.arm_q), c.truth))

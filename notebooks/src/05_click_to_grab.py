@@ -21,7 +21,7 @@ from IPython import get_ipython
 
 from armlab import kinematics, make_station, planning, tasks
 from armlab.tasks.experiments import LAB_TABLE_III_ERROR_MM, format_table, reach_experiment
-from armlab.exercises import references, with_reference
+from armlab.exercises import references, require_written, with_reference
 from armlab.tasks.sag import LAB_BASELINE, calibration_poses, hover_pose
 
 get_ipython().run_line_magic("matplotlib", "inline")
@@ -100,6 +100,7 @@ print("FK of those joints puts the tool at", kinematics.fk(q)[:3, 3], "mm")
 
 # %%
 # CHECK ik.candidates
+require_written("ik.candidates")
 assert np.allclose(kinematics.fk(q)[:3, 3], grasp_point, atol=1e-6), "FK(IK(p)) misses the grasp point"
 print("OK: world -> joints: FK(IK(p)) = p")
 

@@ -19,9 +19,9 @@ import tempfile
 from pathlib import Path
 from IPython import get_ipython
 
-from armlab import kinematics, make_station, tasks
+from armlab import kinematics, make_station, planning, tasks
 from armlab._paths import data_path
-from armlab.exercises import require_written, with_reference
+from armlab.exercises import references, require_written, with_reference
 from armlab.tasks import teach
 
 get_ipython().run_line_magic("matplotlib", "inline")
@@ -130,6 +130,7 @@ print(f"red block now at {red.position} mm, blue block now at {blue.position} mm
 
 # %%
 # CHECK teach.record
+require_written("teach.record")
 peak = max(float(np.max(s.trajectory.peak_speed() / station.arm.robot.velocity)) for s in plan.steps
            if hasattr(s, "trajectory"))
 assert result.grasps == (True, True, True), f"grasps {result.grasps}: a block was not held"
@@ -138,3 +139,77 @@ assert np.abs(blue.position - a).max() < 3.0, f"blue is {np.abs(blue.position - 
 assert peak <= 1.0, f"a joint ran at {100 * peak:.0f}% of its velocity limit"
 print(f"OK: swap: red is {np.abs(red.position - b).max():.1f} mm from B's spot, blue "
       f"{np.abs(blue.position - a).max():.1f} mm from A's; peak joint speed {100 * peak:.0f}% of its limit")
+
+# %% [markdown]
+# ## 5 · A time-scaled replay
+#
+# A demonstration runs at the lab's pace; a competition wants the same program faster. Scaling time by a speed
+# factor $s$ divides each segment's moving time, but two floors stay: the driver's shortest move (0.4 s) and every
+# joint's velocity limit $v_j$. With ramps a third of the move, a trapezoid's peak speed is $|\Delta q_j| /
+# (\tfrac{2}{3} T)$, so for each segment between two waypoints
+#
+# $$ T(s) = \max\left(0.4\ \text{s},\ \frac{\max_j |\Delta q_j|}{s\,\pi/4},\
+# \max_j \frac{|\Delta q_j|}{\tfrac{2}{3}\,v_j} \right). $$
+#
+# **Exercise:** write `scaled_durations(program, speed)`, the moving time of each segment. `scaled_plan` (given)
+# turns them into a plan; we replay the swap at 1.5× on a fresh station.
+
+# %%
+robot = station.arm.robot           # joint velocity limits: robot.velocity (rad/s)
+
+
+def scaled_durations(program, speed):
+    """Moving time (s) of each segment between consecutive waypoints (len(program) - 1,) when replaying at `speed`
+    times the lab's pace (the largest joint change at speed * pi/4 rad/s), at least 0.4 s, and never so short that a
+    joint's trapezoid peak speed |dq| / (2/3 T) exceeds its velocity limit (robot.velocity, rad/s)."""
+    # BEGIN SOLUTION teach.time_scaled
+    dq = np.abs(np.diff(program.q, axis=0))
+    lab_pace = dq.max(axis=1) / (speed * np.pi / 4)
+    velocity_floor = (dq / (2 / 3 * robot.velocity)).max(axis=1)
+    return np.maximum(np.maximum(lab_pace, velocity_floor), 0.4)
+    # END SOLUTION
+
+
+def scaled_plan(program, durations):
+    """The program as a Plan whose joint moves take `durations` (s), with its gripper actions (starts at waypoint 0)."""
+    steps = [planning.GripperStep("close" if program.gripper[0] == "closed" else "open", "at waypoint 0")]
+    for i, T in enumerate(durations, start=1):
+        steps.append(planning.MoveStep(planning.joint_move(program.q[i - 1], program.q[i], duration=float(T)),
+                                       f"to waypoint {i}"))
+        if program.gripper[i] != program.gripper[i - 1]:
+            steps.append(planning.GripperStep("close" if program.gripper[i] == "closed" else "open",
+                                              f"at waypoint {i}"))
+    return planning.Plan(tuple(steps))
+
+
+# your scaled_durations; while it is blank the kit's search stands in (it says so once)
+durations = with_reference(scaled_durations, "teach.time_scaled", references.scaled_durations_by_search,
+                           "segment times come from a search over the kit's trapezoid moves")
+fast_station = make_station("sim", seed=0, scene="swap")
+fast_arm = tasks.context(fast_station).arm
+fast_arm.move_to(loaded.q[0])
+fast = scaled_plan(loaded, durations(loaded, 1.5))
+fast_result = planning.execute(fast, fast_arm)
+red_fast, blue_fast = (next(o for o in fast_station.world.blocks if o.color == c) for c in ("red", "blue"))
+print(f"replay at 1.5x: {fast.duration:.1f} s instead of {plan.duration:.1f} s; grasps {fast_result.grasps}")
+
+# %%
+# CHECK teach.time_scaled
+lab_pace = [s.trajectory.duration for s in loaded.to_plan().steps if hasattr(s, "trajectory")]
+mine = {s: scaled_durations(loaded, s) for s in (0.5, 1.0, 1.5, 4.0)}
+assert np.allclose(mine[1.0], lab_pace, atol=1e-9), \
+    f"at speed 1 your times {np.round(mine[1.0], 2)} s should be the lab's {np.round(lab_pace, 2)} s"
+assert np.all(mine[4.0] >= 0.4 - 1e-12), "a segment is shorter than the driver's 0.4 s"
+for s, times in mine.items():
+    for q0, q1, T in zip(loaded.q[:-1], loaded.q[1:], times):
+        peak = np.abs(q1 - q0) / (2 / 3 * T)
+        assert np.all(peak <= robot.velocity + 1e-9), \
+            f"at speed {s} a segment of {T:.2f} s drives a joint at {peak.max():.2f} rad/s, over its velocity limit"
+assert np.all(mine[0.5] >= mine[1.0] - 1e-12) and mine[0.5].sum() > 1.5 * mine[1.0].sum(), \
+    "half speed should take (about) twice as long"
+assert mine[1.5].sum() < mine[1.0].sum(), "1.5x is not faster than the lab's pace"
+assert fast_result.grasps == (True, True, True), f"the fast replay's grasps {fast_result.grasps}"
+swap_err = max(np.abs(red_fast.position - b).max(), np.abs(blue_fast.position - a).max())
+assert swap_err < 3.0, f"after the fast replay a block is {swap_err:.1f} mm from its spot"
+print(f"OK: time-scaled replay: 1.5x takes {mine[1.5].sum():.1f} s of moves instead of {mine[1.0].sum():.1f} s, "
+      f"within every velocity limit; the blocks swapped within {swap_err:.1f} mm")

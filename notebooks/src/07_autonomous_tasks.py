@@ -24,11 +24,14 @@ from IPython import get_ipython
 from armlab.blocks import LAB_RGB, block_edge
 from armlab.robot import JOINT_NAMES
 from armlab.tasks.events import columns, event_station, run_event, score_event
+from armlab.tasks.events.layout import Move, covered
 from armlab.tasks.events.replay import objects_from_snapshot
+from armlab.tasks.events.sort_stack import ROW_XY, SortStack
 from armlab.tasks.events import scoring
 from armlab.tasks.events.sky import TOWER_XY, highest_tool_z
 
 get_ipython().run_line_magic("matplotlib", "inline")
+from armlab.exercises import with_reference
 from armlab.viz.figures import readable
 
 readable()                                             # figure size and fonts readable at 100 % zoom
@@ -202,3 +205,76 @@ assert sky.score.points == scoring.sky_points(tower), "the score does not follow
 assert "out of reach" in sky.stopped, f"the tower stopped for another reason: {sky.stopped}"
 print(f"OK: to the sky: a stable tower of {tower} blocks ({sky.score.points:g} points); it stopped because the next "
       f"level is out of the arm's reach")
+
+# %% [markdown]
+# ## 5 · Your own strategy: sort 'n stack, level 1
+#
+# A strategy is an object with `next_move(seen)`: given the detections of a fresh look (`detection.Block`s: `color`,
+# `size`, `position` = top-face centre in world mm, `is_block`), it returns the next `Move(block, to, yaw, why)` —
+# `to` is where the block's *bottom* centre goes, (x, y, 0) on the board — or `None` when it is done. `run_event`
+# picks, places, looks again and calls it again; it calls `placed(move)` after each successful place.
+#
+# Level 1: every cube into $y < 0$, small ones on the left ($x < 0$), large ones on the right. Use the slots
+# `ROW_XY[size]` (reachable top-down, clear of each other):
+# - a cube is **sorted** when it stands (not on another block) within 20 mm of a slot of its size;
+# - take an unsorted cube that nothing covers, the **highest** first (unstacks stacks);
+# - send it to the first slot of its size that **no detection occupies** (within 30 mm), so that a block that fell
+#   or a failed place is simply seen again;
+# - `None` when every cube is sorted.
+#
+# **Exercise:** write `next_move`.
+
+# %%
+class SortLevel1:
+    """Sort 'n stack level 1 from what the robot sees (see above)."""
+
+    def __init__(self):
+        self.moves = 0
+
+    def next_move(self, seen):
+        # BEGIN SOLUTION events.strategy
+        def near(b, xy, mm):
+            return np.hypot(b.position[0] - xy[0], b.position[1] - xy[1]) < mm
+
+        def is_sorted(b):
+            return b.position[2] < block_edge(b.size) + 5.0 and any(near(b, xy, 20.0) for xy in ROW_XY[b.size])
+
+        todo = [b for b in seen if b.is_block and not is_sorted(b)]
+        free = [b for b in todo if not covered(b, seen)]
+        if not free:
+            return None
+        b = max(free, key=lambda b: b.position[2])
+        slot = next((xy for xy in ROW_XY[b.size] if not any(near(o, xy, 30.0) for o in seen)), None)
+        if slot is None:
+            return None
+        return Move(b, np.array([slot[0], slot[1], 0.0]), 0.0, "sort")
+        # END SOLUTION
+
+    def placed(self, move):
+        self.moves += 1
+
+
+# your strategy; while next_move is blank the kit's SortStack(1) plays (it says so once)
+mine = SortLevel1()
+mine.next_move = with_reference(mine.next_move, "events.strategy", SortStack(1).next_move,
+                                "the kit's sort 'n stack strategy plays")
+station = event_station("sort_stack", 1, seed=3)
+sort1 = run_event(station, "sort_stack", 1, strategy=mine)
+print(sort1.summary())
+
+# %%
+# CHECK events.strategy
+def run_own(seed):
+    st = event_station("sort_stack", 1, seed=seed)
+    return st, run_event(st, "sort_stack", 1, strategy=SortLevel1(), record=False)
+
+
+results = [run_own(seed) for seed in (3, 11)]
+for seed, (st, res) in zip((3, 11), results):
+    assert res.score.full_marks, (f"seed {seed}: your strategy scored {res.score.points:g}/{res.score.max_points} "
+                                  f"({res.stopped}): {[line.why for line in res.score.lines if line.points == 0]}")
+    assert res.within_limit, f"seed {seed}: it took {res.time_s:.0f} s (limit {res.time_limit_s:.0f} s)"
+    assert res.score == score_event("sort_stack", 1, st.world.objects), "the score is not the world's"
+    assert not any(not m.placed for m in res.moves), f"seed {seed}: a pick or place failed: {res.moves}"
+print(f"OK: your sort 'n stack level 1 strategy: full marks on 2 seeds in "
+      f"{' and '.join(f'{res.time_s:.0f} s' for _, res in results)} of {results[0][1].time_limit_s:.0f} s")

@@ -115,14 +115,20 @@ def _obstacles(seen, move: Move, extra=()) -> list:
 
 
 def run_event(station, event: str, level: int = 1, time_limit_s: float | None = None, seed: int = 0,
-              max_moves: int = 60, record: bool = True) -> EventResult:
+              max_moves: int = 60, record: bool = True, strategy=None) -> EventResult:
     """Run one event autonomously on a simulated station and score it (see the module notes).
 
     time_limit_s: default the rules' (180 s sort 'n stack, 600 s the others). seed: the hand-over jitter (sky).
+    strategy: default the kit's for the event and level (make_strategy); your own needs next_move(seen) -> Move or
+    None (seen: the detections of a fresh look) and placed(move), called after each successful place.
     """
     if station.world is None:
         raise ValueError("run_event scores from the simulator's ground truth: it needs a simulated station")
-    strategy = make_strategy(event, level)
+    if strategy is None:
+        strategy = make_strategy(event, level)
+    elif not (callable(getattr(strategy, "next_move", None)) and callable(getattr(strategy, "placed", None))):
+        raise TypeError(f"a strategy needs next_move(seen) and placed(move) methods; {type(strategy).__name__} "
+                        f"lacks {'next_move' if not callable(getattr(strategy, 'next_move', None)) else 'placed'}")
     limit = TIME_LIMIT_S[event] if time_limit_s is None else float(time_limit_s)
     if not limit > 0:
         raise ValueError(f"time_limit_s must be positive, got {time_limit_s}")
