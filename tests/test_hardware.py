@@ -664,7 +664,7 @@ def test_reset_after_a_stop_while_teaching_returns_torque_without_a_jump(arm, ve
     assert calls(vendors.log) == []                             # nothing to hold with torque off
     arm.reset()
     assert calls(vendors.log, "robot_write_commands")[-1][2] == list(Q_READY)
-    assert vendors.log[-1] == ("robot_torque_enable", "group", "arm", True) and arm.torque_on
+    assert vendors.log[-1] == ("robot_torque_enable", "group", "arm", True) and arm.torque_enabled
     arm.home()
     np.testing.assert_allclose(arm.joint_positions(), 0.0)
 

@@ -1,4 +1,4 @@
-"""The real Interbotix RX200 through the manufacturer's ROS 2 Python API, behind armlab.station.Arm.
+"""The real Interbotix RX200 through the manufacturer's ROS 2 Python API, behind armlab.station.contract.Arm.
 
 Safety, in the order a move is handled:
 - Every move is checked BEFORE anything is sent (armlab.hardware.safety.check_move): position limits of
@@ -72,7 +72,7 @@ from armlab.hardware.ros_session import DRIVER_TIMEOUT_S, RosApi, get_bot
 from armlab.hardware.safety import DEFAULT_BOARD_MARGIN_MM, check_move
 from armlab.profile import MIN_MOVING_TIME_S
 from armlab.robot import RobotModel, rx200
-from armlab.station import EmergencyStopped, MotionRefused
+from armlab.station.contract import EmergencyStopped, MotionRefused
 
 __all__ = ["HELD_THRESHOLD_MM", "HOLD_TIME_S", "import_interbotix", "RealArm", "connect_arm", "park"]
 
@@ -205,13 +205,13 @@ class RealArm:
         return 1000.0 * float(state[FINGER_JOINT])
 
     @property
-    def estopped(self) -> bool:
+    def emergency_stopped(self) -> bool:
         """True between emergency_stop() and reset()."""
         return self._estopped
 
     @property
-    def torque_on(self) -> bool:
-        """False while the arm is torqued off for teaching."""
+    def torque_enabled(self) -> bool:
+        """True when the motors hold the arm (False while it is torqued off for teaching)."""
         return self._torque_on
 
     # --- motion --------------------------------------------------------------------------------------------------
@@ -386,11 +386,11 @@ def park(arm: RealArm) -> None:
     if arm.closed:
         return
     try:
-        if arm.estopped:
+        if arm.emergency_stopped:
             warnings.warn("the arm is emergency-stopped: it was not moved to its sleep pose and holds its position; "
                           "support it before powering the arm off", RuntimeWarning, stacklevel=2)
         else:
-            if not arm.torque_on:
+            if not arm.torque_enabled:
                 arm.set_torque(True)
             arm.sleep()
     except Exception as e:

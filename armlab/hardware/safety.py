@@ -18,7 +18,7 @@ import numpy as np
 from armlab.kinematics import check_joints, joint_positions
 from armlab.profile import default_moving_time, velocity_violations
 from armlab.robot import RobotModel, rx200
-from armlab.station import MotionRefused
+from armlab.station.contract import MotionRefused
 
 __all__ = ["TRACKED_POINTS", "DEFAULT_BOARD_MARGIN_MM", "PATH_STEP_RAD", "ACCEL_FRACTION", "MAX_MOVING_TIME_S",
            "path_heights",

@@ -24,7 +24,7 @@ from armlab.robot import RobotModel, rx200
 from armlab.sim.geometry import convex_penetration, prism_features
 from armlab.sim.gripper import PAD_NAMES, GripperGeometry, close_on, push_with_pads
 from armlab.sim.world import World, describe_object
-from armlab.station import EmergencyStopped, MotionRefused
+from armlab.station.contract import EmergencyStopped, MotionRefused
 from armlab.transforms import homogeneous, invert_transform, rot_z, rpy_from_matrix
 
 __all__ = ["ArmRealism", "SimArm", "gravity_deflection"]

@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
-from armlab.station import EmergencyStopped, MotionRefused
+from armlab.station.contract import EmergencyStopped, MotionRefused
 
 from .click import ClickRefused, click_drop, click_grab, click_world, current_view
 from .machine import MachineBusy

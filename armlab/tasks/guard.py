@@ -26,7 +26,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from armlab.station import EmergencyStopped, MotionRefused
+from armlab.station.contract import EmergencyStopped, MotionRefused
 
 from .sag import SagModel
 

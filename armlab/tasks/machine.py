@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from armlab import planning
-from armlab.station import EmergencyStopped
+from armlab.station.contract import EmergencyStopped
 
 from . import click, perception, pickplace, teach
 
