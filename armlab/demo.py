@@ -18,6 +18,7 @@ import numpy as np
 from armlab.files import atomic_path
 from armlab.tasks.events import columns, event_station, run_event
 from armlab.tasks.events.runner import see
+from armlab.transforms import wrap_quarter
 
 __all__ = ["run_demo", "detection_accuracy"]
 
@@ -39,7 +40,7 @@ def detection_accuracy(detected, objects, max_mm: float = 20.0) -> dict:
             pairs.append((b, tops[i]))
     xy = np.array([np.linalg.norm(np.asarray(b.position[:2]) - t.position[:2]) for b, t in pairs])
     dz = np.array([b.position[2] - t.top_z for b, t in pairs])
-    yaw = np.array([abs((b.yaw - t.yaw + np.pi / 4) % (np.pi / 2) - np.pi / 4) for b, t in pairs])
+    yaw = np.abs(wrap_quarter([b.yaw - t.yaw for b, t in pairs]))
     return {"true_tops": len(tops), "detected": len(cubes), "matched": len(pairs),
             "distractors_flagged": sum(not b.is_block for b in detected),
             "colour_ok": sum(b.color == t.color for b, t in pairs), "size_ok": sum(b.size == t.size for b, t in pairs),
