@@ -72,11 +72,11 @@ def run_demo(out_dir: str = "out", seed: int = 0, event: str = "sort_stack", lev
     """Run the demo (module notes); returns a process exit code (0 when the event got full marks)."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    from armlab.tasks import pickplace
+    from armlab.tasks import handling
 
     print(f"armlab demo: {event} level {level} on the simulator (seed {seed})")
     station = event_station(event, level, seed=seed)
-    ctx = pickplace.context(station)
+    ctx = handling.context(station)
     print(f"calibration: {ctx.calibration.notes}")
     look = see(station, ctx)
     acc = detection_accuracy(look.objects, station.world.objects)

@@ -32,6 +32,8 @@ __all__ = ["ArmRealism", "SimArm", "gravity_deflection"]
 GRAVITY = 9.81                 # m/s^2
 HELD_CONTACT_TOL_MM = 0.5      # a held block may press this far into another object (resting on it, placing it on a
                                # stack, touching a neighbour): not a collision
+HELD_PATH_STEP_RAD = 0.01      # the held-object check's path step (coarser than motion_safety.PATH_STEP_RAD for the
+                               # board: each sample costs a separating-axis test per pair of object pieces)
 
 
 @dataclass(frozen=True)
@@ -286,7 +288,7 @@ class SimArm:
         if not others:
             return None
         dq = np.asarray(q1) - np.asarray(q0)
-        s = motion_safety.path_fractions(q0, q1)
+        s = motion_safety.path_fractions(q0, q1, HELD_PATH_STEP_RAD)
         T = kinematics.fk_pox(physical(q0 + s[:, None] * dq), self.robot, check_limits=False)     # (n, 4, 4)
         fixed = [(o, [prism_features(p, o.edge / 2, homogeneous(rot_z(o.yaw), o.position))
                       for p in footprint(o.shape, o.edge)]) for o in others]

@@ -6,7 +6,7 @@ in the camera-clear pose (armlab.planning.plan_camera_clear) one frame: AprilTag
 (calibration.calibrate_extrinsics) and the planar depth correction (calibration.fit_depth_correction, arm pixels
 excluded). The result is an armlab.calibration.Calibration (save/load it with calibration.save_calibration /
 load_calibration).
-look(station, calibration): arm camera-clear (clear_view: with a lower clearance or a lift back first when needed),
+observe(station, calibration): arm camera-clear (clear_view: with a lower clearance or a lift back first when needed),
 capture, correct the depth, detect the blocks (detection.detect_blocks with the arm masked out; or every object,
 distractors included, with all_objects=True). surface_point(...): the world point (mm) under a pixel, from the median
 corrected depth in a small window. Units: px, mm, rad; world (board) frame.
@@ -26,7 +26,7 @@ from armlab.camera import Camera
 from armlab.kinematics import Unreachable
 from armlab.station.contract import Frame
 
-__all__ = ["Observation", "calibrate_camera", "clear_view", "look", "surface_point", "checkerboard_intrinsics",
+__all__ = ["Observation", "calibrate_camera", "clear_view", "observe", "surface_point", "checkerboard_intrinsics",
            "station_intrinsics", "CLEAR_VIEW_MIN_CLEARANCE_MM", "REAL_CHECKERBOARD_FOLDER"]
 
 CLEAR_VIEW_MIN_CLEARANCE_MM = 25.0   # tool point above what it passes on the way out of view: the finger tips
@@ -132,8 +132,8 @@ def calibrate_camera(station, intrinsics="checkerboard", arm=None) -> Calibratio
                                                  f"residual {correction.residual_mm:.1f} mm")
 
 
-def look(station, calib: Calibration, arm=None, obstacles=(), clear: bool = True, held_below: float = 0.0,
-         all_objects: bool = False, settings: detection.DetectionSettings | None = None) -> Observation:
+def observe(station, calib: Calibration, arm=None, obstacles=(), clear: bool = True, held_below: float = 0.0,
+            all_objects: bool = False, settings: detection.DetectionSettings | None = None) -> Observation:
     """Move the arm out of view (clear_view, unless clear=False), capture a frame, correct its depth and detect.
 
     Observation.blocks holds the cubes (detection.detect_blocks) or, with all_objects, every object's top face

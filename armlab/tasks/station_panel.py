@@ -50,8 +50,8 @@ from armlab.lab import lab_config
 
 from .click import ClickRefused
 from .click_widget import ClickToGrab, encode_view, event_pixel, holding_text, scaled_size, view_is_current
+from .handling import context
 from .machine import TaskMachine
-from .pickplace import context
 
 __all__ = ["StationPanel", "station_panel", "VIEW_MODES", "depth_rgb"]
 

@@ -1,4 +1,5 @@
-"""Pick and place on a station: detected block -> plan (armlab.planning) -> execute on the station's arm.
+"""Handling blocks on a station: look (tasks.look), pick and place a detected block -> plan (armlab.planning's
+pick/place plans) -> execute on the station's arm. (armlab.planning.pickplace plans; this module runs them.)
 
 Works the same on the simulated and the real station: it uses only the Arm protocol (through a GuardedArm, which
 compensates sag) and station.camera. Each station gets a TaskContext on first use (kept on the station object):
@@ -92,7 +93,7 @@ def look(station) -> perception.Observation:
     obstacles."""
     ctx = context(station)
     held_below = 0.0 if ctx.held is None else ctx.held_edge - planning.default_grasp_depth(ctx.held_edge)
-    obs = perception.look(station, ctx.calibration, ctx.arm, obstacles=ctx.known, held_below=held_below)
+    obs = perception.observe(station, ctx.calibration, ctx.arm, obstacles=ctx.known, held_below=held_below)
     ctx.last = obs
     ctx.known = list(obs.blocks)
     return obs
