@@ -133,6 +133,16 @@ def test_capabilities_say_what_only_a_backend_can_do(station):
     if station.world is None:                 # hardware: no ground truth, nothing it can calibrate by itself
         assert caps == Capabilities()
         return
+    caps.pacing.set_real_time(True)
+    assert caps.pacing.is_real_time() and station.arm.real_time and station.world.real_time
+    caps.pacing.set_real_time(False)
+    assert not caps.pacing.is_real_time()
+    station.arm.set_torque(False)
+    caps.pose_by_hand(Q_READY)
+    np.testing.assert_allclose(station.arm.joint_positions(), Q_READY, atol=ATOL)
+    with pytest.raises(MotionRefused, match="through the board"):
+        caps.pose_by_hand(kinematics.ik(np.array([0.0, 300.0, -20.0]), np.pi / 2)[0])
+    station.arm.set_torque(True)
     assert callable(caps.camera_intrinsics)   # renders its own checkerboard views (~1.5 s: tests/test_calibration)
     reference = caps.sag_reference()
     assert isinstance(reference.arm, Arm) and reference.arm is not station.arm

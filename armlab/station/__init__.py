@@ -12,11 +12,12 @@ from armlab.station.contract import (
     Frame,
     GroundTruth,
     MotionRefused,
+    Pacing,
     RGBDCamera,
     SagReference,
     Station,
 )
 from armlab.station.registry import BACKENDS, backend_names, make_station, register_backend
 
-__all__ = ["Frame", "Arm", "RGBDCamera", "GroundTruth", "Station", "Capabilities", "SagReference", "make_station",
-           "MotionRefused", "EmergencyStopped", "BACKENDS", "backend_names", "register_backend"]
+__all__ = ["Frame", "Arm", "RGBDCamera", "GroundTruth", "Station", "Capabilities", "Pacing", "SagReference",
+           "make_station", "MotionRefused", "EmergencyStopped", "BACKENDS", "backend_names", "register_backend"]

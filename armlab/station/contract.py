@@ -18,8 +18,8 @@ import numpy as np
 
 from armlab.robot import RobotModel
 
-__all__ = ["Frame", "Arm", "RGBDCamera", "GroundTruth", "Capabilities", "SagReference", "Station", "MotionRefused",
-           "EmergencyStopped"]
+__all__ = ["Frame", "Arm", "RGBDCamera", "GroundTruth", "Capabilities", "Pacing", "SagReference", "Station",
+           "MotionRefused", "EmergencyStopped"]
 
 
 class MotionRefused(ValueError):
@@ -126,6 +126,15 @@ class SagReference:
 
 
 @dataclass(frozen=True)
+class Pacing:
+    """The simulator's clock switch: is_real_time() -> bool, and set_real_time(on): motions take wall-clock time
+    (True) or run in simulated time, returning at once (False). Hardware always moves in real time."""
+
+    is_real_time: Callable[[], bool]
+    set_real_time: Callable[[bool], None]
+
+
+@dataclass(frozen=True)
 class Capabilities:
     """What a backend offers beyond the Arm and RGBDCamera protocols; None where it does not.
 
@@ -134,10 +143,15 @@ class Capabilities:
             its own camera (the simulator renders them); None: the set is read from the data folder.
         sag_reference: () -> SagReference, to fit the sag on before the first task; None: the sag stays zero until
             the caller fits one (tasks.calibrate_sag with a measuring function).
+        pose_by_hand: (q) -> None: with torque off, put the arm at joint angles q (5,) rad as a hand would (the
+            simulator's hand; MotionRefused through the board or past a hard stop); None: a person moves the arm.
+        pacing: the clock switch (Pacing) of a simulated station; None: motions always take wall-clock time.
     """
 
     camera_intrinsics: Callable[[], tuple[np.ndarray, np.ndarray]] | None = None
     sag_reference: Callable[[], SagReference] | None = None
+    pose_by_hand: Callable[[np.ndarray], None] | None = None
+    pacing: Pacing | None = None
 
 
 @dataclass
