@@ -25,6 +25,7 @@ from armlab.station import (
     backend_names,
     register_backend,
 )
+from armlab.tasks import GuardedArm
 
 Q_READY = np.array([0.0, -0.5, 0.3, 1.2, 0.0])   # tool well above the board, reachable from sleep
 ATOL = 0.01                                     # rad: the simulator's encoder noise and quantisation
@@ -59,6 +60,15 @@ def test_state_names_are_the_same_on_both_backends(station):
         arm.move_to(Q_READY)
     arm.set_torque(True)
     assert arm.torque_enabled is True
+
+
+def test_the_task_layer_guard_is_an_arm_with_the_same_state(station):
+    guarded = GuardedArm(station.arm)
+    assert isinstance(guarded, Arm) and guarded.torque_enabled and not guarded.emergency_stopped
+    guarded.emergency_stop()
+    assert guarded.emergency_stopped and station.arm.emergency_stopped
+    guarded.reset()
+    assert not station.arm.emergency_stopped
 
 
 def test_emergency_stop_wins_until_reset(station):

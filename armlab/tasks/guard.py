@@ -54,6 +54,16 @@ class GuardedArm:
             self.arm.emergency_stop()
             raise EmergencyStopped(f"{what} refused: an emergency stop was requested; reset first")
 
+    @property
+    def torque_enabled(self) -> bool:
+        """The wrapped arm's state: True when its motors hold it."""
+        return self.arm.torque_enabled
+
+    @property
+    def emergency_stopped(self) -> bool:
+        """The wrapped arm's state: True after an emergency stop until reset()."""
+        return self.arm.emergency_stopped
+
     def joint_positions(self) -> np.ndarray:
         """Estimated physical joint angles (5,) rad: the encoder reading plus the predicted sag."""
         return self.sag.physical(self.arm.joint_positions(), self.robot)
