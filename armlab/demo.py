@@ -18,6 +18,7 @@ import numpy as np
 from armlab.files import atomic_path
 from armlab.tasks.events import columns, event_station, run_event
 from armlab.tasks.events.runner import see
+from armlab.transforms import wrap_quarter
 
 __all__ = ["run_demo", "detection_accuracy"]
 
@@ -39,7 +40,7 @@ def detection_accuracy(detected, objects, max_mm: float = 20.0) -> dict:
             pairs.append((b, tops[i]))
     xy = np.array([np.linalg.norm(np.asarray(b.position[:2]) - t.position[:2]) for b, t in pairs])
     dz = np.array([b.position[2] - t.top_z for b, t in pairs])
-    yaw = np.array([abs((b.yaw - t.yaw + np.pi / 4) % (np.pi / 2) - np.pi / 4) for b, t in pairs])
+    yaw = np.abs(wrap_quarter([b.yaw - t.yaw for b, t in pairs]))
     return {"true_tops": len(tops), "detected": len(cubes), "matched": len(pairs),
             "distractors_flagged": sum(not b.is_block for b in detected),
             "colour_ok": sum(b.color == t.color for b, t in pairs), "size_ok": sum(b.size == t.size for b, t in pairs),
@@ -71,11 +72,11 @@ def run_demo(out_dir: str = "out", seed: int = 0, event: str = "sort_stack", lev
     """Run the demo (module notes); returns a process exit code (0 when the event got full marks)."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    from armlab.tasks import pickplace
+    from armlab.tasks import handling
 
     print(f"armlab demo: {event} level {level} on the simulator (seed {seed})")
     station = event_station(event, level, seed=seed)
-    ctx = pickplace.context(station)
+    ctx = handling.context(station)
     print(f"calibration: {ctx.calibration.notes}")
     look = see(station, ctx)
     acc = detection_accuracy(look.objects, station.world.objects)

@@ -12,10 +12,12 @@ import numpy as np
 from armlab.robot import RobotModel, rx200
 
 __all__ = ["trapezoid_fraction", "default_moving_time", "velocity_violations", "MIN_MOVING_TIME_S",
-           "LAB_MEAN_SPEED"]
+           "LAB_MEAN_SPEED", "ACCEL_FRACTION"]
 
 MIN_MOVING_TIME_S = 0.4            # the lab's shortest move (reference/lab.md)
 LAB_MEAN_SPEED = np.pi / 4         # rad/s: the lab's rule of thumb for the largest joint change
+ACCEL_FRACTION = 1 / 3             # the lab's accel_time = moving_time / 3 unless the caller chooses (every default
+                                   # ramp of the kit: the arms, the planner's trapezoids, default_moving_time)
 
 
 def trapezoid_fraction(t, moving_time: float, accel_time: float) -> np.ndarray:
@@ -32,7 +34,8 @@ def trapezoid_fraction(t, moving_time: float, accel_time: float) -> np.ndarray:
                     np.where(t <= moving_time - Ta, v * (t - Ta / 2), 1.0 - 0.5 * a * (moving_time - t) ** 2))
 
 
-def default_moving_time(q_from, q_to, robot: RobotModel | None = None, accel_fraction: float = 1 / 3) -> float:
+def default_moving_time(q_from, q_to, robot: RobotModel | None = None,
+                        accel_fraction: float = ACCEL_FRACTION) -> float:
     """Moving time (s) for a joint move: the largest change at the lab's pi/4 rad/s, at least 0.4 s, and long
     enough that no joint's peak speed |dq| / (T - accel_time) exceeds its velocity limit."""
     robot = robot or rx200()

@@ -138,17 +138,18 @@ def test_a_station_is_calibrated_with_its_own_cameras_checkerboard_set():
 def test_a_real_station_reads_the_set_saved_from_its_camera(tmp_path, monkeypatch, dataset):
     from types import SimpleNamespace
 
+    from armlab.station import Capabilities
     from armlab.tasks import perception
 
     monkeypatch.setenv("ARMLAB_DATA", str(tmp_path))
-    real = SimpleNamespace(kind="real", camera=SimpleNamespace(width=1280, height=720))
+    real = SimpleNamespace(capabilities=Capabilities(), camera=SimpleNamespace(width=1280, height=720))
     with pytest.raises(ValueError, match=f"{tmp_path / 'checkerboard_real'}: no checkerboard set for this camera"):
         perception.station_intrinsics(real)
     images, _ = dataset
     cal.save_checkerboard_set(images[:8], tmp_path / "checkerboard_real")
     K, dist = perception.station_intrinsics(real)
     assert np.allclose(K, cal.calibrate_intrinsics(images[:8], (9, 6), 25.0).K, atol=0.5) and dist.shape == (5,)
-    small = SimpleNamespace(kind="real", camera=SimpleNamespace(width=640, height=480))
+    small = SimpleNamespace(capabilities=Capabilities(), camera=SimpleNamespace(width=640, height=480))
     with pytest.raises(ValueError, match="1280x720 px, the camera's images 640x480"):
         perception.station_intrinsics(small)
 

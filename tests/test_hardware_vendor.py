@@ -493,7 +493,7 @@ def test_5_an_emergency_stop_during_a_move_being_sent_wins(vendor):
         stopper.join(timeout=THREAD_JOIN_S)
         assert not stopper.is_alive()
         vendor.sdk.on_register_write = None
-        assert state["fired"] and st.arm.estopped
+        assert state["fired"] and st.arm.emergency_stopped
         last = goals(vendor.sdk)[-1]
         np.testing.assert_allclose(last, Q_READY, atol=1e-6)                   # the hold went out last
         np.testing.assert_allclose(st.arm.joint_positions(), Q_READY, atol=1e-6)

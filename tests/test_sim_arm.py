@@ -98,9 +98,9 @@ def test_goal_below_the_board_is_refused_naming_the_part():
     world, arm = make()
     q = kinematics.ik([0.0, 300.0, -5.0], DOWN)[0]
     with pytest.raises(MotionRefused, match=r"collision with the board\): the (tool point|left finger pad|right "
-                                            r"finger pad) would go [0-9.]+ mm below the board at \(") as e:
+                                            r"finger pad) would go down to z = -[0-9.]+ mm at \(") as e:
         arm.move_to(q)
-    assert "mm below the board at (0.0, 300.0) mm, 100% of the way" in str(e.value)
+    assert "mm at (0.0, 300.0) mm, 100% of the way" in str(e.value)
     np.testing.assert_array_equal(arm.joint_positions(), rx200().sleep)
 
 
@@ -374,7 +374,7 @@ def test_held_block_moved_sideways_through_a_standing_block_is_refused_and_nothi
         move_tool(arm, target, aligned_roll(target, 0.0))
     hit_at = [float(v) for v in str(e.value).split("centre at (")[-1].split(")")[0].split(",")]
     # where it first goes HELD_CONTACT_TOL_MM into the red block's -x face (x = -38 mm for its centre), within one
-    # checked path step (0.01 rad of waist at about 270 mm reach)
+    # checked path step (HELD_PATH_STEP_RAD = 0.01 rad of waist at about 270 mm reach)
     assert -38.0 + 0.5 < hit_at[0] < -38.0 + 0.5 + 2.8
     _assert_same_state(before, _world_state(world, arm))
     assert world.problems() == []

@@ -201,8 +201,8 @@ def test_look_can_return_every_object_and_the_event_runner_sees_through_it():
                           "position_mm": [120.0, 220.0]}]}
     st = make_station("sim", seed=4, scene=scene)
     ctx = tasks.context(st)
-    cubes = tasks.perception.look(st, ctx.calibration, ctx.arm).blocks
-    everything = tasks.perception.look(st, ctx.calibration, ctx.arm, all_objects=True).blocks
+    cubes = tasks.perception.observe(st, ctx.calibration, ctx.arm).blocks
+    everything = tasks.perception.observe(st, ctx.calibration, ctx.arm, all_objects=True).blocks
     assert [b.color for b in cubes] == ["red"] and all(b.is_block for b in cubes)
     assert sorted((b.color, b.is_block) for b in everything) == [("blue", False), ("red", True)]
     far = next(b for b in everything if not b.is_block)

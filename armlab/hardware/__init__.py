@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import atexit
 
-from armlab.station import Station
+from armlab.station.contract import Station
 
 __all__ = ["HardwareUnavailable", "make_real_station"]
 

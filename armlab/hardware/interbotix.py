@@ -1,11 +1,12 @@
-"""The real Interbotix RX200 through the manufacturer's ROS 2 Python API, behind armlab.station.Arm.
+"""The real Interbotix RX200 through the manufacturer's ROS 2 Python API, behind armlab.station.contract.Arm.
 
 Safety, in the order a move is handled:
-- Every move is checked BEFORE anything is sent (armlab.hardware.safety.check_move): position limits of
-  armlab.robot.rx200(), the driver's velocity rule (armlab.profile.velocity_violations), a valid time profile
-  (moving time at most MAX_MOVING_TIME_S = 32.737 s, the servos' Profile_Velocity limit), and the board-collision
-  check of the straight joint-space path. A refused move raises MotionRefused naming the reason and sends nothing.
-- Moving time defaults to armlab.profile.default_moving_time and accel time to moving time / 3 (<= moving / 2).
+- Every move is checked BEFORE anything is sent (armlab.hardware.safety.check_move: armlab.motion_safety's rules,
+  the simulator's too): position limits of armlab.robot.rx200(), the driver's velocity rule
+  (armlab.profile.velocity_violations), a valid time profile (moving time at most MAX_MOVING_TIME_S = 32.737 s, the
+  servos' Profile_Velocity limit), and the board clearance of the links and the pads (at the measured finger
+  opening) along the straight joint-space path. A refused move raises MotionRefused naming the reason and sends nothing.
+- Moving time defaults to armlab.profile.default_moving_time and accel time to ACCEL_FRACTION x moving time.
   The trajectory time is set before set_joint_positions because the driver checks velocities against its stored
   moving time and its last command, not the new ones; if the driver still refuses, MotionRefused says so.
 - Moves are sent non-blocking (set_joint_positions(blocking=False)); armlab waits on an event that
@@ -69,10 +70,10 @@ import numpy as np
 
 from armlab.hardware import HardwareUnavailable
 from armlab.hardware.ros_session import DRIVER_TIMEOUT_S, RosApi, get_bot
-from armlab.hardware.safety import DEFAULT_BOARD_MARGIN_MM, check_move
+from armlab.hardware.safety import DEFAULT_BOARD_MARGIN_MM, check_move, pad_opening_mm
 from armlab.profile import MIN_MOVING_TIME_S
 from armlab.robot import RobotModel, rx200
-from armlab.station import EmergencyStopped, MotionRefused
+from armlab.station.contract import EmergencyStopped, MotionRefused
 
 __all__ = ["HELD_THRESHOLD_MM", "HOLD_TIME_S", "import_interbotix", "RealArm", "connect_arm", "park"]
 
@@ -191,7 +192,9 @@ class RealArm:
 
     def joint_positions(self) -> np.ndarray:
         """Measured joint positions (5,) rad (also while torque is off, for teaching by hand)."""
-        state = self._joint_state()
+        return self._arm_joints(self._joint_state())
+
+    def _arm_joints(self, state: dict[str, float]) -> np.ndarray:
         missing = [n for n in self.robot.joint_names if n not in state]
         if missing:
             raise RuntimeError(f"the driver's joint states lack {missing}")
@@ -205,13 +208,13 @@ class RealArm:
         return 1000.0 * float(state[FINGER_JOINT])
 
     @property
-    def estopped(self) -> bool:
+    def emergency_stopped(self) -> bool:
         """True between emergency_stop() and reset()."""
         return self._estopped
 
     @property
-    def torque_on(self) -> bool:
-        """False while the arm is torqued off for teaching."""
+    def torque_enabled(self) -> bool:
+        """True when the motors hold the arm (False while it is torqued off for teaching)."""
         return self._torque_on
 
     # --- motion --------------------------------------------------------------------------------------------------
@@ -234,8 +237,11 @@ class RealArm:
         self.wait()
         with self._lock:
             self._require_motion_allowed()
-            moving_time, accel_time = check_move(self.joint_positions(), q, moving_time, accel_time, self.robot,
-                                                 self.board_margin_mm)
+            state = self._joint_state()
+            q_now = self._arm_joints(state)
+            opening = pad_opening_mm(1000.0 * float(state[FINGER_JOINT])) if FINGER_JOINT in state else None
+            moving_time, accel_time = check_move(q_now, q, moving_time, accel_time, self.robot, self.board_margin_mm,
+                                                 opening)
             arm = self._bot.arm
             arm.set_trajectory_time(moving_time, accel_time)
             self._require_motion_allowed()        # a stop that came during the register writes wins
@@ -386,11 +392,11 @@ def park(arm: RealArm) -> None:
     if arm.closed:
         return
     try:
-        if arm.estopped:
+        if arm.emergency_stopped:
             warnings.warn("the arm is emergency-stopped: it was not moved to its sleep pose and holds its position; "
                           "support it before powering the arm off", RuntimeWarning, stacklevel=2)
         else:
-            if not arm.torque_on:
+            if not arm.torque_enabled:
                 arm.set_torque(True)
             arm.sleep()
     except Exception as e:

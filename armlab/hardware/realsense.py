@@ -30,7 +30,7 @@ import numpy as np
 
 from armlab.camera import check_intrinsics
 from armlab.hardware import HardwareUnavailable
-from armlab.station import Frame
+from armlab.station.contract import Frame
 
 __all__ = ["COLOR_SIZE", "DEPTH_SIZE", "FPS", "MIN_VALID_DEPTH_FRACTION", "import_realsense", "depth_to_mm",
            "intrinsics_matrix", "RealFrame", "RealCamera", "open_camera", "configure_streams"]

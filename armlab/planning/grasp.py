@@ -35,6 +35,7 @@ import numpy as np
 from armlab import kinematics
 from armlab.kinematics import Unreachable
 from armlab.robot import RobotModel, rx200
+from armlab.transforms import wrap_quarter
 
 __all__ = ["GraspPose", "face_roll", "face_misalignment", "choose_grasp", "TOP_DOWN", "LIMIT_MARGIN_RAD",
            "inner_limits", "steepest_pitch_inside"]
@@ -65,7 +66,7 @@ def face_roll(heading: float, yaw: float) -> float:
     """Wrist roll (rad, in [-pi/4, pi/4)) that closes top-down fingers across two opposite faces of a block of
     yaw `yaw` (rad) seen from an arm plane at `heading` (rad): roll = heading - yaw (mod pi/2), the smaller turn.
     """
-    return float(np.mod(heading - yaw + np.pi / 4, np.pi / 2) - np.pi / 4)
+    return float(wrap_quarter(heading - yaw))
 
 
 def face_misalignment(heading: float, pitch: float, roll: float, yaw: float) -> float:

@@ -15,14 +15,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from armlab.profile import default_moving_time, trapezoid_fraction
+from armlab.profile import ACCEL_FRACTION, default_moving_time, trapezoid_fraction
 from armlab.robot import RobotModel, rx200
 
 __all__ = ["SCALINGS", "ACCEL_FRACTION", "quintic_fraction", "trapezoid_rate", "time_scaling", "peak_rate",
            "default_accel_time", "moving_time", "check_scaling"]
 
 SCALINGS: tuple[str, ...] = ("trapezoid", "quintic")
-ACCEL_FRACTION = 1 / 3     # the lab's accel_time = moving_time / 3 (also what default_moving_time assumes)
 QUINTIC_PEAK = 15 / 8      # peak of ds/dtau for the quintic
 
 

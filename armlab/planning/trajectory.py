@@ -21,7 +21,7 @@ import numpy as np
 
 from armlab import kinematics
 from armlab.kinematics import Unreachable
-from armlab.profile import MIN_MOVING_TIME_S, trapezoid_fraction
+from armlab.profile import ACCEL_FRACTION, MIN_MOVING_TIME_S, trapezoid_fraction
 from armlab.robot import RobotModel, rx200
 
 from .timing import check_scaling, default_accel_time, moving_time, peak_rate, quintic_fraction, time_scaling
@@ -262,7 +262,7 @@ def cartesian_line(p0, p1, pitch: float, roll: float = 0.0, current=None, scalin
     n = max(2, int(np.ceil(length / 10.0)))
     while True:
         tau = np.linspace(0.0, 1.0, n + 1)
-        s = quintic_fraction(tau)[0] if scaling == "quintic" else trapezoid_fraction(tau, 1.0, 1 / 3)
+        s = quintic_fraction(tau)[0] if scaling == "quintic" else trapezoid_fraction(tau, 1.0, ACCEL_FRACTION)
         knots = _line_knots(P0, P1, s, pitch, roll, current, robot)
         deviation = _line_deviation(knots, P0, P1, robot)
         if deviation <= tol_mm:

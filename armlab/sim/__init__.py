@@ -17,7 +17,7 @@ from armlab.sim.arm import ArmRealism, SimArm
 from armlab.sim.gripper import GripperGeometry
 from armlab.sim.scenes import PRESETS, SceneError, load_scene, save_scene, scene_objects
 from armlab.sim.world import World
-from armlab.station import Station
+from armlab.station.contract import Capabilities, Pacing, SagReference, Station
 
 __all__ = ["make_sim_station", "SimArm", "ArmRealism", "GripperGeometry", "World", "PRESETS", "SceneError",
            "scene_objects", "load_scene", "save_scene"]
@@ -27,7 +27,10 @@ def make_sim_station(seed: int = 0, scene: str | os.PathLike | dict = "random",
                      realism: str | ArmRealism = "realistic", real_time: bool = False,
                      gripper: GripperGeometry | None = None, camera_realism: str | None = None,
                      **scene_options) -> Station:
-    """A simulated station: Station(kind="sim", arm, camera, world).
+    """A simulated station: Station(kind="sim", arm, camera, world) with the simulator's capabilities: the camera
+    photographs a checkerboard itself (camera_intrinsics) and the sag is fitted on an empty-board twin of the arm
+    with the true tool pose (sag_reference); the arm can be posed by hand with torque off (pose_by_hand) and the
+    simulated clock can follow the wall clock (pacing).
 
     Args:
         seed: one seed for everything (scene, arm errors, camera noise): same seed, same station.
@@ -50,4 +53,33 @@ def make_sim_station(seed: int = 0, scene: str | os.PathLike | dict = "random",
     from armlab.sim.camera import SimCamera  # the renderer is heavier: import it only when a station is built
 
     camera = SimCamera(world, arm, realism=camera_realism, seed=camera_seed)
-    return Station(kind="sim", arm=arm, camera=camera, world=world)
+    return Station(kind="sim", arm=arm, camera=camera, world=world,
+                   capabilities=Capabilities(camera_intrinsics=lambda: _camera_intrinsics(camera),
+                                             sag_reference=lambda: _sag_reference(arm),
+                                             pose_by_hand=arm.move_by_hand, pacing=_pacing(world, arm)))
+
+
+def _camera_intrinsics(camera) -> tuple[np.ndarray, np.ndarray]:
+    """K (3, 3), dist (5,) from checkerboard views the simulated camera renders of itself (~1.5 s once, cached)."""
+    from armlab.sim.checkerboard import sim_camera_intrinsics  # renders the views: imported when first asked
+
+    result = sim_camera_intrinsics(camera)
+    return result.K.copy(), result.dist.copy()
+
+
+def _sag_reference(arm: SimArm) -> SagReference:
+    """The arm's empty-board twin (its calibration poses go down to 40 mm over the work area, where they would shove
+    the scene's blocks) and its true tool point (3,) world mm, a stand-in for a lab's touch-off measurements."""
+    twin = arm.empty_board_twin()
+    return SagReference(twin, lambda: twin.tool_pose_true()[:3, 3])
+
+
+def _pacing(world: World, arm: SimArm) -> Pacing:
+    """Switch the world's and the arm's clocks together; the world's wall clock restarts at the switch, so no idle
+    time is caught up."""
+
+    def set_real_time(on: bool) -> None:
+        world.advance(0.0)
+        world.real_time = arm.real_time = bool(on)
+
+    return Pacing(lambda: arm.real_time, set_real_time)

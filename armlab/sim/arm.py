@@ -16,26 +16,24 @@ from dataclasses import dataclass, fields, replace
 
 import numpy as np
 
-from armlab import kinematics
+from armlab import kinematics, motion_safety
 from armlab.blocks import ObjectState, footprint
 from armlab.gripper_geometry import GRIPPER
-from armlab.profile import default_moving_time, trapezoid_fraction, velocity_violations
+from armlab.profile import trapezoid_fraction
 from armlab.robot import RobotModel, rx200
 from armlab.sim.geometry import convex_penetration, prism_features
-from armlab.sim.gripper import PAD_NAMES, GripperGeometry, close_on, push_with_pads
+from armlab.sim.gripper import GripperGeometry, close_on, push_with_pads
 from armlab.sim.world import World, describe_object
-from armlab.station import EmergencyStopped, MotionRefused
+from armlab.station.contract import EmergencyStopped, MotionRefused
 from armlab.transforms import homogeneous, invert_transform, rot_z, rpy_from_matrix
 
 __all__ = ["ArmRealism", "SimArm", "gravity_deflection"]
 
 GRAVITY = 9.81                 # m/s^2
-BOARD_CONTACT_TOL_MM = 1.0     # a part may touch the board this far in (rubber pads, wood): not a collision
 HELD_CONTACT_TOL_MM = 0.5      # a held block may press this far into another object (resting on it, placing it on a
                                # stack, touching a neighbour): not a collision
-_PATH_STEP_RAD = 0.01          # collision checks: largest joint change between checked path samples
-_POINT_NAMES = ("base", "waist", "shoulder joint", "elbow joint", "wrist joint", "wrist_rotate joint",
-                "tool point")
+HELD_PATH_STEP_RAD = 0.01      # the held-object check's path step (coarser than motion_safety.PATH_STEP_RAD for the
+                               # board: each sample costs a separating-axis test per pair of object pieces)
 
 
 @dataclass(frozen=True)
@@ -262,44 +260,15 @@ class SimArm:
         if self._estopped:
             raise EmergencyStopped(f"{what} refused: the arm is emergency-stopped; call reset() first")
 
-    @staticmethod
-    def _path_samples(q0, q1) -> np.ndarray:
-        """Fractions s (n,) in [0, 1] at which the straight joint-space path q0 -> q1 (rad) is checked: at most
-        _PATH_STEP_RAD of joint change apart, both ends included."""
-        dq = np.asarray(q1, dtype=float) - np.asarray(q0, dtype=float)
-        return np.linspace(0.0, 1.0, max(2, int(np.ceil(np.abs(dq).max() / _PATH_STEP_RAD)) + 1))
+    def _held_parts(self) -> list[motion_safety.HeldBlock]:
+        """The held blocks, for the board check: each a cube at its pose in the tool frame."""
+        return [motion_safety.HeldBlock(obj.edge, T_rel, f"held {obj.color} block") for obj, T_rel in self._held]
 
     def _board_collision(self, q0, q1, physical) -> str | None:
-        """Why the straight joint-space path q0 -> q1 (motor positions) would put a part below the board, or None."""
-        dq = np.asarray(q1) - np.asarray(q0)
-        s = self._path_samples(q0, q1)
-        n = len(s)
-        Q = physical(q0 + s[:, None] * dq)
-        frames = kinematics.link_frames(Q, self.robot, check_limits=False)
-        T = frames[:, 6]
-        parts = {name: kinematics.joint_positions(Q, self.robot)[:, i] for i, name in enumerate(_POINT_NAMES)
-                 if i >= 2}
-        pads = self.gripper_geometry.pad_corners(T, self.gripper_opening_mm)       # (n, 2, 8, 3)
-        for k, name in enumerate(PAD_NAMES):
-            parts[name] = pads[:, k]
-        for obj, T_rel in self._held:
-            local = (np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)]) * obj.edge / 2)
-            corners_tool = local @ T_rel[:3, :3].T + T_rel[:3, 3]
-            parts[f"held {obj.color} block"] = np.einsum("nij,kj->nki", T[:, :3, :3], corners_tool) + T[:, None, :3, 3]
-        for name, pts in parts.items():
-            pts = pts.reshape(n, -1, 3)
-            z = pts[..., 2]
-            # A part may press into the board by BOARD_CONTACT_TOL_MM (compliance) and never needs to rise above
-            # where it already is (e.g. a held block whose weight adds sag as it is lifted off the board).
-            below = z < np.minimum(-BOARD_CONTACT_TOL_MM, z[0]) - 1e-9
-            if below.any():
-                first = int(np.flatnonzero(below.any(axis=1))[0])
-                i, j = np.unravel_index(np.argmin(z), z.shape)
-                x, y, zz = pts[i, j]
-                return (f"the {name} would go {-zz:.1f} mm below the board at ({x:.1f}, {y:.1f}) mm, "
-                        f"{100 * s[i]:.0f}% of the way along the move (it would touch the board at "
-                        f"{100 * s[first]:.0f}%)")
-        return None
+        """Why the straight joint-space path q0 -> q1 would put a link, a pad or a held block below the board
+        (motion_safety.SIM_CLEARANCE on the angles physical(q) the links take), or None."""
+        return motion_safety.board_intrusion(q0, q1, motion_safety.SIM_CLEARANCE, self.robot, self.gripper_geometry,
+                                             self.gripper_opening_mm, self._held_parts(), physical)
 
     def _held_collision(self, q0, q1, physical) -> str | None:
         """Why the straight joint-space path q0 -> q1 (motor positions) would drive a held object into another object
@@ -319,7 +288,7 @@ class SimArm:
         if not others:
             return None
         dq = np.asarray(q1) - np.asarray(q0)
-        s = self._path_samples(q0, q1)
+        s = motion_safety.path_fractions(q0, q1, HELD_PATH_STEP_RAD)
         T = kinematics.fk_pox(physical(q0 + s[:, None] * dq), self.robot, check_limits=False)     # (n, 4, 4)
         fixed = [(o, [prism_features(p, o.edge / 2, homogeneous(rot_z(o.yaw), o.position))
                       for p in footprint(o.shape, o.edge)]) for o in others]
@@ -350,40 +319,23 @@ class SimArm:
     def move_to(self, q, moving_time: float | None = None, accel_time: float | None = None,
                 blocking: bool = True) -> None:
         """Move to joint positions q (5,) rad in moving_time s (default: the lab's rule, profile.default_moving_time)
-        with accel_time s ramps (default moving_time / 3). Raises MotionRefused before anything moves when q is out
-        of the joint limits, too fast for a joint, or the path would put any part of the arm below the board or drive
-        a held block into another object (deeper than HELD_CONTACT_TOL_MM and than it already is)."""
+        with accel_time s ramps (default ACCEL_FRACTION x moving_time). Raises MotionRefused before anything moves
+        when the move breaks armlab.motion_safety's rules (joint limits, time profile, velocity limits, a link, pad
+        or held block below the board: the real arm's rules, with the simulator's floors) or would drive a held
+        block into another object (deeper than HELD_CONTACT_TOL_MM and than it already is)."""
         self._check_ready("motion")
         if not self._torque:
             raise MotionRefused("motion refused: torque is off (the arm is being moved by hand); "
                                 "call set_torque(True) first")
-        try:
-            q = kinematics.check_joints(q, self.robot, check_limits=False).astype(float)
-        except ValueError as e:
-            raise MotionRefused(f"motion refused: {e}") from None
-        if q.shape != (5,):
-            raise MotionRefused(f"motion refused: move_to takes one joint vector (5,), got shape {q.shape}")
-        limits = self.robot.limit_violations(q)
-        if limits:
-            raise MotionRefused("motion refused (joint limits): " + "; ".join(limits))
         self.world.sync()
         start = self._motor.copy()
-        T = default_moving_time(start, q, self.robot) if moving_time is None else float(moving_time)
-        if not np.isfinite(T) or T <= 0:
-            raise MotionRefused(f"motion refused: moving_time must be a positive number of seconds, got {T}")
-        Ta = T / 3 if accel_time is None else float(accel_time)
-        if not np.isfinite(Ta) or not 0 <= Ta <= T / 2 + 1e-12:
-            raise MotionRefused(f"motion refused: accel_time must be between 0 and moving_time / 2 = {T / 2:.3f} s, "
-                                f"got {Ta}")
-        too_fast = velocity_violations(start, q, T, self.robot)
-        if too_fast:
-            raise MotionRefused(f"motion refused (velocity limits, moving time {T:.2f} s): " + "; ".join(too_fast))
-        hit = self._board_collision(start, q, self._physical)
-        if hit:
-            raise MotionRefused(f"motion refused (collision with the board): {hit}")
+        T, Ta = motion_safety.check_move(start, q, moving_time, accel_time, self.robot, motion_safety.SIM_CLEARANCE,
+                                         self.gripper_geometry, self.gripper_opening_mm, self._held_parts(),
+                                         self._physical)
+        q = np.asarray(q, dtype=float)
         hit = self._held_collision(start, q, self._physical)
         if hit:
-            raise MotionRefused(f"motion refused (collision of the held block): {hit}")
+            raise motion_safety.refusal("collision of the held block", hit)
         self._motion = _Motion(self.world.time_s, start, q, T, Ta)
         if blocking:
             self.wait()

@@ -15,7 +15,7 @@ from armlab.camera import Camera, look_at
 from armlab.lab import LabConfig, lab_config
 from armlab.sim.realism import CameraRealism, resolve_realism
 from armlab.sim.render import render
-from armlab.station import Frame
+from armlab.station.contract import Frame
 from armlab.transforms import invert_transform, rotvec_to_matrix
 
 __all__ = ["SimCamera", "CameraRealism", "true_camera"]

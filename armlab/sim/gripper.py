@@ -25,7 +25,6 @@ from armlab.transforms import rot_z
 
 __all__ = ["GripperGeometry", "GraspOutcome", "close_on", "push_with_pads"]
 
-PAD_NAMES = ("left finger pad", "right finger pad")
 _PUSH_MARGIN_MM = 0.05       # pads touching a face (closed on a cube) do not count as pushing it
 
 

@@ -5,9 +5,9 @@ from . import teach
 from .click import ClickRefused, click_drop, click_grab, click_world, current_view
 from .click_widget import ClickResult, ClickToGrab
 from .guard import GuardedArm
+from .handling import RELEASE_GAP_MM, TaskContext, calibrate_sag, context, look, pick, place
 from .machine import STATES, MachineBusy, TaskMachine
 from .perception import Observation, calibrate_camera, clear_view, surface_point
-from .pickplace import RELEASE_GAP_MM, TaskContext, calibrate_sag, context, look, pick, place
 from .sag import LAB_BASELINE, SagModel, calibration_poses, fit_sag
 from .station_panel import StationPanel, station_panel
 from .teach import TeachFileError, TeachProgram, load_teach, plot_teach, repeat, save_teach

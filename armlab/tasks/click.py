@@ -19,7 +19,7 @@ from armlab.kinematics import Unreachable
 from armlab.lab import lab_config
 
 from . import perception
-from .pickplace import context, look, pick, place
+from .handling import context, look, pick, place
 
 __all__ = ["ClickRefused", "click_grab", "click_drop", "click_world", "current_view"]
 

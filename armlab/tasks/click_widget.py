@@ -27,11 +27,11 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
-from armlab.station import EmergencyStopped, MotionRefused
+from armlab.station.contract import EmergencyStopped, MotionRefused
 
 from .click import ClickRefused, click_drop, click_grab, click_world, current_view
+from .handling import context, look
 from .machine import MachineBusy
-from .pickplace import context, look
 
 __all__ = ["ClickResult", "ClickToGrab", "event_pixel", "encode_view", "scaled_size", "view_is_current",
            "holding_text", "STALE_VIEW_RAD"]

@@ -17,7 +17,7 @@ import numpy as np
 from armlab import kinematics, planning
 
 from .click import click_world
-from .pickplace import context
+from .handling import context
 
 __all__ = ["LAB_LOCATIONS_MM", "LAB_TABLE_II_ACTUAL_MM", "LAB_TABLE_III_ERROR_MM", "LAB_Z_MM", "ReachRow",
            "reach_experiment", "format_table"]

@@ -26,7 +26,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from armlab.station import EmergencyStopped, MotionRefused
+from armlab.station.contract import EmergencyStopped, MotionRefused
 
 from .sag import SagModel
 
@@ -53,6 +53,16 @@ class GuardedArm:
             self._last_cmd = None
             self.arm.emergency_stop()
             raise EmergencyStopped(f"{what} refused: an emergency stop was requested; reset first")
+
+    @property
+    def torque_enabled(self) -> bool:
+        """The wrapped arm's state: True when its motors hold it."""
+        return self.arm.torque_enabled
+
+    @property
+    def emergency_stopped(self) -> bool:
+        """The wrapped arm's state: True after an emergency stop until reset()."""
+        return self.arm.emergency_stopped
 
     def joint_positions(self) -> np.ndarray:
         """Estimated physical joint angles (5,) rad: the encoder reading plus the predicted sag."""

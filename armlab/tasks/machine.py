@@ -18,9 +18,9 @@ from typing import Any
 import numpy as np
 
 from armlab import planning
-from armlab.station import EmergencyStopped
+from armlab.station.contract import EmergencyStopped
 
-from . import click, perception, pickplace, teach
+from . import click, handling, perception, teach
 
 __all__ = ["STATES", "TaskMachine", "MachineBusy"]
 
@@ -48,8 +48,8 @@ class TaskMachine:
         self.state = state
         self.history.append(state)
 
-    def _context(self) -> pickplace.TaskContext:
-        ctx = pickplace.context(self.station)
+    def _context(self) -> handling.TaskContext:
+        ctx = handling.context(self.station)
         ctx.arm.should_stop = lambda: self._stop
         return ctx
 
@@ -101,7 +101,7 @@ class TaskMachine:
 
     def detect(self) -> list:
         """Look at the board (arm out of view) and return the detected blocks."""
-        return self._run("detect", lambda: (self._context(), pickplace.look(self.station))[1].blocks)
+        return self._run("detect", lambda: (self._context(), handling.look(self.station))[1].blocks)
 
     def execute(self, work) -> Any:
         """Run a planning.Plan (returns planning.ExecutionResult) or a list of (block, place position) pairs: pick
@@ -112,9 +112,9 @@ class TaskMachine:
                 return planning.execute(work, ctx.arm)
             out = []
             for block, position in work:
-                out.append(pickplace.pick(self.station, block))
+                out.append(handling.pick(self.station, block))
                 if out[-1]:
-                    pickplace.place(self.station, np.asarray(position, float))
+                    handling.place(self.station, np.asarray(position, float))
             return out
         return self._run("execute", action)
 

@@ -6,7 +6,7 @@ in the camera-clear pose (armlab.planning.plan_camera_clear) one frame: AprilTag
 (calibration.calibrate_extrinsics) and the planar depth correction (calibration.fit_depth_correction, arm pixels
 excluded). The result is an armlab.calibration.Calibration (save/load it with calibration.save_calibration /
 load_calibration).
-look(station, calibration): arm camera-clear (clear_view: with a lower clearance or a lift back first when needed),
+observe(station, calibration): arm camera-clear (clear_view: with a lower clearance or a lift back first when needed),
 capture, correct the depth, detect the blocks (detection.detect_blocks with the arm masked out; or every object,
 distractors included, with all_objects=True). surface_point(...): the world point (mm) under a pixel, from the median
 corrected depth in a small window. Units: px, mm, rad; world (board) frame.
@@ -24,9 +24,9 @@ from armlab._paths import data_path
 from armlab.calibration import Calibration
 from armlab.camera import Camera
 from armlab.kinematics import Unreachable
-from armlab.station import Frame
+from armlab.station.contract import Frame
 
-__all__ = ["Observation", "calibrate_camera", "clear_view", "look", "surface_point", "checkerboard_intrinsics",
+__all__ = ["Observation", "calibrate_camera", "clear_view", "observe", "surface_point", "checkerboard_intrinsics",
            "station_intrinsics", "CLEAR_VIEW_MIN_CLEARANCE_MM", "REAL_CHECKERBOARD_FOLDER"]
 
 CLEAR_VIEW_MIN_CLEARANCE_MM = 25.0   # tool point above what it passes on the way out of view: the finger tips
@@ -61,17 +61,14 @@ def station_intrinsics(station, folder=None) -> tuple[np.ndarray, np.ndarray]:
     """K (3, 3) and dist (5,) of the station's own camera, from a checkerboard set captured with THAT camera (cameras
     differ by ~0.3 % in focal length and ~4 px in principal point: another camera's K misplaces the camera by mm).
 
-    folder: a saved set (calibration.save_checkerboard_set) to use. Without it, a simulated station's camera
-    photographs the board itself (armlab.sim.checkerboard.sim_camera_intrinsics: ~1.5 s once per camera, cached),
-    and a real station reads data/checkerboard_real/ ($ARMLAB_DATA/checkerboard_real when set), the set saved from
+    folder: a saved set (calibration.save_checkerboard_set) to use. Without it, a station that can photograph a
+    checkerboard itself does (Capabilities.camera_intrinsics: the simulator's, ~1.5 s once per camera, cached),
+    and any other station reads data/checkerboard_real/ ($ARMLAB_DATA/checkerboard_real when set), the set saved from
     its camera. Raises ValueError naming the folder when the set is missing or is not of the camera's image size.
     """
     size = (station.camera.width, station.camera.height)
-    if folder is None and station.kind == "sim":
-        from armlab.sim.checkerboard import sim_camera_intrinsics  # renders the views: simulation only
-
-        result = sim_camera_intrinsics(station.camera)
-        return result.K.copy(), result.dist.copy()
+    if folder is None and station.capabilities.camera_intrinsics is not None:
+        return station.capabilities.camera_intrinsics()
     path = Path(folder) if folder is not None else data_path(REAL_CHECKERBOARD_FOLDER)
     if not path.is_dir():
         raise ValueError(f"{path}: no checkerboard set for this camera. Photograph a checkerboard in ~16 poses with it "
@@ -135,8 +132,8 @@ def calibrate_camera(station, intrinsics="checkerboard", arm=None) -> Calibratio
                                                  f"residual {correction.residual_mm:.1f} mm")
 
 
-def look(station, calib: Calibration, arm=None, obstacles=(), clear: bool = True, held_below: float = 0.0,
-         all_objects: bool = False, settings: detection.DetectionSettings | None = None) -> Observation:
+def observe(station, calib: Calibration, arm=None, obstacles=(), clear: bool = True, held_below: float = 0.0,
+            all_objects: bool = False, settings: detection.DetectionSettings | None = None) -> Observation:
     """Move the arm out of view (clear_view, unless clear=False), capture a frame, correct its depth and detect.
 
     Observation.blocks holds the cubes (detection.detect_blocks) or, with all_objects, every object's top face

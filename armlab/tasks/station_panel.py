@@ -29,7 +29,7 @@ simulator are off by default, so a notebook run is deterministic.
 
 Same code on the simulated and the real station. What only the simulator offers is used when it is there and said
 so: its world's truth for drawing the blocks (station.world), moving the arm by hand in teach mode
-(station.arm.move_by_hand), and real-time pacing (station.arm.real_time / station.world.real_time).
+(station.capabilities.pose_by_hand), and real-time pacing (station.capabilities.pacing).
 Units: px, mm, rad, s; world (board) frame.
 """
 
@@ -50,8 +50,8 @@ from armlab.lab import lab_config
 
 from .click import ClickRefused
 from .click_widget import ClickToGrab, encode_view, event_pixel, holding_text, scaled_size, view_is_current
+from .handling import context
 from .machine import TaskMachine
-from .pickplace import context
 
 __all__ = ["StationPanel", "station_panel", "VIEW_MODES", "depth_rgb"]
 
@@ -195,15 +195,14 @@ class StationPanel:
         return f"state {self.machine.state} | {holding_text(self.station)} | {job}"
 
     def offers_real_time(self) -> bool:
-        """True when the station can pace the simulator in real time (a simulated station offers it)."""
-        world = getattr(self.station, "world", None)
-        return (world is not None and isinstance(getattr(world, "real_time", None), bool)
-                and isinstance(getattr(self.station.arm, "real_time", None), bool))
+        """True when the station can switch its clock (Capabilities.pacing: a simulated station offers it)."""
+        return self.station.capabilities.pacing is not None
 
     @property
     def real_time(self) -> bool:
         """True when motions take wall-clock time (always on a real arm)."""
-        return bool(getattr(self.station.arm, "real_time", True))
+        pacing = self.station.capabilities.pacing
+        return True if pacing is None else bool(pacing.is_real_time())
 
     def set_real_time(self, on: bool) -> None:
         """Simulator only: let motions take wall-clock time (True) or run in simulated time (False). Refused
@@ -213,9 +212,7 @@ class StationPanel:
         with self._lock:
             if self.busy:
                 raise RuntimeError(f"cannot change the pacing while {self._job_name} runs")
-            world = self.station.world
-            world.advance(0.0)          # restart its wall clock now, so no idle time is caught up
-            world.real_time = self.station.arm.real_time = bool(on)
+            self.station.capabilities.pacing.set_real_time(bool(on))
         self._update_widgets()
 
     # -- the shown frame ----------------------------------------------------------------------------------------
@@ -566,8 +563,8 @@ class StationPanel:
                                     f"font-size:12px'>{lines}</pre>")
 
     def _hand(self):
-        """The simulator's hand (arm.move_by_hand) when the station has one."""
-        return getattr(self.station.arm, "move_by_hand", None)
+        """The station's hand (Capabilities.pose_by_hand: the simulator's) when it has one."""
+        return self.station.capabilities.pose_by_hand
 
     # -- widgets --------------------------------------------------------------------------------------------------
     def _update_image(self) -> None:

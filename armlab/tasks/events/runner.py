@@ -1,7 +1,7 @@
 """Run an autonomous event on a station: look, choose a move, pick, place, look again (verify, retry), score.
 
 run_event(station, "sort_stack" | "line_up" | "sky", level) sets the station up through the task layer
-(armlab.tasks.pickplace.context: camera calibration and, in simulation, the sag fit; not timed), then loops within the
+(armlab.tasks.handling.context: camera calibration and, in simulation, the sag fit; not timed), then loops within the
 event's time limit (simulated seconds): look with the arm out of view (detect_objects: blocks AND distractors, which
 the plans avoid), ask the strategy for the next move, pick (a failed pick is retried after a new look, up to
 MAX_PICK_TRIES times per block), place, and record. The robot acts only on what it sees; the score comes from the
@@ -22,7 +22,7 @@ from armlab.detection import DetectionSettings
 from armlab.kinematics import Unreachable
 from armlab.planning import Obstacle
 from armlab.station import MotionRefused
-from armlab.tasks import perception, pickplace
+from armlab.tasks import handling, perception
 
 from .layout import Move, footprint_radius
 from .line_up import LineUp
@@ -98,9 +98,9 @@ class Look:
 
 
 def see(station, ctx, obstacles=(), settings: DetectionSettings | None = None) -> Look:
-    """Arm out of the camera's view, one frame, corrected depth, every object's top face (tasks.perception.look with
+    """Arm out of the camera's view, one frame, corrected depth, every object's top face (tasks.perception.observe with
     all_objects: distractors included, which the plans avoid)."""
-    obs = perception.look(station, ctx.calibration, ctx.arm, obstacles, all_objects=True, settings=settings)
+    obs = perception.observe(station, ctx.calibration, ctx.arm, obstacles, all_objects=True, settings=settings)
     return Look(obs.frame, obs.depth, obs.blocks)
 
 
@@ -132,7 +132,7 @@ def run_event(station, event: str, level: int = 1, time_limit_s: float | None = 
     limit = TIME_LIMIT_S[event] if time_limit_s is None else float(time_limit_s)
     if not limit > 0:
         raise ValueError(f"time_limit_s must be positive, got {time_limit_s}")
-    ctx = pickplace.context(station)
+    ctx = handling.context(station)
     world = station.world
     handover = HandOver(world, seed) if event == "sky" else None
     if handover is not None:
@@ -162,7 +162,7 @@ def run_event(station, event: str, level: int = 1, time_limit_s: float | None = 
         obstacles = _obstacles(seen, move, extra)
         t_start = world.time_s - t0
         try:
-            held = pickplace.pick(station, move.block, obstacles=obstacles)
+            held = handling.pick(station, move.block, obstacles=obstacles)
         except Unreachable as e:
             stopped = f"cannot reach the {key[0]} {key[1]} block: {e}"
             break
@@ -173,11 +173,11 @@ def run_event(station, event: str, level: int = 1, time_limit_s: float | None = 
             continue
         truth = list(station.arm.holding)[:1]
         try:
-            pickplace.place(station, move.to, move.yaw, obstacles=obstacles, clearance=move.clearance)
+            handling.place(station, move.to, move.yaw, obstacles=obstacles, clearance=move.clearance)
         except (Unreachable, MotionRefused) as e:   # e.g. the tower is as high as the arm can stack: put it back
             why = f"cannot place the {key[0]} {key[1]} block ({e})"
             back = np.asarray(move.block.position, float) - [0.0, 0.0, block_edge(move.block.size)]
-            pickplace.place(station, back, move.yaw, obstacles=obstacles)
+            handling.place(station, back, move.yaw, obstacles=obstacles)
             board = [*obstacles, move.block]
             moves.append(MoveLog(move.describe() + " (cannot place: put back)", t_start, world.time_s - t0, True,
                                  False, np.full(3, np.nan)))

@@ -1,11 +1,13 @@
-"""Pick and place on a station: detected block -> plan (armlab.planning) -> execute on the station's arm.
+"""Handling blocks on a station: look (tasks.look), pick and place a detected block -> plan (armlab.planning's
+pick/place plans) -> execute on the station's arm. (armlab.planning.pickplace plans; this module runs them.)
 
 Works the same on the simulated and the real station: it uses only the Arm protocol (through a GuardedArm, which
 compensates sag) and station.camera. Each station gets a TaskContext on first use (kept on the station object):
 - calibration: the camera calibration (perception.calibrate_camera, done once, or set by the caller);
-- sag: the sag model (tasks.sag). In simulation it is fitted on first use from 24 poses measured with the
-  simulator's ground truth (arm.tool_pose_true, a stand-in for a student's touch-off measurements); on the real arm
-  it stays zero until the caller sets one (calibrate_sag with a measuring function, or a saved model);
+- sag: the sag model (tasks.sag). When the station offers a sag reference (Capabilities.sag_reference: the
+  simulator's empty-board twin with its ground truth, a stand-in for a student's touch-off measurements) it is
+  fitted on first use from 24 poses; otherwise (the real arm) it stays zero until the caller sets one
+  (calibrate_sag with a measuring function, or a saved model);
 - known: what stands on the board (detections from the last look, updated by picks and places), the obstacles plans
   avoid; held: the block in the gripper.
 place() releases the block RELEASE_GAP_MM above the requested bottom height, so a residual arm error never pushes
@@ -70,16 +72,16 @@ def calibrate_sag(arm, measure: Callable[[], np.ndarray], poses=None) -> SagMode
 
 
 def context(station, intrinsics="checkerboard") -> TaskContext:
-    """The station's TaskContext, created (camera calibrated, sag fitted in simulation) on first use.
+    """The station's TaskContext, created (camera calibrated, sag fitted) on first use.
 
-    In simulation the sag is fitted as a lab fits it, on the same arm over an empty board (SimArm.empty_board_twin:
-    its calibration poses go down to 40 mm over the work area, where they would shove the scene's blocks)."""
+    The sag is fitted when the station offers a reference to fit it on (Capabilities.sag_reference: in simulation
+    the same arm over an empty board, measured with the ground truth); otherwise it stays zero until set."""
     ctx = getattr(station, "_tasks_context", None)
     if ctx is None:
         arm = GuardedArm(station.arm)
-        if station.kind == "sim":
-            twin = station.arm.empty_board_twin()
-            arm.sag = calibrate_sag(twin, lambda: twin.tool_pose_true()[:3, 3])
+        if station.capabilities.sag_reference is not None:
+            reference = station.capabilities.sag_reference()
+            arm.sag = calibrate_sag(reference.arm, reference.measure)
         ctx = TaskContext(arm)
         ctx.calibration = perception.calibrate_camera(station, intrinsics, arm=arm)
         station._tasks_context = ctx
@@ -91,7 +93,7 @@ def look(station) -> perception.Observation:
     obstacles."""
     ctx = context(station)
     held_below = 0.0 if ctx.held is None else ctx.held_edge - planning.default_grasp_depth(ctx.held_edge)
-    obs = perception.look(station, ctx.calibration, ctx.arm, obstacles=ctx.known, held_below=held_below)
+    obs = perception.observe(station, ctx.calibration, ctx.arm, obstacles=ctx.known, held_below=held_below)
     ctx.last = obs
     ctx.known = list(obs.blocks)
     return obs

@@ -1,0 +1,230 @@
+"""The rules every joint move must pass before anything moves, for the simulated and the real arm alike, and for a
+whole plan before its first command.
+
+A move from q_from to q_to (5,) rad is refused (MotionRefused, naming the problem) when:
+- the target is malformed (shape, NaN) or outside a joint's position limits (the joint is named);
+- its time profile is impossible: moving_time not in (0, MAX_MOVING_TIME_S], accel_time not in [0, moving_time / 2]
+  (defaults: armlab.profile.default_moving_time and accel_time = ACCEL_FRACTION x moving_time);
+- a joint would be faster than its velocity limit (the driver's rule, armlab.profile.velocity_violations);
+- the straight joint-space path (the time-based profile keeps every joint at the same fraction of its change) takes a
+  part below its floor over the board (BoardClearance): the joint centres and the tool point (the links between them
+  are straight, so their lowest point is one of these), the corners of both finger pads, and the corners of a held
+  block. The path is sampled at most PATH_STEP_RAD of the largest joint change apart. A part that starts below its
+  floor (after teaching by hand, or at a grasp) may stay where it is or rise, but never sink further.
+
+Each backend names its floors (BoardClearance): pads and held blocks may press BOARD_CONTACT_TOL_MM into the board
+on both (rubber pads, wood); the simulator checks the physical joint angles (its sag included), so its links share
+that floor (SIM_CLEARANCE), while the real arm checks commanded angles whose unmodelled sag (5-15 mm at long reach)
+its links' +10 mm margin covers (REAL_CLEARANCE). A held block's collisions with the other objects are the
+simulator's (armlab.sim.arm), which knows where they are.
+
+Units: rad, s, mm; heights are world z (the board surface is z = 0).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from armlab.gripper_geometry import GripperGeometry
+from armlab.kinematics import check_joints, joint_positions, link_frames
+from armlab.profile import ACCEL_FRACTION, default_moving_time, velocity_violations
+from armlab.robot import RobotModel, rx200
+from armlab.station.contract import MotionRefused
+
+__all__ = ["BOARD_CONTACT_TOL_MM", "REAL_LINK_MARGIN_MM", "PATH_STEP_RAD", "MAX_MOVING_TIME_S", "LINK_POINTS",
+           "PAD_NAMES", "BoardClearance", "SIM_CLEARANCE", "REAL_CLEARANCE", "HeldBlock", "Segment", "refusal",
+           "check_target", "check_timing", "path_fractions", "board_intrusion", "check_move", "check_plan"]
+
+BOARD_CONTACT_TOL_MM = 1.0          # a pad or a held block may press this far into the board: not a collision
+REAL_LINK_MARGIN_MM = 10.0          # the real arm's links stay this far above the board (unmodelled sag)
+PATH_STEP_RAD = np.radians(0.25)    # largest joint change between two checked samples of a path
+# In time-based profile mode the servos' Profile_Velocity register holds the moving time in ms, at most 32737
+# (ROBOTIS e-manual, X-series control table); the driver passes a larger value on and the servo ignores it.
+MAX_MOVING_TIME_S = 32.737
+LINK_POINTS: tuple[str, ...] = ("shoulder joint", "elbow joint", "wrist joint", "wrist_rotate joint", "tool point")
+PAD_NAMES: tuple[str, ...] = ("left finger pad", "right finger pad")
+_CUBE_CORNERS = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], dtype=float) / 2
+
+
+@dataclass(frozen=True)
+class BoardClearance:
+    """The lowest world z (mm) each kind of part may reach along a move, unless it starts lower.
+
+    Attributes:
+        links_mm: the joint centres and the tool point (LINK_POINTS).
+        contact_mm: the finger pads' and a held block's corners (default -BOARD_CONTACT_TOL_MM).
+    """
+
+    links_mm: float
+    contact_mm: float = -BOARD_CONTACT_TOL_MM
+
+    def __post_init__(self):
+        for name in ("links_mm", "contact_mm"):
+            if not np.isfinite(getattr(self, name)):
+                raise ValueError(f"BoardClearance.{name} must be a finite number of mm, got {getattr(self, name)}")
+
+
+SIM_CLEARANCE = BoardClearance(links_mm=-BOARD_CONTACT_TOL_MM)   # physical angles, sag included
+REAL_CLEARANCE = BoardClearance(links_mm=REAL_LINK_MARGIN_MM)    # commanded angles: the margin covers the sag
+
+
+@dataclass(frozen=True)
+class HeldBlock:
+    """A cube in the gripper: its edge (mm) and its pose in the tool frame T_tool_block (4, 4) (mm)."""
+
+    edge_mm: float
+    T_tool_block: np.ndarray
+    name: str = "held block"
+
+
+@dataclass(frozen=True)
+class Segment:
+    """One arm command of a plan: move to q (5,) rad in moving_time / accel_time s (None: the defaults) with the
+    pads opening_mm apart (None: no pads checked) and the blocks held along it; label names it in a refusal."""
+
+    q: np.ndarray
+    moving_time: float | None = None
+    accel_time: float | None = None
+    opening_mm: float | None = None
+    held: tuple[HeldBlock, ...] = ()
+    label: str = ""
+
+
+def refusal(category: str, reason: str) -> MotionRefused:
+    """The one form of a refusal: 'motion refused (<category>): <reason> (nothing was sent to the arm)'."""
+    return MotionRefused(f"motion refused ({category}): {reason} (nothing was sent to the arm)")
+
+
+def check_target(q_to, robot: RobotModel | None = None) -> np.ndarray:
+    """q_to as a (5,) float array, or MotionRefused naming the problem: shape, NaN, or the joints outside their
+    position limits (each named, with its value and limits)."""
+    robot = robot or rx200()
+    try:
+        q = check_joints(q_to, robot, check_limits=False).astype(float)
+    except ValueError as e:
+        raise refusal("bad target", str(e)) from None
+    if q.shape != (5,):
+        raise refusal("bad target", f"a move takes one joint vector (5,) rad, got shape {q.shape}")
+    limits = robot.limit_violations(q)
+    if limits:
+        raise refusal("joint limits", "; ".join(limits))
+    return q
+
+
+def check_timing(q_from, q_to, moving_time: float | None = None, accel_time: float | None = None,
+                 robot: RobotModel | None = None) -> tuple[float, float]:
+    """The (moving_time, accel_time) s to send for a move q_from -> q_to (5,) rad (defaults filled in), or
+    MotionRefused for an impossible time profile or a joint faster than its velocity limit (the joint named)."""
+    robot = robot or rx200()
+    T = default_moving_time(q_from, q_to, robot, ACCEL_FRACTION) if moving_time is None else float(moving_time)
+    if not np.isfinite(T) or T <= 0:
+        raise refusal("time profile", f"moving_time must be a positive number of seconds, got {T}")
+    if T > MAX_MOVING_TIME_S:
+        raise refusal("time profile", f"moving_time {T:g} s is longer than the servos' time profile allows "
+                                      f"({MAX_MOVING_TIME_S} s): split the move")
+    Ta = T * ACCEL_FRACTION if accel_time is None else float(accel_time)
+    if not np.isfinite(Ta) or not 0 <= Ta <= T / 2 + 1e-12:
+        raise refusal("time profile", f"accel_time {Ta} s must lie in [0, moving_time / 2] = [0, {T / 2:g}] s")
+    too_fast = velocity_violations(q_from, q_to, T, robot)
+    if too_fast:
+        raise refusal(f"velocity limits, moving time {T:.2f} s", "; ".join(too_fast))
+    return T, Ta
+
+
+def path_fractions(q_from, q_to, step: float = PATH_STEP_RAD) -> np.ndarray:
+    """Fractions s (n,) in [0, 1] at which the straight joint path q_from -> q_to (rad) is checked: at most `step`
+    rad of the largest joint change apart, both ends included."""
+    dq = np.abs(np.asarray(q_to, dtype=float) - np.asarray(q_from, dtype=float))
+    return np.linspace(0.0, 1.0, max(2, int(np.ceil(dq.max() / step)) + 1))
+
+
+def _parts(Q, robot: RobotModel, gripper: GripperGeometry | None, opening_mm: float | None,
+           held: Sequence[HeldBlock]) -> list[tuple[str, np.ndarray, bool]]:
+    """(name, world points (n, k, 3) mm, is a contact part) of every checked part at the joint angles Q (n, 5)."""
+    T = link_frames(Q, robot, check_limits=False)[:, 6]              # (n, 4, 4) tool poses
+    points = joint_positions(Q, robot)[:, 2:]                         # (n, 5, 3): shoulder ... tool point
+    parts = [(name, points[:, i, None], False) for i, name in enumerate(LINK_POINTS)]
+    if gripper is not None and opening_mm is not None:
+        pads = gripper.pad_corners(T, opening_mm)                     # (n, 2, 8, 3)
+        parts += [(name, pads[:, k], True) for k, name in enumerate(PAD_NAMES)]
+    for block in held:
+        local = _CUBE_CORNERS * block.edge_mm
+        R, p = np.asarray(block.T_tool_block, float)[:3, :3], np.asarray(block.T_tool_block, float)[:3, 3]
+        corners_tool = local @ R.T + p
+        parts.append((block.name, np.einsum("nij,kj->nki", T[:, :3, :3], corners_tool) + T[:, None, :3, 3], True))
+    return parts
+
+
+def board_intrusion(q_from, q_to, clearance: BoardClearance, robot: RobotModel | None = None,
+                    gripper: GripperGeometry | None = None, opening_mm: float | None = None,
+                    held: Sequence[HeldBlock] = (),
+                    physical: Callable[[np.ndarray], np.ndarray] | None = None) -> str | None:
+    """Why the straight joint path q_from -> q_to (5,) rad takes a part below its floor, in words; None when clear.
+
+    physical: maps commanded joint angles (n, 5) to the angles the links take (the simulator's sag and backlash);
+    default: the commanded ones. The first part (links, then pads, then held blocks) to go below its floor is
+    reported at its lowest point, with where along the move it first crosses the floor.
+    """
+    robot = robot or rx200()
+    q0, q1 = np.asarray(q_from, dtype=float), np.asarray(q_to, dtype=float)
+    s = path_fractions(q0, q1)
+    Q = q0 + s[:, None] * (q1 - q0)
+    Q = physical(Q) if physical is not None else Q
+    for name, pts, contact in _parts(Q, robot, gripper, opening_mm, held):
+        z = pts[..., 2]
+        floor = clearance.contact_mm if contact else clearance.links_mm
+        below = z < np.minimum(floor, z[0]) - 1e-9
+        if below.any():
+            first = int(np.flatnonzero(below.any(axis=1))[0])
+            i, j = np.unravel_index(np.argmin(z), z.shape)
+            x, y, zz = pts[i, j]
+            z0 = z[0, j]
+            under = f"the board's {floor:+.1f} mm floor for it" if z0 >= floor else \
+                f"where it starts (z = {z0:.1f} mm, already under the board's {floor:+.1f} mm floor for it)"
+            return (f"the {name} would go down to z = {zz:.1f} mm at ({x:.1f}, {y:.1f}) mm, {100 * s[i]:.0f}% of "
+                    f"the way along the move, below {under} (it would first go below at {100 * s[first]:.0f}%)")
+    return None
+
+
+def check_move(q_from, q_to, moving_time: float | None = None, accel_time: float | None = None,
+               robot: RobotModel | None = None, clearance: BoardClearance = REAL_CLEARANCE,
+               gripper: GripperGeometry | None = None, opening_mm: float | None = None,
+               held: Sequence[HeldBlock] = (),
+               physical: Callable[[np.ndarray], np.ndarray] | None = None) -> tuple[float, float]:
+    """Validate a move from q_from (where the arm is) to q_to (5,) rad; return the (moving_time, accel_time) s to
+    send. Raises MotionRefused naming the problem (see the module notes), in this order: target, timing, board."""
+    robot = robot or rx200()
+    q_from = check_joints(q_from, robot, check_limits=False).astype(float)
+    q_to = check_target(q_to, robot)
+    times = check_timing(q_from, q_to, moving_time, accel_time, robot)
+    hit = board_intrusion(q_from, q_to, clearance, robot, gripper, opening_mm, held, physical)
+    if hit:
+        raise refusal("collision with the board", hit)
+    return times
+
+
+def check_plan(q_start, segments: Sequence[Segment], robot: RobotModel | None = None,
+               clearance: BoardClearance = REAL_CLEARANCE, gripper: GripperGeometry | None = None,
+               physical: Callable[[np.ndarray], np.ndarray] | None = None) -> list[tuple[float, float]]:
+    """Check every command of a plan, from q_start (5,) rad, before the first is sent: the (moving_time,
+    accel_time) s of each, or MotionRefused naming the first segment that fails (its index and label) and why, so
+    an impossible pick or place is refused before anything moves."""
+    robot = robot or rx200()
+    q = check_joints(q_start, robot, check_limits=False).astype(float)
+    if q.shape != (5,):
+        raise ValueError(f"q_start must be one joint vector (5,) rad, got shape {q.shape}")
+    times = []
+    for k, seg in enumerate(segments):
+        if not isinstance(seg, Segment):
+            raise ValueError(f"segment {k} must be a motion_safety.Segment, got {type(seg).__name__}")
+        try:
+            times.append(check_move(q, seg.q, seg.moving_time, seg.accel_time, robot, clearance, gripper,
+                                    seg.opening_mm, seg.held, physical))
+        except MotionRefused as e:
+            what = f"segment {k}" + (f" ({seg.label})" if seg.label else "")
+            raise MotionRefused(f"plan refused at {what} of {len(segments)}: {e}") from None
+        q = np.asarray(seg.q, dtype=float)
+    return times

@@ -1,0 +1,100 @@
+"""The package's import graph has no cycle: built with ast from the sources (no module is imported), an edge from
+each module to every armlab module it imports, at module level and inside functions (a lazy import still ties the
+two modules together). `from pkg import name` is an edge to pkg.name when that is a module, else to pkg. A package
+importing its own submodules (its __init__ re-exporting them) is the one allowed way up: edges from a module to the
+packages that contain it are not counted, since Python runs those before the module anyway."""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+PACKAGE = ROOT / "armlab"
+
+
+def module_names() -> dict[str, Path]:
+    out = {}
+    for path in PACKAGE.rglob("*.py"):
+        parts = path.relative_to(ROOT).with_suffix("").parts
+        out[".".join(parts[:-1] if parts[-1] == "__init__" else parts)] = path
+    return out
+
+
+def imports_of(name: str, path: Path, modules: dict[str, Path]) -> set[str]:
+    """The armlab modules `name` (at `path`) imports anywhere in its source."""
+    package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+    found = set()
+    for node in ast.walk(ast.parse(path.read_text(), str(path))):
+        if isinstance(node, ast.Import):
+            found.update(a.name for a in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = package.split(".")
+                base = base[:len(base) - node.level + 1]
+                source = ".".join(base + ([node.module] if node.module else []))
+            else:
+                source = node.module
+            for a in node.names:
+                found.add(f"{source}.{a.name}" if f"{source}.{a.name}" in modules else source)
+    return {m for m in found if m in modules and m != name and not name.startswith(m + ".")}
+
+
+def import_graph() -> dict[str, set[str]]:
+    modules = module_names()
+    return {name: imports_of(name, path, modules) for name, path in modules.items()}
+
+
+def find_cycle(graph: dict[str, set[str]]) -> list[str] | None:
+    """One cycle [a, b, ..., a] of the directed graph, or None (iterative depth-first search)."""
+    state: dict[str, int] = {}          # 1 = on the current path, 2 = done
+    for start in sorted(graph):
+        if start in state:
+            continue
+        path, stack = [start], [iter(sorted(graph[start]))]
+        state[start] = 1
+        while stack:
+            nxt = next(stack[-1], None)
+            if nxt is None:
+                state[path.pop()] = 2
+                stack.pop()
+            elif state.get(nxt) == 1:
+                return path[path.index(nxt):] + [nxt]
+            elif nxt not in state:
+                state[nxt] = 1
+                path.append(nxt)
+                stack.append(iter(sorted(graph[nxt])))
+    return None
+
+
+def test_find_cycle_finds_a_cycle_and_accepts_a_tree():
+    assert find_cycle({"a": {"b"}, "b": {"c"}, "c": {"a"}}) == ["a", "b", "c", "a"]
+    assert find_cycle({"a": {"b", "c"}, "b": {"c"}, "c": set()}) is None
+
+
+def test_the_graph_sees_the_imports_it_should():
+    graph = import_graph()
+    assert "armlab.station.contract" in graph["armlab.sim.arm"]
+    assert "armlab.station.contract" in graph["armlab.hardware.interbotix"]
+    assert "armlab.kinematics" in graph["armlab.sim.arm"]          # `from armlab import kinematics`
+    assert "armlab.tasks.perception" in graph["armlab.tasks.handling"]   # `from . import perception`
+
+
+def test_armlab_import_graph_is_acyclic():
+    cycle = find_cycle(import_graph())
+    assert cycle is None, "import cycle in armlab: " + " -> ".join(cycle)
+
+
+@pytest.mark.parametrize("backend", ["armlab.sim", "armlab.hardware"])
+def test_backends_import_the_contract_and_nothing_that_builds_stations(backend):
+    graph = import_graph()
+    reach, todo = set(), [m for m in graph if m == backend or m.startswith(backend + ".")]
+    while todo:
+        m = todo.pop()
+        if m not in reach:
+            reach.add(m)
+            todo.extend(graph[m])
+    assert "armlab.station.contract" in reach
+    assert not reach & {"armlab.station", "armlab.station.registry", "armlab"}, sorted(reach)
