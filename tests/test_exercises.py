@@ -328,3 +328,34 @@ def test_require_written_names_the_blank_exercise(monkeypatch):
     with pytest.raises(NotImplementedError, match=r"exercise grab\.pixel_to_world \(notebook 05\): write "
                                                   r"pixel_to_world"):
         require_written("grab.pixel_to_world")
+
+
+def _with_regions_of(text: str, source: str, where: str) -> str:
+    """`text` with each exercise region's body replaced by the same region's body in `source`."""
+    lines, theirs = text.splitlines(), source.splitlines()
+    bodies = {(r.exercise_id, k): theirs[r.begin + 1:r.end]
+              for k, r in enumerate(find_regions(source, where))}
+    out, last = [], 0
+    for k, r in enumerate(find_regions(text, where)):
+        out += lines[last:r.begin + 1] + bodies[(r.exercise_id, k)]
+        last = r.end
+    return "\n".join(out + lines[last:]) + ("\n" if text.endswith("\n") else "")
+
+
+def test_restoring_the_solutions_gives_back_the_instructors_files(release):
+    """Release = instructor's files with the regions stubbed: putting the solutions back into the regions restores
+    every package file byte for byte and every notebook's code, so the restored release passes what the
+    instructor's checkout passes (its notebooks under nbval, its tests)."""
+    out, stubbed = release
+    for name in stubbed:
+        mine, theirs = (out / name).read_text(), (REPO / name).read_text()
+        if name.endswith(".py"):
+            assert _with_regions_of(mine, theirs, name) == theirs, f"{name} does not restore"
+            continue
+        cells = [("".join(c["source"]) if isinstance(c["source"], list) else c["source"])
+                 for c in json.loads(mine)["cells"] if c["cell_type"] == "code"]
+        originals = [("".join(c["source"]) if isinstance(c["source"], list) else c["source"])
+                     for c in json.loads(theirs)["cells"] if c["cell_type"] == "code"]
+        assert len(cells) == len(originals), f"{name}: the release has other cells"
+        for cell, original in zip(cells, originals, strict=True):
+            assert _with_regions_of(cell, original, name) == original, f"{name}: a cell does not restore"
