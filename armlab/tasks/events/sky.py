@@ -43,7 +43,7 @@ def highest_tool_z(xy, top_down: bool = False, tol_mm: float = 0.5) -> float:
     def ok(z: float) -> bool:
         p = np.array([xy[0], xy[1], z], float)
         if top_down:
-            return bool(kinematics.ik_batch(p[None], np.pi / 2, robot=robot).ok[0])
+            return bool(kinematics.ik_batch(p[None], np.pi / 2, robot=robot).success[0])
         try:
             kinematics.steepest_pitch(p, robot=robot)
             return True
