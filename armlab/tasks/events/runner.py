@@ -1,6 +1,7 @@
 """Run an autonomous event on a station: look, choose a move, pick, place, look again (verify, retry), score.
 
-run_event(station, "sort_stack" | "line_up" | "sky", level) sets the station up through the task layer
+run_event(station, event, level) runs any registered event (registry.py: "sort_stack", "line_up", "sky", ...); it
+sets the station up through the task layer
 (armlab.tasks.pickplace.context: camera calibration and, in simulation, the sag fit; not timed), then loops within the
 event's time limit (simulated seconds): look with the arm out of view (detect_objects: blocks AND distractors, which
 the plans avoid), ask the strategy for the next move, pick (a failed pick is retried after a new look, up to
@@ -25,16 +26,14 @@ from armlab.station import MotionRefused
 from armlab.tasks import perception, pickplace
 
 from .layout import Move, footprint_radius
-from .line_up import LineUp
+from .registry import Strategy, score_event
+from .registry import event as event_spec
 from .replay import Recorder, Replay, objects_from_snapshot
-from .scoring import LEVELS, TIME_LIMIT_S, Score, score_event
-from .sky import HANDOVER_XY, TOWER_XY, HandOver, Sky
-from .sort_stack import SortStack
+from .scoring import Score
 
 __all__ = ["EventResult", "MoveLog", "Look", "run_event", "see", "make_strategy", "MAX_PICK_TRIES"]
 
 MAX_PICK_TRIES = 3
-SKY_SETTINGS = DetectionSettings(max_height=500.0, max_levels=13)   # the tower rises above the default 260 mm, 6 levels
 
 
 @dataclass(frozen=True)
@@ -81,11 +80,11 @@ class EventResult:
                 f"{sum(not m.picked for m in self.moves)} failed picks; {self.stopped}")
 
 
-def make_strategy(event: str, level: int):
-    """The strategy object of an event and level (SortStack, LineUp or Sky)."""
-    if event not in LEVELS:
-        raise ValueError(f"unknown event {event!r}: expected one of {sorted(LEVELS)}")
-    return {"sort_stack": SortStack, "line_up": LineUp, "sky": Sky}[event](level)
+def make_strategy(event: str, level: int) -> Strategy:
+    """The strategy object of a registered event and level (e.g. SortStack, LineUp or Sky)."""
+    spec = event_spec(event)
+    spec.check_level(level)
+    return spec.strategy(level)
 
 
 @dataclass(frozen=True)
@@ -118,22 +117,23 @@ def run_event(station, event: str, level: int = 1, time_limit_s: float | None = 
               max_moves: int = 60, record: bool = True) -> EventResult:
     """Run one event autonomously on a simulated station and score it (see the module notes).
 
-    time_limit_s: default the rules' (180 s sort 'n stack, 600 s the others). seed: the hand-over jitter (sky).
+    time_limit_s: default the event's (the rules': 180 s sort 'n stack, 600 s the others). seed: the supply's
+    jitter (to the sky's hand-over).
     """
     if station.world is None:
         raise ValueError("run_event scores from the simulator's ground truth: it needs a simulated station")
+    spec = event_spec(event)
     strategy = make_strategy(event, level)
-    limit = TIME_LIMIT_S[event] if time_limit_s is None else float(time_limit_s)
+    limit = spec.time_limit_s if time_limit_s is None else float(time_limit_s)
     if not limit > 0:
         raise ValueError(f"time_limit_s must be positive, got {time_limit_s}")
     ctx = pickplace.context(station)
     world = station.world
-    handover = HandOver(world, seed) if event == "sky" else None
-    if handover is not None:
-        handover.hand_over()
+    supply = spec.supply(world, seed) if spec.supply is not None else None
+    if supply is not None:
+        supply.hand_over()
     t0 = world.time_s
     recorder = Recorder(station, limit_s=limit) if record else None
-    settings = SKY_SETTINGS if event == "sky" else None
     tries: Counter = Counter()
     moves: list[MoveLog] = []
     looks, stopped, board = 0, "", []      # board: what stands where, as last seen and changed since
@@ -141,13 +141,13 @@ def run_event(station, event: str, level: int = 1, time_limit_s: float | None = 
         if world.time_s - t0 >= limit:
             stopped = "time is up"
             break
-        extra = [Obstacle(*TOWER_XY, strategy.height * block_edge("large"), 27.0)] if event == "sky" else []
-        seen = see(station, ctx, [*board, *extra], settings).objects
+        extra = list(strategy.obstacles())
+        seen = see(station, ctx, [*board, *extra], spec.detection).objects
         board = list(seen)
         looks += 1
         move = strategy.next_move(seen)
         if move is None:
-            stopped = strategy.stopped if getattr(strategy, "stopped", "") else "nothing left to do"
+            stopped = strategy.stopped or "nothing left to do"
             break
         key = (move.block.size, move.block.color)
         if tries[key] >= MAX_PICK_TRIES:
@@ -175,8 +175,7 @@ def run_event(station, event: str, level: int = 1, time_limit_s: float | None = 
             board = [*obstacles, move.block]
             moves.append(MoveLog(move.describe() + " (cannot place: put back)", t_start, world.time_s - t0, True,
                                  False, np.full(3, np.nan)))
-            if hasattr(strategy, "unreachable"):
-                strategy.unreachable(f"the next level is out of reach: {why}")
+            if strategy.cannot_place(why):
                 continue
             stopped = why
             break
@@ -190,15 +189,13 @@ def run_event(station, event: str, level: int = 1, time_limit_s: float | None = 
         moves.append(MoveLog(move.describe(), t_start, world.time_s - t0, True, True, err))
         if recorder is not None:
             recorder.snapshot(move.describe())
-        if handover is not None:
-            handover.hand_over()
+        if supply is not None:
+            supply.hand_over()
     else:
         stopped = f"stopped after {max_moves} moves"
     elapsed = world.time_s - t0
     replay = recorder.stop() if recorder is not None else None
-    options = {}
-    if event == "sky":
-        options = {"n_handed": handover.supply, "handover_xy": HANDOVER_XY}
+    options = supply.score_options() if supply is not None else {}
     if replay is not None and elapsed > limit and recorder.at_limit is not None:
         final = objects_from_snapshot(recorder.at_limit)      # the judges score the board at the time limit
     else:
