@@ -22,7 +22,7 @@ from armlab.detection import (
     stack_levels,
 )
 from armlab.detection.heightmap import pixels_to_plane
-from armlab.sim.scoring import Score, corrected_depth, score_frame, sim_case, truth_faces, yaw_error
+from armlab.sim.detection_eval import DetectionScore, corrected_depth, score_frame, sim_case, truth_faces, yaw_error
 
 
 @pytest.fixture(scope="module")
@@ -87,7 +87,7 @@ def test_exact_frames_give_yaw_and_position_to_the_pixel_grid_limit():
 @pytest.mark.exercise("calib.tag_extrinsics", "calib.depth_plane", "detect.classify")
 def test_realistic_frames_meet_the_goals(case):
     found = detect_objects(case.rgb, corrected_depth(case), case.camera, case.arm_q)
-    score = Score()
+    score = DetectionScore()
     score.add(score_frame(found, case.truth))
     m = score.metrics()
     assert m["blocks"] >= 3

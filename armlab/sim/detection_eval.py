@@ -21,7 +21,7 @@ import numpy as np
 
 from armlab.camera import Camera
 
-__all__ = ["TruthFace", "FrameScore", "Score", "truth_faces", "score_frame", "yaw_error", "sim_case", "Case",
+__all__ = ["TruthFace", "FrameScore", "DetectionScore", "truth_faces", "score_frame", "yaw_error", "sim_case", "Case",
            "SCENES", "case_specs", "labelled_faces", "fit_color_model", "TRAIN_SEEDS"]
 
 # The scenes of the evaluation sets: singles, stacks 2-3 high, the events' levels 2-3 (stacks and distractors).
@@ -125,7 +125,7 @@ def score_frame(detections, truth: list[TruthFace], min_visible: float = 0.5, ma
 
 
 @dataclass
-class Score:
+class DetectionScore:
     """Metrics over many frames (see summary())."""
 
     frames: list[FrameScore] = field(default_factory=list)
@@ -247,7 +247,7 @@ def fit_color_model(seeds=TRAIN_SEEDS):
     return ColorModel.fit(colours, labels), len(labels)
 
 
-if __name__ == "__main__":   # python -m armlab.sim.scoring: refit data/color_model.json
+if __name__ == "__main__":   # python -m armlab.sim.detection_eval: refit data/color_model.json
     from armlab._paths import data_write_path
     from armlab.detection.color import COLOR_MODEL_FILE
 

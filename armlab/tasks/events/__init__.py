@@ -11,14 +11,14 @@ runner (the look-plan-act loop with a time limit), replay (recorded joint trajec
 """
 
 from .registry import EventSpec, Strategy, event, events, max_points, register, score_event
-from .replay import Recorder, Replay
+from .replay import Replay, ReplayRecorder
 from .runner import EventResult, MoveLog, make_strategy, run_event
 from .scoring import Score, ScoreLine, columns
 from .sky import HANDOVER_XY, TOWER_XY, HandOver
 
 __all__ = ["EventSpec", "Strategy", "event", "events", "register", "max_points", "Score", "ScoreLine", "columns",
-           "score_event", "EventResult", "MoveLog", "make_strategy", "run_event", "Recorder", "Replay", "HandOver",
-           "HANDOVER_XY", "TOWER_XY", "event_station"]
+           "score_event", "EventResult", "MoveLog", "make_strategy", "run_event", "ReplayRecorder", "Replay",
+           "HandOver", "HANDOVER_XY", "TOWER_XY", "event_station"]
 
 
 def event_station(event_name: str, level: int = 1, seed: int = 0, **options):

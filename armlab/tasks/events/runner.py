@@ -28,7 +28,7 @@ from armlab.tasks import perception, pickplace
 from .layout import Move, footprint_radius
 from .registry import Strategy, score_event
 from .registry import event as event_spec
-from .replay import Recorder, Replay, objects_from_snapshot
+from .replay import Replay, ReplayRecorder, objects_from_snapshot
 from .scoring import Score
 
 __all__ = ["EventResult", "MoveLog", "Look", "run_event", "see", "make_strategy", "MAX_PICK_TRIES"]
@@ -133,7 +133,7 @@ def run_event(station, event: str, level: int = 1, time_limit_s: float | None = 
     if supply is not None:
         supply.hand_over()
     t0 = world.time_s
-    recorder = Recorder(station, limit_s=limit) if record else None
+    recorder = ReplayRecorder(station, limit_s=limit) if record else None
     tries: Counter = Counter()
     moves: list[MoveLog] = []
     looks, stopped, board = 0, "", []      # board: what stands where, as last seen and changed since
