@@ -141,6 +141,9 @@ class _Frame:
 _SUM3 = np.ones((1, 3))                     # cv2.transform: the sum of three channels
 _SQUARE3, _SQUARE5, _SQUARE7 = (np.ones((k, k), np.uint8) for k in (3, 5, 7))   # morphology kernels
 STANDING_RISE_MM = 3.0    # a pixel not of a face's colour this far above it is something standing on the face
+FACE_COLOR_LEVEL = 3.5    # a pixel this near the face's core colour (distance in core spreads) has the face's colour
+BELOW_FACE_MM = 10.0      # a pixel this far below a face's height is not on it (the board, a lower face)
+OCCLUDER_RISE_MM = 8.0    # a pixel this far above a face's height hides it (the arm, a block standing over it)
 STANDING_KERNEL = np.ones((9, 9), np.uint8)   # outline points within 4 px of such a pixel are not the face's edge
 ARM_MAX_LEVEL = 110    # the RX200 is black: its pixels are dark (max channel below this, 8-bit) ...
 ARM_MAX_CHROMA = 22    # ... and grey (max - min channel below this), unlike every block colour's top face
@@ -215,8 +218,8 @@ def _refine_by_colour(face: Face, f: _Frame, pad: int = 6):
     no_return = np.isnan(height)
     cv2.patchNaNs(height, face.height_mm)        # no return: neither below nor above
     height = cv2.medianBlur(height, 5)
-    not_below = height > face.height_mm - 10.0
-    occluder = height > face.height_mm + 8.0
+    not_below = height > face.height_mm - BELOW_FACE_MM
+    occluder = height > face.height_mm + OCCLUDER_RISE_MM
     if f.arm_small is not None:
         arm = f.arm_small[(y0 // s):(y1 + s - 1) // s, (x0 // s):(x1 + s - 1) // s]
         if arm.any():
@@ -227,11 +230,11 @@ def _refine_by_colour(face: Face, f: _Frame, pad: int = 6):
             # heights) or where it gave no return (unless the pixel has the face's colour: a dark face's dropouts)
             arm = arm & _arm_coloured(rgb)
             not_below &= ~arm
-            occluder |= arm & no_return & (distance >= 3.5)
-    candidate = ((distance < 3.5) & not_below).astype(np.uint8)
+            occluder |= arm & no_return & (distance >= FACE_COLOR_LEVEL)
+    candidate = ((distance < FACE_COLOR_LEVEL) & not_below).astype(np.uint8)
     # what stands on the face: pixels not of its colour that rise above it (a block's side faces rise from the face,
     # so they are above it by less than `occluder` asks right next to it)
-    standing = (height > face.height_mm + STANDING_RISE_MM) & ~occluder & (distance >= 3.5)
+    standing = (height > face.height_mm + STANDING_RISE_MM) & ~occluder & (distance >= FACE_COLOR_LEVEL)
     n, labels = cv2.connectedComponents(candidate, connectivity=4)
     if n <= 1:
         return seed, (x0, y0), mean, occluder, standing, distance
@@ -310,7 +313,7 @@ EDGE_QUANT_PX = 12 ** -0.5   # an edge's position error from the pixel grid (px,
 SEEN_SIDE_VAR = 1.4         # a side whose own side face is in view beyond it: its slope's variance counts 1.4 times
                             # (measured: its squared slope error over its variance is 1.4 times a silhouette's, on
                             # seeds 300-315 with the renderer filling faces by pixel centre)
-EDGE_LEVEL = 3.5        # the face ends where the colour distance to its core colour first reaches this (core spreads)
+EDGE_LEVEL = FACE_COLOR_LEVEL   # the face ends where the colour distance to its core colour first reaches this
 _PROFILE_T = np.linspace(-0.8, 0.8, EDGE_SAMPLES)
 _PROFILE_S = np.arange(-EDGE_SEARCH_MM, EDGE_SEARCH_MM + 1e-9, EDGE_STEP_MM)
 
