@@ -150,8 +150,8 @@ def default_color_model() -> ColorModel:
     try:
         stamp = path.stat()
     except FileNotFoundError:
-        raise ValueError(f"{path}: colour model file not found (refit it with `python -m "
-                         f"armlab.sim.detection_eval`, or pass detection settings with a ColorModel)") from None
+        raise ValueError(f"{path}: colour model file not found (refit it with `python -m armlab colors fit`, or "
+                         f"pass detection settings with a ColorModel)") from None
     key = (str(path), stamp.st_mtime_ns, stamp.st_size)
     if key not in _DEFAULT:
         _DEFAULT.clear()

@@ -245,13 +245,3 @@ def fit_color_model(seeds=TRAIN_SEEDS):
     specs = [(SCENES[k % len(SCENES)], seed, k % 3 == 1) for k, seed in enumerate(seeds)]
     colours, labels = labelled_faces([sim_case(*s) for s in specs])
     return ColorModel.fit(colours, labels), len(labels)
-
-
-if __name__ == "__main__":   # python -m armlab.sim.detection_eval: refit data/color_model.json
-    from armlab._paths import data_write_path
-    from armlab.detection.color import COLOR_MODEL_FILE
-
-    model, n = fit_color_model()
-    model.save(data_write_path(COLOR_MODEL_FILE), note=f"fitted on {n} simulated block faces, seeds "
-                                                       f"{TRAIN_SEEDS.start}-{TRAIN_SEEDS.stop - 1}")
-    print(f"wrote {data_write_path(COLOR_MODEL_FILE)} from {n} faces")
