@@ -49,6 +49,7 @@ def run_cli(*args, cwd):
                           capture_output=True, text=True, timeout=600)
 
 
+@pytest.mark.exercise("detect.classify")           # the fitted model classifies its faces back
 def test_colors_fit_refits_the_model_from_labelled_frames(labelled_folder, tmp_path):
     frames, calibration = load_labelled_frames(labelled_folder)
     colours, labels = labelled_colours(frames, calibration)
