@@ -1,5 +1,6 @@
 """Command line: `python -m armlab demo` runs the kit's main job headless on the simulator; `python -m armlab record
-OUT.bag` records the lab's RealSense camera for replay with make_station("real", arm=False, playback=...)."""
+OUT.bag` records the lab's RealSense camera for replay with make_station("real", arm=False, playback=...);
+`python -m armlab colors fit [--frames FOLDER]` refits the block colour model from labelled frames."""
 
 from __future__ import annotations
 
@@ -13,11 +14,22 @@ def main(argv: list[str] | None = None) -> int:
     demo = sub.add_parser("demo", help="run the end-to-end demo headless on the simulator")
     demo.add_argument("--out", default="out", help="folder for the demo's images and replay (default: out/)")
     demo.add_argument("--seed", type=int, default=0)
-    demo.add_argument("--event", default="sort_stack", choices=["sort_stack", "line_up", "sky"],
-                      help="the competition event to run (default: sort_stack)")
-    demo.add_argument("--level", type=int, default=3, help="the event's level, 1-3 (default: 3; sky: 1)")
+    demo.add_argument("--event", default="sort_stack",
+                      help="the competition event to run: sort_stack (default), line_up, sky, or any other registered "
+                           "event (armlab.tasks.events.registry: a module defining EVENT, in the kit's events package "
+                           "or named in $ARMLAB_EVENT_MODULES)")
+    demo.add_argument("--level", type=int, default=None, help="the event's level (default: its highest)")
     demo.add_argument("--no-html", action="store_true", help="skip the meshcat replay page")
     sub.add_parser("exercises", help="list the exercises: id, points, notebook, where to write them")
+    colors = sub.add_parser("colors", help="the block colour model (data/color_model.json)")
+    colors_fit = colors.add_subparsers(dest="colors_command", required=True).add_parser(
+        "fit", help="refit the colour model from labelled frames (real or simulated)")
+    colors_fit.add_argument("--frames", default=None,
+                            help="a folder of labelled RGB-D frames with labels.json (format: "
+                                 "armlab.detection.color_labels); default: the kit's simulated training frames")
+    colors_fit.add_argument("--out", default=None,
+                            help="where to write the model (default: color_model.json in $ARMLAB_DATA when set, "
+                                 "else the package's data folder)")
     sub.add_parser("record", add_help=False,
                    help="record the RealSense camera to a .bag (replay: make_station('real', arm=False, playback=...))")
     args, rest = parser.parse_known_args(argv)
@@ -32,12 +44,51 @@ def main(argv: list[str] | None = None) -> int:
 
         print(exercises_table())
         return 0
+    if args.command == "colors":
+        return _fit_colors(args.frames, args.out)
     if args.command == "demo":
         from armlab.demo import run_demo
+        from armlab.tasks.events.registry import events
 
-        level = 1 if args.event == "sky" else args.level
+        specs = events()               # read only here: the other commands do not import the task layer
+        if args.event not in specs:
+            parser.error(f"unknown event {args.event!r}: the registered events are {', '.join(sorted(specs))}")
+        spec = specs[args.event]
+        level = max(spec.levels) if args.level is None else args.level
+        if level not in spec.levels:
+            parser.error(f"{args.event} has levels {spec.levels}, got --level {level}")
         return run_demo(out_dir=args.out, seed=args.seed, event=args.event, level=level, html=not args.no_html)
     return 2
+
+
+def _fit_colors(frames_folder: str | None, out: str | None) -> int:
+    """`armlab colors fit`: fit ColorModel on labelled faces and write it atomically; 2 and nothing written on
+    bad input."""
+    from pathlib import Path
+
+    from armlab._paths import data_write_path
+    from armlab.detection.color import COLOR_MODEL_FILE, ColorModel
+
+    try:
+        if frames_folder is not None:
+            from armlab.detection.color_labels import labelled_colours, load_labelled_frames
+
+            frames, calibration = load_labelled_frames(frames_folder)
+            colours, labels = labelled_colours(frames, calibration)
+            model, n = ColorModel.fit(colours, labels), len(labels)
+            note = f"fitted on {n} labelled block faces of {len(frames)} frames in {frames_folder}"
+        else:
+            from armlab.sim.detection_eval import TRAIN_SEEDS, fit_color_model
+
+            model, n = fit_color_model()
+            note = f"fitted on {n} simulated block faces, seeds {TRAIN_SEEDS.start}-{TRAIN_SEEDS.stop - 1}"
+    except ValueError as e:
+        print(f"armlab colors fit: error: {e}", file=sys.stderr)
+        return 2
+    path = Path(out) if out is not None else data_write_path(COLOR_MODEL_FILE)
+    model.save(path, note=note)
+    print(f"wrote {path} from {n} faces ({', '.join(model.names)})")
+    return 0
 
 
 if __name__ == "__main__":

@@ -173,13 +173,6 @@ class Camera:
         t = np.where(np.isfinite(t) & (t > 0), t, np.nan)
         return origin + t[:, None] * rays
 
-    # -- homography ----------------------------------------------------------------------------------------------
-    def board_homography(self) -> np.ndarray:
-        """Homography (3, 3) from board coordinates (x, y, 1) mm on z = 0 to undistorted pixels (u, v, 1)."""
-        R, t = self.T_cam_world[:3, :3], self.T_cam_world[:3, 3]
-        H = self.K @ np.column_stack([R[:, 0], R[:, 1], t])
-        return H / H[2, 2]
-
     def with_pose(self, T_cam_world) -> Camera:
         """A copy of this camera with another extrinsic."""
         return Camera(self.K, self.dist, T_cam_world, self.width, self.height)

@@ -11,11 +11,17 @@ which the simulator and the viewer use as the physical arm). They agree to 1e-9 
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import functools
+import math
+import operator
+import warnings
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from types import SimpleNamespace
 
 import numpy as np
 
-from armlab.exercises.fallback import reference_fallback
+from armlab.exercises.fallback import is_blank_stub, reference_fallback
 from armlab.robot import DH_TOOL_ROTATION, RobotModel, rx200
 from armlab.transforms import exp_se3, homogeneous, log_so3, rot_x, rot_y, rot_z
 
@@ -32,6 +38,7 @@ __all__ = [
     "tool_orientation",
     "ik",
     "ik_batch",
+    "IKResult",
     "IKBatchResult",
     "steepest_pitch",
     "ik_numerical",
@@ -224,9 +231,9 @@ def tool_orientation(heading, pitch, roll=0.0) -> np.ndarray:
 _BRANCHES = (("facing", "elbow up"), ("facing", "elbow down"), ("flipped", "elbow up"), ("flipped", "elbow down"))
 
 
-def _wrap(angle):
-    """Wrap angles to (-pi, pi]."""
-    return np.pi - np.mod(np.pi - angle, 2 * np.pi)
+def _wrap(angle, xp=np):
+    """Wrap angles to (-pi, pi] (arrays with xp = numpy, a Python float with xp = _SCALAR_MATH)."""
+    return xp.pi - xp.mod(xp.pi - angle, 2 * xp.pi)
 
 
 @dataclass(frozen=True)
@@ -316,43 +323,148 @@ def _numerical_candidates(P: np.ndarray, pitch: np.ndarray, roll: np.ndarray, ro
     return _Candidates(q, np.repeat(in_reach[:, None], 4, axis=1), valid, np.repeat(wrist_distance[:, None], 4, axis=1))
 
 
-@reference_fallback("ik.candidates", _numerical_candidates, "inverse kinematics is solved numerically on the PoX "
-                                                            "model (slower)")
-def _ik_candidates(P: np.ndarray, pitch: np.ndarray, roll: np.ndarray, robot: RobotModel) -> _Candidates:
-    """Every IK branch for targets P (N, 3) with pitch (N,) and roll (N,), vectorised over targets and branches.
+# The math the closed-form IK needs, for numpy arrays (the batch: every target and branch at once) or for Python
+# floats (one target, one branch at a time: no numpy per-call cost). The same formulas run on either.
+_SCALAR_MATH = SimpleNamespace(pi=math.pi, cos=math.cos, sin=math.sin, arctan2=math.atan2, arccos=math.acos,
+                               hypot=math.hypot, sqrt=math.sqrt, abs=abs, minimum=min, maximum=max, mod=operator.mod,
+                               where=lambda condition, a, b: a if condition else b)
+
+
+def _heading(x, y, robot_o1, xp=np):
+    """The arm plane's heading (rad, from world +x towards +y) for a target at (x, y) mm; on the base axis any
+    heading works: keep the waist at 0 (heading = the waist's DH offset)."""
+    r = xp.hypot(x, y)
+    return xp.where(r > 1e-9, xp.arctan2(y, x), robot_o1), r
+
+
+def _branch_joints(heading, r, z, pitch, flipped, delta_sign, geometry, xp=np):
+    """Joint angles q1..q4 (rad, not yet wrapped) of the IK branch(es) `flipped` (1 = the waist turned away from
+    the target, 0 = facing it) and `delta_sign` (see _DELTA_SIGN) for a target at heading `heading` (rad), distance
+    `r` (mm) from the base axis and height `z` (world mm), approach pitched `pitch` rad below horizontal. Also: ok
+    (the wrist centre is within the arm's span) and d2 (squared shoulder-wrist distance, mm^2). geometry: the
+    arm's (shoulder height, upper arm, forearm, wrist-to-tool, o1, o2, o3) in mm and rad.
+
+    Written once for either number type: with xp = numpy every argument may be an array (broadcast together: the
+    batch), with xp = _SCALAR_MATH they are Python floats (one branch of one target: the fast single solve).
 
     Exercise ik.candidates (notebook 03: the kit's closed-form IK: all four branches).
     """
-    dh = robot.dh
-    h0, L1, L2, Lt = _planar_geometry(robot)
-    o1, o2, o3 = dh[0, 0], dh[1, 0], dh[2, 0]
-    x, y, z = (c[:, None] for c in P.T)                     # (N, 1): broadcast against the 4 branches
-    pitch = pitch[:, None]
-    r = np.hypot(x, y)
-    heading = np.where(r > 1e-9, np.arctan2(y, x), o1)  # on the base axis any heading works: keep the waist at 0
-    flipped = _FLIPPED                                       # (4,): 1 where the waist turns away from the target
-    side = 1.0 - 2.0 * flipped                               # +1 facing, -1 flipped
+    h0, L1, L2, Lt, o1, o2, o3 = geometry
+    side = 1.0 - 2.0 * flipped                              # +1 facing, -1 flipped
     # BEGIN SOLUTION ik.candidates
-    q1 = heading - o1 + np.pi * flipped
+    q1 = heading - o1 + xp.pi * flipped
     r_plane = side * r                                      # target's distance along the arm's forward direction
-    psi = np.pi * flipped + side * pitch                    # approach angle below the arm's forward horizontal
-    wr = r_plane - Lt * np.cos(psi)                         # wrist centre in the arm's plane, from the shoulder
-    wh = z - h0 + Lt * np.sin(psi)
-    d2 = wr**2 + wh**2
-    cos_delta = (d2 - L1**2 - L2**2) / (2 * L1 * L2)
-    ok = np.abs(cos_delta) <= 1 + 1e-12
-    delta = np.arccos(np.minimum(np.maximum(cos_delta, -1.0), 1.0)) * _DELTA_SIGN   # sign: see _DELTA_SIGN
-    upper_arm_elevation = np.arctan2(wh, wr) - np.arctan2(L2 * np.sin(delta), L1 + L2 * np.cos(delta))
+    psi = xp.pi * flipped + side * pitch                    # approach angle below the arm's forward horizontal
+    wr = r_plane - Lt * xp.cos(psi)                         # wrist centre in the arm's plane, from the shoulder
+    wh = z - h0 + Lt * xp.sin(psi)
+    d2 = wr * wr + wh * wh
+    cos_delta = (d2 - L1 * L1 - L2 * L2) / (2 * L1 * L2)
+    ok = xp.abs(cos_delta) <= 1 + 1e-12
+    delta = xp.arccos(xp.minimum(xp.maximum(cos_delta, -1.0), 1.0)) * delta_sign   # sign: see _DELTA_SIGN
+    upper_arm_elevation = xp.arctan2(wh, wr) - xp.arctan2(L2 * xp.sin(delta), L1 + L2 * xp.cos(delta))
     q2 = -upper_arm_elevation - o2
     q3 = -delta - o3
     q4 = psi - q2 - q3 - (o2 + o3)
     # END SOLUTION
+    return q1, q2, q3, q4, ok, d2
+
+
+_GEOMETRY: dict[int, tuple[RobotModel, tuple[float, ...]]] = {}   # id(robot) -> (robot, its geometry)
+
+
+def _ik_geometry(robot: RobotModel) -> tuple[float, ...]:
+    """(shoulder height, upper arm, forearm, wrist-to-tool) mm and the DH offsets o1, o2, o3 rad, as Python floats
+    (computed once per robot model: its arrays are read-only)."""
+    cached = _GEOMETRY.get(id(robot))
+    if cached is None or cached[0] is not robot:
+        dh = robot.dh
+        geometry = (*(float(v) for v in _planar_geometry(robot)), float(dh[0, 0]), float(dh[1, 0]), float(dh[2, 0]))
+        cached = _GEOMETRY[id(robot)] = (robot, geometry)
+    return cached[1]
+
+
+@reference_fallback("ik.candidates", _numerical_candidates, "inverse kinematics is solved numerically on the PoX "
+                                                            "model (slower)")
+def _ik_candidates(P: np.ndarray, pitch: np.ndarray, roll: np.ndarray, robot: RobotModel) -> _Candidates:
+    """Every IK branch for targets P (N, 3) with pitch (N,) and roll (N,), vectorised over targets and branches
+    (_branch_joints on arrays: (N, 1) targets broadcast against the 4 branches)."""
+    geometry = _ik_geometry(robot)
+    x, y, z = (c[:, None] for c in P.T)                     # (N, 1): broadcast against the 4 branches
+    heading, r = _heading(x, y, geometry[4])
+    q1, q2, q3, q4, ok, d2 = _branch_joints(heading, r, z, pitch[:, None], _FLIPPED, _DELTA_SIGN, geometry)
     q = np.empty(q2.shape + (5,))
     q[..., 0], q[..., 1], q[..., 2], q[..., 3], q[..., 4] = q1, q2, q3, q4, roll[:, None]
     q = _wrap(q)                                            # every joint angle in (-pi, pi]
     q[~ok] = np.nan
     valid = ok & robot.within_limits(q)                     # NaN (out of reach) compares False: not within
     return _Candidates(q, ok, valid, np.sqrt(d2))
+
+
+_BRANCH_SIGNS = tuple(zip(_FLIPPED.tolist(), _DELTA_SIGN.tolist(), _ELBOW_DOWN.tolist()))
+
+
+def _real(value) -> float:
+    """A plain number as a Python float; TypeError for anything else (arrays go the general way)."""
+    if isinstance(value, (float, int, np.floating, np.integer)) and not isinstance(value, bool):
+        return float(value)
+    raise TypeError(value)
+
+
+def _floats(values, n: int) -> list[float]:
+    """n plain numbers from a list, tuple or (n,) array; TypeError otherwise."""
+    if isinstance(values, np.ndarray):
+        if values.shape != (n,) or values.dtype.kind not in "fi":
+            raise TypeError(values)
+        return values.tolist()
+    if isinstance(values, (list, tuple)) and len(values) == n:
+        return [_real(v) for v in values]
+    raise TypeError(values)
+
+
+def _ik_one(position, pitch, roll, current, robot: RobotModel) -> np.ndarray | None:
+    """ik() for one target in plain Python floats: the same _branch_joints, wrap, limits and ranking as the batch,
+    without numpy's per-call cost. None where the general path must answer: input it does not take as is (it
+    validates and raises), no valid branch (it explains why), or the exercise ik.candidates still blank."""
+    try:
+        x, y, z = _floats(position, 3)
+        pitch, roll = _real(pitch), _real(roll)
+        cur = robot.home.tolist() if current is None else _floats(current, 5)
+    except TypeError:
+        return None
+    if not all(map(math.isfinite, (x, y, z, pitch, roll, *cur))):
+        return None
+    geometry = _ik_geometry(robot)
+    heading, r = _heading(x, y, geometry[4], _SCALAR_MATH)
+    bounds = robot.bounds
+    roll = _wrap(roll, _SCALAR_MATH)
+    if not bounds[4][0] <= roll <= bounds[4][1]:
+        return None
+    found = []
+    for flipped, delta_sign, elbow_down in _BRANCH_SIGNS:
+        try:
+            *joints, ok, _ = _branch_joints(heading, r, z, pitch, flipped, delta_sign, geometry, _SCALAR_MATH)
+        except NotImplementedError as e:
+            if is_blank_stub(e, "ik.candidates"):
+                return None
+            raise
+        if not ok:
+            continue
+        q = []
+        for a, (lo, hi) in zip(joints, bounds):
+            a = _wrap(a, _SCALAR_MATH)
+            if not lo <= a <= hi:
+                break
+            q.append(a)
+        else:
+            q.append(roll)
+            found.append((elbow_down, q))
+    if not found:
+        return None
+    if len(found) > 1:             # _rank's order: elbow up first, then least joint motion from `current`
+        found = [(elbow_down * 1e3 + sum(abs(_wrap(a - c, _SCALAR_MATH)) for a, c in zip(q, cur)), q)
+                 for elbow_down, q in found]
+        found.sort(key=lambda item: item[0])                # stable: ties keep the branch order, as _rank does
+    return np.array([q for _, q in found])
 
 
 def _explain(c: _Candidates, i: int, robot: RobotModel, position, pitch) -> str:
@@ -410,8 +522,17 @@ def ik(position, pitch, roll: float = 0.0, current=None, robot: RobotModel | Non
     the right of the base axis, the elbow lies to the left of the direction from the shoulder to the wrist centre,
     i.e. above the shoulder-wrist line whenever the wrist centre is on the target's side of the waist axis.
     Raises Unreachable (a ValueError) saying why when there is none.
+
+    One plain target goes the fast way (_ik_one: the same math on Python floats, about 10x quicker); anything
+    else, and every failure, through the batch machinery (_ik_general), which validates and explains.
     """
     robot = robot or rx200()
+    fast = _ik_one(position, pitch, roll, current, robot)
+    return fast if fast is not None else _ik_general(position, pitch, roll, current, robot)
+
+
+def _ik_general(position, pitch, roll, current, robot: RobotModel) -> np.ndarray:
+    """ik() through the batch machinery (_prepare, _ik_candidates, _rank) for one target."""
     P, pitch_a, roll_a, cur, single = _prepare(position, pitch, roll, current, robot)
     if not single:
         raise ValueError("ik takes one position (3,); use ik_batch for (N, 3)")
@@ -425,12 +546,36 @@ def ik(position, pitch, roll: float = 0.0, current=None, robot: RobotModel | Non
 
 
 @dataclass(frozen=True)
-class IKBatchResult:
-    """Best IK solution per target: q (N, 5) rad (NaN where none), ok (N,) bool, branch (N,) index or -1."""
+class IKResult:
+    """What an IK solver found for one target: q (5,) rad, success, and reason ("" on success, else why not, in
+    words). The closed-form ik() returns its solutions and raises Unreachable with the reason instead; IKBatchResult
+    holds the same three per target, NumericalIKResult adds the iterations and the final error."""
 
     q: np.ndarray
-    ok: np.ndarray
+    success: bool
+    reason: str
+
+
+@dataclass(frozen=True, eq=False)
+class IKBatchResult:
+    """Best closed-form IK solution per target: q (N, 5) rad (NaN where none), success (N,) bool, branch (N,) index
+    into the four branches or -1, and reason (N,) strings ("" where solved, else ik()'s Unreachable message;
+    worded on first access, so the batch pays nothing for it)."""
+
+    q: np.ndarray
+    success: np.ndarray
     branch: np.ndarray
+    _explain: Callable[[int], str] = field(repr=False)
+
+    @functools.cached_property
+    def reason(self) -> tuple[str, ...]:
+        return tuple("" if ok else self._explain(i) for i, ok in enumerate(self.success.tolist()))
+
+    @property
+    def ok(self) -> np.ndarray:
+        """Deprecated name of `success`."""
+        warnings.warn("IKBatchResult.ok is deprecated: use .success", DeprecationWarning, stacklevel=2)
+        return self.success
 
 
 def ik_batch(positions, pitch, roll=0.0, current=None, robot: RobotModel | None = None) -> IKBatchResult:
@@ -442,7 +587,7 @@ def ik_batch(positions, pitch, roll=0.0, current=None, robot: RobotModel | None 
     rows = np.arange(P.shape[0])
     ok = c.valid[rows, best]
     q = np.where(ok[:, None], c.q[rows, best], np.nan)
-    return IKBatchResult(q=q, ok=ok, branch=np.where(ok, best, -1))
+    return IKBatchResult(q, ok, np.where(ok, best, -1), lambda i: _explain(c, i, robot, P[i], pitch_a[i]))
 
 
 def steepest_pitch(position, roll: float = 0.0, max_pitch: float = np.pi / 2, min_pitch: float = 0.0,
@@ -462,7 +607,7 @@ def steepest_pitch(position, roll: float = 0.0, max_pitch: float = np.pi / 2, mi
     if not (step > 0 and tol > 0):
         raise ValueError(f"step ({step} rad) and tol ({tol} rad) must be positive")
     grid = np.linspace(max_pitch, min_pitch, max(2, int(np.ceil((max_pitch - min_pitch) / step)) + 1))
-    ok = ik_batch(np.repeat(P[None], grid.size, 0), grid, roll, robot=robot).ok
+    ok = ik_batch(np.repeat(P[None], grid.size, 0), grid, roll, robot=robot).success
     if not ok.any():
         raise Unreachable(f"no pitch between {np.degrees(min_pitch):.1f} and {np.degrees(max_pitch):.1f} deg "
                           f"reaches ({P[0]:.1f}, {P[1]:.1f}, {P[2]:.1f}) mm: "
@@ -474,7 +619,7 @@ def steepest_pitch(position, roll: float = 0.0, max_pitch: float = np.pi / 2, mi
     good, bad = grid[k], grid[k - 1]
     while bad - good > tol:
         mid = 0.5 * (good + bad)
-        if ik_batch(P[None], mid, roll, robot=robot).ok[0]:
+        if ik_batch(P[None], mid, roll, robot=robot).success[0]:
             good = mid
         else:
             bad = mid
@@ -486,11 +631,10 @@ def steepest_pitch(position, roll: float = 0.0, max_pitch: float = np.pi / 2, mi
 # ---------------------------------------------------------------------------------------------------------------
 
 @dataclass(frozen=True)
-class NumericalIKResult:
-    """Result of damped least squares IK: q (5,), success, iterations, final position error (mm)."""
+class NumericalIKResult(IKResult):
+    """Result of damped least squares IK: q (5,) rad, success, reason ("" on success), iterations, final position
+    error (mm)."""
 
-    q: np.ndarray
-    success: bool
     iterations: int
     position_error_mm: float
 
@@ -518,11 +662,13 @@ def ik_numerical(position, pitch, roll: float = 0.0, q0=None, damping: float = 0
         T = fk(q, robot, check_limits=False)
         e = np.concatenate([P - T[:3, 3], log_so3(R_target @ T[:3, :3].T)])
         if np.linalg.norm(e[:3]) < tol_mm and np.linalg.norm(e[3:]) * orientation_scale_mm < tol_mm:
-            return NumericalIKResult(q, True, it, float(np.linalg.norm(e[:3])))
+            return NumericalIKResult(q, True, "", it, float(np.linalg.norm(e[:3])))
         J = jacobian(q, robot) * weight[:, None]
         ew = e * weight
         dq = J.T @ np.linalg.solve(J @ J.T + damping**2 * np.eye(6), ew)
         dq *= min(1.0, max_step / max(float(np.abs(dq).max()), 1e-300))  # near singularities the step explodes
         q = np.clip(q + dq, robot.lower, robot.upper)
     err = float(np.linalg.norm(P - fk(q, robot, check_limits=False)[:3, 3]))
-    return NumericalIKResult(q, False, max_iterations, err)
+    why = (f"did not converge in {max_iterations} iterations from q0: the tool ends {err:.3g} mm from "
+           f"({P[0]:.1f}, {P[1]:.1f}, {P[2]:.1f}) mm (out of reach, a joint limit, or a seed on another branch)")
+    return NumericalIKResult(q, False, why, max_iterations, err)

@@ -16,7 +16,7 @@ import numpy as np
 from armlab._paths import data_path
 from armlab.transforms import homogeneous, rotvec_to_matrix
 
-__all__ = ["JOINT_NAMES", "RobotModel", "RobotDataError", "load_robot", "rx200", "DH_TOOL_ROTATION"]
+__all__ = ["JOINT_NAMES", "LIMIT_TOL_RAD", "RobotModel", "RobotDataError", "load_robot", "rx200", "DH_TOOL_ROTATION"]
 
 JOINT_NAMES: tuple[str, ...] = ("waist", "shoulder", "elbow", "wrist_angle", "wrist_rotate")
 
@@ -30,7 +30,10 @@ class RobotDataError(ValueError):
     """A robot description file is missing or malformed; the message names the file, row and problem."""
 
 
-@dataclass(frozen=True)
+LIMIT_TOL_RAD = 1e-9   # a joint this far past its limit (rad) still counts as within it (rounding)
+
+
+@dataclass(frozen=True, repr=False)
 class RobotModel:
     """Kinematic description of a 5-joint arm.
 
@@ -56,7 +59,7 @@ class RobotModel:
     M: np.ndarray
     frames_home: np.ndarray
 
-    def limit_violations(self, q, tol: float = 1e-9) -> list[str]:
+    def limit_violations(self, q, tol: float = LIMIT_TOL_RAD) -> list[str]:
         """Human-readable list of the joints of q (5,) outside their limits (empty when all are within)."""
         q = np.asarray(q, dtype=float)
         out = []
@@ -66,10 +69,36 @@ class RobotModel:
                            f"[{lo:.6f}, {hi:.6f}] rad")
         return out
 
-    def within_limits(self, q, tol: float = 1e-9) -> np.ndarray:
+    def within_limits(self, q, tol: float = LIMIT_TOL_RAD) -> np.ndarray:
         """Boolean (...,) telling which joint vectors q (..., 5) respect every position limit."""
         q = np.asarray(q, dtype=float)
         return ((q >= self.lower - tol) & (q <= self.upper + tol)).all(axis=-1)
+
+    @functools.cached_property
+    def bounds(self) -> tuple[tuple[float, float], ...]:
+        """Per joint (lower - LIMIT_TOL_RAD, upper + LIMIT_TOL_RAD) rad as Python floats: within_limits' rule for
+        code that tests one joint vector without numpy's per-call cost (the single-target IK)."""
+        return tuple(zip((self.lower - LIMIT_TOL_RAD).tolist(), (self.upper + LIMIT_TOL_RAD).tolist()))
+
+    def __repr__(self) -> str:
+        """The joint table (limits, home, deg), the DH table (deg, mm) and the PoX screws (world frame, mm)."""
+        deg = np.degrees
+        rows = [f"RobotModel: {len(self.joint_names)} joints (world frame: the board's; mm, deg)",
+                "joints (deg)      lower    upper     home  vel (deg/s)"]
+        for name, lo, hi, home, vel in zip(self.joint_names, deg(self.lower), deg(self.upper), deg(self.home),
+                                           deg(self.velocity)):
+            rows.append(f"  {name:12} {lo:8.1f} {hi:8.1f} {home:8.1f} {vel:10.1f}")
+        rows.append("DH (standard)     theta0 (deg)   d (mm)   a (mm)  alpha (deg)")
+        for name, (theta0, d, a, alpha) in zip(self.joint_names, self.dh):
+            rows.append(f"  {name:12} {deg(theta0):13.2f} {d:8.2f} {a:8.2f} {deg(alpha):12.2f}")
+        rows.append("PoX screws (world)   wx     wy     wz      vx (mm)   vy (mm)   vz (mm)")
+        for name, (wx, wy, wz, vx, vy, vz) in zip(self.joint_names, self.screws):
+            rows.append(f"  {name:12} {wx:6.2f} {wy:6.2f} {wz:6.2f} {vx:10.2f} {vy:9.2f} {vz:9.2f}")
+        x, y, z = self.M[:3, 3]
+        rows.append(f"  tool at q = 0 (M): ({x:.2f}, {y:.2f}, {z:.2f}) mm")
+        return "\n".join(rows)
+
+    __str__ = __repr__
 
 
 def _read_rows(path: Path, header: list[str]) -> list[tuple[int, dict[str, str]]]:

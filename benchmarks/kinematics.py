@@ -3,10 +3,11 @@
 Prints one table from one run (all timings in the same process, so the ratios are comparable):
 - FK per pose: armlab.kinematics.fk called in a loop vs one vectorised call on 100 000 poses (and the PoX batch).
 - IK per solve on the same 1000 reachable targets (tool poses of random in-limit joint vectors, tool above the
-  board): closed form one target at a time and as a batch, modern_robotics.IKinSpace exactly as the Interbotix SDK
-  calls it (manufacturer's Slist/M in metres, seeds all-zero then waist -120/+120 deg, eomg = ev = 0.001, answer
-  wrapped to (-pi, pi] and checked against the joint limits), and armlab's damped least squares ik_numerical with
-  the same seeds. Success rate and the worst tool-point error (mm) of the accepted answers.
+  board): closed form one target at a time (ik's fast single-target path, and the same targets through the batch
+  machinery, _ik_general, which ik used for one target before) and as a batch, modern_robotics.IKinSpace exactly
+  as the Interbotix SDK calls it (manufacturer's Slist/M in metres, seeds all-zero then waist -120/+120 deg,
+  eomg = ev = 0.001, answer wrapped to (-pi, pi] and checked against the joint limits), and armlab's damped least
+  squares ik_numerical with the same seeds. Success rate and the worst tool-point error (mm) of the accepted answers.
 
     .venv/bin/python benchmarks/kinematics.py
 """
@@ -102,14 +103,17 @@ def main() -> None:
         return len(ok), float(np.linalg.norm(k.fk(np.array(ok))[:, :3, 3] - P[[s is not None for s in solutions]],
                                              axis=1).max())
 
-    def closed_form_loop():
+    def closed_form_loop(solve=k.ik):
         out = []
         for i in range(N_IK):
             try:
-                out.append(k.ik(P[i], pitch[i], roll[i])[0])
+                out.append(solve(P[i], pitch[i], roll[i])[0])
             except k.Unreachable:
                 out.append(None)
         return out
+
+    def general_path(p, pitch_i, roll_i):
+        return k._ik_general(p, pitch_i, roll_i, None, robot)
 
     results = {}
 
@@ -119,12 +123,14 @@ def main() -> None:
         return time.perf_counter() - start
 
     t_single = timed("single", closed_form_loop)
+    t_general = timed("general", lambda: closed_form_loop(general_path))
     t_ik_batch = seconds(lambda: results.__setitem__("batch", k.ik_batch(P, pitch, roll)), repeat=3)
     t_sdk = timed("sdk", lambda: [sdk_ik(Ti) for Ti in T])
     t_num = timed("numerical", lambda: [numerical_ik(P[i], pitch[i], roll[i]) for i in range(N_IK)])
     batch = results["batch"]
-    batch_solutions = [qi if ok else None for qi, ok in zip(batch.q, batch.ok)]
+    batch_solutions = [qi if ok else None for qi, ok in zip(batch.q, batch.success)]
     for method, key, t in (("closed form ik, one target at a time", "single", t_single),
+                           ("  the same through the batch machinery", "general", t_general),
                            ("closed form ik_batch, one (N, 3) call", None, t_ik_batch),
                            ("modern_robotics IKinSpace, SDK seeds", "sdk", t_sdk),
                            ("armlab ik_numerical (DLS), SDK seeds", "numerical", t_num)):
@@ -132,7 +138,7 @@ def main() -> None:
         rows.append(("IK", method, N_IK, f"{solved}/{N_IK}", f"{err:.1e}", t / N_IK))
 
     fk_loop_us = rows[0][5]
-    sdk_us = rows[5][5]
+    sdk_us = next(r[5] for r in rows if r[1].startswith("modern_robotics"))
     print(f"Kinematics benchmark (seed {SEED}; IK targets: {N_IK} tool poses of random in-limit joint vectors, "
           "tool above the board)")
     header = f"{'':3} {'method':40} {'N':>7} {'success':>10} {'max err (mm)':>17} {'us per item':>12} {'speed-up':>9}"

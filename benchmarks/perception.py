@@ -30,7 +30,7 @@ from armlab.detection import detect_objects, hsv_table_classify  # noqa: E402
 from armlab.lab import lab_config  # noqa: E402
 from armlab.sim.camera import CameraRealism  # noqa: E402
 from armlab.sim.checkerboard import load_dataset  # noqa: E402
-from armlab.sim.scoring import Score, case_specs, corrected_depth, score_frame, sim_case  # noqa: E402
+from armlab.sim.detection_eval import DetectionScore, case_specs, corrected_depth, score_frame, sim_case  # noqa: E402
 from armlab.tasks.perception import station_intrinsics  # noqa: E402
 
 cv2.setNumThreads(1)
@@ -93,7 +93,7 @@ def grid_errors(K, dist) -> list[tuple[str, float, float]]:
 def main(n_frames: int = 32) -> None:
     K, dist = checkerboard_intrinsics()
     cases = [sim_case(*spec) for spec in case_specs(n_frames, 100)]
-    scores = {"true camera": Score(), "calibrated": Score()}
+    scores = {"true camera": DetectionScore(), "calibrated": DetectionScore()}
     det_ms, tag_ms, hsv_hits, hsv_none, n_hsv = [], [], 0, 0, 0
     for case in cases:   # each seed is another camera: calibrate its intrinsics from its own checkerboard set
         case_K, case_dist = station_intrinsics(make_station("sim", seed=case.seed, scene=case.scene))

@@ -22,7 +22,7 @@ from armlab.detection import (
     stack_levels,
 )
 from armlab.detection.heightmap import pixels_to_plane
-from armlab.sim.scoring import Score, corrected_depth, score_frame, sim_case, truth_faces, yaw_error
+from armlab.sim.detection_eval import DetectionScore, corrected_depth, score_frame, sim_case, truth_faces, yaw_error
 
 
 @pytest.fixture(scope="module")
@@ -87,7 +87,7 @@ def test_exact_frames_give_yaw_and_position_to_the_pixel_grid_limit():
 @pytest.mark.exercise("calib.tag_extrinsics", "calib.depth_plane", "detect.classify")
 def test_realistic_frames_meet_the_goals(case):
     found = detect_objects(case.rgb, corrected_depth(case), case.camera, case.arm_q)
-    score = Score()
+    score = DetectionScore()
     score.add(score_frame(found, case.truth))
     m = score.metrics()
     assert m["blocks"] >= 3
@@ -181,17 +181,17 @@ def test_yaw_refinement_recovers_a_turned_start():
     frame = station.camera.capture()
     cam = station.camera.truth
     seen = []
-    real = D._refine_yaws
+    real = D.refine_yaws
 
     def spy(camera, faces, iterations=3):
         seen.extend(faces)
         return real(camera, faces, iterations)
 
-    D._refine_yaws = spy
+    D.refine_yaws = spy
     try:
         found = D.detect_blocks(frame.rgb, frame.depth, cam, station.arm.joint_positions())
     finally:
-        D._refine_yaws = real
+        D.refine_yaws = real
     assert len(seen) == len(found) == 6
     truth = [min(station.world.blocks, key=lambda t: np.hypot(*(t.position[:2] - m.centre))) for m in seen]
     assert all(np.hypot(*(t.position[:2] - m.centre)) < 2.0 for t, m in zip(truth, seen))
@@ -221,12 +221,12 @@ def test_yaw_of_small_blocks_whose_sides_render_nearly_straight(spec):
 
 
 def test_plane_homographies_of_many_faces_match_the_lens_model(ideal):
-    from armlab.detection.detect import _plane_homographies
+    from armlab.detection.edges import plane_homographies
 
     station, _ = ideal
     cam = station.camera.truth
     centres, heights = np.array([[0.0, 150.0], [-320.0, -100.0], [300.0, 280.0]]), np.array([25.0, 38.0, 114.0])
-    many = _plane_homographies(cam, centres, heights, np.array([25.0, 25.0, 25.0]))
+    many = plane_homographies(cam, centres, heights, np.array([25.0, 25.0, 25.0]))
     assert many.shape == (3, 3, 3)
     for H, centre, z in zip(many, centres, heights):     # each face's own plane, all from one call
         xy = np.asarray(centre) + np.random.default_rng(0).uniform(-25, 25, (50, 2))
@@ -349,7 +349,7 @@ def test_segment_faces_boxes_heights_and_valid_mask():
 
 
 def test_board_white_balance_uses_the_bright_board_pixels():
-    from armlab.detection.detect import _board_white_balance
+    from armlab.detection.colour_region import board_white_balance
 
     rng = np.random.default_rng(5)
     rgb = np.empty((720, 1280, 3), np.uint8)
@@ -359,9 +359,9 @@ def test_board_white_balance_uses_the_bright_board_pixels():
     height = np.zeros((360, 640), np.float32)
     height[:100] = 50.0                              # raised pixels are not board
     rgb[:200] = (0, 0, 255)
-    gains = _board_white_balance(rgb, height, np.ones((360, 640), bool), 2)
+    gains = board_white_balance(rgb, height, np.ones((360, 640), bool), 2)
     assert np.allclose(gains * (200, 180, 150), np.mean((200, 180, 150)))
-    assert np.array_equal(_board_white_balance(rgb, np.full((360, 640), 50.0, np.float32), np.ones((360, 640), bool),
+    assert np.array_equal(board_white_balance(rgb, np.full((360, 640), 50.0, np.float32), np.ones((360, 640), bool),
                                                2), np.ones(3))
 
 

@@ -236,15 +236,56 @@ def test_ik_batch_equals_first_ik_solution():
     pitch = rng.uniform(-0.5, 2.5, 2000)
     current = random_q(2000, seed=10)
     res = k.ik_batch(P, pitch, 0.3, current=current)
-    assert 300 < res.ok.sum() < 1900        # a mix of reachable and unreachable targets
+    assert 300 < res.success.sum() < 1900        # a mix of reachable and unreachable targets
     for i in range(len(P)):
         try:
             first = k.ik(P[i], pitch[i], 0.3, current=current[i])[0]
         except k.Unreachable:
-            assert not res.ok[i] and np.isnan(res.q[i]).all() and res.branch[i] == -1
+            assert not res.success[i] and np.isnan(res.q[i]).all() and res.branch[i] == -1
             continue
-        assert res.ok[i] and 0 <= res.branch[i] < 4
-        np.testing.assert_array_equal(res.q[i], first)
+        assert res.success[i] and 0 <= res.branch[i] < 4
+        # one target goes ik's fast path (Python floats and libm, numpy's SIMD loops in the batch): last bits differ
+        np.testing.assert_allclose(res.q[i], first, rtol=0, atol=1e-12)
+
+
+@pytest.mark.exercise("ik.candidates")
+def test_the_fast_single_target_path_gives_the_batch_machinerys_answers():
+    """ik() solves one plain target on Python floats (_ik_one); the batch machinery (_ik_general) gives the same
+    solutions in the same order to 1e-12 rad and the same reasons, over reachable, joint-limited and unreachable
+    targets, either elbow, any current pose."""
+    rng = np.random.default_rng(21)
+    q = random_q(2500, seed=22)
+    P, pitch, roll = target_of(q)                                  # reachable: every branch of the arm's poses
+    P = np.vstack([P, np.column_stack([rng.uniform(-500, 500, 2500), rng.uniform(-300, 500, 2500),
+                                       rng.uniform(-80, 480, 2500)])])
+    pitch = np.concatenate([pitch, rng.uniform(-0.6, 2.6, 2500)])
+    roll = np.concatenate([roll, rng.uniform(-3.5, 3.5, 2500)])   # beyond +-pi: wrapped, sometimes out of limits
+    current = random_q(5000, seed=23)
+    counts = {"one": 0, "several": 0, "elbow down first": 0, "limits": 0, "reach": 0}
+    for i in range(len(P)):
+        args = (P[i], pitch[i], roll[i], current[i] if i % 2 else None, ROBOT)
+        fast = k._ik_one(*args)
+        try:
+            general = k._ik_general(*args)
+        except k.Unreachable as e:
+            assert fast is None, (i, fast)
+            with pytest.raises(k.Unreachable) as again:
+                k.ik(P[i], pitch[i], roll[i], current=args[3])
+            assert str(again.value) == str(e)
+            counts["limits" if "joint limit" in str(e) else "reach"] += 1
+            continue
+        assert fast is not None and fast.shape == general.shape, (i, fast, general)
+        np.testing.assert_allclose(fast, general, rtol=0, atol=1e-12)
+        counts["one" if len(fast) == 1 else "several"] += 1
+        counts["elbow down first"] += not elbow_up(fast, P[i])[0]
+    assert all(n >= 100 for n in counts.values()), counts
+    # what the fast path does not take as is (shapes, NaN, arrays of pitch) goes the general way and its checks
+    with pytest.raises(ValueError, match="shape"):
+        k.ik(np.zeros((3, 1)), 1.0)
+    with pytest.raises(ValueError, match="NaN"):
+        k.ik([0.0, np.nan, 19.0], 1.0)
+    assert k._ik_one([0, 250, 19], np.array([1.5]), 0.0, None, ROBOT) is None
+    np.testing.assert_allclose(k.ik([0, 250, 19], np.array([1.5])), k.ik([0, 250, 19], 1.5), rtol=0, atol=1e-12)
 
 
 def test_unreachable_says_why():
@@ -325,3 +366,20 @@ def test_ik_numerical_converges_from_nearby_seeds():
 def test_bad_input_raises_clear_value_error(call, message):
     with pytest.raises(ValueError, match=message):
         call()
+
+
+def test_every_ik_solver_answers_with_q_success_and_reason():
+    targets = [[0.0, 250.0, 19.0], [0.0, 600.0, 30.0], [0.0, -150.0, 20.0]]   # fine, out of reach, joint limits
+    res = k.ik_batch(targets, np.pi / 2)
+    assert res.success.tolist() == [True, False, False] and res.q.shape == (3, 5)
+    assert res.reason[0] == ""
+    for target, reason in zip(targets[1:], res.reason[1:]):   # the batch's reason: ik()'s Unreachable, word for word
+        with pytest.raises(k.Unreachable) as err:
+            k.ik(target, np.pi / 2)
+        assert reason == str(err.value), target
+    with pytest.warns(DeprecationWarning, match="use .success"):
+        assert res.ok.tolist() == res.success.tolist()
+    good = k.ik_numerical([0.0, 250.0, 19.0], np.pi / 2)
+    assert isinstance(good, k.IKResult) and good.success and good.reason == "" and good.q.shape == (5,)
+    bad = k.ik_numerical([0.0, 700.0, 19.0], np.pi / 2, max_iterations=30)
+    assert not bad.success and bad.reason.startswith("did not converge in 30 iterations") and "mm from" in bad.reason

@@ -119,3 +119,13 @@ def test_missing_extra_and_empty_files(tmp_path):
     with pytest.raises(RobotDataError, match="nowhere.csv: file not found"):
         load_robot(tmp_path / "nowhere.csv")
     assert issubclass(RobotDataError, ValueError)
+
+
+def test_printing_the_robot_shows_its_tables_not_a_dataclass_dump():
+    text = repr(rx200())
+    assert text == str(rx200()) and len(text) < 1600 and "array(" not in text
+    lines = text.splitlines()
+    assert lines[0].startswith("RobotModel: 5 joints") and any(line.startswith("DH (standard)") for line in lines)
+    assert any(line.startswith("PoX screws") for line in lines)
+    shoulder_dh = next(line for line in lines if line.startswith("  shoulder") and "206.16" in line)
+    assert shoulder_dh.split()[1:] == ["-75.96", "0.00", "206.16", "0.00"]        # theta0 deg, d, a mm, alpha deg

@@ -150,7 +150,7 @@ def default_color_model() -> ColorModel:
     try:
         stamp = path.stat()
     except FileNotFoundError:
-        raise ValueError(f"{path}: colour model file not found (refit it with `python -m armlab.sim.scoring`, or "
+        raise ValueError(f"{path}: colour model file not found (refit it with `python -m armlab colors fit`, or "
                          f"pass detection settings with a ColorModel)") from None
     key = (str(path), stamp.st_mtime_ns, stamp.st_size)
     if key not in _DEFAULT:

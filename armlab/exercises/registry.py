@@ -72,7 +72,7 @@ EXERCISES: tuple[Exercise, ...] = (
     Exercise("ik.planar_ik", "the planar two-link IK with both elbow branches", 8, _NB["03"], _src("03"),
              ("planar_ik",)),
     Exercise("ik.candidates", "the kit's closed-form IK: all four branches", 10, _NB["03"], "armlab/kinematics.py",
-             ("_ik_candidates",)),
+             ("_branch_joints",)),
     Exercise("detect.centroid", "a face's centroid from its mask (image moments)", 3, _NB["04"], _src("04"),
              ("centroid",)),
     Exercise("detect.wrap_yaw", "a cube's yaw wrapped to [-pi/4, pi/4)", 2, _NB["04"], _src("04"), ("wrap_yaw",)),

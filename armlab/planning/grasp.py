@@ -101,7 +101,7 @@ def _vertical_ok(position: np.ndarray, top_z: float, pitch: float, roll: float, 
     pts = np.repeat(position[None], n, axis=0)
     pts[:, 2] = np.linspace(position[2], max(top_z, position[2]), n)
     res = kinematics.ik_batch(pts, pitch, roll, robot=robot)
-    return bool(res.ok.all() and np.all(res.branch == res.branch[0]))
+    return bool(res.success.all() and np.all(res.branch == res.branch[0]))
 
 
 def choose_grasp(position, yaw: float, approach_z: float | None = None,

@@ -194,12 +194,12 @@ def _line_knots(P0, P1, s, pitch, roll, current, robot) -> np.ndarray:
     pts = P0 + s[:, None] * (P1 - P0)
     res = kinematics.ik_batch(pts, pitch, roll, current=current, robot=robot)
     head = f"straight line {_fmt(P0)} -> {_fmt(P1)} at pitch {np.degrees(pitch):.1f} deg"
-    if not res.ok.all():
-        i = int(np.flatnonzero(~res.ok)[0])
+    if not res.success.all():
+        i = int(np.flatnonzero(~res.success)[0])
         good, bad = (s[i - 1], s[i]) if i > 0 else (None, s[0])
         while good is not None and (bad - good) * np.linalg.norm(P1 - P0) > 0.1:   # locate the edge to 0.1 mm
             mid = 0.5 * (good + bad)
-            if kinematics.ik_batch(P0 + mid * (P1 - P0), pitch, roll, current=current, robot=robot).ok[0]:
+            if kinematics.ik_batch(P0 + mid * (P1 - P0), pitch, roll, current=current, robot=robot).success[0]:
                 good = mid
             else:
                 bad = mid

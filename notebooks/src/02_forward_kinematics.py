@@ -275,7 +275,7 @@ xs, ys = np.arange(-450.0, 451.0, 25.0), np.arange(-175.0, 476.0, 25.0)
 X, Y = np.meshgrid(xs, ys)
 targets = np.stack([X.ravel(), Y.ravel(), np.full(X.size, 19.0)], 1)   # half a large block above the board
 sol = kinematics.ik_batch(targets, np.pi / 2)
-print(f"{sol.ok.sum()} of {len(targets)} grid points reachable top-down")
+print(f"{sol.success.sum()} of {len(targets)} grid points reachable top-down")
 
 # your fk_from_table; while it is blank the kit's DH chain stands in (it says so once)
 chain = with_reference(fk_from_table, "fk.fk_from_table", references.fk_by_kit_dh,
@@ -283,7 +283,8 @@ chain = with_reference(fk_from_table, "fk.fk_from_table", references.fk_by_kit_d
 errors = {}
 for name, tab in report_tables.items():
     e = np.full(len(targets), np.nan)
-    e[sol.ok] = np.linalg.norm(np.stack([chain(q, tab)[:3, 3] for q in sol.q[sol.ok]]) - targets[sol.ok],
+    solved = sol.success
+    e[solved] = np.linalg.norm(np.stack([chain(q, tab)[:3, 3] for q in sol.q[solved]]) - targets[solved],
                                axis=1)
     errors[name] = e.reshape(X.shape)
     Q = random_q(1000)                                                   # anywhere in the workspace

@@ -203,7 +203,7 @@ X, Y = np.meshgrid(xs, ys)
 cells = np.stack([X.ravel(), Y.ravel(), np.full(X.size, z_grasp)], 1)
 ladder = np.radians(np.arange(90.0, -0.1, -1.0))           # 90, 89, ..., 0 deg
 res = kinematics.ik_batch(np.repeat(cells, len(ladder), 0), np.tile(ladder, len(cells)))
-ok = res.ok.reshape(len(cells), len(ladder))
+ok = res.success.reshape(len(cells), len(ladder))
 steepest = np.where(ok.any(1), ladder[np.argmax(ok, axis=1)], np.nan).reshape(X.shape)
 top_down = ok[:, 0].reshape(X.shape)
 r_max = np.sqrt((L1 + L2) ** 2 - (z_grasp + Lt - h0) ** 2)
@@ -294,7 +294,7 @@ err = np.full(len(pts), np.inf)
 err[finite] = np.linalg.norm(kinematics.fk(q_report[finite], check_limits=False)[:, :3, 3] - pts[finite], axis=1)
 right = in_limits & (err < 1e-6)
 ours = kinematics.ik_batch(pts, psi)
-print(f"reachable cells: {len(pts)}; kinematics.ik solves {ours.ok.sum()}; the report's equations put the tool on "
+print(f"reachable cells: {len(pts)}; kinematics.ik solves {ours.success.sum()}; the report's equations put the tool on "
       f"target within limits at {right.sum()}")
 print(f"cells the report misses: {(~right).sum()}, all behind the base (y < 0): {bool(np.all(pts[~right, 1] < 0))}; "
       f"worst tool error there {err[~right & finite].max():.0f} mm")
@@ -302,7 +302,7 @@ print(f"cells the report misses: {(~right).sum()}, all behind the base (y < 0): 
 # %%
 # CHECK ik.candidates
 require_written("ik.candidates")
-assert ours.ok.all(), f"kinematics.ik fails at {(~ours.ok).sum()} reachable cells"
+assert ours.success.all(), f"kinematics.ik fails at {(~ours.success).sum()} reachable cells"
 assert np.abs(kinematics.fk(ours.q)[:, :3, 3] - pts).max() < 1e-6, "an IK solution misses its cell"
 assert np.all(right[pts[:, 1] > 0]) and not np.any(right[pts[:, 1] < 0]), "the report's equations fail in front"
 print(f"OK: kinematics.ik reaches all {len(pts)} reachable board cells; the report's equation (4) without (5) misses "

@@ -22,7 +22,7 @@ from armlab.detection import default_color_model, detect_objects, draw_detection
 from armlab.detection import hsv_table_classify
 from armlab.detection.color import LAB_HSV_TABLE, white_balance_gains
 from armlab.exercises import references, require_written, with_reference
-from armlab.sim.scoring import Score, corrected_depth, score_frame, sim_case
+from armlab.sim.detection_eval import DetectionScore, corrected_depth, score_frame, sim_case
 
 get_ipython().run_line_magic("matplotlib", "inline")
 from armlab.viz.figures import readable
@@ -312,7 +312,7 @@ for b in found:
 # %%
 # CHECK detect.classify
 require_written("detect.classify")
-score = Score()
+score = DetectionScore()
 for c in cases:
     score.add(score_frame(detect_objects(c.rgb, corrected_depth(c), c.camera, c.arm_q), c.truth))
 m = score.metrics()

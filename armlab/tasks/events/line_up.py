@@ -19,8 +19,10 @@ from armlab.blocks import COLORS
 from armlab.planning.transit import GRIPPER_RADIUS_MM
 
 from .layout import Move, covered, footprint_radius, free_spot, is_stacked
+from .registry import EventSpec, Strategy
+from .scoring import LINE_UP_LEVELS, score_line_up
 
-__all__ = ["LineUp", "line_slots", "PITCH_MM"]
+__all__ = ["LineUp", "line_slots", "PITCH_MM", "EVENT"]
 
 PITCH_MM = {"large": 50.0, "small": 40.0}     # 6 large: 5 x 50 + 38 = 288 mm; 6 small: 5 x 40 + 25 = 225 mm
 FIRST_X_MM = 110.0                            # |x| of the red slot (nearest the base)
@@ -43,14 +45,14 @@ def _overlaps_slot(b, slot, size) -> bool:
     return bool(np.linalg.norm(np.asarray(b.position[:2]) - slot[:2]) < footprint_radius(b) + GRIPPER_RADIUS_MM)
 
 
-class LineUp:
+class LineUp(Strategy):
     """The line 'em up strategy for one level (1, 2 or 3); call next_move(seen) until it returns None."""
 
     event = "line_up"
 
     def __init__(self, level: int):
-        if level not in (1, 2, 3):
-            raise ValueError(f"line 'em up has levels 1-3, got {level!r}")
+        if level not in LINE_UP_LEVELS:
+            raise ValueError(f"line 'em up has levels {LINE_UP_LEVELS}, got {level!r}")
         self.level = level
         self.slots: dict[tuple[str, str], np.ndarray] | None = None
         self.skipped: set[tuple[str, str]] = set()
@@ -88,3 +90,6 @@ class LineUp:
 
     def placed(self, move: Move) -> None:
         """Nothing to remember: the next look shows where the blocks are."""
+
+
+EVENT = EventSpec("line_up", "line 'em up", LINE_UP_LEVELS, 600.0, LineUp, score_line_up)

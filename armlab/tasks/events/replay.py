@@ -1,6 +1,6 @@
 """Replays of an event: the arm's joint trajectory and gripper opening over simulated time, and world snapshots.
 
-Recorder listens to the simulated world's clock (World.add_listener) and samples the arm's physical joints
+ReplayRecorder listens to the simulated world's clock (World.add_listener) and samples the arm's physical joints
 (arm.q_true) and every object's pose (centre, yaw, tilt) every `dt` simulated seconds; snapshots of every object are
 taken on request (after each move) and, once, at the event's time limit (what the judges would score). Replay saves
 to / loads from NPZ (no pickles) and plays in the meshcat Viewer (Viewer.animate with the objects' tracks: blocks
@@ -18,7 +18,7 @@ import numpy as np
 from armlab.blocks import ObjectState
 from armlab.files import atomic_path
 
-__all__ = ["Replay", "Recorder", "snapshot_objects", "objects_from_snapshot"]
+__all__ = ["Replay", "ReplayRecorder", "snapshot_objects", "objects_from_snapshot"]
 
 
 def snapshot_objects(objects) -> list[dict]:
@@ -116,8 +116,9 @@ class Replay:
                            objects=[self.objects_at_sample(int(k)) for k in keep])
 
 
-class Recorder:
-    """Samples a simulated station's arm every dt simulated seconds from now on (see the module notes)."""
+class ReplayRecorder:
+    """Records an event's Replay (teach.Recorder records taught waypoints instead): samples a simulated station's
+    arm every dt simulated seconds from now on (see the module notes)."""
 
     def __init__(self, station, dt: float = 0.1, limit_s: float | None = None):
         self.world, self.arm = station.world, station.arm

@@ -1,6 +1,7 @@
 """Run an autonomous event on a station: look, choose a move, pick, place, look again (verify, retry), score.
 
-run_event(station, "sort_stack" | "line_up" | "sky", level) sets the station up through the task layer
+run_event(station, event, level) runs any registered event (registry.py: "sort_stack", "line_up", "sky", ...); it
+sets the station up through the task layer
 (armlab.tasks.handling.context: camera calibration and, in simulation, the sag fit; not timed), then loops within the
 event's time limit (simulated seconds): look with the arm out of view (detect_objects: blocks AND distractors, which
 the plans avoid), ask the strategy for the next move, pick (a failed pick is retried after a new look, up to
@@ -25,16 +26,14 @@ from armlab.station import MotionRefused
 from armlab.tasks import handling, perception
 
 from .layout import Move, footprint_radius
-from .line_up import LineUp
-from .replay import Recorder, Replay, objects_from_snapshot
-from .scoring import LEVELS, TIME_LIMIT_S, Score, score_event
-from .sky import HANDOVER_XY, TOWER_XY, HandOver, Sky
-from .sort_stack import SortStack
+from .registry import Strategy, score_event
+from .registry import event as event_spec
+from .replay import Replay, ReplayRecorder, objects_from_snapshot
+from .scoring import Score
 
 __all__ = ["EventResult", "MoveLog", "Look", "run_event", "see", "make_strategy", "MAX_PICK_TRIES"]
 
 MAX_PICK_TRIES = 3
-SKY_SETTINGS = DetectionSettings(max_height=500.0, max_levels=13)   # the tower rises above the default 260 mm, 6 levels
 
 
 @dataclass(frozen=True)
@@ -81,11 +80,11 @@ class EventResult:
                 f"{sum(not m.picked for m in self.moves)} failed picks; {self.stopped}")
 
 
-def make_strategy(event: str, level: int):
-    """The strategy object of an event and level (SortStack, LineUp or Sky)."""
-    if event not in LEVELS:
-        raise ValueError(f"unknown event {event!r}: expected one of {sorted(LEVELS)}")
-    return {"sort_stack": SortStack, "line_up": LineUp, "sky": Sky}[event](level)
+def make_strategy(event: str, level: int) -> Strategy:
+    """The strategy object of a registered event and level (e.g. SortStack, LineUp or Sky)."""
+    spec = event_spec(event)
+    spec.check_level(level)
+    return spec.strategy(level)
 
 
 @dataclass(frozen=True)
@@ -114,32 +113,65 @@ def _obstacles(seen, move: Move, extra=()) -> list:
     return out + list(extra)
 
 
+class _WithDefaults(Strategy):
+    """A strategy object of one's own, with the Strategy protocol's defaults for what it does not define."""
+
+    def __init__(self, strategy):
+        self._strategy = strategy
+
+    def __getattr__(self, name):
+        return getattr(self._strategy, name)
+
+    @property
+    def stopped(self) -> str:
+        return getattr(self._strategy, "stopped", "")
+
+    def next_move(self, seen):
+        return self._strategy.next_move(seen)
+
+    def placed(self, move) -> None:
+        self._strategy.placed(move)
+
+    def cannot_place(self, why: str) -> bool:
+        own = getattr(self._strategy, "cannot_place", None)
+        return bool(own(why)) if callable(own) else False
+
+    def obstacles(self) -> list:
+        own = getattr(self._strategy, "obstacles", None)
+        return list(own()) if callable(own) else []
+
+
+def _with_protocol_defaults(strategy) -> Strategy:
+    missing = [m for m in ("next_move", "placed") if not callable(getattr(strategy, m, None))]
+    if missing:
+        raise TypeError(f"a strategy needs next_move(seen) and placed(move) methods; {type(strategy).__name__} "
+                        f"lacks {' and '.join(missing)}")
+    return _WithDefaults(strategy)
+
+
 def run_event(station, event: str, level: int = 1, time_limit_s: float | None = None, seed: int = 0,
               max_moves: int = 60, record: bool = True, strategy=None) -> EventResult:
     """Run one event autonomously on a simulated station and score it (see the module notes).
 
-    time_limit_s: default the rules' (180 s sort 'n stack, 600 s the others). seed: the hand-over jitter (sky).
-    strategy: default the kit's for the event and level (make_strategy); your own needs next_move(seen) -> Move or
-    None (seen: the detections of a fresh look) and placed(move), called after each successful place.
+    time_limit_s: default the event's (the rules': 180 s sort 'n stack, 600 s the others). seed: the supply's
+    jitter (to the sky's hand-over). strategy: default the event's own for the level (make_strategy); yours needs
+    next_move(seen) -> Move or None (seen: the detections of a fresh look) and placed(move), called after each
+    successful place; what it lacks of the Strategy protocol (stopped, cannot_place, obstacles) takes the defaults.
     """
     if station.world is None:
         raise ValueError("run_event scores from the simulator's ground truth: it needs a simulated station")
-    if strategy is None:
-        strategy = make_strategy(event, level)
-    elif not (callable(getattr(strategy, "next_move", None)) and callable(getattr(strategy, "placed", None))):
-        raise TypeError(f"a strategy needs next_move(seen) and placed(move) methods; {type(strategy).__name__} "
-                        f"lacks {'next_move' if not callable(getattr(strategy, 'next_move', None)) else 'placed'}")
-    limit = TIME_LIMIT_S[event] if time_limit_s is None else float(time_limit_s)
+    spec = event_spec(event)
+    strategy = make_strategy(event, level) if strategy is None else _with_protocol_defaults(strategy)
+    limit = spec.time_limit_s if time_limit_s is None else float(time_limit_s)
     if not limit > 0:
         raise ValueError(f"time_limit_s must be positive, got {time_limit_s}")
     ctx = handling.context(station)
     world = station.world
-    handover = HandOver(world, seed) if event == "sky" else None
-    if handover is not None:
-        handover.hand_over()
+    supply = spec.supply(world, seed) if spec.supply is not None else None
+    if supply is not None:
+        supply.hand_over()
     t0 = world.time_s
-    recorder = Recorder(station, limit_s=limit) if record else None
-    settings = SKY_SETTINGS if event == "sky" else None
+    recorder = ReplayRecorder(station, limit_s=limit) if record else None
     tries: Counter = Counter()
     moves: list[MoveLog] = []
     looks, stopped, board = 0, "", []      # board: what stands where, as last seen and changed since
@@ -147,13 +179,13 @@ def run_event(station, event: str, level: int = 1, time_limit_s: float | None = 
         if world.time_s - t0 >= limit:
             stopped = "time is up"
             break
-        extra = [Obstacle(*TOWER_XY, strategy.height * block_edge("large"), 27.0)] if event == "sky" else []
-        seen = see(station, ctx, [*board, *extra], settings).objects
+        extra = list(strategy.obstacles())
+        seen = see(station, ctx, [*board, *extra], spec.detection).objects
         board = list(seen)
         looks += 1
         move = strategy.next_move(seen)
         if move is None:
-            stopped = strategy.stopped if getattr(strategy, "stopped", "") else "nothing left to do"
+            stopped = strategy.stopped or "nothing left to do"
             break
         key = (move.block.size, move.block.color)
         if tries[key] >= MAX_PICK_TRIES:
@@ -181,8 +213,7 @@ def run_event(station, event: str, level: int = 1, time_limit_s: float | None = 
             board = [*obstacles, move.block]
             moves.append(MoveLog(move.describe() + " (cannot place: put back)", t_start, world.time_s - t0, True,
                                  False, np.full(3, np.nan)))
-            if hasattr(strategy, "unreachable"):
-                strategy.unreachable(f"the next level is out of reach: {why}")
+            if strategy.cannot_place(why):
                 continue
             stopped = why
             break
@@ -196,15 +227,13 @@ def run_event(station, event: str, level: int = 1, time_limit_s: float | None = 
         moves.append(MoveLog(move.describe(), t_start, world.time_s - t0, True, True, err))
         if recorder is not None:
             recorder.snapshot(move.describe())
-        if handover is not None:
-            handover.hand_over()
+        if supply is not None:
+            supply.hand_over()
     else:
         stopped = f"stopped after {max_moves} moves"
     elapsed = world.time_s - t0
     replay = recorder.stop() if recorder is not None else None
-    options = {}
-    if event == "sky":
-        options = {"n_handed": handover.supply, "handover_xy": HANDOVER_XY}
+    options = supply.score_options() if supply is not None else {}
     if replay is not None and elapsed > limit and recorder.at_limit is not None:
         final = objects_from_snapshot(recorder.at_limit)      # the judges score the board at the time limit
     else:

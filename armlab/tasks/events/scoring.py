@@ -34,13 +34,13 @@ import numpy as np
 from armlab.blocks import COLORS, ObjectState
 from armlab.sim.geometry import polygons_overlap, wrap_quarter
 
-__all__ = ["EVENTS", "LEVELS", "Score", "ScoreLine", "score_event", "score_sort_stack", "score_line_up", "score_sky",
-           "columns", "max_points", "REST_TOL_MM", "LINE_TOL_MM", "LINE_MAX_MM", "BLOCK_POINTS", "NEATNESS_POINTS",
-           "sky_points"]
+__all__ = ["Score", "ScoreLine", "score_sort_stack", "score_line_up", "score_sky", "SORT_STACK_LEVELS",
+           "LINE_UP_LEVELS", "SKY_LEVELS", "columns", "REST_TOL_MM", "LINE_TOL_MM", "LINE_MAX_MM", "BLOCK_POINTS",
+           "NEATNESS_POINTS", "sky_points"]
 
-EVENTS: tuple[str, ...] = ("sort_stack", "line_up", "sky")
-LEVELS: dict[str, tuple[int, ...]] = {"sort_stack": (1, 2, 3), "line_up": (1, 2, 3), "sky": (1,)}
-TIME_LIMIT_S: dict[str, float] = {"sort_stack": 180.0, "line_up": 600.0, "sky": 600.0}
+SORT_STACK_LEVELS: tuple[int, ...] = (1, 2, 3)    # the levels each scorer knows (the event specs name them)
+LINE_UP_LEVELS: tuple[int, ...] = (1, 2, 3)
+SKY_LEVELS: tuple[int, ...] = (1,)
 
 REST_TOL_MM = 1.0              # a bottom face this close to a top face (or the board) rests on it
 BLOCK_POINTS = 30
@@ -158,7 +158,7 @@ def _sort_area_ok(o: ObjectState) -> bool:
 def score_sort_stack(objects: Iterable[ObjectState], level: int, held: Iterable[int] = (),
                      clicked: bool = False) -> Score:
     """Sort 'n stack (module notes): +30 per block in its area (and, at levels 2-3, in its rainbow stack)."""
-    objects, held, sup, blocks = _board_state("sort_stack", level, objects, held)
+    objects, held, sup, blocks = _board_state("sort_stack", SORT_STACK_LEVELS, level, objects, held)
     cols = columns(objects, held)
     main: dict[str, list[ObjectState]] = {}
     for size in ("large", "small"):
@@ -225,7 +225,7 @@ def _best_line(xy: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 def score_line_up(objects: Iterable[ObjectState], level: int, held: Iterable[int] = (),
                   clicked: bool = False) -> Score:
     """Line 'em up (module notes): +30 per block in its size's rainbow line, +20 per neat line."""
-    objects, held, sup, blocks = _board_state("line_up", level, objects, held)
+    objects, held, sup, blocks = _board_state("line_up", LINE_UP_LEVELS, level, objects, held)
     lines: list[ScoreLine] = []
     sizes = [s for s in ("large", "small") if any(b.size == s for b in blocks)]
     for size in sizes:
@@ -295,7 +295,7 @@ def score_sky(objects: Iterable[ObjectState], level: int = 1, held: Iterable[int
     handover_xy: (x, y) world mm of the hand-over spot: a column standing within HANDOVER_RADIUS_MM of it is a block
     waiting to be stacked, not a tower.
     """
-    _check_level("sky", level)
+    _check_level("sky", SKY_LEVELS, level)
     objects = list(objects)
     cols = columns(objects, held)
     if handover_xy is not None:
@@ -319,16 +319,15 @@ def score_sky(objects: Iterable[ObjectState], level: int = 1, held: Iterable[int
 
 # ---------------------------------------------------------------------------------------------------------------
 
-def _check_level(event: str, level: int) -> None:
-    if event not in LEVELS:
-        raise ValueError(f"unknown event {event!r}: expected one of {EVENTS}")
-    if isinstance(level, bool) or level not in LEVELS[event]:
-        raise ValueError(f"{event} has levels {LEVELS[event]}, got {level!r}")
+def _check_level(event: str, levels: tuple[int, ...], level: int) -> None:
+    if isinstance(level, bool) or level not in levels:
+        raise ValueError(f"{event} has levels {levels}, got {level!r}")
 
 
-def _board_state(event: str, level: int, objects: Iterable[ObjectState], held: Iterable[int]):
+def _board_state(event: str, levels: tuple[int, ...], level: int, objects: Iterable[ObjectState],
+                 held: Iterable[int]):
     """Check the level; return (objects as a list, held ids as a set, what each object rests on, the blocks)."""
-    _check_level(event, level)
+    _check_level(event, levels, level)
     objects, held = list(objects), set(held)
     return objects, held, _supports(objects, held), [o for o in objects if o.is_block]
 
@@ -336,19 +335,3 @@ def _board_state(event: str, level: int, objects: Iterable[ObjectState], held: I
 def _total(event: str, level: int, lines: list[ScoreLine], most: int, clicked: bool) -> Score:
     points = sum(ln.points for ln in lines)
     return Score(event, level, points / 2 if clicked else points, most, tuple(lines), bool(clicked))
-
-
-def max_points(event: str, level: int, objects: Iterable[ObjectState]) -> int:
-    """The most an event can score on a board with these objects."""
-    return score_event(event, level, objects).max_points
-
-
-def score_event(event: str, level: int, objects: Iterable[ObjectState], held: Iterable[int] = (),
-                clicked: bool = False, **options) -> Score:
-    """Score a world state for an event ("sort_stack", "line_up" or "sky") and level; options go to the event's
-    scorer (to the sky: n_handed, handover_xy)."""
-    _check_level(event, level)
-    if options and event != "sky":
-        raise ValueError(f"{event} takes no scoring options, got {sorted(options)}")
-    scorer = {"sort_stack": score_sort_stack, "line_up": score_line_up, "sky": score_sky}[event]
-    return scorer(objects, level, held=held, clicked=clicked, **options)

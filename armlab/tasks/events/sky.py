@@ -21,18 +21,24 @@ import numpy as np
 
 from armlab import kinematics
 from armlab.blocks import COLORS, ObjectState, block_edge
+from armlab.detection import DetectionSettings
 from armlab.kinematics import Unreachable
-from armlab.planning import inner_limits
+from armlab.planning import Obstacle, inner_limits
 
 from .layout import Move
+from .registry import EventSpec, Strategy
+from .scoring import SKY_LEVELS, score_sky
 
-__all__ = ["Sky", "HandOver", "HANDOVER_XY", "TOWER_XY", "SKY_CLEARANCE_MM", "highest_tool_z"]
+__all__ = ["Sky", "HandOver", "HANDOVER_XY", "TOWER_XY", "SKY_CLEARANCE_MM", "SKY_SETTINGS", "TOWER_RADIUS_MM",
+           "highest_tool_z", "EVENT"]
 
 HANDOVER_XY = (-200.0, 150.0)
 TOWER_XY = (120.0, 120.0)           # 170 mm from the waist axis: where the tool reaches highest (module notes)
 NEAR_MM = 40.0
 SKY_CLEARANCE_MM = 15.0             # held block over the tower top; the empty finger tips (8 mm below the tool point)
                                     # end 7 mm above the new top after the release
+SKY_SETTINGS = DetectionSettings(max_height=500.0, max_levels=13)   # the tower rises above the default 260 mm, 6 levels
+TOWER_RADIUS_MM = 27.0              # the tower as an obstacle for the plans: a column this wide at TOWER_XY
 
 
 def highest_tool_z(xy, top_down: bool = False, tol_mm: float = 0.5) -> float:
@@ -43,7 +49,7 @@ def highest_tool_z(xy, top_down: bool = False, tol_mm: float = 0.5) -> float:
     def ok(z: float) -> bool:
         p = np.array([xy[0], xy[1], z], float)
         if top_down:
-            return bool(kinematics.ik_batch(p[None], np.pi / 2, robot=robot).ok[0])
+            return bool(kinematics.ik_batch(p[None], np.pi / 2, robot=robot).success[0])
         try:
             kinematics.steepest_pitch(p, robot=robot)
             return True
@@ -88,15 +94,19 @@ class HandOver:
         self.handed.append(obj)
         return obj
 
+    def score_options(self) -> dict:
+        """score_sky's options: how many blocks could be handed over, and where."""
+        return {"n_handed": self.supply, "handover_xy": HANDOVER_XY}
 
-class Sky:
+
+class Sky(Strategy):
     """The to-the-sky strategy: the block seen at the hand-over spot goes on top of the tower."""
 
     event = "sky"
     level = 1
 
     def __init__(self, level: int = 1):
-        if level != 1:
+        if level not in SKY_LEVELS:
             raise ValueError(f"to the sky has no levels (use 1), got {level!r}")
         self.height = 0                     # blocks on the tower (belief)
         self.top_xy = np.asarray(TOWER_XY, float)
@@ -117,5 +127,15 @@ class Sky:
     def placed(self, move: Move) -> None:
         self.height += 1
 
-    def unreachable(self, reason: str) -> None:
-        self.stopped = reason
+    def cannot_place(self, why: str) -> bool:
+        """The next level is out of reach: the tower is done (next_move returns None from now on, saying why)."""
+        self.stopped = f"the next level is out of reach: {why}"
+        return True
+
+    def obstacles(self) -> list:
+        """The tower as the strategy believes it (its top is out of the detector's range once it is tall)."""
+        return [Obstacle(*TOWER_XY, self.height * block_edge("large"), TOWER_RADIUS_MM)]
+
+
+EVENT = EventSpec("sky", "to the sky", SKY_LEVELS, 600.0, Sky, score_sky, scene=lambda level: "empty",
+                  detection=SKY_SETTINGS, supply=HandOver)

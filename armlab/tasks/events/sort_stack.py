@@ -14,8 +14,10 @@ import numpy as np
 from armlab.blocks import COLORS, block_edge
 
 from .layout import Move, covered, free_spot, is_stacked
+from .registry import EventSpec, Strategy
+from .scoring import SORT_STACK_LEVELS, score_sort_stack
 
-__all__ = ["SortStack", "STACK_XY", "ROW_XY"]
+__all__ = ["SortStack", "STACK_XY", "ROW_XY", "EVENT"]
 
 STACK_XY = {"large": (200.0, -100.0), "small": (-200.0, -100.0)}      # levels 2-3: one stack per size
 ROW_XY = {"large": [(140.0, -100.0), (210.0, -100.0), (280.0, -100.0), (140.0, -160.0), (210.0, -160.0)],
@@ -23,14 +25,14 @@ ROW_XY = {"large": [(140.0, -100.0), (210.0, -100.0), (280.0, -100.0), (140.0, -
 AT_SLOT_MM = 20.0          # a detected block this close (x, y) to a destination is there
 
 
-class SortStack:
+class SortStack(Strategy):
     """The sort 'n stack strategy for one level (1, 2 or 3); call next_move(seen) until it returns None."""
 
     event = "sort_stack"
 
     def __init__(self, level: int):
-        if level not in (1, 2, 3):
-            raise ValueError(f"sort 'n stack has levels 1-3, got {level!r}")
+        if level not in SORT_STACK_LEVELS:
+            raise ValueError(f"sort 'n stack has levels {SORT_STACK_LEVELS}, got {level!r}")
         self.level = level
         self.stack: dict[str, list[str]] = {"large": [], "small": []}   # colours placed on each stack (belief)
         self.rows: dict[str, int] = {"large": 0, "small": 0}
@@ -90,3 +92,6 @@ class SortStack:
             self.stack[b.size].append(b.color)
         elif move.why == "sort":
             self.rows[b.size] += 1
+
+
+EVENT = EventSpec("sort_stack", "sort 'n stack", SORT_STACK_LEVELS, 180.0, SortStack, score_sort_stack)

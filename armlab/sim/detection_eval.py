@@ -21,7 +21,7 @@ import numpy as np
 
 from armlab.camera import Camera
 
-__all__ = ["TruthFace", "FrameScore", "Score", "truth_faces", "score_frame", "yaw_error", "sim_case", "Case",
+__all__ = ["TruthFace", "FrameScore", "DetectionScore", "truth_faces", "score_frame", "yaw_error", "sim_case", "Case",
            "SCENES", "case_specs", "labelled_faces", "fit_color_model", "TRAIN_SEEDS"]
 
 # The scenes of the evaluation sets: singles, stacks 2-3 high, the events' levels 2-3 (stacks and distractors).
@@ -125,7 +125,7 @@ def score_frame(detections, truth: list[TruthFace], min_visible: float = 0.5, ma
 
 
 @dataclass
-class Score:
+class DetectionScore:
     """Metrics over many frames (see summary())."""
 
     frames: list[FrameScore] = field(default_factory=list)
@@ -245,13 +245,3 @@ def fit_color_model(seeds=TRAIN_SEEDS):
     specs = [(SCENES[k % len(SCENES)], seed, k % 3 == 1) for k, seed in enumerate(seeds)]
     colours, labels = labelled_faces([sim_case(*s) for s in specs])
     return ColorModel.fit(colours, labels), len(labels)
-
-
-if __name__ == "__main__":   # python -m armlab.sim.scoring: refit data/color_model.json
-    from armlab._paths import data_write_path
-    from armlab.detection.color import COLOR_MODEL_FILE
-
-    model, n = fit_color_model()
-    model.save(data_write_path(COLOR_MODEL_FILE), note=f"fitted on {n} simulated block faces, seeds "
-                                                       f"{TRAIN_SEEDS.start}-{TRAIN_SEEDS.stop - 1}")
-    print(f"wrote {data_write_path(COLOR_MODEL_FILE)} from {n} faces")

@@ -1,0 +1,279 @@
+"""A top face's square: the fit to its outline (centre, sides, yaw from the outline's chords) and the sub-pixel
+refinement of every cube's sides on the image edges (colour-distance profiles across each side, one batched pass
+over all faces). Units: mm and rad in the world (board) frame, pixels.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from armlab.camera import Camera
+from armlab.detection.colour_region import FACE_COLOR_LEVEL
+from armlab.detection.segment import Face
+
+__all__ = ["MeasuredFace", "fit_square", "edge_direction", "refine_yaws", "plane_homographies", "EDGE_LEVEL",
+           "EDGE_SEARCH_MM", "CUBE_SIZE_SLACK"]
+
+
+def edge_direction(points: np.ndarray, theta: float, span: int = 4, free: np.ndarray | None = None) -> float:
+    """The square's yaw (rad) from its outline (N, 2) mm: the mean of the outline's chord directions with the
+    angles multiplied by four (a square's four sides then agree), weighted by chord length; chords around the
+    corners (more than 20 deg off `theta`, the minimum-area rectangle's angle) are left out, and so are chords with
+    an end that is not `free` (N,) bool (next to an occluder), when given."""
+    if len(points) < 4 * span:
+        return theta
+    d = np.concatenate([points[span:], points[:span]]) - points      # chords to the point `span` ahead
+    z = d[:, 0] + 1j * d[:, 1]
+    length = np.abs(z)
+    quad = (z / np.where(length > 0, length, 1.0)) ** 4              # unit vectors at four times the chord angles
+    w = length * ((quad * np.exp(-4j * theta)).real > np.cos(np.radians(80)))
+    if free is not None:
+        w = w * (free & np.concatenate([free[span:], free[:span]]))
+    if w.sum() <= 0:
+        return theta
+    return float(np.angle((w * quad).sum()) / 4)
+
+
+def fit_square(points: np.ndarray, blocked: np.ndarray, pixel_mm: float, edge_hint: float | None,
+                edges=(25.0, 38.0)):
+    """Centre (2,), side lengths (2,) mm and angle (rad) of the rectangle of a face's world outline (N, 2) mm.
+
+    Outline points next to an occluder (`blocked`) are not the face's edge: when there are any, the rectangle's
+    orientation comes from the free points, and along each side direction the centre is set from the edges the
+    free points show (both: their middle; one: half an edge, `edge_hint`, inside it). With no hint (None), the edge
+    is the lab edge (`edges`, mm) nearest to a side length the free points show whole (else the largest)."""
+    if blocked.sum() > 0.8 * len(points) or len(points) - blocked.sum() < 12:
+        blocked = np.zeros(len(points), bool)   # too little free outline to tell: measure the whole outline
+    free = points[~blocked] if blocked.any() else points
+    (cx, cy), (w, h), angle = cv2.minAreaRect(free.astype(np.float32))
+    # The outline runs through the centres of the boundary pixels: half a pixel inside the true edge on each side.
+    sides = np.array([w, h]) + pixel_mm
+    theta = np.radians(angle)
+    if not blocked.any() or blocked.mean() < 0.02:
+        return np.array([cx, cy]), sides, edge_direction(points, theta), True
+    axes = np.array([[np.cos(theta), np.sin(theta)], [-np.sin(theta), np.cos(theta)]])
+    local = (free - [cx, cy]) @ axes.T
+    centre_local = np.zeros(2)
+    complete = True
+    lo, hi = local.min(axis=0), local.max(axis=0)
+    n_lo, n_hi = np.sum(local < lo + 1.5, axis=0), np.sum(local > hi - 1.5, axis=0)
+    both = (np.minimum(n_lo, n_hi) >= 0.4 * np.maximum(n_lo, n_hi)) & (hi - lo > 0.85 * min(edges))
+    if edge_hint is None and both.any():   # a side seen whole: the face's edge is the lab edge nearest to it
+        seen = float(np.max((hi - lo)[both])) + pixel_mm
+        edge_hint = min(edges, key=lambda e: abs(e - seen))
+    elif edge_hint is None:
+        edge_hint = max(edges)
+    for i in range(2):
+        if both[i] and hi[i] - lo[i] > 0.85 * edge_hint:
+            centre_local[i] = (lo[i] + hi[i]) / 2
+        else:
+            complete = False
+            centre_local[i] = (lo[i] + (edge_hint - pixel_mm) / 2 if n_lo[i] >= n_hi[i]
+                               else hi[i] - (edge_hint - pixel_mm) / 2)
+            sides[i] = edge_hint
+    return np.array([cx, cy]) + centre_local @ axes, sides, theta, complete
+
+
+EDGE_SEARCH_MM = 3.5    # the side refinement looks this far inside and outside each fitted side
+CUBE_SIZE_SLACK = (2.0, 0.15)   # a face this near (edge mm, aspect) to cube-sized by its colour outline is refined and
+                                # judged again on its image edges (the outline can take or leave a boundary pixel)
+EDGE_STEP_MM = 0.5      # sampling step across a side
+EDGE_SAMPLES = 21       # profiles along each side (its middle 80 %: corners are rounded by blur)
+EDGE_FIT_TOL = 0.6      # edge points farther than this (mm) from a side's first line fit are left out of the refit
+EDGE_QUANT_PX = 12 ** -0.5   # an edge's position error from the pixel grid (px, a uniform one-pixel step's spread)
+SEEN_SIDE_VAR = 1.4         # a side whose own side face is in view beyond it: its slope's variance counts 1.4 times
+                            # (measured: its squared slope error over its variance is 1.4 times a silhouette's, on
+                            # seeds 300-315 with the renderer filling faces by pixel centre)
+EDGE_LEVEL = FACE_COLOR_LEVEL   # the face ends where the colour distance to its core colour first reaches this
+_PROFILE_T = np.linspace(-0.8, 0.8, EDGE_SAMPLES)
+_PROFILE_S = np.arange(-EDGE_SEARCH_MM, EDGE_SEARCH_MM + 1e-9, EDGE_STEP_MM)
+
+
+def plane_homographies(camera: Camera, centres, z, reach) -> np.ndarray:
+    """(F, 3, 3) homographies from world (x, y) on the planes z (F,) mm to pixels, each exact at four points `reach`
+    (F,) mm around its centre (F, 2): the pinhole part of a plane's image is a homography, and the lens distortion
+    over a block's few centimetres is smooth enough that the four-point fit stays within a hundredth of a pixel. One
+    projection of four points per plane instead of one per sample."""
+    centres = np.asarray(centres, float).reshape(-1, 2)
+    n = len(centres)
+    z, reach = np.broadcast_to(np.asarray(z, float), (n,)), np.broadcast_to(np.asarray(reach, float), (n,))
+    square = centres[:, None] + reach[:, None, None] * np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]], float)
+    uv = camera.project(np.column_stack([square.reshape(-1, 2), np.repeat(z, 4)])).reshape(n, 4, 2)
+    return np.array([cv2.getPerspectiveTransform(sq.astype(np.float32), p.astype(np.float32))
+                     for sq, p in zip(square, uv)]).reshape(n, 3, 3)
+
+
+def _line_fits(t: np.ndarray, y: np.ndarray, w: np.ndarray):
+    """Least-squares lines y = a + b t through the rows of t, y (S, M) using the points where w (S, M) bool: slopes b
+    (S,), intercepts a (S,), point counts n (S,), spread of the used t (S,) and sum of squared t deviations (S,)."""
+    n = w.sum(axis=1)
+    nz = np.maximum(n, 1)
+    tm = np.where(w, t, 0.0).sum(axis=1) / nz
+    ym = np.where(w, y, 0.0).sum(axis=1) / nz
+    dt = np.where(w, t - tm[:, None], 0.0)
+    sxx = (dt * dt).sum(axis=1)
+    b = (dt * np.where(w, y - ym[:, None], 0.0)).sum(axis=1) / np.maximum(sxx, 1e-9)
+    spread = np.where(w, t, -np.inf).max(axis=1) - np.where(w, t, np.inf).min(axis=1)
+    return b, ym - b * tm, n, np.where(n > 0, spread, 0.0), sxx
+
+
+def _edge_offsets(prof: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Where the face ends along each profile (..., K) sampled at offsets s (K,) mm: the first sample whose colour
+    distance reaches EDGE_LEVEL finds the edge, which is then placed half-way between the face's level (inside) and
+    the level just beyond (within 1.5 mm), linearly interpolated: the middle of a blurred step, whatever lies beyond
+    it (board, grid line, the face's own shaded side). Returns the offsets (...) mm and whether each was found."""
+    shape, K = prof.shape[:-1], prof.shape[-1]
+    p = prof.reshape(-1, K)
+    finite = np.isfinite(p).all(axis=-1)
+    p = np.where(finite[:, None], p, 0.0)
+    k = (p >= EDGE_LEVEL).argmax(axis=-1)
+    ok = finite & (k > 0)
+    rows = np.arange(len(p))
+    reach = int(round(1.5 / EDGE_STEP_MM))
+    # inside: the least level before sample k (a running minimum); beyond: the greatest within reach from k on
+    inside = np.where(k > 0, np.minimum.accumulate(p, axis=-1)[rows, np.maximum(k - 1, 0)], np.inf)
+    padded = np.concatenate([p, np.full((len(p), reach), -np.inf, p.dtype)], axis=-1)
+    window = padded[:, :K].copy()
+    for d in range(1, reach + 1):
+        np.maximum(window, padded[:, d:d + K], out=window)
+    beyond = window[rows, k]
+    with np.errstate(invalid="ignore"):
+        half = np.where(ok, 0.5 * (inside + beyond), EDGE_LEVEL)
+    m = np.maximum((p >= half[:, None]).argmax(axis=-1), 1)
+    p0, p1 = p[rows, m - 1], p[rows, m]
+    frac = np.minimum(np.maximum((half - p0) / np.where(p1 > p0, p1 - p0, 1.0), 0.0), 1.0)
+    return (s[0] + EDGE_STEP_MM * (m - 1 + frac)).reshape(shape), ok.reshape(shape)
+
+
+@dataclass
+class MeasuredFace:
+    """One face measured on its own (before the batched refinement): the fitted square (centre (2,) mm, sides (2,) mm,
+    theta rad; the refinement moves them onto the image edges), whether the outline was complete and the face
+    cube-sized (before the refinement: near enough to be refined and judged again), the square fitted to the colour
+    outline itself (outline_centre, outline_sides: what the outline's rectangularity is measured against), and what the
+    refinement and the Block need."""
+
+    face: Face
+    centre: np.ndarray
+    sides: np.ndarray
+    theta: float
+    complete: bool
+    cube_sized: bool
+    outline: np.ndarray
+    outline_centre: np.ndarray
+    outline_sides: np.ndarray
+    blocked: np.ndarray
+    pixel_mm: float
+    contour: np.ndarray
+    mean_rgb: np.ndarray
+    feature: np.ndarray
+    near: np.ndarray
+    origin: tuple[int, int]
+    plane_z: float
+
+
+def refine_yaws(camera: Camera, faces: list[MeasuredFace], iterations: int = 3) -> np.ndarray:
+    """The faces' yaws (F,) rad refined on the full-resolution image edges of their top faces, all faces at once.
+
+    Across each side of a face's fitted square, profiles of the colour distance to the face's colour (EDGE_SAMPLES
+    positions t along the side, offsets s across it) give edge points (_edge_offsets); each side's points get a line
+    fit s = a + b t (points more than EDGE_FIT_TOL off the first fit dropped, then refitted), whose slope says how far
+    the side is turned: a square turned by d (counterclockwise) puts its side at s = -d t. A face's turn is the mean
+    of its sides' turns weighted by the inverse variance of their slopes: the fit's own variance plus the pixel grid's
+    (EDGE_QUANT_PX px over the side's length: the renderer and the sensor draw edges on whole pixels, so a side turned
+    by less than a pixel over its length looks straight and its residuals say nothing of it), and SEEN_SIDE_VAR times
+    that for a side whose own side face is in view beyond it (a softer edge against a face of the same colour, seen
+    to err a little more than a silhouette against the board). Sharp, long, unhidden silhouettes count most and sides
+    next to occluders not at all. A face keeps its yaw when no side shows a usable edge, or only one side whose own
+    side face is in view beyond it or with fewer than 8 edge points. The result is the middle of the last two
+    iterations' yaws. The fits' intercepts a (where each side's edge is, at its middle) also move the squares: every
+    iteration, a pair of opposite sides that both show an edge sets the face's centre and side length along them, and
+    the faces' centre and sides are left at the last iteration's (in place)."""
+    n_faces = len(faces)
+    if n_faces == 0:
+        return np.zeros(0)
+    centre = np.array([m.centre for m in faces], float)
+    theta = np.array([m.theta for m in faces], float)
+    half = np.array([m.sides for m in faces], float) / 2
+    dist = half[:, [0, 1, 0, 1]]                                           # (F, 4) centre to side
+    t = _PROFILE_T[None, None] * half[:, [1, 0, 1, 0], None]               # (F, 4, M) along each side
+    s = _PROFILE_S
+    # one plane homography per face (world (x, y) at the face's height -> pixels), from one projection of all faces'
+    # corner points; then into an atlas that stacks the faces' patches (feature and occluder masks) with gaps, so
+    # that each iteration samples every face in one remap
+    homographies = plane_homographies(camera, centre, [m.plane_z for m in faces],
+                                       half.max(axis=1) + EDGE_SEARCH_MM)
+    gap = 4                                                                # >= 3 px
+    shapes = np.array([m.feature.shape for m in faces])
+    top = gap + np.concatenate([[0], np.cumsum(shapes[:, 0] + gap)[:-1]])
+    feature = np.full((int(top[-1] + shapes[-1, 0] + gap), int(shapes[:, 1].max() + 2 * gap)), np.nan, np.float32)
+    near = np.ones(feature.shape, np.uint8)
+    for i, m in enumerate(faces):
+        h, w = m.feature.shape
+        feature[top[i]:top[i] + h, gap:gap + w] = m.feature
+        near[top[i]:top[i] + h, gap:gap + w] = m.near
+        homographies[i, :2] -= np.outer(m.origin, homographies[i, 2])     # pixels of the face's patch
+    size = (shapes[:, ::-1] + 0.5).astype(np.float32)                      # (F, 2) patch width, height + 0.5
+    shift = np.column_stack([np.full(n_faces, gap), top]).astype(np.float32)   # (F, 2) patch origin in the atlas
+    s32, t32 = s.astype(np.float32), t.astype(np.float32)
+    prof = np.empty((n_faces, 4, len(_PROFILE_T), len(s)), np.float32)
+    pixel_mm = np.repeat([m.pixel_mm for m in faces], 4)
+    for _ in range(iterations):
+        ang = theta[:, None] + np.arange(4) * (np.pi / 2)
+        normal = np.stack([np.cos(ang), np.sin(ang)], axis=-1)            # (F, 4, 2) outward
+        tangent = np.stack([-normal[..., 1], normal[..., 0]], axis=-1)
+        # the samples' world points c + (dist + s) n + t tangent are affine in (s, t): so are their homogeneous
+        # pixels, H [c + dist n, 1] + s H [n, 0] + t H [tangent, 0]
+        base = np.concatenate([centre[:, None] + dist[..., None] * normal, np.ones((n_faces, 4, 1))], axis=-1)
+        f32 = np.float32                # patch pixels are small numbers: float32 is exact to 1e-5 px
+        hb = np.einsum("fij,faj->fai", homographies, base).astype(f32)     # (F, 4, 3)
+        hn = np.einsum("fij,faj->fai", homographies[:, :, :2], normal).astype(f32)
+        ht = np.einsum("fij,faj->fai", homographies[:, :, :2], tangent).astype(f32)
+        hom = (hb[:, :, None, None] + s32[:, None] * hn[:, :, None, None]
+               + t32[..., None, None] * ht[:, :, None, None])             # (F, 4, M, K, 3)
+        px = hom[..., :2] / hom[..., 2:]                                   # patch pixels
+        # a sample off its patch reads the atlas's gap around the patch, NaN (feature) and 1 (occluded), as the
+        # border of a remap of the patch alone would: clipped to 1.5 px (linear) / 1 px (nearest) off the patch
+        np.minimum(np.maximum(px, f32(-1.5), out=px), size[:, None, None, None], out=px)
+        px += shift[:, None, None, None]
+        px = px.reshape(-1, len(s), 2)
+        p = cv2.remap(feature, px, None, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=np.nan)
+        hidden = cv2.remap(near, px, None, cv2.INTER_NEAREST, borderMode=cv2.BORDER_CONSTANT, borderValue=1)
+        p[hidden > 0] = np.nan
+        prof[:] = p.reshape(prof.shape)
+        edge, ok = _edge_offsets(prof, s)
+        mid = centre[:, None] + normal * dist[..., None]
+        sees_side = np.einsum("fij,fij->fi", normal, camera.position[:2] - mid) > 0
+        tt, ee, okk = (x.reshape(-1, t.shape[-1]) for x in (t, edge, ok))
+        b, a, _, _, _ = _line_fits(tt, ee, okk)
+        use = okk & (np.abs(ee - (a[:, None] + b[:, None] * tt)) <= EDGE_FIT_TOL)
+        b, a, n, spread, sxx = _line_fits(tt, ee, use)
+        r = np.where(use, ee - (a[:, None] + b[:, None] * tt), 0.0)
+        sigma = np.maximum(np.sqrt((r * r).sum(axis=1) / np.maximum(n - 2, 1)), 0.1)
+        good = ((n >= 5) & (spread >= 4.0)).reshape(n_faces, 4)
+        turns = -np.arctan(b).reshape(n_faces, 4)
+        # each side's slope variance: the fit's own (its residuals) plus the pixel grid's, which a straight-looking
+        # staircase hides (a side turned less than a pixel over its length renders as a straight edge)
+        var = sigma ** 2 / np.maximum(sxx, 1e-9) + (EDGE_QUANT_PX * pixel_mm / np.maximum(spread, 1e-9)) ** 2
+        weights = np.where(good, 1.0 / (var.reshape(n_faces, 4) * np.where(sees_side, SEEN_SIDE_VAR, 1.0)), 0.0)
+        n_good = good.sum(axis=1)
+        fewest = np.where(good, n.reshape(n_faces, 4), 99).min(axis=1)
+        lone = (n_good == 1) & ((good & sees_side).any(axis=1) | (fewest < 8))
+        total = weights.sum(axis=1)
+        turn = (np.where(good, turns, 0.0) * weights).sum(axis=1) / np.maximum(total, 1e-12)
+        # the sides where they are: a pair of opposite sides that both show an edge moves the centre to their middle
+        # and sets the side length between them (the edges' sub-pixel positions: unbiased, unlike the colour
+        # outline, whose threshold leaves out the blurred boundary pixel on a side against the board)
+        a4 = a.reshape(n_faces, 4)
+        pair = good[:, :2] & good[:, 2:]                                   # (F, 2) sides 0 + 2, 1 + 3
+        move = np.where(pair, 0.5 * (a4[:, :2] - a4[:, 2:]), 0.0)
+        centre = centre + move[:, 0, None] * normal[:, 0] + move[:, 1, None] * normal[:, 1]
+        dist = dist + np.where(pair, 0.5 * (a4[:, :2] + a4[:, 2:]), 0.0)[:, [0, 1, 0, 1]]
+        previous, theta = theta, theta + np.where((n_good > 0) & ~lone & (total > 0), turn, 0.0)
+    for m, c, d in zip(faces, centre, dist):
+        m.centre, m.sides = c, 2 * d[:2]
+    # the last step can swing between two readings of a jagged side: take the middle of the last two
+    return 0.5 * (previous + theta) if iterations > 1 else theta
