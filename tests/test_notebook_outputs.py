@@ -61,3 +61,18 @@ def test_no_stored_output_prints_rounding_noise(path):
         computed = [m.group(0) for m in NOISE_SCALE.finditer(stdout(outputs)) if m.group(0) not in source]
         assert not computed, f"{path.name}, code cell {i} prints {computed}: values at the scale of rounding " \
                              f"noise differ on another CPU; print a bound instead"
+
+
+@pytest.mark.parametrize("path", NOTEBOOKS, ids=lambda p: p.stem)
+def test_every_assert_says_what_is_wrong(path):
+    """A bare AssertionError tells a student nothing: every assert in a notebook carries a message."""
+    import ast
+
+    bare = []
+    for source, _ in code_cells(path):
+        try:
+            tree = ast.parse(source)
+        except SyntaxError:                 # IPython magics: not Python
+            continue
+        bare += [ast.unparse(n)[:90] for n in ast.walk(tree) if isinstance(n, ast.Assert) and n.msg is None]
+    assert not bare, f"{path.name}: asserts without a message: {bare}"

@@ -133,7 +133,8 @@ for p, pitch, q in zip(P, pitches, Q):
     cand = cand[~np.isnan(cand).any(axis=1)]
     Tc = kinematics.fk(cand, check_limits=False)
     worst = max(worst, np.abs(Tc[:, :3, 3] - p).max())
-    assert np.allclose(Tc[:, :3, 0], kinematics.fk(q)[:3, 0], atol=1e-9)   # the same approach direction
+    assert np.allclose(Tc[:, :3, 0], kinematics.fk(q)[:3, 0], atol=1e-9), \
+        f"a branch for target {p.round(1)} mm points the tool another way: check q4 = psi - q2 - q3"
     found += np.abs(wrap(cand - q)).max(axis=1).min() < 1e-9
 assert worst < 1e-9, f"a branch misses its target by {worst:.2g} mm: check the law of cosines and the wrist angle"
 assert found == len(Q), f"the original joints are among the branches for only {found} of {len(Q)} targets"
@@ -178,7 +179,9 @@ fig.tight_layout()
 require_written("ik.candidates")
 solutions = kinematics.ik(target, pitch)
 order = ["facing, elbow up", "flipped, elbow up", "facing, elbow down"]   # elbow up first, then least motion
-assert [name for name, q in zip(BRANCHES, cand) if not robot.limit_violations(q)] == sorted(order, key=BRANCHES.index)
+within = [name for name, q in zip(BRANCHES, cand) if not robot.limit_violations(q)]
+assert within == sorted(order, key=BRANCHES.index), \
+    f"the branches within the joint limits are {within}, expected {sorted(order, key=BRANCHES.index)}"
 assert np.allclose(solutions, [cand[BRANCHES.index(name)] for name in order]), \
     "kinematics.ik's solutions are not your branches in the order elbow up first, then least motion"
 print(f"OK: kinematics.ik returns {len(solutions)} solutions, in the order {order}")
@@ -235,11 +238,15 @@ fig.tight_layout()
 require_written("ik.candidates")
 r_cells = np.hypot(X, Y)
 behind = (X == 0) & (Y < 0)
-assert np.all(top_down[(r_cells < r_max - 15) & ~behind]) and not np.any(top_down[r_cells > r_max + 1e-9])
-assert behind.sum() >= 8 and not np.any(top_down[behind & (r_cells > 50)]) and top_down[behind & (r_cells < 20)].all()
+assert np.all(top_down[(r_cells < r_max - 15) & ~behind]), "a cell well inside r_max cannot be reached top-down"
+assert not np.any(top_down[r_cells > r_max + 1e-9]), "a cell beyond r_max is reached top-down"
+assert behind.sum() >= 8 and not np.any(top_down[behind & (r_cells > 50)]), \
+    "a cell behind the base, more than 50 mm out, is reached top-down"
+assert top_down[behind & (r_cells < 20)].all(), "a cell right at the base axis is not reached top-down"
 for p in cells[np.isfinite(steepest.ravel()) & ~top_down.ravel()][::40]:
     s = kinematics.steepest_pitch(p)
-    assert abs(s - steepest.ravel()[np.all(cells == p, axis=1)][0]) < np.radians(1) + 1e-9
+    assert abs(s - steepest.ravel()[np.all(cells == p, axis=1)][0]) < np.radians(1) + 1e-9, \
+        f"steepest_pitch at {p.round(0)} mm disagrees with the 1-degree ladder"
     _ = kinematics.ik(p, s)                                     # reachable at its steepest pitch ...
     try:
         kinematics.ik(p, s + 1e-6)                              # ... and not a hair steeper
