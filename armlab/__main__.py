@@ -18,6 +18,13 @@ def main(argv: list[str] | None = None) -> int:
     demo.add_argument("--level", type=int, default=3, help="the event's level, 1-3 (default: 3; sky: 1)")
     demo.add_argument("--no-html", action="store_true", help="skip the meshcat replay page")
     sub.add_parser("exercises", help="list the exercises: id, points, notebook, where to write them")
+    grade = sub.add_parser("grade", help="grade a folder of submissions (one folder per student) into OUT")
+    grade.add_argument("submissions")
+    grade.add_argument("--out", required=True, help="folder for grades.csv and <student>/results.json, feedback.md")
+    grade.add_argument("--jobs", type=int, default=1, help="submissions graded in parallel (default: 1)")
+    grade.add_argument("--timeout", type=float, default=300.0, help="wall-clock seconds per notebook run")
+    grade.add_argument("--reference", default=".", help="the instructor's checkout (default: .)")
+    sub.add_parser("check", help="run the public checks of each exercise in this checkout (students)")
     sub.add_parser("record", add_help=False,
                    help="record the RealSense camera to a .bag (replay: make_station('real', arm=False, playback=...))")
     args, rest = parser.parse_known_args(argv)
@@ -32,6 +39,10 @@ def main(argv: list[str] | None = None) -> int:
 
         print(exercises_table())
         return 0
+    if args.command in ("grade", "check"):
+        from armlab.grading.cli import main as grading_main
+
+        return grading_main(args)
     if args.command == "demo":
         from armlab.demo import run_demo
 
