@@ -2,7 +2,8 @@
 
 Score of an exercise: 0 when blank (nothing runs) or when its regions cannot be read or spliced; otherwise
 points x (passed checks / all checks), its checks being the notebook's code cells tagged `# CHECK <id>` (the public
-checks, run by the instructor's copy of the notebook). A region byte-identical to one already graded in this run
+checks, run by the instructor's copy of the notebook) and its hidden checks (armlab.grading.hidden), each public
+cell and each hidden check counting one. A region byte-identical to one already graded in this run
 (the reference's, or another student's) reuses that result: the work tree is then identical, so is the outcome.
 """
 
@@ -18,7 +19,7 @@ from pathlib import Path
 
 from armlab.exercises.registry import EXERCISES, exercise
 
-from .run import DEFAULT_LIMITS, Limits, check_cells, run_notebook
+from .run import DEFAULT_LIMITS, Limits, check_cells, run_harness, run_notebook
 from .splice import RegionRejected, build_worktree
 from .submission import Submission, read_submission
 
@@ -64,6 +65,7 @@ class Grader:
         self._cache: dict[tuple[str, str], ExerciseResult] = {}
         self._locks: dict[tuple[str, str], threading.Lock] = {}
         self._guard = threading.Lock()
+        self._expected: dict[str, list[dict]] = {}
         self.runs = 0
 
     def grade_exercise(self, exercise_id: str, bodies: list[str]) -> ExerciseResult:
@@ -89,10 +91,45 @@ class Grader:
                 return _score(exercise_id, [], f"{notebook} has no '# CHECK {exercise_id}' cell")
             self.runs += 1
             run = run_notebook(tree, notebook, self.limits)
+            hidden = self._hidden(exercise_id, tree)
         checks = [CheckResult(f"{ex.notebook} cell {i}", run.cells.get(i, None) is not None and run.cells[i].passed,
                               run.cells[i].message if i in run.cells else run.problem or "the cell did not run")
                   for i in tags]
-        return _score(exercise_id, checks, run.problem)
+        return _score(exercise_id, checks + hidden, run.problem)
+
+    def _request(self, exercise_id: str, tree: Path, spec_function: str, cases: list) -> dict:
+        ex = exercise(exercise_id)
+        notebook = None if ex.in_package else str(tree / f"notebooks/{ex.notebook}.ipynb")
+        return {"notebook": notebook, "function": spec_function, "cases": [args for case in cases for args in case]}
+
+    def _hidden(self, exercise_id: str, tree: Path) -> list[CheckResult]:
+        """The exercise's hidden checks (none without a spec, or in a student release, which lacks them): the
+        student's results from `tree`, the expected ones from the reference tree (once per Grader)."""
+        try:
+            from . import hidden
+        except ImportError:
+            return []
+        cases = hidden.cases_of(exercise_id)
+        if cases is None:
+            return []
+        function = hidden.SPECS[exercise_id].function
+        with self._guard:
+            lock = self._locks.setdefault(("expected", exercise_id), threading.Lock())
+        with lock:
+            if exercise_id not in self._expected:
+                with tempfile.TemporaryDirectory(prefix="armlab-grade-ref-") as tmp:
+                    ref = build_worktree(self.reference, Path(tmp) / "work")
+                    expected, problem = run_harness(ref, self._request(exercise_id, ref, function, cases), self.limits)
+                if expected is None or any("error" in e for e in expected):
+                    raise RuntimeError(f"the reference fails its own hidden checks of {exercise_id}: "
+                                       f"{problem or expected}")
+                self._expected[exercise_id] = expected
+        got, problem = run_harness(tree, self._request(exercise_id, tree, function, cases), self.limits)
+        names = [f"hidden check {i + 1}" for i in range(len(cases))]
+        if got is None:
+            return [CheckResult(n, False, problem) for n in names]
+        verdicts = hidden.compare(exercise_id, got, self._expected[exercise_id], [len(c) for c in cases])
+        return [CheckResult(n, ok, message) for n, (ok, message) in zip(names, verdicts, strict=True)]
 
     def grade(self, submission: Submission) -> dict[str, ExerciseResult]:
         results = {}

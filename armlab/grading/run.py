@@ -17,7 +17,8 @@ import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 from pathlib import Path
 
-__all__ = ["DEFAULT_LIMITS", "Limits", "CellResult", "NotebookRun", "run_notebook", "check_cells"]
+__all__ = ["DEFAULT_LIMITS", "Limits", "CellResult", "NotebookRun", "bounded", "run_notebook", "run_harness",
+           "check_cells"]
 
 _CHECK = re.compile(r"^\s*# CHECK[ \t]+(?P<ids>.+?)\s*$", re.MULTILINE)
 _CONFIG = "[pytest]\naddopts =\nfilterwarnings =\n    ignore::DeprecationWarning\n"
@@ -99,32 +100,70 @@ def _parse_junit(path: Path) -> dict[int, CellResult]:
     return cells
 
 
+def _environment(worktree: Path) -> dict[str, str]:
+    env = {k: v for k, v in os.environ.items() if not k.startswith(("PYTEST", "ARMLAB_MESHCAT"))}
+    env.update(PYTHONPATH=str(worktree), MPLBACKEND="Agg", PYTHONDONTWRITEBYTECODE="1")
+    return env
+
+
+def bounded(cmd: list[str], worktree: Path, limits: Limits) -> tuple[bool, str]:
+    """Run `cmd` in `worktree` in a new session under `limits`; (finished in time, its output). The whole process
+    group (the notebook's kernel, anything it started) is killed at the end."""
+    proc = subprocess.Popen(cmd, cwd=worktree, env=_environment(worktree), stdout=subprocess.PIPE,
+                            stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL, start_new_session=True,
+                            preexec_fn=_limit(limits))
+    try:
+        out, _ = proc.communicate(timeout=limits.timeout_s)
+        done = True
+    except subprocess.TimeoutExpired:
+        os.killpg(proc.pid, signal.SIGKILL)
+        out, _ = proc.communicate()
+        done = False
+    finally:
+        try:
+            os.killpg(proc.pid, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
+    return done, out.decode(errors="replace")[-20000:]
+
+
+def run_harness(worktree: Path, request: dict, limits: Limits = DEFAULT_LIMITS) -> tuple[list[dict] | None, str]:
+    """Call an exercise's function in a bounded subprocess of `worktree` (armlab.grading.harness): its JSON results
+    per call, or None and why."""
+    req, res = worktree / ".grader-request.json", worktree / ".grader-results.json"
+    req.write_text(json.dumps(request))
+    res.unlink(missing_ok=True)
+    # the grader's own harness file, run as a script so that the work tree needs no copy of it
+    harness = Path(__file__).with_name("harness.py")
+    launch = f"import runpy, sys; sys.argv = {[str(harness), str(req), str(res)]!r}; " \
+             f"runpy.run_path(sys.argv[0], run_name='__main__')"
+    done, out = bounded([sys.executable, "-c", launch], worktree, limits)
+    if not done:
+        return None, f"the hidden checks did not finish within {limits.timeout_s:g} s (wall clock)"
+    try:
+        results = json.loads(res.read_text())
+        if not isinstance(results, list) or not all(isinstance(r, dict) for r in results):
+            raise ValueError("not a list of results")
+        return results, ""
+    except (OSError, ValueError) as e:
+        tail = " | ".join(out.strip().splitlines()[-2:])
+        return None, f"the hidden checks gave no results ({type(e).__name__}): {tail}"[:600]
+
+
 def run_notebook(worktree: Path, notebook: str, limits: Limits = DEFAULT_LIMITS, lax: bool = False) -> NotebookRun:
     """Run `notebook` (relative to `worktree`) under nbval with the instructor's sanitize file; per-cell results.
     lax: --nbval-lax (a cell fails only by raising; for a student's own notebooks, which hold no stored outputs)."""
     config = worktree / ".grader-pytest.ini"
     config.write_text(_CONFIG)
     junit = worktree / ".grader-junit.xml"
-    env = {k: v for k, v in os.environ.items() if not k.startswith(("PYTEST", "ARMLAB_MESHCAT"))}
-    env.update(PYTHONPATH=str(worktree), MPLBACKEND="Agg", PYTHONDONTWRITEBYTECODE="1")
     cmd = [sys.executable, "-m", "pytest", "-q", "-c", str(config), "--rootdir", str(worktree), "-p",
            "no:cacheprovider", notebook, "--nbval-lax" if lax else "--nbval",
            "--nbval-sanitize-with", "tests/nbval_sanitize.cfg",
            f"--nbval-cell-timeout={int(limits.timeout_s)}", f"--junitxml={junit}"]
-    proc = subprocess.Popen(cmd, cwd=worktree, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                            stdin=subprocess.DEVNULL, start_new_session=True, preexec_fn=_limit(limits))
-    try:
-        out, _ = proc.communicate(timeout=limits.timeout_s)
-    except subprocess.TimeoutExpired:
-        os.killpg(proc.pid, signal.SIGKILL)
-        proc.communicate()
+    done, out = bounded(cmd, worktree, limits)
+    if not done:
         return NotebookRun({}, f"the notebook did not finish within {limits.timeout_s:g} s (wall clock)")
-    finally:
-        try:
-            os.killpg(proc.pid, signal.SIGKILL)       # the kernel and any process the notebook left behind
-        except ProcessLookupError:
-            pass
     if not junit.is_file():
-        tail = out.decode(errors="replace").strip().splitlines()[-3:]
-        return NotebookRun({}, f"the notebook run ended without results (exit {proc.returncode}): {' | '.join(tail)}")
+        tail = out.strip().splitlines()[-3:]
+        return NotebookRun({}, f"the notebook run ended without results : {' | '.join(tail)}")
     return NotebookRun(_parse_junit(junit))
