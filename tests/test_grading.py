@@ -189,3 +189,14 @@ def test_submission_reading_reports_damaged_markers(tmp_path):
     sub = read_submission(tmp_path / "s", ROOT)
     damaged = [i for i in sub.problems if exercise(i).where == "armlab/kinematics.py"]
     assert damaged and "markers" in sub.problems[damaged[0]]
+
+
+def test_grade_command_on_a_blank_class(tmp_path):
+    from armlab.__main__ import main
+
+    make_student_release(ROOT, tmp_path / "subs" / "alice")
+    assert main(["grade", str(tmp_path / "subs"), "--out", str(tmp_path / "out"), "--reference", str(ROOT)]) == 0
+    rows = list(csv.DictReader((tmp_path / "out" / "grades.csv").open()))
+    assert rows[0]["student"] == "alice" and rows[0]["total"] == "0" and rows[0]["max"] == "100"
+    with pytest.raises(SystemExit, match="no such folder"):
+        main(["grade", str(tmp_path / "missing"), "--out", str(tmp_path / "out")])
