@@ -39,6 +39,8 @@ RELEASE_EXCLUDES = (
     "tests/test_packaging.py",     # builds wheels of the instructor's checkout
     "tests/test_repeatable.py",    # teaches by hand (the teach.record exercise) to test the simulator's rounding
     "tests/test_notebook_outputs.py",   # checks the instructor's executed notebooks (the release's have no outputs)
+    "armlab/grading/hidden.py",    # the grader's hidden checks (fresh inputs per exercise)
+    "tests/test_grading*.py",      # the grader's tests (they hold wrong answers and the tricks)
 )
 
 

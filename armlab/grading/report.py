@@ -1,0 +1,89 @@
+"""The grader's outputs, each written atomically (a temporary file in the same folder, then os.replace):
+OUT/grades.csv (student, one column per exercise id, total, max), OUT/<student>/results.json in Gradescope's
+autograder format (score; tests with name, score, max_score, output, visibility) and OUT/<student>/feedback.md."""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import os
+import tempfile
+from pathlib import Path
+
+from armlab.exercises.registry import exercise
+
+from .grade import ExerciseResult
+
+__all__ = ["atomic_write", "results_json", "feedback_md", "grades_csv", "table", "write_reports"]
+
+
+def atomic_write(path: Path, text: str) -> None:
+    """Write `text` to `path` so that readers see the old file or the whole new one, never a part."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8", newline="") as f:
+            f.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def _summary(r: ExerciseResult) -> str:
+    if not r.checks:
+        return r.reason
+    passed = sum(c.passed for c in r.checks)
+    first = next((c for c in r.checks if not c.passed), None)
+    text = f"{passed} of {len(r.checks)} checks passed"
+    return text + (f"; first failing check: {first.name}: {first.message}" if first else "")
+
+
+def results_json(results: dict[str, ExerciseResult]) -> str:
+    """Gradescope's results.json: one test per exercise."""
+    tests = [{"name": f"{r.exercise_id}: {exercise(r.exercise_id).title}", "score": r.score,
+              "max_score": r.max_score, "output": _summary(r), "visibility": "visible"} for r in results.values()]
+    return json.dumps({"score": round(sum(r.score for r in results.values()), 2), "tests": tests}, indent=1) + "\n"
+
+
+def table(results: dict[str, ExerciseResult]) -> str:
+    """The per-exercise table (the feedback's and `python -m armlab check`'s): points, checks passed."""
+    width = max(len(i) for i in results)
+    lines = [f"{'exercise'.ljust(width)}  points  checks"]
+    for r in results.values():
+        checks = f"{sum(c.passed for c in r.checks)}/{len(r.checks)}" if r.checks else "-"
+        lines.append(f"{r.exercise_id.ljust(width)}  {r.score:>5g}/{r.max_score:<2d} {checks}")
+    total = sum(r.score for r in results.values())
+    lines.append(f"{'total'.ljust(width)}  {total:>5g}/{sum(r.max_score for r in results.values())}")
+    return "\n".join(lines)
+
+
+def feedback_md(student: str, results: dict[str, ExerciseResult]) -> str:
+    out = [f"# Feedback for {student}", "", "```", table(results), "```", ""]
+    for r in results.values():
+        out += [f"## {r.exercise_id} ({exercise(r.exercise_id).title}): {r.score:g} / {r.max_score}", ""]
+        out += [f"- {'passed' if c.passed else 'FAILED'}: {c.name}" + ("" if c.passed else f": {c.message}")
+                for c in r.checks]
+        if r.reason:
+            out.append(f"- {r.reason}")
+        out.append("")
+    return "\n".join(out)
+
+
+def grades_csv(graded: dict[str, dict[str, ExerciseResult]]) -> str:
+    ids = list(next(iter(graded.values())))
+    buf = io.StringIO()
+    writer = csv.writer(buf, lineterminator="\n")
+    writer.writerow(["student", *ids, "total", "max"])
+    for student, results in graded.items():
+        writer.writerow([student, *(f"{results[i].score:g}" for i in ids),
+                         f"{sum(r.score for r in results.values()):g}", sum(r.max_score for r in results.values())])
+    return buf.getvalue()
+
+
+def write_reports(graded: dict[str, dict[str, ExerciseResult]], out: Path) -> None:
+    for student, results in graded.items():
+        atomic_write(out / student / "results.json", results_json(results))
+        atomic_write(out / student / "feedback.md", feedback_md(student, results))
+    atomic_write(out / "grades.csv", grades_csv(graded))

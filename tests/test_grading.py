@@ -1,0 +1,202 @@
+"""The grader, on submissions generated from the student release plus region edits: restored solutions score full
+marks, the blank release 0, a wrong answer costs its own exercise only, the tricks of issue 11 score below full
+marks, an infinite loop and a corrupt notebook are contained. One class is graded once (module fixture) on two
+exercises of two notebooks to keep the run short."""
+
+from __future__ import annotations
+
+import csv
+import json
+from pathlib import Path
+
+import pytest
+
+from armlab.exercises import make_student_release
+from armlab.exercises.registry import exercise
+from armlab.grading import grade_class, read_submission
+from armlab.grading.run import Limits
+from armlab.grading.splice import splice_text
+from armlab.grading.submission import exercise_file, regions_of, source_texts
+
+ROOT = Path(__file__).resolve().parents[1]
+GRADED = ["fk.dh_transform", "fk.fk_from_table", "ik.planar_ik"]
+WRONG = {"fk.dh_transform": "    ct, st, ca, sa = np.cos(theta), np.sin(theta), np.cos(alpha), np.sin(alpha)\n"
+                            "    return np.array([[ct, -st * ca, st * sa, a * ct], [st, ct * ca, -ct * sa, a * st],\n"
+                            "                     [0.0, sa, ca, -d], [0.0, 0.0, 0.0, 1.0]])",
+         "ik.planar_ik": None}
+
+
+def _reference_bodies(exercise_id: str) -> list[str]:
+    name = exercise_file(exercise(exercise_id))
+    return regions_of(source_texts(ROOT / name), exercise_id, name)
+
+
+def _edit(student: Path, exercise_id: str, bodies: list[str]) -> None:
+    """Put `bodies` into the student's regions of the exercise (as a student edits their release copy)."""
+    name = exercise_file(exercise(exercise_id))
+    path = student / name
+    if name.endswith(".ipynb"):
+        nb = json.loads(path.read_text())
+        used = 0
+        for cell in nb["cells"]:
+            if cell["cell_type"] == "code":
+                new, n = splice_text("".join(cell["source"]), exercise_id, bodies, used, name)
+                cell["source"], used = new.splitlines(keepends=True), used + n
+        path.write_text(json.dumps(nb, indent=1))
+    else:
+        path.write_text(splice_text(path.read_text(), exercise_id, bodies, 0, name)[0])
+
+
+def _wrong_ik() -> list[str]:
+    # the elbow branches swapped: the classic sign slip of notebook 03
+    return [_reference_bodies("ik.planar_ik")[0].replace("(-1 if elbow_up else 1)", "(1 if elbow_up else -1)")]
+
+
+def _tamper_checks(student: Path) -> None:
+    """Comment out every assert of notebook 02's check cells and print the instructor's verdict line instead."""
+    path = student / "notebooks/02_forward_kinematics.ipynb"
+    nb = json.loads(path.read_text())
+    ref = json.loads((ROOT / "notebooks/02_forward_kinematics.ipynb").read_text())
+    for cell, ref_cell in zip(nb["cells"], ref["cells"], strict=True):
+        text = "".join(cell["source"])
+        if "# CHECK" in text:
+            verdicts = [o.get("text", "") for o in ref_cell.get("outputs", []) if o.get("name") == "stdout"]
+            lines = ["# NBVAL_RAISES_EXCEPTION"] + [("# " + ln if "assert" in ln else ln) for ln in text.splitlines()]
+            lines += [f"print({''.join(v)!r}, end='')" for v in verdicts]
+            cell["source"] = "\n".join(lines).splitlines(keepends=True)
+    path.write_text(json.dumps(nb, indent=1))
+
+
+@pytest.fixture(scope="module")
+def graded(tmp_path_factory) -> tuple[dict, Path]:
+    base = tmp_path_factory.mktemp("grading")
+    subs = base / "submissions"
+    release = base / "release"
+    make_student_release(ROOT, release)
+    import shutil
+
+    def student(name: str) -> Path:
+        shutil.copytree(release, subs / name)
+        return subs / name
+
+    full = student("full")
+    for exercise_id in GRADED:
+        _edit(full, exercise_id, _reference_bodies(exercise_id))
+    student("blank")
+    _edit(student("wrong_dh"), "fk.dh_transform", [WRONG["fk.dh_transform"]])
+    wrong_ik = student("wrong_ik")
+    _edit(wrong_ik, "ik.planar_ik", _wrong_ik())
+    _edit(wrong_ik, "fk.dh_transform", _reference_bodies("fk.dh_transform"))
+    tampered = student("tampered")          # a wrong DH, every trick on the check cells, a conftest that passes all
+    _edit(tampered, "fk.dh_transform", [WRONG["fk.dh_transform"].replace("-d]", "-1.0 * d]")])
+    _tamper_checks(tampered)
+    (tampered / "conftest.py").write_text(
+        "import pytest\n\n@pytest.hookimpl(hookwrapper=True)\ndef pytest_runtest_makereport(item, call):\n"
+        "    outcome = yield\n    outcome.get_result().outcome = 'passed'\n")
+    (tampered / "pytest.ini").write_text("[pytest]\naddopts = -p no:nbval\n")
+    _edit(student("marker"), "fk.dh_transform",
+          ["    # NBVAL_RAISES_EXCEPTION\n" + WRONG["fk.dh_transform"].replace("-d]", "-2 * d]")])
+    _edit(student("loop"), "fk.dh_transform", ["    while True:\n        pass"])
+    corrupt = student("corrupt")
+    (corrupt / "notebooks/02_forward_kinematics.ipynb").write_text('{"cells": [ not json')
+    edited_only = subs / "edited_only"     # only the edited file, the rest not submitted
+    (edited_only / "notebooks").mkdir(parents=True)
+    shutil.copy2(full / "notebooks/03_inverse_kinematics.ipynb", edited_only / "notebooks")
+    kit = student("kit_call")            # the kit's reference function in place of the DH chain
+    _edit(kit, "fk.fk_from_table", ["    from armlab import kinematics\n"
+                                    "    return kinematics.fk_pox(q, check_limits=False)"])
+    out = base / "out"
+    results = grade_class(subs, out, ROOT, jobs=2, limits=Limits(timeout_s=240, cpu_s=25), exercises=GRADED)
+    return results, out
+
+
+def _score(graded, student, exercise_id):
+    return graded[0][student][exercise_id].score
+
+
+def test_restored_solutions_score_full_marks(graded):
+    for exercise_id in GRADED:
+        assert _score(graded, "full", exercise_id) == exercise(exercise_id).points
+
+
+def test_blank_release_scores_zero_without_running(graded):
+    results = graded[0]["blank"]
+    assert all(r.score == 0 and r.reason == "not written (blank region)" and not r.checks for r in results.values())
+
+
+def test_wrong_answer_costs_its_own_exercise_only(graded):
+    assert _score(graded, "wrong_dh", "fk.dh_transform") < exercise("fk.dh_transform").points
+    assert _score(graded, "wrong_ik", "ik.planar_ik") < exercise("ik.planar_ik").points
+    assert _score(graded, "wrong_ik", "fk.dh_transform") == exercise("fk.dh_transform").points
+    ik = graded[0]["wrong_ik"]["ik.planar_ik"]
+    assert ik.checks[0].passed          # the public check right after the exercise misses the swapped branches
+    first = next(c for c in ik.checks if not c.passed)
+    assert first.name.startswith("hidden check") and "differs" in first.message
+
+
+def test_tricks_score_below_full_marks(graded):
+    assert _score(graded, "tampered", "fk.dh_transform") == 0        # edited asserts, verdicts, markers, conftest
+    marker = graded[0]["marker"]["fk.dh_transform"]
+    assert marker.score == 0 and "NBVAL_RAISES_EXCEPTION" in marker.reason and not marker.checks
+
+
+def test_calling_the_kits_reference_function_fails_the_hidden_checks(graded):
+    kit = graded[0]["kit_call"]["fk.fk_from_table"]
+    hidden = [c for c in kit.checks if c.name.startswith("hidden")]
+    assert hidden and not any(c.passed for c in hidden) and kit.score < exercise("fk.fk_from_table").points
+
+
+def test_the_release_lacks_the_hidden_checks(tmp_path):
+    make_student_release(ROOT, tmp_path / "s")
+    assert (ROOT / "armlab/grading/hidden.py").is_file() and not (tmp_path / "s/armlab/grading/hidden.py").exists()
+    assert (tmp_path / "s/armlab/grading/harness.py").is_file()
+    assert not list((tmp_path / "s/tests").glob("test_grading*.py"))
+
+
+def test_infinite_loop_and_corrupt_notebook_are_contained(graded):
+    loop = graded[0]["loop"]["fk.dh_transform"]
+    assert loop.score == 0 and loop.checks and not any(c.passed for c in loop.checks)
+    corrupt = graded[0]["corrupt"]["fk.dh_transform"]
+    assert corrupt.score == 0 and "not a readable notebook" in corrupt.reason
+    assert _score(graded, "corrupt", "ik.planar_ik") == 0            # blank in that release copy, not broken
+
+
+def test_a_submission_of_the_edited_files_only(graded):
+    assert _score(graded, "edited_only", "ik.planar_ik") == exercise("ik.planar_ik").points
+    assert graded[0]["edited_only"]["fk.dh_transform"].reason == "not written (blank region)"
+
+
+def test_reports(graded):
+    results, out = graded
+    rows = list(csv.DictReader((out / "grades.csv").open()))
+    assert [r["student"] for r in rows] == sorted(results)
+    assert list(rows[0]) == ["student", *GRADED, "total", "max"]
+    full = next(r for r in rows if r["student"] == "full")
+    assert float(full["total"]) == float(full["max"]) == sum(exercise(i).points for i in GRADED)
+    gradescope = json.loads((out / "wrong_dh" / "results.json").read_text())
+    assert set(gradescope) == {"score", "tests"} and len(gradescope["tests"]) == len(GRADED)
+    assert {"name", "score", "max_score", "output", "visibility"} <= set(gradescope["tests"][0])
+    assert gradescope["score"] == sum(t["score"] for t in gradescope["tests"])
+    feedback = (out / "wrong_dh" / "feedback.md").read_text()
+    assert "fk.dh_transform" in feedback and "FAILED" in feedback and "first failing check" in \
+        gradescope["tests"][0]["output"]
+
+
+def test_submission_reading_reports_damaged_markers(tmp_path):
+    make_student_release(ROOT, tmp_path / "s")
+    path = tmp_path / "s" / "armlab/kinematics.py"
+    path.write_text(path.read_text().replace("# END SOLUTION", "# the end", 1))
+    sub = read_submission(tmp_path / "s", ROOT)
+    damaged = [i for i in sub.problems if exercise(i).where == "armlab/kinematics.py"]
+    assert damaged and "markers" in sub.problems[damaged[0]]
+
+
+def test_grade_command_on_a_blank_class(tmp_path):
+    from armlab.__main__ import main
+
+    make_student_release(ROOT, tmp_path / "subs" / "alice")
+    assert main(["grade", str(tmp_path / "subs"), "--out", str(tmp_path / "out"), "--reference", str(ROOT)]) == 0
+    rows = list(csv.DictReader((tmp_path / "out" / "grades.csv").open()))
+    assert rows[0]["student"] == "alice" and rows[0]["total"] == "0" and rows[0]["max"] == "100"
+    with pytest.raises(SystemExit, match="no such folder"):
+        main(["grade", str(tmp_path / "missing"), "--out", str(tmp_path / "out")])
