@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from armlab.camera import Camera
+from armlab.transforms import wrap_quarter
 
 __all__ = ["TruthFace", "FrameScore", "DetectionScore", "truth_faces", "score_frame", "yaw_error", "sim_case", "Case",
            "SCENES", "case_specs", "labelled_faces", "fit_color_model", "TRAIN_SEEDS"]
@@ -45,8 +46,7 @@ class TruthFace:
 
 def yaw_error(a: float, b: float) -> float:
     """Smallest difference (rad, >= 0) between two square yaws (equal every quarter turn)."""
-    d = (a - b + np.pi / 4) % (np.pi / 2) - np.pi / 4
-    return float(abs(d))
+    return float(abs(wrap_quarter(a - b)))
 
 
 def _stack_levels(obj, objects) -> int:
