@@ -194,14 +194,14 @@ def test_yaw_refinement_recovers_a_turned_start():
         D._refine_yaws = real
     assert len(seen) == len(found) == 6
     truth = [min(station.world.blocks, key=lambda t: np.hypot(*(t.position[:2] - m.centre))) for m in seen]
-    assert all(np.hypot(*(t.position[:2] - m.centre)) < 2.0 for t, m in zip(truth, seen))
+    assert all(np.hypot(*(t.position[:2] - m.centre)) < 2.0 for t, m in zip(truth, seen, strict=True))
     own = [min(found, key=lambda b: np.hypot(*(b.position[:2] - m.centre))).yaw for m in seen]
     for turn in (4.0, -4.0):
-        for m, t in zip(seen, truth):
+        for m, t in zip(seen, truth, strict=True):
             m.theta = t.yaw + np.radians(turn)
         yaws = real(cam, seen, iterations=3)
-        assert max(np.degrees(yaw_error(y, o)) for y, o in zip(yaws, own)) < 0.2
-        assert max(np.degrees(yaw_error(y, t.yaw)) for y, t in zip(yaws, truth)) < EXACT_YAW_MAX_DEG
+        assert max(np.degrees(yaw_error(y, o)) for y, o in zip(yaws, own, strict=True)) < 0.2
+        assert max(np.degrees(yaw_error(y, t.yaw)) for y, t in zip(yaws, truth, strict=True)) < EXACT_YAW_MAX_DEG
     assert len(real(cam, [])) == 0
 
 
@@ -228,7 +228,7 @@ def test_plane_homographies_of_many_faces_match_the_lens_model(ideal):
     centres, heights = np.array([[0.0, 150.0], [-320.0, -100.0], [300.0, 280.0]]), np.array([25.0, 38.0, 114.0])
     many = _plane_homographies(cam, centres, heights, np.array([25.0, 25.0, 25.0]))
     assert many.shape == (3, 3, 3)
-    for H, centre, z in zip(many, centres, heights):     # each face's own plane, all from one call
+    for H, centre, z in zip(many, centres, heights, strict=True):     # each face's own plane, all from one call
         xy = np.asarray(centre) + np.random.default_rng(0).uniform(-25, 25, (50, 2))
         uv = cam.project(np.column_stack([xy, np.full(50, z)]))
         h = np.column_stack([xy, np.ones(50)]) @ H.T

@@ -167,7 +167,7 @@ def _solution_signatures() -> set[str]:
             body = [line for line in body if line and not line.startswith("#")]
             if len(body) == 1 and len(body[0]) >= 24:
                 signatures.add(body[0])
-            signatures.update(f"{a} {b}" for a, b in zip(body, body[1:]) if len(a) + len(b) >= 30)
+            signatures.update(f"{a} {b}" for a, b in zip(body, body[1:], strict=True) if len(a) + len(b) >= 30)
     return signatures
 
 

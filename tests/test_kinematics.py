@@ -191,7 +191,7 @@ def test_ik_round_trip_over_thousands_of_reachable_targets():
 
 @pytest.mark.exercise("ik.candidates")
 @SETTINGS
-@given(st.tuples(*[st.floats(lo, hi) for lo, hi in zip(ROBOT.lower, ROBOT.upper)]).map(np.array))
+@given(st.tuples(*[st.floats(lo, hi) for lo, hi in zip(ROBOT.lower, ROBOT.upper, strict=True)]).map(np.array))
 def test_ik_round_trip_property(q):
     P, pitch, roll = target_of(q)
     if np.hypot(*P[:2]) < 1e-3:   # on the waist axis the heading (and the pitch) is undefined
@@ -286,7 +286,7 @@ def test_ik_numerical_converges_from_nearby_seeds():
     rng = np.random.default_rng(11)
     xs, ys = rng.uniform(-300, 300, 100), rng.uniform(100, 400, 100)
     done = 0
-    for x, y in zip(xs, ys):
+    for x, y in zip(xs, ys, strict=True):
         p = np.array([x, y, rng.uniform(10, 200)])
         pitch = min(k.steepest_pitch(p), 1.2)
         exact = k.ik(p, pitch, 0.2)[0]

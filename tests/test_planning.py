@@ -47,7 +47,7 @@ def test_random_moves_never_exceed_velocity_limits(scaling):
     rng = np.random.default_rng(1)
     a, b = random_poses(rng, 200), random_poses(rng, 200)
     worst = 0.0
-    for q0, q1 in zip(a, b):
+    for q0, q1 in zip(a, b, strict=True):
         move = planning.joint_move(q0, q1, scaling)
         t = np.linspace(0, move.duration, 1001)
         q, qd = move.sample(t)

@@ -95,7 +95,7 @@ def test_pick_and_place_aligned_and_yawed_blocks_of_both_sizes(station):
     ctx = tasks.context(station)
     seen = sorted(ctx.last.blocks, key=lambda b: b.color)
     assert [b.color for b in seen] == ["blue", "green", "red", "yellow"]
-    for block, target in zip(seen, TARGETS):
+    for block, target in zip(seen, TARGETS, strict=True):
         truth = next(o for o in station.world.blocks if o.color == block.color)
         assert tasks.pick(station, block), f"{block.color} {block.size} not grasped: {station.arm.last_grasp}"
         assert station.arm.holding[0] is truth
