@@ -60,11 +60,16 @@ class RobotModel:
     frames_home: np.ndarray
 
     def limit_violations(self, q, tol: float = LIMIT_TOL_RAD) -> list[str]:
-        """Human-readable list of the joints of q (5,) outside their limits (empty when all are within)."""
+        """Human-readable list of the joints of q (5,) outside their limits (empty when all are within); NaN and
+        infinity are violations too (a NaN compares false with every limit, so it is named on its own)."""
         q = np.asarray(q, dtype=float)
+        if q.shape != (len(self.joint_names),):
+            raise ValueError(f"joint angles must have shape ({len(self.joint_names)},), got shape {q.shape}")
         out = []
-        for name, value, lo, hi in zip(self.joint_names, q, self.lower, self.upper):
-            if value < lo - tol or value > hi + tol:
+        for name, value, lo, hi in zip(self.joint_names, q, self.lower, self.upper, strict=True):
+            if not np.isfinite(value):
+                out.append(f"{name} = {value} is not a finite angle (limits [{lo:.6f}, {hi:.6f}] rad)")
+            elif not lo - tol <= value <= hi + tol:
                 out.append(f"{name} = {value:.6f} rad ({np.degrees(value):.1f} deg) is outside its limits "
                            f"[{lo:.6f}, {hi:.6f}] rad")
         return out

@@ -14,7 +14,10 @@ to the fingers, i.e. at the arm's heading mod 90 deg, not the requested yaw). Th
 yaw minus the requested one (mod 90 deg).
 Six locations: the lab report's Table II/III experiment (click the point, reach 37 mm above it) without and with the
 sag model, next to the lab report's errors.
+Regions (issue 14): in front close in and at full reach, beside the base, behind the waist axis, on a stack, and
+random spots over the whole board; per region: placed, refused before moving, refused mid-plan, errors.
     .venv/bin/python benchmarks/manipulation.py [stations]       # default 13 stations x 8 blocks
+    .venv/bin/python benchmarks/manipulation.py regions [n]      # n spots per region (default 6)
 """
 
 from __future__ import annotations
@@ -123,6 +126,83 @@ def summary_row(method: str, trials: list[dict]) -> list:
             *yaw_stats]
 
 
+# Regions of the board (issue 14): (name, reach range mm from the waist axis, heading range deg from +y, onto a block)
+REGIONS = [
+    ("in front, close in", (150.0, 200.0), (-45.0, 45.0), False),
+    ("in front, full reach", (370.0, 420.0), (-30.0, 30.0), False),
+    ("beside the base", (200.0, 330.0), (70.0, 110.0), False),
+    ("behind the waist axis", (180.0, 330.0), (100.0, 160.0), False),
+    ("on a stack", (200.0, 330.0), (-60.0, 60.0), True),
+    ("random, whole board", (150.0, 420.0), (-160.0, 160.0), False),
+]
+
+
+def _spot(rng, reach, heading_deg, world, keep_out_mm: float = 60.0):
+    """A board spot (x, y, 0) mm in the region, away from every object (truth); None after 200 tries."""
+    for _ in range(200):
+        r, th = rng.uniform(*reach), np.radians(rng.uniform(*heading_deg)) * rng.choice([-1.0, 1.0])
+        p = np.array([-r * np.sin(th), r * np.cos(th), 0.0])
+        if all(np.hypot(*(o.position[:2] - p[:2])) > keep_out_mm for o in world.objects):
+            return p
+    return None
+
+
+def region_trials(n_per_region: int = 6, first_seed: int = 500) -> list[list]:
+    """Per region: pick the first large block seen (tasks.pick) on a fresh seeded station and place it (tasks.place,
+    yaw 0) at a random free spot of the region, or on top of another seen block; count placed, refused before
+    moving (nothing sent), refused mid-plan (the arm had moved) and failed grasps; placement error = the block's true
+    bottom-face centre minus the target (mm)."""
+    rows = []
+    for k, (name, reach, heading, stack) in enumerate(REGIONS):
+        counts = {"placed": 0, "refused before": 0, "refused mid-plan": 0, "not grasped": 0}
+        errors, examples = [], []
+        for i in range(n_per_region):
+            seed = first_seed + 100 * k + i
+            st = make_station("sim", seed=seed, scene="random", n=4)
+            rng = np.random.default_rng(seed)
+            seen = tasks.look(st).blocks
+            block = next((b for b in seen if b.size == "large"), seen[0])
+            truth = min(st.world.blocks, key=lambda o: np.hypot(*(o.position[:2] - block.position[:2])))
+            if stack:
+                others = [b for b in seen if b is not block and reach[0] <= np.hypot(*b.position[:2]) <= reach[1]]
+                if not others:
+                    continue
+                base = others[0]
+                target = np.array([base.position[0], base.position[1], base.position[2]])
+            else:
+                target = _spot(rng, reach, heading, st.world)
+                if target is None:
+                    continue
+            if not tasks.pick(st, block):
+                counts["not grasped"] += 1
+                continue
+            sent = len(tasks.context(st).arm.sent)
+            try:
+                tasks.place(st, target, 0.0)
+            except Exception as e:
+                moved = len(tasks.context(st).arm.sent) != sent
+                counts["refused mid-plan" if moved else "refused before"] += 1
+                examples.append(f"({target[0]:.0f}, {target[1]:.0f}, {target[2]:.0f}): {str(e)[:110]}")
+                continue
+            counts["placed"] += 1
+            errors.append(truth.position - [0, 0, truth.edge / 2] - target)
+        e = np.abs(np.array(errors).reshape(-1, 3))
+        mean = e.mean(axis=0) if len(e) else np.full(3, np.nan)
+        mx = e.max(axis=0) if len(e) else np.full(3, np.nan)
+        tried = sum(counts.values())
+        rows.append([name, str(tried), *(str(counts[c]) for c in counts), *mean, *mx])
+        for ex in examples[:2]:
+            print(f"  {name}: {ex}")
+    return rows
+
+
+def main_regions(n_per_region: int = 6) -> None:
+    rows = region_trials(n_per_region)
+    print("Pick and place by region of the board (realistic simulator, tasks.sag, a large block, yaw 0)")
+    print(format_table(["region", "tried", "placed", "refused before", "refused mid-plan", "not grasped",
+                        "mean |x|", "mean |y|", "mean |z|", "max |x|", "max |y|", "max |z|"], rows))
+
+
 def main(n_stations: int = 13) -> None:
     seeds = range(n_stations)
     rows, failures = [], {}
@@ -158,4 +238,7 @@ def main(n_stations: int = 13) -> None:
 
 
 if __name__ == "__main__":
-    main(int(sys.argv[1]) if len(sys.argv) > 1 else 13)
+    if len(sys.argv) > 1 and sys.argv[1] == "regions":
+        main_regions(int(sys.argv[2]) if len(sys.argv) > 2 else 6)
+    else:
+        main(int(sys.argv[1]) if len(sys.argv) > 1 else 13)

@@ -144,7 +144,7 @@ def test_refused_clicks_move_nothing(panel, where, match):
     result = panel.handle_event(browser_event(where))
     assert not result.ok and not result.moved and match in result.message and "nothing moved" in result.message
     np.testing.assert_allclose(station.arm.joint_positions(), q, atol=0.005)   # encoder readings jitter
-    for o, p in zip(station.world.blocks, before):
+    for o, p in zip(station.world.blocks, before, strict=True):
         np.testing.assert_array_equal(o.position, p)
     assert panel.next_action == "grab"
 
@@ -221,7 +221,7 @@ def test_a_click_on_a_stale_picture_is_refused_after_a_new_look():
     result = panel.click(red.pixel)
     assert not result.ok and "out of date" in result.message and "nothing moved" in result.message
     assert tasks.context(station).last is not obs and tasks.click_widget.view_is_current(station)
-    for o, p in zip(station.world.blocks, before):
+    for o, p in zip(station.world.blocks, before, strict=True):
         np.testing.assert_array_equal(o.position, p)        # only the arm moved (out of view)
     again = panel.click(red.pixel)                          # a click on the new picture acts
     assert again.ok and panel.holding.color == "red"

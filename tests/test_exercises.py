@@ -7,6 +7,7 @@ text anywhere, and a kit that still runs while the exercises are blank.
 
 from __future__ import annotations
 
+import itertools
 import json
 import re
 import subprocess
@@ -167,7 +168,7 @@ def _solution_signatures() -> set[str]:
             body = [line for line in body if line and not line.startswith("#")]
             if len(body) == 1 and len(body[0]) >= 24:
                 signatures.add(body[0])
-            signatures.update(f"{a} {b}" for a, b in zip(body, body[1:]) if len(a) + len(b) >= 30)
+            signatures.update(f"{a} {b}" for a, b in itertools.pairwise(body) if len(a) + len(b) >= 30)
     return signatures
 
 

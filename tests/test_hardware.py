@@ -159,7 +159,7 @@ class FakeArmInterface:
         theta = [int(x * 1000) / 1000.0 for x in q]
         return all(lo <= t <= hi and abs(t - c) / self.moving_time <= v for t, c, lo, hi, v in
                    zip(theta, self.joint_commands, gi.joint_lower_limits, gi.joint_upper_limits,
-                       gi.joint_velocity_limits))
+                       gi.joint_velocity_limits, strict=True))
 
     def set_joint_positions(self, joint_positions, moving_time=None, accel_time=None, blocking=True):
         if not self._driver_accepts(joint_positions):

@@ -284,7 +284,7 @@ def session_calls(world, trace: Trace) -> None:
     trace("int goals", lambda: arm.set_joint_positions([0, 0, 0, 1, 0], moving_time=3.0, blocking=False))
 
     def moved_by_hand():
-        sdk.q = dict(zip(ros.ARM_JOINTS, [0.2, -0.4, 0.3, 1.1, 0.1]))
+        sdk.q = dict(zip(ros.ARM_JOINTS, [0.2, -0.4, 0.3, 1.1, 0.1], strict=True))
         r.deliver()
         before = arm.get_joint_commands()
         arm.capture_joint_positions()
@@ -379,7 +379,7 @@ def test_the_behaviour_fake_does_what_the_vendor_files_do(calls):
             traces[backend] = trace.steps
     vendor, fake = traces[VENDOR_FILES], traces[BEHAVIOUR_FAKE]
     assert [step[0] for step in fake] == [step[0] for step in vendor]
-    for v, f in zip(vendor, fake):
+    for v, f in zip(vendor, fake, strict=True):
         assert f == v, f"step {v[0]!r}: the behaviour fake did {f[1:]}, the vendor files {v[1:]}"
 
 
@@ -427,7 +427,7 @@ def test_3_ctrl_c_holds_the_arm_then_parks_it(vendor):
         with arm_station() as st:
             st.arm.move_to(Q_READY)
             st.arm.move_to(rx200().home, moving_time=3.0, blocking=False)
-            vendor.sdk.q = dict(zip(ros.ARM_JOINTS, 0.5 * Q_READY))      # where the arm is at the Ctrl+C
+            vendor.sdk.q = dict(zip(ros.ARM_JOINTS, 0.5 * Q_READY, strict=True))      # where the arm is at the Ctrl+C
             vendor.ros.deliver()
             os.kill(os.getpid(), signal.SIGINT)
             pytest.fail("SIGINT did not interrupt")

@@ -191,7 +191,7 @@ def test_ik_round_trip_over_thousands_of_reachable_targets():
 
 @pytest.mark.exercise("ik.candidates")
 @SETTINGS
-@given(st.tuples(*[st.floats(lo, hi) for lo, hi in zip(ROBOT.lower, ROBOT.upper)]).map(np.array))
+@given(st.tuples(*[st.floats(lo, hi) for lo, hi in zip(ROBOT.lower, ROBOT.upper, strict=True)]).map(np.array))
 def test_ik_round_trip_property(q):
     P, pitch, roll = target_of(q)
     if np.hypot(*P[:2]) < 1e-3:   # on the waist axis the heading (and the pitch) is undefined
@@ -327,7 +327,7 @@ def test_ik_numerical_converges_from_nearby_seeds():
     rng = np.random.default_rng(11)
     xs, ys = rng.uniform(-300, 300, 100), rng.uniform(100, 400, 100)
     done = 0
-    for x, y in zip(xs, ys):
+    for x, y in zip(xs, ys, strict=True):
         p = np.array([x, y, rng.uniform(10, 200)])
         pitch = min(k.steepest_pitch(p), 1.2)
         exact = k.ik(p, pitch, 0.2)[0]
@@ -373,7 +373,7 @@ def test_every_ik_solver_answers_with_q_success_and_reason():
     res = k.ik_batch(targets, np.pi / 2)
     assert res.success.tolist() == [True, False, False] and res.q.shape == (3, 5)
     assert res.reason[0] == ""
-    for target, reason in zip(targets[1:], res.reason[1:]):   # the batch's reason: ik()'s Unreachable, word for word
+    for target, reason in zip(targets[1:], res.reason[1:], strict=True):   # the batch's reason: ik()'s Unreachable, word for word
         with pytest.raises(k.Unreachable) as err:
             k.ik(target, np.pi / 2)
         assert reason == str(err.value), target

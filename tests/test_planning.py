@@ -1,11 +1,12 @@
 """armlab.planning: time scaling, velocity limits, Cartesian lines, grasp choice, clearance, place heights, execute."""
 
+import dataclasses
 import re
 
 import numpy as np
 import pytest
 
-from armlab import kinematics, planning
+from armlab import kinematics, motion_safety, planning
 from armlab.blocks import ObjectState
 from armlab.kinematics import Unreachable
 from armlab.lab import lab_config
@@ -47,7 +48,7 @@ def test_random_moves_never_exceed_velocity_limits(scaling):
     rng = np.random.default_rng(1)
     a, b = random_poses(rng, 200), random_poses(rng, 200)
     worst = 0.0
-    for q0, q1 in zip(a, b):
+    for q0, q1 in zip(a, b, strict=True):
         move = planning.joint_move(q0, q1, scaling)
         t = np.linspace(0, move.duration, 1001)
         q, qd = move.sample(t)
@@ -120,6 +121,50 @@ def test_cartesian_line_keeps_the_tool_on_the_line(p0, p1, pitch, roll):
     assert np.abs(np.diff(q, axis=0)).max() < 0.05                 # one branch: no jumps between samples
     back = planning.reverse(seg)
     assert np.allclose(back.sample(t)[0], q[::-1])
+
+
+FAST_LINES = [   # (p0, p1 world mm, pitch rad) at 2000 mm/s: each is bound by a joint's velocity limit, not the speed
+    ((-150, 150, 40), (150, 150, 40), np.pi / 2),     # across, close in: the waist binds
+    ((-200, 250, 60), (200, 250, 60), np.pi / 2),     # across, further out: the shoulder binds
+    ((0, 200, 150), (0, 420, 150), 0.0),              # outwards, horizontal approach
+    ((0, 350, 50), (0, 350, 300), 0.0),               # up, horizontal approach
+    ((250, 0, 60), (0, 250, 60), np.pi / 2),          # a diagonal across the front
+]
+
+
+def _piece_rates(seg) -> np.ndarray:
+    """Largest |dq/dt| per joint (5,) rad/s of a piecewise-linear segment: exact, it is what the arm executes."""
+    return np.abs(np.diff(seg.knots, axis=0) / np.diff(seg.times)[:, None]).max(axis=0)
+
+
+@pytest.mark.parametrize("scaling", ["quintic", "trapezoid"])
+@pytest.mark.parametrize("p0, p1, pitch", FAST_LINES)
+def test_a_fast_cartesian_line_keeps_every_joint_within_its_velocity_limit(p0, p1, pitch, scaling):
+    # no GuardedArm here: the line itself must be slow enough, as planned, for the driver's rule on every piece
+    seg = planning.cartesian_line(p0, p1, pitch, speed=2000.0, scaling=scaling)
+    assert seg.duration > np.linalg.norm(np.subtract(p1, p0)) / 2000.0 * 1.2      # the joints, not the speed, bind
+    rate = _piece_rates(seg)
+    assert np.all(rate <= ROBOT.velocity * (1 + 1e-9)), rate / ROBOT.velocity
+    assert (rate / ROBOT.velocity).max() > 0.95          # the bound is tight: the line is not stretched for nothing
+    segments = [motion_safety.Segment(w.q, w.moving_time, w.accel_time) for w in seg.waypoints()]
+    motion_safety.check_plan(seg.start, segments)        # the arms' own velocity rule, command by command
+
+
+@pytest.mark.parametrize("joint", range(4))
+def test_a_fast_cartesian_line_respects_whichever_joint_is_slowest(joint):
+    # a robot whose only slow joint is `joint` (the others 100x faster): that joint must bind at exactly its limit.
+    # wrist_rotate is left out: a line holds the roll, so it never moves.
+    slow = np.full(5, 100.0)
+    slow[joint] = 0.5
+    robot = dataclasses.replace(ROBOT, velocity=slow)
+    moving = [line for line in FAST_LINES
+              if np.ptp(planning.cartesian_line(*line, speed=80.0).knots[:, joint]) > 0.05]
+    assert moving, f"no test line moves joint {joint}"
+    for p0, p1, pitch in moving:
+        seg = planning.cartesian_line(p0, p1, pitch, speed=2000.0, robot=robot)
+        rate = _piece_rates(seg)
+        assert np.all(rate <= slow * (1 + 1e-9)), (p0, p1, rate)
+        assert rate[joint] > 0.95 * slow[joint], (p0, p1, rate)
 
 
 def test_cartesian_line_names_where_it_leaves_the_workspace():

@@ -154,7 +154,7 @@ def test_realistic_capture_is_deterministic_per_seed_and_frame():
     a, b = SimCamera(world, arm, seed=7), SimCamera(world, arm, seed=7)
     fa = [a.capture() for _ in range(2)]
     fb = [b.capture() for _ in range(2)]
-    for x, y in zip(fa, fb):
+    for x, y in zip(fa, fb, strict=True):
         assert np.array_equal(x.rgb, y.rgb)
         assert np.array_equal(x.depth, y.depth, equal_nan=True)
     assert not np.array_equal(fa[0].rgb, fa[1].rgb)           # consecutive frames have fresh noise
@@ -360,7 +360,7 @@ def _centre_inside(P, U, V, margin):
     more than `margin` (-1), or within `margin` of an edge (0)."""
     area = np.sum(P[:, 0] * np.roll(P, -1, 0)[:, 1] - P[:, 1] * np.roll(P, -1, 0)[:, 0])
     dist = np.full(U.shape, np.inf)
-    for a, b in zip(P, np.roll(P, -1, 0)):
+    for a, b in zip(P, np.roll(P, -1, 0), strict=True):
         d = b - a
         dist = np.minimum(dist, np.sign(area) * (d[0] * (V - a[1]) - d[1] * (U - a[0])) / np.hypot(*d))
     return np.where(dist > margin, 1, np.where(dist < -margin, -1, 0))

@@ -96,6 +96,19 @@ def test_limits_are_refused_naming_the_joint_and_nothing_moves(station, target, 
     np.testing.assert_allclose(station.arm.joint_positions(), before, atol=ATOL)
 
 
+@pytest.mark.parametrize("value", [np.nan, np.inf, -np.inf])
+@pytest.mark.parametrize("joint", range(5))
+def test_non_finite_targets_are_refused_and_nothing_moves(station, value, joint):
+    target = Q_READY.copy()
+    target[joint] = value
+    before = station.arm.joint_positions()
+    with pytest.raises(MotionRefused, match=r"motion refused \(bad target\): joint angles contain NaN or infinity"):
+        station.arm.move_to(target)
+    with pytest.raises(ValueError, match="5 finite joint angles"):
+        GuardedArm(station.arm).move_to(target)
+    np.testing.assert_allclose(station.arm.joint_positions(), before, atol=ATOL)
+
+
 def test_a_move_into_the_board_is_refused_the_same_way(station):
     below = kinematics.ik(np.array([0.0, 300.0, -20.0]), np.pi / 2)[0]
     with pytest.raises(MotionRefused, match=r"motion refused \(collision with the board\): the .* would go down"):

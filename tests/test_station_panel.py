@@ -147,7 +147,7 @@ def test_every_move_leaves_a_fresh_view_and_the_next_click_looks_first(panel):
 
 def test_sliders_are_the_joint_limits_and_a_move_outside_is_refused(panel):
     robot = rx200()
-    assert [(s.min, s.max) for s in panel._w["sliders"]] == list(zip(robot.lower, robot.upper))
+    assert [(s.min, s.max) for s in panel._w["sliders"]] == list(zip(robot.lower, robot.upper, strict=True))
     q = panel.station.arm.joint_positions()
     bad = robot.home.copy()
     bad[1] = 2.5
@@ -163,7 +163,7 @@ def test_teach_record_and_repeat(panel):
     assert w["teach"].description == "finish teaching" and not w["record"].disabled
     waypoints = [[0.3, -0.3, 0.3, 0.6, 0.0], [-0.3, -0.2, 0.2, 0.7, 0.0]]
     for q in waypoints:
-        for s, v in zip(w["sliders"], q):                    # in teach mode the sliders are the simulator's hand
+        for s, v in zip(w["sliders"], q, strict=True):   # in teach mode the sliders are the simulator's hand
             s.value = v
         w["record"].click()
     assert "waypoint 2 recorded" in panel.messages[-1]

@@ -5,6 +5,7 @@ import pytest
 
 from armlab import kinematics, make_station, tasks
 from armlab.profile import velocity_violations
+from armlab.station import EmergencyStopped
 from armlab.tasks.sag import SagModel, calibration_poses, fit_sag
 
 # Four blocks: aligned and yawed, both sizes, spread over reach and heading (world mm, yaw rad).
@@ -95,7 +96,7 @@ def test_pick_and_place_aligned_and_yawed_blocks_of_both_sizes(station):
     ctx = tasks.context(station)
     seen = sorted(ctx.last.blocks, key=lambda b: b.color)
     assert [b.color for b in seen] == ["blue", "green", "red", "yellow"]
-    for block, target in zip(seen, TARGETS):
+    for block, target in zip(seen, TARGETS, strict=True):
         truth = next(o for o in station.world.blocks if o.color == block.color)
         assert tasks.pick(station, block), f"{block.color} {block.size} not grasped: {station.arm.last_grasp}"
         assert station.arm.holding[0] is truth
@@ -131,6 +132,44 @@ def test_guarded_arm_stretches_a_move_the_compensation_makes_too_fast():
         assert np.allclose(arm.joint_positions(), target, atol=1e-6)
         stretched.append(T_sent > T)
     assert any(stretched)
+
+
+@pytest.mark.parametrize("after", [1, 3, 6])
+def test_a_stop_requested_mid_plan_sends_no_further_command(monkeypatch, after):
+    # the stop flag alone (as a TaskMachine's, set from another thread) must halt a running pick: GuardedArm asks
+    # should_stop() before every command, emergency-stops the arm and raises; nothing after it reaches the arm
+    st = make_station("sim", seed=2, scene=SCENE)
+    obs = tasks.look(st)
+    guarded = tasks.context(st).arm
+    reached = []
+    real_move = st.arm.move_to
+
+    def counting_move(q, *args, **kwargs):
+        real_move(q, *args, **kwargs)
+        reached.append(np.asarray(q, float))
+
+    monkeypatch.setattr(st.arm, "move_to", counting_move)
+    monkeypatch.setattr(st.arm, "close_gripper", lambda: pytest.fail("the gripper closed after the stop request"))
+    guarded.should_stop = lambda: len(reached) >= after
+    sent_before = len(guarded.sent)
+    with pytest.raises(EmergencyStopped, match="emergency stop was requested"):
+        tasks.pick(st, obs.blocks[0])
+    assert len(reached) == after and len(guarded.sent) - sent_before == after
+    assert st.arm.emergency_stopped
+    np.testing.assert_allclose(st.arm.joint_positions(), reached[-1], atol=0.01)    # stopped at that command
+    assert not st.arm.holding
+
+
+def test_a_stop_request_refuses_the_gripper_too():
+    st = make_station("sim", seed=2, scene="empty")
+    stop = False
+    arm = tasks.GuardedArm(st.arm, should_stop=lambda: stop)
+    arm.open_gripper()
+    stop = True
+    for action in (arm.close_gripper, arm.open_gripper, lambda: arm.move_to(st.arm.robot.home, 2.0)):
+        with pytest.raises(EmergencyStopped):
+            action()
+    assert st.arm.emergency_stopped and arm.sent == []
 
 
 def test_pick_refuses_while_holding_and_place_refuses_when_empty():

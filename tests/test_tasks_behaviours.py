@@ -42,6 +42,25 @@ def test_click_grab_then_click_drop_moves_the_clicked_block(station):
     assert np.abs(err).max() < 4.0, err                     # click-to-world through the camera + placing
 
 
+@pytest.mark.exercise("calib.tag_extrinsics", "calib.depth_plane")
+def test_a_click_reads_the_world_point_under_it_to_a_fraction_of_a_pixel(station):
+    # a board point 0.5 px off is ~0.5 mm off here (about 1.07 mm per pixel): the grab/drop tests' 4 mm cannot see it
+    ctx = tasks.context(station)
+    frame = tasks.current_view(station).frame
+    rng = np.random.default_rng(3)
+    pts = np.column_stack([rng.uniform(-300, 300, 40), rng.uniform(60, 420, 40), np.zeros(40)])
+    pts = pts[(np.hypot(pts[:, 0], pts[:, 1]) > 120)
+              & (np.hypot(*(pts[:, :2] - [-150.0, 200.0]).T) > 40) & (np.hypot(*(pts[:, :2] - [150.0, 250.0]).T) > 30)]
+    uv = ctx.calibration.camera.project(pts)
+    got = np.array([tasks.click_world(station, p, frame) for p in uv])
+    back = ctx.calibration.camera.project(got)
+    assert np.abs(back - uv).max() < 0.01, np.abs(back - uv).max()     # on the clicked pixel's own ray
+    mm_per_px = ctx.calibration.camera.T_cam_world[2, 3] / ctx.calibration.camera.K[0, 0]
+    seen = station.camera.truth.pixel_to_plane(uv, 0.0)                # where the true camera sees that pixel
+    err = np.hypot(*(got - seen)[:, :2].T)
+    assert err.mean() < 0.25 * mm_per_px and err.max() < 0.5 * mm_per_px, (err.mean(), err.max(), mm_per_px)
+
+
 @pytest.mark.exercise("calib.tag_extrinsics", "calib.depth_plane", "detect.classify")
 def test_click_drop_on_a_block_stacks_on_it(station):
     red, green = _truth(station, "red"), _truth(station, "green")

@@ -63,7 +63,7 @@ def test_skew_is_the_cross_product(w, v):
 
 
 def test_exp_so3_matches_elementary_rotations_and_rotvec():
-    for axis, rot in zip(np.eye(3), (tf.rot_x, tf.rot_y, tf.rot_z)):
+    for axis, rot in zip(np.eye(3), (tf.rot_x, tf.rot_y, tf.rot_z), strict=True):
         np.testing.assert_allclose(tf.exp_so3(axis, 0.7), rot(0.7), atol=1e-15)
     np.testing.assert_allclose(tf.rotvec_to_matrix([0.0, 0.0, 0.0]), np.eye(3))
     np.testing.assert_allclose(tf.rotvec_to_matrix([0.0, -1.2, 0.0]), tf.rot_y(-1.2), atol=1e-15)

@@ -350,7 +350,7 @@ def test_joint_sliders_drive_the_arm_within_its_limits(viewer):
     box = viewer.joint_sliders(arm=station.arm)
     np.testing.assert_allclose(viewer.q, station.arm.joint_positions(), atol=0.005)  # the viewer shows the arm first
     np.testing.assert_allclose([s.value for s in box.sliders], viewer.q)
-    assert [(s.min, s.max) for s in box.sliders] == list(zip(rx200().lower, rx200().upper))
+    assert [(s.min, s.max) for s in box.sliders] == list(zip(rx200().lower, rx200().upper, strict=True))
     assert not box.sliders[0].continuous_update                       # the arm moves when a slider is released
     box.sliders[0].value = 0.4
     np.testing.assert_allclose(station.arm.joint_positions(), [0.4, 0, 0, 0, 0], atol=0.005)
@@ -490,13 +490,13 @@ def test_browser_draws_the_arm_where_the_model_says(tmp_path):
     camera = browser_camera()
     points = kinematics.joint_positions(q)
     t = np.linspace(0.05, 0.95, 15)[:, None]
-    samples = np.vstack([a + t * (b - a) for a, b in zip(points[1:-1], points[2:])])
+    samples = np.vstack([a + t * (b - a) for a, b in zip(points[1:-1], points[2:], strict=True)])
     px = np.round(camera.project(samples)).astype(int)
     hit = [changed[v - 2:v + 3, u - 2:u + 3].any() for u, v in px]
     assert np.mean(hit) > 0.95, f"arm drawn at only {np.mean(hit):.0%} of its projected link points"
     # and nowhere else: every changed pixel lies within the arm's projected silhouette (plus the gripper)
     silhouette = np.zeros(changed.shape, np.uint8)
-    for (a, b), radius in zip(zip(points[:-1], points[1:]), geo.LINK_RADII_MM):
+    for (a, b), radius in zip(zip(points[:-1], points[1:], strict=True), geo.LINK_RADII_MM, strict=True):
         pa, pb = np.round(camera.project(np.array([a, b]))).astype(int)
         width = int(2 * radius * camera.K[0, 0] / camera.depth_of(np.array([a]))[0]) + 2
         cv2.line(silhouette, tuple(pa), tuple(pb), 1, width)

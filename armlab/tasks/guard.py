@@ -75,21 +75,31 @@ class GuardedArm:
         q = np.asarray(q, dtype=float)
         if q.shape != (5,) or not np.all(np.isfinite(q)):
             raise ValueError(f"move_to takes 5 finite joint angles (rad), got {q!r}")
-        q_cmd = self._within_limits(q, self.sag.command(q, self.robot))
         q_read = np.asarray(self.arm.joint_positions(), dtype=float)
         starts = [q_read]
         if self._last_cmd is not None and np.abs(q_read - self._last_cmd).max() <= _AT_COMMAND_RAD:
             starts.append(self._last_cmd)
+        q_cmd, moving_time, accel_time = self.command_for(q, starts, moving_time, accel_time)
+        self.sent.append((q_read, q_cmd, moving_time, accel_time))
+        self._last_cmd = None
+        self.arm.move_to(q_cmd, moving_time=moving_time, accel_time=accel_time, blocking=blocking)
+        self._last_cmd = q_cmd
+
+    def command_for(self, q, starts, moving_time: float | None = None,
+                    accel_time: float | None = None) -> tuple[np.ndarray, float | None, float | None]:
+        """What move_to(q, moving_time, accel_time) sends from commanded joints `starts` (list of (5,) rad: where
+        the arm may be taken to start from): (the compensated command (5,) rad, moving_time s stretched for the
+        velocity limits, accel_time s scaled with it). MotionRefused when the command is past a limit by more than
+        LIMIT_CLIP_RAD (module notes). Used by move_to and by the task layer's whole-plan pre-check."""
+        q = np.asarray(q, dtype=float)
+        q_cmd = self._within_limits(q, self.sag.command(q, self.robot))
         if moving_time is not None:
             need = max(float(np.max(np.abs(q_cmd - s) / self.robot.velocity)) for s in starts) * (1 + _SPEED_EPS)
             if need > moving_time:
                 scale = need / moving_time
                 moving_time = need
                 accel_time = None if accel_time is None else accel_time * scale
-        self.sent.append((q_read, q_cmd, moving_time, accel_time))
-        self._last_cmd = None
-        self.arm.move_to(q_cmd, moving_time=moving_time, accel_time=accel_time, blocking=blocking)
-        self._last_cmd = q_cmd
+        return q_cmd, moving_time, accel_time
 
     def _within_limits(self, q: np.ndarray, q_cmd: np.ndarray) -> np.ndarray:
         """The compensated command q_cmd for planned joints q, clipped onto the limits within LIMIT_CLIP_RAD when q

@@ -13,7 +13,9 @@ compensates sag) and station.camera. Each station gets a TaskContext on first us
 place() releases the block RELEASE_GAP_MM above the requested bottom height, so a residual arm error never pushes
 it into what it is put on (the block drops that little and settles); at long reach, where the tool is tilted,
 planning.plan_place also lifts it by how far the tilted block's lowest edge hangs below its bottom-face centre
-(planning.tilted_release_lift). Units: mm, rad; world (board) frame.
+(planning.tilted_release_lift). Every pick and place plan is checked whole before its first command
+(tasks.precheck: the commands the guarded arm would send, the pads and the held block along them, the sag model and
+the known blocks): an impossible one raises MotionRefused with nothing sent. Units: mm, rad; world (board) frame.
 """
 
 from __future__ import annotations
@@ -23,12 +25,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from armlab import planning
+from armlab import motion_safety, planning
 from armlab.blocks import block_edge
 from armlab.calibration import Calibration
+from armlab.gripper_geometry import GRIPPER
 from armlab.planning import Obstacle
 
-from . import perception
+from . import perception, precheck
 from .guard import GuardedArm
 from .sag import SagModel, calibration_poses, fit_sag, hover_pose
 
@@ -46,6 +49,7 @@ class TaskContext:
     held: object | None = None              # the picked detection Block while it is in the gripper
     known: list = field(default_factory=list)
     last: perception.Observation | None = None
+    held_in_tool: np.ndarray | None = None  # T_tool_block (4, 4) mm of the held block as planned at its grasp
 
     @property
     def held_edge(self) -> float:
@@ -110,8 +114,8 @@ def pick(station, block, obstacles=None) -> bool:
 
     Plans with planning.plan_pick around `obstacles` (default: the known blocks) and runs the plan on the guarded arm.
     Returns close_gripper's answer (True when the block is held). Raises ValueError when the gripper already holds a
-    block, kinematics.Unreachable (a ValueError) when the block cannot be reached (nothing moves then), and lets the
-    arm's MotionRefused / EmergencyStopped through.
+    block, kinematics.Unreachable (a ValueError) when the block cannot be reached and MotionRefused when the whole
+    plan fails the pre-check (nothing moves then), and lets the arm's EmergencyStopped through.
     """
     ctx = context(station)
     if ctx.held is not None:
@@ -119,11 +123,22 @@ def pick(station, block, obstacles=None) -> bool:
     edge = block_edge(block.size)
     obs = ctx.known if obstacles is None else list(obstacles)
     plan = planning.plan_pick(ctx.arm.joint_positions(), block.position, float(block.yaw), edge, obstacles=obs)
+    q_grasp = next(s.trajectory for s in plan.steps if s.label == "descend").end
+    grasped = motion_safety.HeldBlock(edge, precheck.held_pose_at_grasp(q_grasp, block.position, float(block.yaw),
+                                                                        edge), f"picked {block.color} block")
+    precheck.check_whole_plan(plan, ctx.arm, _opening(station), grasped=grasped,
+                              known=precheck.known_boxes(obs, np.asarray(block.position, float)[:2], edge / 2),
+                              what=f"picking the {block.color} block")
     held = bool(planning.execute(plan, ctx.arm).holding)
     ctx.known = [k for k in ctx.known if not _same(k, block)]
     if held:
-        ctx.held = block
+        ctx.held, ctx.held_in_tool = block, grasped.T_tool_block
     return held
+
+
+def _opening(station) -> float:
+    """The pads' opening (mm) now: the arm's own reading where it offers one, else fully open."""
+    return float(getattr(station.arm, "gripper_opening_mm", GRIPPER.max_opening_mm))
 
 
 def place(station, position, yaw: float = 0.0, obstacles=None,
@@ -131,7 +146,8 @@ def place(station, position, yaw: float = 0.0, obstacles=None,
     """Put the held block's bottom-face centre at `position` (3,) world mm with yaw (rad); True when the plan ran
     through (the gripper opened there). clearance: how far (mm) the held block's bottom passes above the obstacles'
     tops in transit, and the empty tool point ends above the placed block (planning.plan_place). Raises ValueError
-    when nothing is held or for bad input, Unreachable when the spot cannot be reached (nothing moves then)."""
+    when nothing is held or for bad input, Unreachable when the spot cannot be reached and MotionRefused when the
+    whole plan fails the pre-check, e.g. the held block would go into a known block (nothing moves then)."""
     ctx = context(station)
     edge = ctx.held_edge
     p = np.asarray(position, dtype=float)
@@ -140,7 +156,11 @@ def place(station, position, yaw: float = 0.0, obstacles=None,
     obs = ctx.known if obstacles is None else list(obstacles)
     plan = planning.plan_place(ctx.arm.joint_positions(), p + [0.0, 0.0, RELEASE_GAP_MM], edge, float(yaw),
                                obstacles=obs, clearance=clearance)
+    held = () if ctx.held_in_tool is None else (
+        motion_safety.HeldBlock(edge, ctx.held_in_tool, f"held {ctx.held.color} block"),)
+    precheck.check_whole_plan(plan, ctx.arm, edge, held=held, known=precheck.known_boxes(obs),
+                              what=f"placing at ({p[0]:.1f}, {p[1]:.1f}, {p[2]:.1f}) mm")
     planning.execute(plan, ctx.arm)
-    ctx.held = None
+    ctx.held, ctx.held_in_tool = None, None
     ctx.known = [*ctx.known, Obstacle(float(p[0]), float(p[1]), float(p[2] + edge), edge / np.sqrt(2))]
     return True

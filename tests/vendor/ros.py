@@ -125,7 +125,7 @@ class XsSdk:
     mode: str = "position"
     profile_type: str = "time"
     gripper_mode: str = "pwm"
-    q: dict = field(default_factory=lambda: dict(zip(ARM_JOINTS, SLEEP)))
+    q: dict = field(default_factory=lambda: dict(zip(ARM_JOINTS, SLEEP, strict=True)))
     finger_m: float = FINGER_UPPER_M
     object_width_mm: float | None = None
     torque: bool = True
@@ -180,7 +180,7 @@ class XsSdk:
         self.log.append((kind, {k: getattr(msg, k) for k in type(msg).FIELDS}))
         if kind == "joint_group" and msg.name == "arm" and self.torque:
             self.executed.append((list(msg.cmd), {j: self.registers[j]["Profile_Velocity"] for j in ARM_JOINTS}))
-            self.q = dict(zip(ARM_JOINTS, msg.cmd))
+            self.q = dict(zip(ARM_JOINTS, msg.cmd, strict=False))   # as the driver: no length check
         elif kind == "joint_single" and msg.name == "gripper":
             if msg.cmd < 0:
                 w = self.object_width_mm

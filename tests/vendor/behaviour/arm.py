@@ -81,7 +81,7 @@ class InterbotixArmXSInterface:
 
     def _check_joint_limits(self, positions: list[float]) -> bool:
         info = self.group_info
-        for i, (goal, last) in enumerate(zip(positions, self.joint_commands)):
+        for i, (goal, last) in enumerate(zip(positions, self.joint_commands, strict=False)):   # vendor: no length check
             goal = int(goal * 1000) / 1000.0
             if not info.joint_lower_limits[i] <= goal <= info.joint_upper_limits[i]:
                 return False
