@@ -36,7 +36,8 @@ def labelled_folder(tmp_path_factory):
         cv2.imwrite(str(folder / f"frame_{seed}.png"), cv2.cvtColor(frame.rgb, cv2.COLOR_RGB2BGR))
         np.save(folder / f"frame_{seed}.npy", frame.depth)
         frames.append({"rgb": f"frame_{seed}.png", "depth": f"frame_{seed}.npy", "arm_q": q.tolist(),
-                       "blocks": [{"pixel": uv.tolist(), "color": o.color} for uv, o in zip(tops, blocks, strict=True)]})
+                       "blocks": [{"pixel": uv.tolist(), "color": o.color}
+                                  for uv, o in zip(tops, blocks, strict=True)]})
     save_calibration(calibration, folder / "calibration.json")
     (folder / "labels.json").write_text(json.dumps({"format": LABELS_FORMAT, "calibration": "calibration.json",
                                                     "frames": frames}))

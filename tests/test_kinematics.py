@@ -373,7 +373,8 @@ def test_every_ik_solver_answers_with_q_success_and_reason():
     res = k.ik_batch(targets, np.pi / 2)
     assert res.success.tolist() == [True, False, False] and res.q.shape == (3, 5)
     assert res.reason[0] == ""
-    for target, reason in zip(targets[1:], res.reason[1:], strict=True):   # the batch's reason: ik()'s Unreachable, word for word
+    # the batch's reason: ik()'s Unreachable, word for word
+    for target, reason in zip(targets[1:], res.reason[1:], strict=True):
         with pytest.raises(k.Unreachable) as err:
             k.ik(target, np.pi / 2)
         assert reason == str(err.value), target
