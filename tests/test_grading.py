@@ -236,3 +236,39 @@ def test_run_autograder_in_a_gradescope_layout(tmp_path):
     env["ARMLAB_GRADE_EXERCISES"] = "fk.no_such_exercise"
     done = subprocess.run([str(root / "run_autograder")], env=env, capture_output=True, text=True, timeout=120)
     assert done.returncode == 1 and "no exercise 'fk.no_such_exercise'" in done.stderr
+
+
+def _replaced(exercise_id: str, old: str, new: str) -> list[str]:
+    bodies = _reference_bodies(exercise_id)
+    assert any(old in b for b in bodies), f"{old!r} not in the reference of {exercise_id}"
+    return [b.replace(old, new) for b in bodies]
+
+
+HIDDEN_WRONG = {   # per exercise: wrong answers the hidden checks must fail (hard-coded, a slip, the kit's reference)
+    "calib.tag_homography": {
+        "hard-coded": ["    H = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])"],
+        "normalisation not undone": _replaced("calib.tag_homography", "np.linalg.solve(T_dst, H_normalised @ T_src)",
+                                              "H_normalised"),
+    },
+    "ik.candidates": {
+        "hard-coded": ["    q1 = q2 = q3 = q4 = heading * 0.0\n    ok, d2 = heading == heading, heading * 0.0 + 1.0"],
+        "elbow sign swapped": _replaced("ik.candidates", "* delta_sign", "* -delta_sign"),
+    },
+    "grab.sag_line": {
+        "hard-coded (the lab's rule)": ["    return 0.068, 3.0"],
+        "slope and offset swapped": _replaced("grab.sag_line", "return float(slope), float(offset)",
+                                              "return float(offset), float(slope)"),
+    },
+}
+
+
+@pytest.mark.parametrize("exercise_id", sorted(HIDDEN_WRONG))
+def test_hidden_checks_pass_the_reference_and_fail_wrong_answers(exercise_id):
+    from armlab.grading.grade import Grader
+
+    grader = Grader(ROOT, Limits(timeout_s=240, cpu_s=120), [exercise_id])
+    reference = grader.hidden_checks(exercise_id, _reference_bodies(exercise_id))
+    assert len(reference) >= 4 and all(c.passed for c in reference), [c.message for c in reference]
+    for wrong, bodies in HIDDEN_WRONG[exercise_id].items():
+        checks = grader.hidden_checks(exercise_id, bodies)
+        assert not any(c.passed for c in checks), f"{exercise_id}, {wrong}: {[c.message for c in checks]}"

@@ -97,6 +97,12 @@ class Grader:
                   for i in tags]
         return _score(exercise_id, checks + hidden, run.problem)
 
+    def hidden_checks(self, exercise_id: str, bodies: list[str]) -> list[CheckResult]:
+        """Only the hidden checks of `bodies` spliced into the reference (no notebook run): for instructors trying a
+        new HiddenSpec against wrong answers. RegionRejected for a body holding markers."""
+        with tempfile.TemporaryDirectory(prefix="armlab-grade-") as tmp:
+            return self._hidden(exercise_id, build_worktree(self.reference, Path(tmp) / "work", exercise_id, bodies))
+
     def _request(self, exercise_id: str, tree: Path, spec_function: str, cases: list) -> dict:
         ex = exercise(exercise_id)
         notebook = None if ex.in_package else str(tree / f"notebooks/{ex.notebook}.ipynb")
