@@ -255,9 +255,7 @@ HIDDEN_WRONG = {   # per exercise: wrong answers the hidden checks must fail (ha
         "elbow sign swapped": _replaced("ik.candidates", "* delta_sign", "* -delta_sign"),
     },
     "grab.sag_line": {
-        "hard-coded (the lab's rule)": ["    return 0.068, 3.0"],
-        "slope and offset swapped": _replaced("grab.sag_line", "return float(slope), float(offset)",
-                                              "return float(offset), float(slope)"),
+        "hard-coded (the lab's rule)": ["    return 0.068, 3.0"],   # one wrong answer: each costs a notebook run
     },
 }
 
@@ -272,3 +270,31 @@ def test_hidden_checks_pass_the_reference_and_fail_wrong_answers(exercise_id):
     for wrong, bodies in HIDDEN_WRONG[exercise_id].items():
         checks = grader.hidden_checks(exercise_id, bodies)
         assert not any(c.passed for c in checks), f"{exercise_id}, {wrong}: {[c.message for c in checks]}"
+
+
+def test_regrading_gives_the_same_scores(graded):
+    """A fresh Grader (no shared cache) on the class's wrong and tampered submissions: the same scores and checks."""
+    from armlab.grading.grade import Grader
+
+    results, out = graded
+    grader = Grader(ROOT, Limits(timeout_s=240, cpu_s=25), GRADED)
+    for student in ("wrong_dh", "tampered"):
+        again = grader.grade(read_submission(out.parent / "submissions" / student, ROOT))
+        for exercise_id in GRADED:
+            first, second = results[student][exercise_id], again[exercise_id]
+            assert (second.score, [(c.name, c.passed) for c in second.checks]) == \
+                (first.score, [(c.name, c.passed) for c in first.checks]), (student, exercise_id)
+    assert grader.runs == 2
+
+
+def test_a_hard_coded_answer_scores_below_full_marks():
+    """sky_points as a lookup of the public check's values passes that check and fails the hidden ones."""
+    from armlab.grading.grade import Grader
+
+    lookup = ("    return {0: 0, 1: 30, 5: 150, 7: 210, 8: 240, 9: 290, 12: 440, 13: 490, 20: 840, 24: 1040}[n]")
+    result = Grader(ROOT, Limits(timeout_s=240, cpu_s=60), ["events.sky_points"]).grade_exercise(
+        "events.sky_points", [lookup])
+    public = [c for c in result.checks if not c.name.startswith("hidden")]
+    assert public and all(c.passed for c in public), [c.message for c in public]
+    assert 0 < result.score < exercise("events.sky_points").points
+    assert any("KeyError" in c.message for c in result.checks if not c.passed)
