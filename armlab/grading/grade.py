@@ -14,34 +14,16 @@ import tempfile
 import threading
 from collections.abc import Iterable
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass, field
 from pathlib import Path
 
 from armlab.exercises.registry import EXERCISES, exercise
 
+from .results import CheckResult, ExerciseResult
 from .run import DEFAULT_LIMITS, Limits, check_cells, run_harness, run_notebook
 from .splice import RegionRejected, build_worktree
 from .submission import Submission, read_submission
 
 __all__ = ["CheckResult", "ExerciseResult", "Grader", "grade_submission", "grade_class"]
-
-
-@dataclass(frozen=True)
-class CheckResult:
-    name: str
-    passed: bool
-    message: str = ""
-
-
-@dataclass
-class ExerciseResult:
-    """One exercise's grade: score out of max_score, its checks, and why it scored 0 without checks (reason)."""
-
-    exercise_id: str
-    score: float
-    max_score: int
-    checks: list[CheckResult] = field(default_factory=list)
-    reason: str = ""
 
 
 def _score(exercise_id: str, checks: list[CheckResult], reason: str = "") -> ExerciseResult:
