@@ -6,7 +6,7 @@ RELEASE := $(wildcard .student-release)
 STAMP   := .venv/.installed
 NBVAL   := --nbval --nbval-sanitize-with tests/nbval_sanitize.cfg --nbval-cell-timeout=600
 
-.PHONY: demo test lint unit notebooks lab bench browser camera student clean
+.PHONY: demo test lint unit notebooks lab bench browser camera student autograder clean
 
 $(STAMP): requirements.txt pyproject.toml
 	test -x $(PY) || python3 -m venv .venv
@@ -57,6 +57,12 @@ bench: $(STAMP)
 student: $(STAMP)
 	rm -rf dist/student
 	$(PY) tools/student-release dist/student
+
+## make autograder: the Gradescope autograder bundle (setup.sh, run_autograder, the kit with its hidden checks) in
+## dist/autograder and dist/autograder.zip, the file to upload
+autograder: $(STAMP)
+	rm -rf dist/autograder dist/autograder.zip
+	$(PY) -m armlab.grading.autograder build dist/autograder
 
 clean:
 	rm -rf .venv out dist

@@ -200,3 +200,101 @@ def test_grade_command_on_a_blank_class(tmp_path):
     assert rows[0]["student"] == "alice" and rows[0]["total"] == "0" and rows[0]["max"] == "100"
     with pytest.raises(SystemExit, match="no such folder"):
         main(["grade", str(tmp_path / "missing"), "--out", str(tmp_path / "out")])
+
+
+def test_run_autograder_in_a_gradescope_layout(tmp_path):
+    """The bundle (make autograder) unpacked as Gradescope does, run_autograder on a blank release with one exercise
+    written, two exercises graded (ARMLAB_GRADE_EXERCISES)."""
+    import os
+    import shutil
+    import subprocess
+    import sys
+    import zipfile
+
+    from armlab.grading.autograder import build_bundle
+
+    zip_path = build_bundle(ROOT, tmp_path / "bundle")
+    root = tmp_path / "autograder"
+    with zipfile.ZipFile(zip_path) as z:
+        z.extractall(root / "source")
+    assert (root / "source/setup.sh").is_file() and (root / "source/armlab/grading/hidden.py").is_file()
+    shutil.copy2(root / "source/run_autograder", root / "run_autograder")
+    (root / "run_autograder").chmod(0o755)
+    make_student_release(ROOT, root / "submission")
+    _edit(root / "submission", "fk.dh_transform", _reference_bodies("fk.dh_transform"))
+    (root / "results").mkdir()
+    env = dict(os.environ, ARMLAB_AUTOGRADER_ROOT=str(root), ARMLAB_PYTHON=sys.executable,
+               ARMLAB_GRADE_EXERCISES="fk.dh_transform,ik.planar_ik", ARMLAB_GRADE_TIMEOUT="240")
+    env.pop("PYTHONPATH", None)
+    done = subprocess.run([str(root / "run_autograder")], env=env, capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr[-2000:]
+    results = json.loads((root / "results/results.json").read_text())
+    scores = {t["name"].split(":")[0]: (t["score"], t["max_score"]) for t in results["tests"]}
+    points = exercise("fk.dh_transform").points
+    assert scores == {"fk.dh_transform": (points, points), "ik.planar_ik": (0, exercise("ik.planar_ik").points)}
+    assert results["score"] == points
+    env["ARMLAB_GRADE_EXERCISES"] = "fk.no_such_exercise"
+    done = subprocess.run([str(root / "run_autograder")], env=env, capture_output=True, text=True, timeout=120)
+    assert done.returncode == 1 and "no exercise 'fk.no_such_exercise'" in done.stderr
+
+
+def _replaced(exercise_id: str, old: str, new: str) -> list[str]:
+    bodies = _reference_bodies(exercise_id)
+    assert any(old in b for b in bodies), f"{old!r} not in the reference of {exercise_id}"
+    return [b.replace(old, new) for b in bodies]
+
+
+HIDDEN_WRONG = {   # per exercise: wrong answers the hidden checks must fail (hard-coded, a slip, the kit's reference)
+    "calib.tag_homography": {
+        "hard-coded": ["    H = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])"],
+        "normalisation not undone": _replaced("calib.tag_homography", "np.linalg.solve(T_dst, H_normalised @ T_src)",
+                                              "H_normalised"),
+    },
+    "ik.candidates": {
+        "hard-coded": ["    q1 = q2 = q3 = q4 = heading * 0.0\n    ok, d2 = heading == heading, heading * 0.0 + 1.0"],
+        "elbow sign swapped": _replaced("ik.candidates", "* delta_sign", "* -delta_sign"),
+    },
+    "grab.sag_line": {
+        "hard-coded (the lab's rule)": ["    return 0.068, 3.0"],   # one wrong answer: each costs a notebook run
+    },
+}
+
+
+@pytest.mark.parametrize("exercise_id", sorted(HIDDEN_WRONG))
+def test_hidden_checks_pass_the_reference_and_fail_wrong_answers(exercise_id):
+    from armlab.grading.grade import Grader
+
+    grader = Grader(ROOT, Limits(timeout_s=240, cpu_s=120), [exercise_id])
+    reference = grader.hidden_checks(exercise_id, _reference_bodies(exercise_id))
+    assert len(reference) >= 4 and all(c.passed for c in reference), [c.message for c in reference]
+    for wrong, bodies in HIDDEN_WRONG[exercise_id].items():
+        checks = grader.hidden_checks(exercise_id, bodies)
+        assert not any(c.passed for c in checks), f"{exercise_id}, {wrong}: {[c.message for c in checks]}"
+
+
+def test_regrading_gives_the_same_scores(graded):
+    """A fresh Grader (no shared cache) on the class's wrong and tampered submissions: the same scores and checks."""
+    from armlab.grading.grade import Grader
+
+    results, out = graded
+    grader = Grader(ROOT, Limits(timeout_s=240, cpu_s=25), GRADED)
+    for student in ("wrong_dh", "tampered"):
+        again = grader.grade(read_submission(out.parent / "submissions" / student, ROOT))
+        for exercise_id in GRADED:
+            first, second = results[student][exercise_id], again[exercise_id]
+            assert (second.score, [(c.name, c.passed) for c in second.checks]) == \
+                (first.score, [(c.name, c.passed) for c in first.checks]), (student, exercise_id)
+    assert grader.runs == 2
+
+
+def test_a_hard_coded_answer_scores_below_full_marks():
+    """sky_points as a lookup of the public check's values passes that check and fails the hidden ones."""
+    from armlab.grading.grade import Grader
+
+    lookup = ("    return {0: 0, 1: 30, 5: 150, 7: 210, 8: 240, 9: 290, 12: 440, 13: 490, 20: 840, 24: 1040}[n]")
+    result = Grader(ROOT, Limits(timeout_s=240, cpu_s=60), ["events.sky_points"]).grade_exercise(
+        "events.sky_points", [lookup])
+    public = [c for c in result.checks if not c.name.startswith("hidden")]
+    assert public and all(c.passed for c in public), [c.message for c in public]
+    assert 0 < result.score < exercise("events.sky_points").points
+    assert any("KeyError" in c.message for c in result.checks if not c.passed)

@@ -40,6 +40,7 @@ RELEASE_EXCLUDES = (
     "tests/test_repeatable.py",    # teaches by hand (the teach.record exercise) to test the simulator's rounding
     "tests/test_notebook_outputs.py",   # checks the instructor's executed notebooks (the release's have no outputs)
     "armlab/grading/hidden.py",    # the grader's hidden checks (fresh inputs per exercise)
+    "tools/autograder/*",          # the Gradescope bundle's scripts (make autograder)
     "tests/test_grading*.py",      # the grader's tests (they hold wrong answers and the tricks)
 )
 

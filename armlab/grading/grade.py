@@ -14,34 +14,16 @@ import tempfile
 import threading
 from collections.abc import Iterable
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass, field
 from pathlib import Path
 
 from armlab.exercises.registry import EXERCISES, exercise
 
+from .results import CheckResult, ExerciseResult
 from .run import DEFAULT_LIMITS, Limits, check_cells, run_harness, run_notebook
 from .splice import RegionRejected, build_worktree
 from .submission import Submission, read_submission
 
 __all__ = ["CheckResult", "ExerciseResult", "Grader", "grade_submission", "grade_class"]
-
-
-@dataclass(frozen=True)
-class CheckResult:
-    name: str
-    passed: bool
-    message: str = ""
-
-
-@dataclass
-class ExerciseResult:
-    """One exercise's grade: score out of max_score, its checks, and why it scored 0 without checks (reason)."""
-
-    exercise_id: str
-    score: float
-    max_score: int
-    checks: list[CheckResult] = field(default_factory=list)
-    reason: str = ""
 
 
 def _score(exercise_id: str, checks: list[CheckResult], reason: str = "") -> ExerciseResult:
@@ -96,6 +78,12 @@ class Grader:
                               run.cells[i].message if i in run.cells else run.problem or "the cell did not run")
                   for i in tags]
         return _score(exercise_id, checks + hidden, run.problem)
+
+    def hidden_checks(self, exercise_id: str, bodies: list[str]) -> list[CheckResult]:
+        """Only the hidden checks of `bodies` spliced into the reference (no notebook run): for instructors trying a
+        new HiddenSpec against wrong answers. RegionRejected for a body holding markers."""
+        with tempfile.TemporaryDirectory(prefix="armlab-grade-") as tmp:
+            return self._hidden(exercise_id, build_worktree(self.reference, Path(tmp) / "work", exercise_id, bodies))
 
     def _request(self, exercise_id: str, tree: Path, spec_function: str, cases: list) -> dict:
         ex = exercise(exercise_id)

@@ -104,6 +104,49 @@ def _towers(rng):
     return [[[int(n)] for n in rng.integers(0, 7, 4)], [[int(n)] for n in rng.integers(8, 16, 4)], [[8], [9], [0]]]
 
 
+def _homographies(rng):
+    # exact pairs through a random homography (a camera looking at a plane), 4 points and more
+    cases = []
+    for n in (4, 4, 6, 15):
+        H = np.array([[rng.uniform(0.5, 2), rng.uniform(-0.3, 0.3), rng.uniform(-300, 300)],
+                      [rng.uniform(-0.3, 0.3), rng.uniform(0.5, 2), rng.uniform(-300, 300)],
+                      [rng.uniform(-4e-4, 4e-4), rng.uniform(-4e-4, 4e-4), 1.0]])
+        src = np.column_stack([rng.uniform(-400, 400, n), rng.uniform(-300, 300, n)])
+        dst = np.column_stack([src, np.ones(n)]) @ H.T
+        cases.append([[src.tolist(), (dst[:, :2] / dst[:, 2:]).tolist()]])
+    return cases
+
+
+def _noisy_lines(rng):
+    cases = []
+    for _ in range(4):
+        n = int(rng.integers(6, 30))
+        reach = rng.uniform(100, 500, n)
+        sag = rng.uniform(-0.2, 0.2) * reach + rng.uniform(-20, 20) + rng.normal(0, rng.uniform(0.1, 3), n)
+        cases.append([[reach.tolist(), sag.tolist()]])
+    return cases
+
+
+def _ik_all_solutions(rng):
+    # every solution of ik() (K, 5) at random targets the instructor's kit reaches (the harness reports an
+    # unreachable target as an error): per check two with one solution in the joint limits and two with several
+    # (elbow up and down, or both waist branches; about 2 % of the targets); the student's _branch_joints runs in
+    # the fast single solve and in the batch it falls back to
+    from armlab.kinematics import Unreachable, ik
+
+    single, several = [], []
+    while len(single) < 8 or len(several) < 8:
+        heading, r = rng.uniform(-np.pi, np.pi), rng.uniform(50, 420)
+        call = [[float(r * np.cos(heading)), float(r * np.sin(heading)), float(rng.uniform(-50, 350))],
+                float(rng.uniform(-0.5, 2.5)), float(rng.uniform(-1, 1))]
+        try:
+            k = len(ik(np.array(call[0]), call[1], call[2]))
+        except Unreachable:
+            continue
+        (single if k == 1 else several).append(call)
+    return [single[i:i + 2] + several[i:i + 2] for i in range(0, 8, 2)]
+
+
 SPECS: dict[str, HiddenSpec] = {
     "calib.project_pinhole": HiddenSpec("project_pinhole", _projections, atol=1e-6),
     "calib.pixel_to_world_pinhole": HiddenSpec("pixel_to_world_pinhole", _back_projections, atol=1e-6),
@@ -114,6 +157,9 @@ SPECS: dict[str, HiddenSpec] = {
     "detect.centroid": HiddenSpec("centroid", _masks, atol=1e-6),
     "detect.wrap_yaw": HiddenSpec("wrap_yaw", _angles, atol=1e-9),
     "events.sky_points": HiddenSpec("sky_points", _towers, atol=0),
+    "calib.tag_homography": HiddenSpec("armlab.calibration.homography.dlt_homography", _homographies, atol=1e-7),
+    "grab.sag_line": HiddenSpec("sag_line", _noisy_lines, atol=1e-8),
+    "ik.candidates": HiddenSpec("armlab.kinematics.ik", _ik_all_solutions, atol=1e-6),
 }
 
 

@@ -13,7 +13,7 @@ from pathlib import Path
 
 from armlab.exercises.registry import exercise
 
-from .grade import ExerciseResult
+from .results import ExerciseResult
 
 __all__ = ["atomic_write", "results_json", "feedback_md", "grades_csv", "table", "write_reports"]
 

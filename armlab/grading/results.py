@@ -1,0 +1,25 @@
+"""What grading an exercise gives: its checks (passed or not, with the first failure's message) and its score."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+__all__ = ["CheckResult", "ExerciseResult"]
+
+
+@dataclass(frozen=True)
+class CheckResult:
+    name: str
+    passed: bool
+    message: str = ""
+
+
+@dataclass
+class ExerciseResult:
+    """One exercise's grade: score out of max_score, its checks, and why it scored 0 without checks (reason)."""
+
+    exercise_id: str
+    score: float
+    max_score: int
+    checks: list[CheckResult] = field(default_factory=list)
+    reason: str = ""
