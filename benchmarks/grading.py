@@ -7,7 +7,6 @@ third correct, a third blank, a third wrong: the reference regions with one sign
 from __future__ import annotations
 
 import argparse
-import json
 import shutil
 import tempfile
 import time
@@ -16,25 +15,10 @@ from pathlib import Path
 from armlab.exercises import make_student_release
 from armlab.exercises.registry import exercise
 from armlab.grading import grade_class
-from armlab.grading.splice import splice_text
+from armlab.grading.splice import write_regions
 from armlab.grading.submission import exercise_file, regions_of, source_texts
 
 ROOT = Path(__file__).resolve().parents[1]
-
-
-def _put(student: Path, exercise_id: str, bodies: list[str]) -> None:
-    name = exercise_file(exercise(exercise_id))
-    path = student / name
-    if name.endswith(".ipynb"):
-        nb = json.loads(path.read_text())
-        used = 0
-        for cell in nb["cells"]:
-            if cell["cell_type"] == "code":
-                new, n = splice_text("".join(cell["source"]), exercise_id, bodies, used, name)
-                cell["source"], used = new.splitlines(keepends=True), used + n
-        path.write_text(json.dumps(nb, indent=1))
-    else:
-        path.write_text(splice_text(path.read_text(), exercise_id, bodies, 0, name)[0])
 
 
 def _wrong(body: str, student: int) -> str:
@@ -58,7 +42,7 @@ def make_class(folder: Path, students: int, exercises: list[str]) -> None:
                 continue                                  # blank
             if kind == 2:                                 # wrong, and different text per student (no shared result)
                 bodies = [_wrong(b, i) for b in bodies]
-            _put(student, exercise_id, bodies)
+            write_regions(student, exercise_id, bodies)
 
 
 def main() -> None:

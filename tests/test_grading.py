@@ -15,7 +15,7 @@ from armlab.exercises import make_student_release
 from armlab.exercises.registry import exercise
 from armlab.grading import grade_class, read_submission
 from armlab.grading.run import Limits
-from armlab.grading.splice import splice_text
+from armlab.grading.splice import write_regions
 from armlab.grading.submission import exercise_file, regions_of, source_texts
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -29,22 +29,6 @@ WRONG = {"fk.dh_transform": "    ct, st, ca, sa = np.cos(theta), np.sin(theta), 
 def _reference_bodies(exercise_id: str) -> list[str]:
     name = exercise_file(exercise(exercise_id))
     return regions_of(source_texts(ROOT / name), exercise_id, name)
-
-
-def _edit(student: Path, exercise_id: str, bodies: list[str]) -> None:
-    """Put `bodies` into the student's regions of the exercise (as a student edits their release copy)."""
-    name = exercise_file(exercise(exercise_id))
-    path = student / name
-    if name.endswith(".ipynb"):
-        nb = json.loads(path.read_text())
-        used = 0
-        for cell in nb["cells"]:
-            if cell["cell_type"] == "code":
-                new, n = splice_text("".join(cell["source"]), exercise_id, bodies, used, name)
-                cell["source"], used = new.splitlines(keepends=True), used + n
-        path.write_text(json.dumps(nb, indent=1))
-    else:
-        path.write_text(splice_text(path.read_text(), exercise_id, bodies, 0, name)[0])
 
 
 def _wrong_ik() -> list[str]:
@@ -81,29 +65,29 @@ def graded(tmp_path_factory) -> tuple[dict, Path]:
 
     full = student("full")
     for exercise_id in GRADED:
-        _edit(full, exercise_id, _reference_bodies(exercise_id))
+        write_regions(full, exercise_id, _reference_bodies(exercise_id))
     student("blank")
-    _edit(student("wrong_dh"), "fk.dh_transform", [WRONG["fk.dh_transform"]])
+    write_regions(student("wrong_dh"), "fk.dh_transform", [WRONG["fk.dh_transform"]])
     wrong_ik = student("wrong_ik")
-    _edit(wrong_ik, "ik.planar_ik", _wrong_ik())
-    _edit(wrong_ik, "fk.dh_transform", _reference_bodies("fk.dh_transform"))
+    write_regions(wrong_ik, "ik.planar_ik", _wrong_ik())
+    write_regions(wrong_ik, "fk.dh_transform", _reference_bodies("fk.dh_transform"))
     tampered = student("tampered")          # a wrong DH, every trick on the check cells, a conftest that passes all
-    _edit(tampered, "fk.dh_transform", [WRONG["fk.dh_transform"].replace("-d]", "-1.0 * d]")])
+    write_regions(tampered, "fk.dh_transform", [WRONG["fk.dh_transform"].replace("-d]", "-1.0 * d]")])
     _tamper_checks(tampered)
     (tampered / "conftest.py").write_text(
         "import pytest\n\n@pytest.hookimpl(hookwrapper=True)\ndef pytest_runtest_makereport(item, call):\n"
         "    outcome = yield\n    outcome.get_result().outcome = 'passed'\n")
     (tampered / "pytest.ini").write_text("[pytest]\naddopts = -p no:nbval\n")
-    _edit(student("marker"), "fk.dh_transform",
+    write_regions(student("marker"), "fk.dh_transform",
           ["    # NBVAL_RAISES_EXCEPTION\n" + WRONG["fk.dh_transform"].replace("-d]", "-2 * d]")])
-    _edit(student("loop"), "fk.dh_transform", ["    while True:\n        pass"])
+    write_regions(student("loop"), "fk.dh_transform", ["    while True:\n        pass"])
     corrupt = student("corrupt")
     (corrupt / "notebooks/02_forward_kinematics.ipynb").write_text('{"cells": [ not json')
     edited_only = subs / "edited_only"     # only the edited file, the rest not submitted
     (edited_only / "notebooks").mkdir(parents=True)
     shutil.copy2(full / "notebooks/03_inverse_kinematics.ipynb", edited_only / "notebooks")
     kit = student("kit_call")            # the kit's reference function in place of the DH chain
-    _edit(kit, "fk.fk_from_table", ["    from armlab import kinematics\n"
+    write_regions(kit, "fk.fk_from_table", ["    from armlab import kinematics\n"
                                     "    return kinematics.fk_pox(q, check_limits=False)"])
     out = base / "out"
     results = grade_class(subs, out, ROOT, jobs=2, limits=Limits(timeout_s=240, cpu_s=25), exercises=GRADED)
@@ -221,7 +205,7 @@ def test_run_autograder_in_a_gradescope_layout(tmp_path):
     shutil.copy2(root / "source/run_autograder", root / "run_autograder")
     (root / "run_autograder").chmod(0o755)
     make_student_release(ROOT, root / "submission")
-    _edit(root / "submission", "fk.dh_transform", _reference_bodies("fk.dh_transform"))
+    write_regions(root / "submission", "fk.dh_transform", _reference_bodies("fk.dh_transform"))
     (root / "results").mkdir()
     env = dict(os.environ, ARMLAB_AUTOGRADER_ROOT=str(root), ARMLAB_PYTHON=sys.executable,
                ARMLAB_GRADE_EXERCISES="fk.dh_transform,ik.planar_ik", ARMLAB_GRADE_TIMEOUT="240")

@@ -15,7 +15,7 @@ from armlab.exercises.registry import exercise
 
 from .submission import exercise_file
 
-__all__ = ["RegionRejected", "tracked_files", "check_body", "splice_text", "build_worktree"]
+__all__ = ["RegionRejected", "tracked_files", "check_body", "splice_text", "write_regions", "build_worktree"]
 
 # nbval's comment markers, the kit's check tags and exercise markers: a student body may hold none of them.
 _FORBIDDEN = re.compile(r"^\s*#\s*(NBVAL_\w*|CHECK\b|BEGIN SOLUTION|END SOLUTION|PYTEST_VALIDATE_IGNORE_OUTPUT)",
@@ -63,6 +63,23 @@ def splice_text(text: str, exercise_id: str, bodies: list[str], start: int, wher
         last, used = region.end, used + 1
     out += lines[last:]
     return "\n".join(out) + ("\n" if text.endswith("\n") else ""), used
+
+
+def write_regions(folder: Path, exercise_id: str, bodies: list[str]) -> None:
+    """Put `bodies` into the regions of an exercise in a submission folder's copy of its file (a notebook's code
+    cells or a package source), as a student edits their release copy (tests and benchmarks build classes so)."""
+    name = exercise_file(exercise(exercise_id))
+    path = Path(folder) / name
+    if name.endswith(".ipynb"):
+        nb = json.loads(path.read_text())
+        used = 0
+        for cell in nb["cells"]:
+            if cell["cell_type"] == "code":
+                new, n = splice_text("".join(cell["source"]), exercise_id, bodies, used, name)
+                cell["source"], used = new.splitlines(keepends=True), used + n
+        path.write_text(json.dumps(nb, indent=1))
+    else:
+        path.write_text(splice_text(path.read_text(), exercise_id, bodies, 0, name)[0])
 
 
 def build_worktree(reference: Path, dest: Path, exercise_id: str | None = None,
