@@ -326,7 +326,9 @@ def _numerical_candidates(P: np.ndarray, pitch: np.ndarray, roll: np.ndarray, ro
 # The math the closed-form IK needs, for numpy arrays (the batch: every target and branch at once) or for Python
 # floats (one target, one branch at a time: no numpy per-call cost). The same formulas run on either.
 _SCALAR_MATH = SimpleNamespace(pi=math.pi, cos=math.cos, sin=math.sin, arctan2=math.atan2, arccos=math.acos,
-                               hypot=math.hypot, sqrt=math.sqrt, abs=abs, minimum=min, maximum=max, mod=operator.mod,
+                               hypot=math.hypot, sqrt=math.sqrt, abs=abs, mod=operator.mod,
+                               minimum=lambda a, b: b if b < a else a,      # what min(a, b) does, called quicker
+                               maximum=lambda a, b: b if b > a else a,
                                where=lambda condition, a, b: a if condition else b)
 
 
@@ -403,9 +405,13 @@ def _ik_candidates(P: np.ndarray, pitch: np.ndarray, roll: np.ndarray, robot: Ro
 _BRANCH_SIGNS = tuple(zip(_FLIPPED.tolist(), _DELTA_SIGN.tolist(), _ELBOW_DOWN.tolist()))
 
 
+_PLAIN_NUMBERS = frozenset((float, int, np.float64, np.float32, np.int64, np.int32))
+
+
 def _real(value) -> float:
     """A plain number as a Python float; TypeError for anything else (arrays go the general way)."""
-    if isinstance(value, (float, int, np.floating, np.integer)) and not isinstance(value, bool):
+    if type(value) in _PLAIN_NUMBERS or (isinstance(value, (float, int, np.floating, np.integer))
+                                         and not isinstance(value, bool)):
         return float(value)
     raise TypeError(value)
 
@@ -421,6 +427,9 @@ def _floats(values, n: int) -> list[float]:
     raise TypeError(values)
 
 
+_PI, _TWO_PI = math.pi, 2 * math.pi     # _ik_one writes _wrap inline on floats: pi - (pi - angle) mod 2 pi
+
+
 def _ik_one(position, pitch, roll, current, robot: RobotModel) -> np.ndarray | None:
     """ik() for one target in plain Python floats: the same _branch_joints, wrap, limits and ranking as the batch,
     without numpy's per-call cost. None where the general path must answer: input it does not take as is (it
@@ -428,42 +437,41 @@ def _ik_one(position, pitch, roll, current, robot: RobotModel) -> np.ndarray | N
     try:
         x, y, z = _floats(position, 3)
         pitch, roll = _real(pitch), _real(roll)
-        cur = robot.home.tolist() if current is None else _floats(current, 5)
+        cur = None if current is None else _floats(current, 5)
     except TypeError:
         return None
-    if not all(map(math.isfinite, (x, y, z, pitch, roll, *cur))):
+    if not (math.isfinite(x + y + z + pitch + roll) and (cur is None or math.isfinite(sum(cur)))):
         return None
     geometry = _ik_geometry(robot)
     heading, r = _heading(x, y, geometry[4], _SCALAR_MATH)
-    bounds = robot.bounds
-    roll = _wrap(roll, _SCALAR_MATH)
-    if not bounds[4][0] <= roll <= bounds[4][1]:
+    (lo1, hi1), (lo2, hi2), (lo3, hi3), (lo4, hi4), (lo5, hi5) = robot.bounds
+    roll = _PI - (_PI - roll) % _TWO_PI
+    if not lo5 <= roll <= hi5:
         return None
     found = []
     for flipped, delta_sign, elbow_down in _BRANCH_SIGNS:
         try:
-            *joints, ok, _ = _branch_joints(heading, r, z, pitch, flipped, delta_sign, geometry, _SCALAR_MATH)
+            q1, q2, q3, q4, ok, _ = _branch_joints(heading, r, z, pitch, flipped, delta_sign, geometry, _SCALAR_MATH)
         except NotImplementedError as e:
             if is_blank_stub(e, "ik.candidates"):
                 return None
             raise
         if not ok:
             continue
-        q = []
-        for a, (lo, hi) in zip(joints, bounds):
-            a = _wrap(a, _SCALAR_MATH)
-            if not lo <= a <= hi:
-                break
-            q.append(a)
-        else:
-            q.append(roll)
-            found.append((elbow_down, q))
+        q1, q2, q3, q4 = (_PI - (_PI - q1) % _TWO_PI, _PI - (_PI - q2) % _TWO_PI,     # _wrap, inline
+                          _PI - (_PI - q3) % _TWO_PI, _PI - (_PI - q4) % _TWO_PI)
+        if lo1 <= q1 <= hi1 and lo2 <= q2 <= hi2 and lo3 <= q3 <= hi3 and lo4 <= q4 <= hi4:
+            found.append((elbow_down, [q1, q2, q3, q4, roll]))
     if not found:
         return None
     if len(found) > 1:             # _rank's order: elbow up first, then least joint motion from `current`
-        found = [(elbow_down * 1e3 + sum(abs(_wrap(a - c, _SCALAR_MATH)) for a, c in zip(q, cur)), q)
-                 for elbow_down, q in found]
-        found.sort(key=lambda item: item[0])                # stable: ties keep the branch order, as _rank does
+        if len(found) == 2 and found[0][0] != found[1][0]:
+            found.sort(key=lambda item: item[0])            # one elbow up, one down: the motion cannot reorder them
+        else:
+            cur = robot.home.tolist() if cur is None else cur
+            found = [(elbow_down * 1e3 + sum([abs(_PI - (_PI - (a - c)) % _TWO_PI) for a, c in zip(q, cur)]), q)
+                     for elbow_down, q in found]
+            found.sort(key=lambda item: item[0])            # stable: ties keep the branch order, as _rank does
     return np.array([q for _, q in found])
 
 
