@@ -189,18 +189,17 @@ def fk(q, robot: RobotModel | None = None, check_limits: bool = True) -> np.ndar
 def joint_positions(q, robot: RobotModel | None = None) -> np.ndarray:
     """World positions (mm) of base, waist top, shoulder, elbow, wrist, wrist_rotate, tool: (7, 3) or (N, 7, 3).
 
-    The points the viewer and the simulator draw the arm's links between.
+    The points the viewer and the simulator draw the arm's links between: the link frames' origins, and the waist
+    top and the wrist_rotate joint carried with link frames 1 and 4 (RobotModel.points_home, data/rx200_pox.csv).
     """
     robot = robot or rx200()
     frames = link_frames(q, robot, check_limits=False)
     base = np.zeros(frames.shape[:-3] + (3,))
-    waist_top = base.copy()
-    waist_top[..., 2] = 65.66
-    wrist = frames[..., 3, :3, 3]
-    approach = frames[..., 6, :3, 0]
-    wrist_rotate = wrist + 65.0 * approach
-    return np.stack([base, waist_top, frames[..., 1, :3, 3], frames[..., 2, :3, 3], wrist, wrist_rotate,
-                     frames[..., 6, :3, 3]], axis=-2)
+    on_link1, on_link4 = robot.points_on_links
+    waist_top = frames[..., 1, :3, :3] @ on_link1 + frames[..., 1, :3, 3]
+    wrist_rotate = frames[..., 4, :3, :3] @ on_link4 + frames[..., 4, :3, 3]
+    return np.stack([base, waist_top, frames[..., 1, :3, 3], frames[..., 2, :3, 3], frames[..., 3, :3, 3],
+                     wrist_rotate, frames[..., 6, :3, 3]], axis=-2)
 
 
 def jacobian(q, robot: RobotModel | None = None) -> np.ndarray:

@@ -46,6 +46,8 @@ class RobotModel:
         screws: (5, 6) space-frame screw axes (w, v), v in mm, world frame.
         M: (4, 4) tool frame ee_gripper_link in the world at q = 0 (mm).
         frames_home: (5, 4, 4) link frames 1..5 (the poses of DH frames 1..5) in the world at q = 0 (mm).
+        points_home: (2, 3) the top of the waist (on link 1) and the wrist_rotate joint (on link 4) in the world at
+            q = 0 (mm): the drawing's points between the link frames' origins.
     """
 
     joint_names: tuple[str, ...]
@@ -58,6 +60,7 @@ class RobotModel:
     screws: np.ndarray
     M: np.ndarray
     frames_home: np.ndarray
+    points_home: np.ndarray
 
     def limit_violations(self, q, tol: float = LIMIT_TOL_RAD) -> list[str]:
         """Human-readable list of the joints of q (5,) outside their limits (empty when all are within); NaN and
@@ -78,6 +81,14 @@ class RobotModel:
         """Boolean (...,) telling which joint vectors q (..., 5) respect every position limit."""
         q = np.asarray(q, dtype=float)
         return ((q >= self.lower - tol) & (q <= self.upper + tol)).all(axis=-1)
+
+    @functools.cached_property
+    def points_on_links(self) -> np.ndarray:
+        """points_home in their links' frames (2, 3) mm: the waist top in link frame 1, the wrist_rotate joint in link
+        frame 4 (what kinematics.joint_positions carries along with those frames)."""
+        local = [np.linalg.solve(self.frames_home[link], np.append(point, 1.0))[:3]
+                 for link, point in zip((0, 3), self.points_home, strict=True)]
+        return np.array(local)
 
     @functools.cached_property
     def bounds(self) -> tuple[tuple[float, float], ...]:
@@ -177,7 +188,7 @@ def load_robot(joints_csv: Path | str | None = None, dh_csv: Path | str | None =
 
     frame_rows = tuple(f"frame{i}_home" for i in range(1, 6))
     pox, pox_lines = _named_table(pox_path, ["name", "wx", "wy", "wz", "vx", "vy", "vz"],
-                                  JOINT_NAMES + ("ee_home",) + frame_rows)
+                                  JOINT_NAMES + ("ee_home",) + frame_rows + ("waist_top_home", "wrist_rotate_home"))
     screws = pox[:5]
     norms = np.linalg.norm(screws[:, :3], axis=1)
     for name, norm, lineno in zip(JOINT_NAMES, norms, pox_lines):
@@ -185,12 +196,14 @@ def load_robot(joints_csv: Path | str | None = None, dh_csv: Path | str | None =
             raise RobotDataError(f"{pox_path}, line {lineno}: joint {name}: rotation axis has length {norm}, "
                                  "expected 1")
     M = homogeneous(rotvec_to_matrix(pox[5, :3]), pox[5, 3:])
-    frames_home = np.array([homogeneous(rotvec_to_matrix(row[:3]), row[3:]) for row in pox[6:]])
+    frames_home = np.array([homogeneous(rotvec_to_matrix(row[:3]), row[3:]) for row in pox[6:11]])
+    points_home = pox[11:, 3:]
 
     arrays = [np.array(a, dtype=float) for a in (lower, upper, velocity, home, sleep)]
-    for a in arrays + [dh, screws, M, frames_home]:
+    for a in arrays + [dh, screws, M, frames_home, points_home]:
         a.setflags(write=False)
-    return RobotModel(JOINT_NAMES, *arrays, dh=dh, screws=screws, M=M, frames_home=frames_home)
+    return RobotModel(JOINT_NAMES, *arrays, dh=dh, screws=screws, M=M, frames_home=frames_home,
+                      points_home=points_home)
 
 
 @functools.lru_cache(maxsize=1)

@@ -107,8 +107,8 @@ def test_malformed_files_name_file_line_and_problem(tmp_path, which, old, new, l
 def test_missing_extra_and_empty_files(tmp_path):
     paths = copy_data(tmp_path)
     text = paths["pox"].read_text()
-    paths["pox"].write_text("\n".join(line for line in text.splitlines() if not line.startswith("frame5_home")))
-    with pytest.raises(RobotDataError, match="row 'frame5_home' is missing"):
+    paths["pox"].write_text("\n".join(line for line in text.splitlines() if not line.startswith("wrist_rotate_home")))
+    with pytest.raises(RobotDataError, match="row 'wrist_rotate_home' is missing"):
         load(paths)
     paths["pox"].write_text(text + "gripper,0,0,1,0,0,0\n")
     with pytest.raises(RobotDataError, match=rf"line {len(text.splitlines()) + 1}: unexpected extra row 'gripper'"):
@@ -129,3 +129,17 @@ def test_printing_the_robot_shows_its_tables_not_a_dataclass_dump():
     assert any(line.startswith("PoX screws") for line in lines)
     shoulder_dh = next(line for line in lines if line.startswith("  shoulder") and "206.16" in line)
     assert shoulder_dh.split()[1:] == ["-75.96", "0.00", "206.16", "0.00"]        # theta0 deg, d, a mm, alpha deg
+
+
+def test_the_drawing_points_come_from_the_data_file():
+    """The waist top and the wrist_rotate joint are rows of rx200_pox.csv (rx200.urdf.xacro: the waist joint's
+    origin 65.66 mm up the base axis, the wrist_rotate joint 65 mm out along the approach from the wrist), carried
+    with link frames 1 and 4; kinematics.joint_positions types no lengths of its own."""
+    from armlab.kinematics import joint_positions, link_frames
+    robot = rx200()
+    np.testing.assert_allclose(robot.points_home, [[0.0, 0.0, 65.66], [0.0, 315.0, 304.57]])
+    q = np.random.default_rng(3).uniform(robot.lower, robot.upper, (200, 5))
+    points, frames = joint_positions(q), link_frames(q, check_limits=False)
+    np.testing.assert_allclose(points[:, 1], np.tile([0.0, 0.0, 65.66], (200, 1)), atol=1e-9)
+    wrist, approach = frames[:, 3, :3, 3], frames[:, 6, :3, 0]
+    np.testing.assert_allclose(points[:, 5], wrist + 65.0 * approach, atol=1e-9)
