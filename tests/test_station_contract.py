@@ -14,6 +14,7 @@ from test_hardware import vendors  # noqa: F401  (the fake vendor modules, a fix
 from armlab import kinematics, make_station
 from armlab.station import (
     BACKENDS,
+    STATION_MODULES_ENV,
     Arm,
     Capabilities,
     EmergencyStopped,
@@ -25,6 +26,7 @@ from armlab.station import (
     backend_names,
     register_backend,
 )
+from armlab.station import registry as station_registry
 from armlab.tasks import GuardedArm
 
 Q_READY = np.array([0.0, -0.5, 0.3, 1.2, 0.0])   # tool well above the board, reachable from sleep
@@ -186,3 +188,30 @@ def test_backends_are_registered_by_name_and_a_new_one_is_one_line():
             assert st.kind == "sim" and st.world.objects == [] and "sim_empty" in backend_names()
     finally:
         del BACKENDS["sim_empty"]
+
+
+def test_a_labs_own_backend_is_one_module_named_in_the_environment(tmp_path, monkeypatch):
+    """A rig outside the kit: one module defining STATION_BACKENDS, named in ARMLAB_STATION_MODULES; no kit file
+    changes. A module that does not import, or defines no backends, is named in the error and registers nothing."""
+    (tmp_path / "lab_rig.py").write_text(
+        "from armlab.sim import make_sim_station\n\n"
+        "def make_rig(**options):\n"
+        "    return make_sim_station(scene='empty', **options)\n\n"
+        "STATION_BACKENDS = {'rig': make_rig}\n")
+    (tmp_path / "not_a_rig.py").write_text("BACKENDS = {'rig2': print}\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    monkeypatch.setenv(STATION_MODULES_ENV, "lab_rig")
+    try:
+        assert "rig" in backend_names()
+        with make_station("rig", seed=1) as st:
+            assert st.kind == "sim" and st.world.objects == []
+        monkeypatch.setenv(STATION_MODULES_ENV, "lab_rig, not_a_rig")
+        with pytest.raises(ValueError, match=r"names 'not_a_rig', which defines no STATION_BACKENDS"):
+            backend_names()
+        assert "rig2" not in BACKENDS
+        monkeypatch.setenv(STATION_MODULES_ENV, "no_such_rig_module")
+        with pytest.raises(ImportError, match=r"ARMLAB_STATION_MODULES names 'no_such_rig_module', which does not"):
+            make_station("sim")
+    finally:
+        BACKENDS.pop("rig", None)
+        station_registry._imported_modules.discard("lab_rig")

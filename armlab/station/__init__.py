@@ -17,7 +17,8 @@ from armlab.station.contract import (
     SagReference,
     Station,
 )
-from armlab.station.registry import BACKENDS, backend_names, make_station, register_backend
+from armlab.station.registry import BACKENDS, STATION_MODULES_ENV, backend_names, make_station, register_backend
 
 __all__ = ["Frame", "Arm", "RGBDCamera", "GroundTruth", "Station", "Capabilities", "Pacing", "SagReference",
-           "make_station", "MotionRefused", "EmergencyStopped", "BACKENDS", "backend_names", "register_backend"]
+           "make_station", "MotionRefused", "EmergencyStopped", "BACKENDS", "backend_names", "register_backend",
+           "STATION_MODULES_ENV"]

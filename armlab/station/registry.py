@@ -3,18 +3,26 @@
 A backend is a function `(**options) -> Station` in a module of its own that implements the contract
 (armlab.station.contract). BACKENDS names it as "module:function" and the module is imported only when a station of
 that kind is built, so the contract, the backends and this registry import no one in a circle, and
-`import armlab` loads no backend. A new backend is one module plus one line here (or `register_backend` from
-outside the package, e.g. a course's own rig).
+`import armlab` loads no backend. A new backend is one module: the kit's own get a line in BACKENDS; a lab's own
+rig, outside the kit, defines `STATION_BACKENDS = {kind: factory}` in a module named in the environment variable
+ARMLAB_STATION_MODULES (comma-separated importable names, imported when a station is first built or the backends are
+listed), or calls `register_backend` itself.
+
+    # my_rig.py, on the path, with ARMLAB_STATION_MODULES=my_rig
+    STATION_BACKENDS = {"rig": make_rig_station}      # (**options) -> armlab.station.contract.Station
 """
 
 from __future__ import annotations
 
 import importlib
+import os
 from collections.abc import Callable
 
 from armlab.station.contract import Station
 
-__all__ = ["BACKENDS", "register_backend", "backend_names", "make_station"]
+__all__ = ["BACKENDS", "register_backend", "backend_names", "make_station", "STATION_MODULES_ENV"]
+
+STATION_MODULES_ENV = "ARMLAB_STATION_MODULES"
 
 BACKENDS: dict[str, str] = {
     "sim": "armlab.sim:make_sim_station",            # simulated arm, block world and RGB-D camera
@@ -36,12 +44,44 @@ def register_backend(kind: str, factory: str | Callable[..., Station]) -> None:
     BACKENDS[kind] = factory
 
 
+_imported_modules: set[str] = set()      # the ARMLAB_STATION_MODULES already registered in this process
+
+
+def _discover() -> None:
+    """Register the backends of every module named in ARMLAB_STATION_MODULES not yet imported. ImportError naming
+    a module that does not import; ValueError for one without a non-empty STATION_BACKENDS dict (nothing of that
+    module is registered then)."""
+    for name in filter(None, (n.strip() for n in os.environ.get(STATION_MODULES_ENV, "").split(","))):
+        if name in _imported_modules:
+            continue
+        try:
+            module = importlib.import_module(name)
+        except ImportError as e:
+            raise ImportError(f"{STATION_MODULES_ENV} names {name!r}, which does not import: {e}") from e
+        backends = getattr(module, "STATION_BACKENDS", None)
+        if not isinstance(backends, dict) or not backends:
+            raise ValueError(f"{STATION_MODULES_ENV} names {name!r}, which defines no STATION_BACKENDS = "
+                             f"{{kind: factory}} dict (got {type(backends).__name__})")
+        added: list[str] = []
+        try:
+            for kind, factory in backends.items():
+                register_backend(kind, factory)
+                added.append(kind)
+        except ValueError as e:
+            for kind in added:                  # all of the module's backends or none
+                del BACKENDS[kind]
+            raise ValueError(f"{STATION_MODULES_ENV}: module {name!r}: {e}") from e
+        _imported_modules.add(name)
+
+
 def backend_names() -> tuple[str, ...]:
-    """The names make_station accepts, in registration order."""
+    """The names make_station accepts, in registration order (the kit's, then ARMLAB_STATION_MODULES')."""
+    _discover()
     return tuple(BACKENDS)
 
 
 def _factory(kind: str) -> Callable[..., Station]:
+    _discover()
     entry = BACKENDS.get(kind) if isinstance(kind, str) else None
     if entry is None:
         names = " or ".join(repr(n) for n in BACKENDS)
