@@ -5,6 +5,9 @@ PY      := .venv/bin/python
 RELEASE := $(wildcard .student-release)
 STAMP   := .venv/.installed
 NBVAL   := --nbval --nbval-sanitize-with tests/nbval_sanitize.cfg --nbval-cell-timeout=600
+# Test files run in parallel, one process per core (at most 4); the tests of one file, and the cells of one notebook
+# (one kernel), stay together in one process (pytest-xdist's loadfile).
+PAR     := -n auto --maxprocesses 4 --dist loadfile
 
 .PHONY: demo test lint unit notebooks lab bench browser camera student autograder clean
 
@@ -23,21 +26,21 @@ demo: $(STAMP)
 ## (installs headless Chromium for the browser checks)
 test: $(STAMP) browser camera lint
 ifeq ($(RELEASE),)
-	$(PY) -m pytest -q tests notebooks $(NBVAL)
-	bash tools/nbval-numerics $(PY) $(NBVAL)
+	$(PY) -m pytest -q $(PAR) tests notebooks $(NBVAL)
+	bash tools/nbval-numerics $(PY) $(PAR) $(NBVAL)
 else
-	MPLBACKEND=Agg $(PY) -m pytest -q tests
+	MPLBACKEND=Agg $(PY) -m pytest -q $(PAR) tests
 endif
 
 lint: $(STAMP)
 	$(PY) -m ruff check armlab tests notebooks $(wildcard benchmarks tools/build-notebook tools/student-release)
 
 unit: $(STAMP) camera
-	MPLBACKEND=Agg $(PY) -m pytest -q tests
+	MPLBACKEND=Agg $(PY) -m pytest -q $(PAR) tests
 
 notebooks: $(STAMP)
-	$(PY) -m pytest -q notebooks $(NBVAL)
-	bash tools/nbval-numerics $(PY) $(NBVAL)
+	$(PY) -m pytest -q $(PAR) notebooks $(NBVAL)
+	bash tools/nbval-numerics $(PY) $(PAR) $(NBVAL)
 
 browser:
 	bash tools/ensure-chromium
