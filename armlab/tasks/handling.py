@@ -11,9 +11,10 @@ compensates sag) and station.camera. Each station gets a TaskContext on first us
 - known: what stands on the board (detections from the last look, updated by picks and places), the obstacles plans
   avoid; held: the block in the gripper.
 place() releases the block RELEASE_GAP_MM above the requested bottom height, so a residual arm error never pushes
-it into what it is put on (the block drops that little and settles); at long reach, where the tool is tilted,
-planning.plan_place also lifts it by how far the tilted block's lowest edge hangs below its bottom-face centre
-(planning.tilted_release_lift). Every pick and place plan is checked whole before its first command
+it into what it is put on (the block drops that little and settles); the release is aimed with the held block's pose
+in the tool frame as planned at its grasp (planning.plan_place's held_in_tool): its centre over the spot and its
+lowest corner at the release height, so a block picked tilted at long reach, or placed tilted, is not lowered into
+the board or what it is put on. Every pick and place plan is checked whole before its first command
 (tasks.precheck: the commands the guarded arm would send, the pads and the held block along them, the sag model and
 the known blocks): an impossible one raises MotionRefused with nothing sent. Units: mm, rad; world (board) frame.
 """
@@ -155,7 +156,7 @@ def place(station, position, yaw: float = 0.0, obstacles=None,
         raise ValueError(f"place position must be 3 finite numbers (x, y, z in world mm), got {position!r}")
     obs = ctx.known if obstacles is None else list(obstacles)
     plan = planning.plan_place(ctx.arm.joint_positions(), p + [0.0, 0.0, RELEASE_GAP_MM], edge, float(yaw),
-                               obstacles=obs, clearance=clearance)
+                               obstacles=obs, clearance=clearance, held_in_tool=ctx.held_in_tool)
     held = () if ctx.held_in_tool is None else (
         motion_safety.HeldBlock(edge, ctx.held_in_tool, f"held {ctx.held.color} block"),)
     precheck.check_whole_plan(plan, ctx.arm, edge, held=held, known=precheck.known_boxes(obs),
