@@ -175,11 +175,12 @@ def _approach(q_start, target: np.ndarray, yaw: float, floor_z: float, held_belo
     for _ in range(_MAX_RAISES + 1):
         hover = np.array([target[0], target[1], z_t])
         try:
-            grasp = choose_grasp(target, yaw, approach_z=z_t, robot=robot)
+            neighbours = others if action == "close" else ()      # a pick's open pads keep clear of them
+            grasp = choose_grasp(target, yaw, approach_z=z_t, robot=robot, obstacles=neighbours)
             down = None
             if not grasp.top_down and low_hover is not None:       # a shorter straight descent keeps the yaw
                 for z in np.arange(z_t - _LOW_HOVER_STEP_MM, low_hover - 1e-9, -_LOW_HOVER_STEP_MM):
-                    low = choose_grasp(target, yaw, approach_z=z, robot=robot)
+                    low = choose_grasp(target, yaw, approach_z=z, robot=robot, obstacles=neighbours)
                     if low.pitch > grasp.pitch + 1e-9:             # steeper: less tilt, more of the yaw kept
                         line = _line_or_none(np.array([target[0], target[1], z]), target, low, robot)
                         if line is not None:
