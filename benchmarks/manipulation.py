@@ -227,7 +227,41 @@ def grid_rows(outcomes: list[board_grid.Outcome]) -> list[list]:
     return rows
 
 
+def sag_by_region(seed: int = 0, z: float = 40.0, hover_mm: float = 60.0) -> list[list]:
+    """How right the fitted sag model (tasks.context's, fitted on calibration poses within 60 deg of straight ahead)
+    is over the whole board: on the station's empty-board twin (the same arm errors), the tool goes to z mm above
+    each grid spot (top-down, or the steepest pitch the spot allows) from hover_mm above it, once commanded as
+    planned and once through the sag model (GuardedArm); per region the |error| of the true tool point (3-D, mm)."""
+    from armlab import kinematics
+    from armlab.tasks.guard import GuardedArm
+
+    st = make_station("sim", seed=seed, scene="empty")
+    sag = tasks.context(st).arm.sag
+    reference = st.capabilities.sag_reference()
+    guarded = GuardedArm(reference.arm)
+    guarded.sag = sag
+    rows = []
+    for region in board_grid.REGIONS[:-1]:
+        errors = {"none": [], "tasks.sag": []}
+        for spot in (s for s in board_grid.GRID if s.region == region):
+            target = np.array([spot.x, spot.y, z])
+            pitch = min(np.pi / 2, kinematics.steepest_pitch(target))
+            for name, arm in (("none", reference.arm), ("tasks.sag", guarded)):
+                above = kinematics.ik(target + [0, 0, hover_mm], min(pitch, kinematics.steepest_pitch(
+                    target + [0, 0, hover_mm])), 0.0)[0]
+                arm.move_to(above)
+                arm.move_to(kinematics.ik(target, pitch, 0.0, current=above)[0])
+                errors[name].append(np.linalg.norm(reference.measure() - target))
+                arm.move_to(above)
+        rows.append([region, str(len(errors["none"])), np.mean(errors["none"]), np.max(errors["none"]),
+                     np.mean(errors["tasks.sag"]), np.max(errors["tasks.sag"])])
+    return rows
+
+
 def main_grid(n_random: int = 8, first_seed: int = 600) -> None:
+    print("The sag model over the board: |tool point error| (3-D, mm) 40 mm above the grid spots (empty-board twin)")
+    print(format_table(["region", "spots", "none mean", "none max", "tasks.sag mean", "tasks.sag max"],
+                       sag_by_region(), "{:.2f}"))
     spots = [*board_grid.GRID, *board_grid.random_spots(n_random, seed=7)]
     outcomes = []
     for i, (pick, place) in enumerate(board_grid.grid_pairs(spots)):
