@@ -542,3 +542,29 @@ def test_place_prefers_a_shorter_top_down_descent_that_keeps_the_yaw():
     # beyond that the place tilts (and can only keep the block square to the fingers)
     far = planning.plan_place(planning.CAMERA_CLEAR_POSE, [0.0, 420.0, 0.0], 38.0, yaw=0.3)
     assert next(s.trajectory for s in far.steps if s.label == "descend").pitch < np.radians(85)
+
+
+def test_a_place_is_aimed_with_the_held_blocks_pose_in_the_tool_frame():
+    # a block picked tilted at full reach sits 8 deg turned (about the closing axis) in the tool frame: placed
+    # top-down without its pose its lowest corner would end 2.5 mm below the target (into what it is put on)
+    from armlab.transforms import homogeneous
+
+    e, spot = 38.0, np.array([0.0, 250.0, 38.0])
+    a = np.radians(8.0)
+    c, s = np.cos(a), np.sin(a)
+    T_tool_block = homogeneous(np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]]) @ kinematics.fk(
+        kinematics.ik(np.array([0.0, 250.0, 57.0]), np.pi / 2, 0.0)[0])[:3, :3].T, np.zeros(3))
+
+    def lowest_and_centre(plan):
+        down = next(st.trajectory for st in plan.steps if st.label == "descend")
+        cube = kinematics.fk(down.end) @ T_tool_block
+        corners = np.array([[x, y, z] for x in (-.5, .5) for y in (-.5, .5) for z in (-.5, .5)]) * e
+        return (corners @ cube[:3, :3].T + cube[:3, 3])[:, 2].min(), cube[:2, 3]
+
+    low, centre = lowest_and_centre(planning.plan_place(planning.CAMERA_CLEAR_POSE, spot, e, 0.0))
+    assert low < spot[2] - 2.0
+    low, centre = lowest_and_centre(planning.plan_place(planning.CAMERA_CLEAR_POSE, spot, e, 0.0,
+                                                        held_in_tool=T_tool_block))
+    assert low == pytest.approx(spot[2], abs=0.1) and np.abs(centre - spot[:2]).max() <= 0.1
+    with pytest.raises(ValueError, match="held_in_tool"):
+        planning.plan_place(planning.CAMERA_CLEAR_POSE, spot, e, held_in_tool=np.eye(3))
