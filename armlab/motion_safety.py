@@ -15,8 +15,14 @@ A move from q_from to q_to (5,) rad is refused (MotionRefused, naming the proble
 Each backend names its floors (BoardClearance): pads and held blocks may press BOARD_CONTACT_TOL_MM into the board
 on both (rubber pads, wood); the simulator checks the physical joint angles (its sag included), so its links share
 that floor (SIM_CLEARANCE), while the real arm checks commanded angles whose unmodelled sag (5-15 mm at long reach)
-its links' +10 mm margin covers (REAL_CLEARANCE). A held block's collisions with the other objects are the
-simulator's (armlab.sim.arm), which knows where they are.
+its links' +10 mm margin covers (REAL_CLEARANCE).
+
+A held block against the other objects (held_intrusion, the one rule for it): along a path sampled at most
+HELD_PATH_STEP_RAD apart (held_path_fractions), the held block may go HELD_CONTACT_TOL_MM into another object
+(resting on a stack, placing on one, touching a neighbour), and never deeper than it already is at the start of the
+path (the block a held block rests on when the lift starts). Whoever knows where the objects are measures the depths:
+the simulator (armlab.sim.arm, its true objects) and the task layer's pre-check (armlab.tasks.precheck, its
+detections, with a smaller allowance that covers detection error).
 
 Units: rad, s, mm; heights are world z (the board surface is z = 0).
 """
@@ -35,12 +41,16 @@ from armlab.robot import RobotModel, rx200
 from armlab.station.contract import MotionRefused
 
 __all__ = ["BOARD_CONTACT_TOL_MM", "REAL_LINK_MARGIN_MM", "PATH_STEP_RAD", "MAX_MOVING_TIME_S", "LINK_POINTS",
-           "PAD_NAMES", "BoardClearance", "SIM_CLEARANCE", "REAL_CLEARANCE", "HeldBlock", "Segment", "refusal",
-           "check_target", "check_timing", "path_fractions", "board_intrusion", "check_move", "check_plan"]
+           "PAD_NAMES", "HELD_CONTACT_TOL_MM", "HELD_PATH_STEP_RAD", "BoardClearance", "SIM_CLEARANCE",
+           "REAL_CLEARANCE", "HeldBlock", "Segment", "refusal", "check_target", "check_timing", "path_fractions",
+           "held_path_fractions", "held_intrusion", "board_intrusion", "check_move", "check_plan"]
 
 BOARD_CONTACT_TOL_MM = 1.0          # a pad or a held block may press this far into the board: not a collision
 REAL_LINK_MARGIN_MM = 10.0          # the real arm's links stay this far above the board (unmodelled sag)
 PATH_STEP_RAD = np.radians(0.25)    # largest joint change between two checked samples of a path
+HELD_CONTACT_TOL_MM = 0.5           # a held block may press this far into another object: not a collision
+HELD_PATH_STEP_RAD = 0.01           # the held-object check's path step (coarser than PATH_STEP_RAD for the board: each
+                                    # sample costs a penetration test per pair of object pieces)
 # In time-based profile mode the servos' Profile_Velocity register holds the moving time in ms, at most 32737
 # (ROBOTIS e-manual, X-series control table); the driver passes a larger value on and the servo ignores it.
 MAX_MOVING_TIME_S = 32.737
@@ -139,6 +149,23 @@ def path_fractions(q_from, q_to, step: float = PATH_STEP_RAD) -> np.ndarray:
     rad of the largest joint change apart, both ends included."""
     dq = np.abs(np.asarray(q_to, dtype=float) - np.asarray(q_from, dtype=float))
     return np.linspace(0.0, 1.0, max(2, int(np.ceil(dq.max() / step)) + 1))
+
+
+def held_path_fractions(q_from, q_to) -> np.ndarray:
+    """Fractions s (n,) in [0, 1] at which a held block is checked against the other objects along the straight
+    joint path q_from -> q_to (rad): path_fractions at HELD_PATH_STEP_RAD."""
+    return path_fractions(q_from, q_to, HELD_PATH_STEP_RAD)
+
+
+def held_intrusion(depth, allowance_mm: float = HELD_CONTACT_TOL_MM) -> int | None:
+    """The held-block rule (module notes): depth (n,) mm the held block goes into one other object at the path's
+    samples (<= 0 or -inf: apart), the first at the start. Returns the first sample where it goes deeper than
+    allowance_mm and than at the start, or None when the path keeps to the rule."""
+    d = np.asarray(depth, dtype=float)
+    if d.ndim != 1 or not len(d):
+        raise ValueError(f"held_intrusion takes one depth per path sample (n,) mm, got shape {d.shape}")
+    hits = np.flatnonzero(d > max(float(allowance_mm), d[0]) + 1e-9)
+    return int(hits[0]) if hits.size else None
 
 
 def _parts(Q, robot: RobotModel, gripper: GripperGeometry | None, opening_mm: float | None,

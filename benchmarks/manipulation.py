@@ -18,6 +18,12 @@ Regions (issue 14): in front close in and at full reach, beside the base, behind
 random spots over the whole board; per region: placed, refused before moving, refused mid-plan, errors.
     .venv/bin/python benchmarks/manipulation.py [stations]       # default 13 stations x 8 blocks
     .venv/bin/python benchmarks/manipulation.py regions [n]      # n spots per region (default 6)
+Grid (issue 14): armlab.tasks.board_grid's spots over the whole reachable board (in front close in and at full
+reach, beside and behind the base, on stacks) plus seeded random spots; each spot is picked from once (a block put
+there in a seeded scene) and placed at once; per region and action: done, refused before moving, refused mid-plan,
+not grasped, and the errors (places: the block's true bottom-face centre minus the target, world mm; picks: the
+grasped block's true centre in the tool frame minus the planned one, tool-frame mm).
+    .venv/bin/python benchmarks/manipulation.py grid [n_random]  # default 8 random spots (about 3-6 minutes)
 """
 
 from __future__ import annotations
@@ -28,6 +34,7 @@ import sys
 import numpy as np
 
 from armlab import make_station, tasks
+from armlab.tasks import board_grid
 from armlab.tasks.experiments import LAB_TABLE_III_ERROR_MM, format_table, reach_experiment
 from armlab.tasks.sag import LAB_BASELINE, SagModel
 
@@ -203,6 +210,80 @@ def main_regions(n_per_region: int = 6) -> None:
                         "mean |x|", "mean |y|", "mean |z|", "max |x|", "max |y|", "max |z|"], rows))
 
 
+def grid_rows(outcomes: list[board_grid.Outcome]) -> list[list]:
+    """Table rows per (region, action) of the grid's outcomes: counts of board_grid.OUTCOMES and the |error| mean
+    and max per axis (mm)."""
+    rows = []
+    for region in board_grid.REGIONS:
+        for action in ("pick", "place"):
+            mine = [o for o in outcomes if o.spot.region == region and o.action == action]
+            if not mine:
+                continue
+            e = np.abs(np.array([o.error for o in mine if o.error is not None]).reshape(-1, 3))
+            mean = e.mean(axis=0) if len(e) else np.full(3, np.nan)
+            mx = e.max(axis=0) if len(e) else np.full(3, np.nan)
+            rows.append([region, action, str(len(mine)), *(str(sum(o.outcome == c for o in mine))
+                                                            for c in board_grid.OUTCOMES), *mean, *mx])
+    return rows
+
+
+def sag_by_region(seed: int = 0, z: float = 40.0, hover_mm: float = 60.0) -> list[list]:
+    """How right the fitted sag model (tasks.context's, fitted on calibration poses within 60 deg of straight ahead)
+    is over the whole board: on the station's empty-board twin (the same arm errors), the tool goes to z mm above
+    each grid spot (top-down, or the steepest pitch the spot allows) from hover_mm above it, once commanded as
+    planned and once through the sag model (GuardedArm); per region the |error| of the true tool point (3-D, mm)."""
+    from armlab import kinematics
+    from armlab.tasks.guard import GuardedArm
+
+    st = make_station("sim", seed=seed, scene="empty")
+    sag = tasks.context(st).arm.sag
+    reference = st.capabilities.sag_reference()
+    guarded = GuardedArm(reference.arm)
+    guarded.sag = sag
+    rows = []
+    for region in board_grid.REGIONS[:-1]:
+        errors = {"none": [], "tasks.sag": []}
+        for spot in (s for s in board_grid.GRID if s.region == region):
+            target = np.array([spot.x, spot.y, z])
+            pitch = min(np.pi / 2, kinematics.steepest_pitch(target))
+            for name, arm in (("none", reference.arm), ("tasks.sag", guarded)):
+                above = kinematics.ik(target + [0, 0, hover_mm], min(pitch, kinematics.steepest_pitch(
+                    target + [0, 0, hover_mm])), 0.0)[0]
+                arm.move_to(above)
+                arm.move_to(kinematics.ik(target, pitch, 0.0, current=above)[0])
+                errors[name].append(np.linalg.norm(reference.measure() - target))
+                arm.move_to(above)
+        rows.append([region, str(len(errors["none"])), np.mean(errors["none"]), np.max(errors["none"]),
+                     np.mean(errors["tasks.sag"]), np.max(errors["tasks.sag"])])
+    return rows
+
+
+def main_grid(n_random: int = 8, first_seed: int = 600) -> None:
+    print("The sag model over the board: |tool point error| (3-D, mm) 40 mm above the grid spots (empty-board twin)")
+    print(format_table(["region", "spots", "none mean", "none max", "tasks.sag mean", "tasks.sag max"],
+                       sag_by_region(), "{:.2f}"))
+    spots = [*board_grid.GRID, *board_grid.random_spots(n_random, seed=7)]
+    outcomes = []
+    for i, (pick, place) in enumerate(board_grid.grid_pairs(spots)):
+        picked, placed = board_grid.run_trial(pick, place, first_seed + i)
+        outcomes += [picked] + ([] if placed is None else [placed])
+        if placed is None:       # the place spot was not tried: count it as not tried through the pick's failure
+            print(f"  {place.region} {place}: not placed (the pick at {pick} failed: {picked.outcome})")
+    for o in outcomes:
+        if o.outcome != "done":
+            print(f"  {o.action} at {o.spot} ({o.spot.region}): {o.outcome}: {o.message[:160]}")
+    print(f"Pick and place over the whole board ({len(spots)} spots: the grid and {n_random} random; realistic "
+          f"simulator, tasks.sag); picks: grasp offset in the tool frame, places: bottom-face centre error, mm")
+    print(format_table(["region", "action", "tried", *board_grid.OUTCOMES, "mean |x|", "mean |y|", "mean |z|",
+                        "max |x|", "max |y|", "max |z|"], grid_rows(outcomes)))
+    done = [o for o in outcomes if o.action == "place" and o.error is not None]
+    e = np.abs(np.array([o.error for o in done]).reshape(-1, 3))
+    if len(e):
+        mean, mx = (" / ".join(f"{v:.2f}" for v in stat) for stat in (e.mean(axis=0), e.max(axis=0)))
+        print(f"all places: {len(done)} of {len(spots)} done, mean |error| x / y / z {mean} mm, max {mx} mm; "
+              f"refused mid-plan: {sum(o.outcome == 'refused mid-plan' for o in outcomes)}")
+
+
 def main(n_stations: int = 13) -> None:
     seeds = range(n_stations)
     rows, failures = [], {}
@@ -240,5 +321,7 @@ def main(n_stations: int = 13) -> None:
 if __name__ == "__main__":
     if len(sys.argv) > 1 and sys.argv[1] == "regions":
         main_regions(int(sys.argv[2]) if len(sys.argv) > 2 else 6)
+    elif len(sys.argv) > 1 and sys.argv[1] == "grid":
+        main_grid(int(sys.argv[2]) if len(sys.argv) > 2 else 8)
     else:
         main(int(sys.argv[1]) if len(sys.argv) > 1 else 13)

@@ -14,6 +14,7 @@ from armlab.planning import timing
 from armlab.profile import default_moving_time, trapezoid_fraction
 from armlab.robot import rx200
 from armlab.station import EmergencyStopped, MotionRefused
+from armlab.transforms import wrap_quarter
 
 ROBOT = rx200()
 
@@ -212,16 +213,31 @@ def test_roll_takes_the_smaller_turn():
         assert np.degrees(planning.face_roll(np.pi / 2, np.radians(yaw_deg))) == pytest.approx(roll_deg, abs=1e-9)
 
 
-def test_pitch_falls_back_at_long_reach_with_horizontal_fingers():
+def test_pitch_falls_back_at_long_reach_with_fingers_turned_square_as_far_as_a_small_tilt_allows():
     p = np.array([0.0, 450.0, 19.0])
+    g = planning.choose_grasp(p, 0.0, approach_z=120.0)          # faces along the arm plane: roll 0, level fingers
+    assert not g.top_down and g.roll == 0.0 and g.misalignment < 1e-9
+    assert abs(kinematics.fk(kinematics.ik(p, g.pitch, g.roll)[0])[2, 1]) < 1e-9
     g = planning.choose_grasp(p, 0.2, approach_z=120.0)
-    assert not g.top_down and g.roll == 0.0
+    assert not g.top_down and g.roll == pytest.approx(planning.tilted_roll(np.pi / 2, g.pitch, 0.2))
     assert g.pitch <= kinematics.steepest_pitch(p) + 1e-12 and g.pitch > np.radians(30)
     q = kinematics.ik(p, g.pitch, g.roll)[0]
-    R = kinematics.fk(q)[:3, :3]
-    assert abs(R[2, 1]) < 1e-9                             # closing direction horizontal
-    assert g.misalignment == pytest.approx(0.2, abs=1e-9)  # heading pi/2 vs yaw 0.2: 0.2 rad off square
-    # the whole vertical approach is reachable at that pitch
+    y = kinematics.fk(q)[:3, 1]
+    # the closing direction is tilted at most MAX_CLOSING_TILT_RAD (here exactly: 0.2 rad needs more at this pitch)
+    assert np.arcsin(abs(y[2])) == pytest.approx(planning.MAX_CLOSING_TILT_RAD, abs=1e-9)
+    horizontal = abs(wrap_quarter(np.arctan2(y[1], y[0]) - 0.2))
+    assert 0.0 < horizontal < 0.2 - np.radians(5)             # turned part of the way (roll 0: 0.2 rad off square)
+    # just short of top-down (400 mm out) a block 40 deg off the arm plane is met square, the tilt within the bound
+    p = np.array([0.0, 400.0, 19.0])
+    g = planning.choose_grasp(p, np.radians(40), approach_z=60.0)
+    y = kinematics.fk(kinematics.ik(p, g.pitch, g.roll)[0])[:3, 1]
+    assert not g.top_down and abs(wrap_quarter(np.arctan2(y[1], y[0]) - np.radians(40))) < 1e-9
+    assert np.arcsin(abs(y[2])) <= planning.MAX_CLOSING_TILT_RAD + 1e-12
+    # the whole vertical approach is reachable at that pitch and roll
+    seg = planning.cartesian_line([0, 400, 60], p, g.pitch, g.roll)
+    assert np.allclose(kinematics.fk(seg.end)[:3, 3], p, atol=1e-6)
+    p = np.array([0.0, 450.0, 19.0])
+    g = planning.choose_grasp(p, 0.2, approach_z=120.0)
     seg = planning.cartesian_line([0, 450, 120], p, g.pitch, g.roll)
     assert np.allclose(kinematics.fk(seg.end)[:3, 3], p, atol=1e-6)
     assert planning.choose_grasp(np.array([0.0, 200, 19]), 0.2).top_down
@@ -526,3 +542,29 @@ def test_place_prefers_a_shorter_top_down_descent_that_keeps_the_yaw():
     # beyond that the place tilts (and can only keep the block square to the fingers)
     far = planning.plan_place(planning.CAMERA_CLEAR_POSE, [0.0, 420.0, 0.0], 38.0, yaw=0.3)
     assert next(s.trajectory for s in far.steps if s.label == "descend").pitch < np.radians(85)
+
+
+def test_a_place_is_aimed_with_the_held_blocks_pose_in_the_tool_frame():
+    # a block picked tilted at full reach sits 8 deg turned (about the closing axis) in the tool frame: placed
+    # top-down without its pose its lowest corner would end 2.5 mm below the target (into what it is put on)
+    from armlab.transforms import homogeneous
+
+    e, spot = 38.0, np.array([0.0, 250.0, 38.0])
+    a = np.radians(8.0)
+    c, s = np.cos(a), np.sin(a)
+    T_tool_block = homogeneous(np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]]) @ kinematics.fk(
+        kinematics.ik(np.array([0.0, 250.0, 57.0]), np.pi / 2, 0.0)[0])[:3, :3].T, np.zeros(3))
+
+    def lowest_and_centre(plan):
+        down = next(st.trajectory for st in plan.steps if st.label == "descend")
+        cube = kinematics.fk(down.end) @ T_tool_block
+        corners = np.array([[x, y, z] for x in (-.5, .5) for y in (-.5, .5) for z in (-.5, .5)]) * e
+        return (corners @ cube[:3, :3].T + cube[:3, 3])[:, 2].min(), cube[:2, 3]
+
+    low, centre = lowest_and_centre(planning.plan_place(planning.CAMERA_CLEAR_POSE, spot, e, 0.0))
+    assert low < spot[2] - 2.0
+    low, centre = lowest_and_centre(planning.plan_place(planning.CAMERA_CLEAR_POSE, spot, e, 0.0,
+                                                        held_in_tool=T_tool_block))
+    assert low == pytest.approx(spot[2], abs=0.1) and np.abs(centre - spot[:2]).max() <= 0.1
+    with pytest.raises(ValueError, match="held_in_tool"):
+        planning.plan_place(planning.CAMERA_CLEAR_POSE, spot, e, held_in_tool=np.eye(3))

@@ -8,12 +8,16 @@ pickplace (pick, place and camera-clear plans).
 
 from .grasp import (
     LIMIT_MARGIN_RAD,
+    MAX_CLOSING_TILT_RAD,
+    PAD_CLEARANCE_MM,
     GraspPose,
     choose_grasp,
     face_misalignment,
     face_roll,
     inner_limits,
+    pad_clearance,
     steepest_pitch_inside,
+    tilted_roll,
 )
 from .pickplace import (
     CAMERA_CLEAR_POSE,
@@ -51,8 +55,8 @@ from .trajectory import (
 from .transit import DEFAULT_CLEARANCE_MM, Clearance, Obstacle, as_obstacles, transit_clearance
 
 __all__ = [
-    "LIMIT_MARGIN_RAD", "GraspPose", "choose_grasp", "face_misalignment", "face_roll", "inner_limits",
-    "steepest_pitch_inside",
+    "LIMIT_MARGIN_RAD", "MAX_CLOSING_TILT_RAD", "GraspPose", "choose_grasp", "face_misalignment", "face_roll",
+    "tilted_roll", "PAD_CLEARANCE_MM", "pad_clearance", "inner_limits", "steepest_pitch_inside",
     "CAMERA_CLEAR_POSE", "default_grasp_depth", "grasp_height", "place_tool_height", "plan_camera_clear", "plan_pick",
     "plan_pick_place",
     "plan_place", "tilted_release_lift",

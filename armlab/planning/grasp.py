@@ -12,12 +12,23 @@ pi/2 + h - roll from world +x. A cube of yaw `yaw` has face normals at yaw + k p
 opposite faces when pi/2 + h - roll = yaw (mod pi/2), i.e. roll = h - yaw (mod pi/2); the smallest wrist turn takes
 the representative in [-pi/4, pi/4) (face_roll).
 
-Tilted (pitch < pi/2, at long reach): only roll = 0 or pi keeps y_tool horizontal (its z component is
-cos(pitch) sin(roll)); any other roll tilts the closing direction, so the flat pads would meet the vertical faces
-on an edge. We use roll = 0: the fingers close horizontally, perpendicular to the arm plane (angle h + pi/2). They
-are across two faces exactly when the heading is aligned with the block's faces (h = yaw mod pi/2); otherwise they
-meet the block `misalignment` = |h - yaw| (mod pi/2, at most pi/4) off square and a closing parallel gripper turns
-the block square to its fingers. The grasp reports the misalignment so a caller can prefer another block or nudge it.
+Tilted (pitch < pi/2, at long reach): in the arm plane's frame (along the heading, across it, up) the closing
+direction is Ry(pitch) Rx(roll) e_y = (sin(pitch) sin(roll), cos(roll), cos(pitch) sin(roll)), so a roll turns its
+horizontal part by atan2(sin(pitch) sin(roll), cos(roll)) from across the arm plane but also tilts it by
+asin(cos(pitch) sin(roll)) from horizontal (flat pads then meet the vertical faces a little off flat). tilted_roll
+takes the roll that turns the horizontal part onto a face normal, tan(roll) = tan(face_roll) / sin(pitch), as long as
+the tilt stays within MAX_CLOSING_TILT_RAD (half the simulated gripper's 10 deg tolerance; rubber pads take it); beyond
+that the roll stops at that tilt and the rest is left as `misalignment` (a closing parallel gripper turns the block
+square to its fingers). Just short of top-down (89 deg at 400 mm out) the roll is the top-down one; the flatter the
+pitch, the less of it fits (cos(pitch) sin(roll) grows): at 420 mm (pitch 83 deg) a block 45 deg off the arm plane
+is still met square, at pitch 45 deg only 7 deg of turn fits. The grasp reports the misalignment so a caller can
+prefer another block or nudge it.
+
+Pad clearance (choose_grasp's obstacles): a top-down grasp can close across either pair of faces (roll and roll +-
+pi/2). The open pads stand out beside the block along the closing direction (their outer faces finger_max_mm from the
+centre line), so with a neighbour close on that side they brush it and turn it. The grasp takes the smaller turn
+unless its pads come within PAD_CLEARANCE_MM of a neighbour (an obstacle cylinder whose top is above the pads'
+lowest point) and the other pair leaves more room.
 
 Joint-limit margin: the steepest pitch sits where a joint (usually wrist_angle) reaches its position limit, and the
 task layer's sag compensation (armlab.tasks.sag, a few mrad) would push such a command past the limit. So pitches
@@ -33,15 +44,19 @@ from dataclasses import dataclass
 import numpy as np
 
 from armlab import kinematics
+from armlab.gripper_geometry import GRIPPER, GripperGeometry
 from armlab.kinematics import Unreachable
 from armlab.robot import RobotModel, rx200
 from armlab.transforms import wrap_quarter
 
-__all__ = ["GraspPose", "face_roll", "face_misalignment", "choose_grasp", "TOP_DOWN", "LIMIT_MARGIN_RAD",
-           "inner_limits", "steepest_pitch_inside"]
+__all__ = ["GraspPose", "face_roll", "tilted_roll", "face_misalignment", "choose_grasp", "TOP_DOWN",
+           "LIMIT_MARGIN_RAD", "MAX_CLOSING_TILT_RAD", "PAD_CLEARANCE_MM", "pad_clearance", "inner_limits",
+           "steepest_pitch_inside"]
 
 TOP_DOWN = np.pi / 2
 LIMIT_MARGIN_RAD = 0.01         # planned poses keep this far inside the position limits where they can (module notes)
+PAD_CLEARANCE_MM = 5.0          # an open pad this close to a neighbour takes the other pair of faces if it is freer
+MAX_CLOSING_TILT_RAD = np.radians(5.0)   # a tilted grasp's closing direction stays this close to horizontal
 _PITCH_STEP = np.radians(1.0)   # fallback pitches are tried from the steepest downwards in this step
 _SEGMENT_STEP_MM = 5.0          # spacing of the reachability check along the vertical approach
 
@@ -67,6 +82,40 @@ def face_roll(heading: float, yaw: float) -> float:
     yaw `yaw` (rad) seen from an arm plane at `heading` (rad): roll = heading - yaw (mod pi/2), the smaller turn.
     """
     return float(wrap_quarter(heading - yaw))
+
+
+def tilted_roll(heading: float, pitch: float, yaw: float, max_tilt: float = MAX_CLOSING_TILT_RAD) -> float:
+    """Wrist roll (rad) that turns the horizontal part of the closing direction of a tool at `pitch` rad (pi/2:
+    top-down) onto a face normal of a block of yaw `yaw` rad seen from an arm plane at `heading` rad, with the closing
+    direction tilted at most max_tilt rad from horizontal (module notes): face_roll when top-down."""
+    delta = face_roll(heading, yaw)
+    s = np.sin(pitch)
+    roll = float(np.arctan2(np.tan(delta), s)) if s > 1e-9 else 0.0
+    c = abs(np.cos(pitch))
+    if c * abs(np.sin(roll)) > np.sin(max_tilt):
+        roll = float(np.sign(roll) * np.arcsin(min(1.0, np.sin(max_tilt) / c)))
+    return roll
+
+
+def pad_clearance(position, heading: float, roll: float, obstacles, gripper: GripperGeometry = GRIPPER) -> float:
+    """Least horizontal distance (mm) from the fully open pads of a top-down tool at `position` (3,) world mm (the tool
+    point), heading and roll (rad) to the obstacles (planning Obstacles: cylinders) whose tops are above the pads'
+    lowest point; inf when none. Negative: a pad would overlap that obstacle."""
+    p = np.asarray(position, dtype=float)
+    phi = np.pi / 2 + heading - roll                       # the closing direction (module notes)
+    u, v = np.array([np.cos(phi), np.sin(phi)]), np.array([-np.sin(phi), np.cos(phi)])
+    centre = gripper.finger_max_mm - gripper.pad_thickness_mm / 2
+    half = np.array([gripper.pad_thickness_mm / 2, gripper.pad_width_mm / 2])
+    bottom = p[2] - gripper.pad_height_mm / 2
+    best = np.inf
+    for o in obstacles:
+        if o.top <= bottom:
+            continue
+        d = np.array([o.x, o.y]) - p[:2]
+        for side in (-1.0, 1.0):
+            local = np.abs(np.array([d @ u - side * centre, d @ v])) - half      # box distance in the pad's frame
+            best = min(best, float(np.linalg.norm(np.maximum(local, 0.0)) + min(local.max(), 0.0)) - o.radius)
+    return best
 
 
 def face_misalignment(heading: float, pitch: float, roll: float, yaw: float) -> float:
@@ -105,12 +154,15 @@ def _vertical_ok(position: np.ndarray, top_z: float, pitch: float, roll: float, 
 
 
 def choose_grasp(position, yaw: float, approach_z: float | None = None,
-                 robot: RobotModel | None = None) -> GraspPose:
+                 robot: RobotModel | None = None, obstacles=()) -> GraspPose:
     """Grasp (or release) pose for a block whose tool point goes to `position` (3,) world mm, block yaw `yaw` rad.
 
     Top-down (pitch = pi/2, roll = face_roll) when the tool can go straight down from approach_z (world mm, default:
     the position's own height) to the position; else the steepest pitch (from kinematics.steepest_pitch, then in
-    1 deg steps down) at which that whole vertical approach is reachable, with roll = 0 (see the module notes).
+    1 deg steps down) at which that whole vertical approach is reachable, with roll = tilted_roll (or 0 where only
+    that is reachable; see the module notes).
+    obstacles: the neighbours (planning Obstacles) the open pads of a top-down grasp keep clear of by choosing the
+    pair of faces (module notes); default none.
     Raises Unreachable saying why when no pitch works, ValueError for bad input.
     """
     robot = robot or rx200()
@@ -126,10 +178,17 @@ def choose_grasp(position, yaw: float, approach_z: float | None = None,
         raise Unreachable(f"({p[0]:.1f}, {p[1]:.1f}) mm is on the waist axis: the arm cannot grasp below itself")
     heading = float(np.arctan2(p[1], p[0]))
     roll = face_roll(heading, yaw)
+    rolls = [roll]
+    obstacles = list(obstacles)
+    if obstacles and pad_clearance(p, heading, roll, obstacles) < PAD_CLEARANCE_MM:
+        other = roll - np.pi / 2 if roll >= 0 else roll + np.pi / 2       # across the other pair of faces
+        if pad_clearance(p, heading, other, obstacles) > pad_clearance(p, heading, roll, obstacles):
+            rolls.insert(0, other)
     steepest = None
     for model in (inner_limits(robot), robot):          # with the margin from the limits first (module notes)
-        if _vertical_ok(p, top_z, TOP_DOWN, roll, model):
-            return GraspPose(p, heading, TOP_DOWN, roll, True, face_misalignment(heading, TOP_DOWN, roll, yaw))
+        for r in rolls:
+            if _vertical_ok(p, top_z, TOP_DOWN, r, model):
+                return GraspPose(p, heading, TOP_DOWN, r, True, face_misalignment(heading, TOP_DOWN, r, yaw))
         try:
             steepest = kinematics.steepest_pitch(p, robot=model)
         except Unreachable:
@@ -137,8 +196,11 @@ def choose_grasp(position, yaw: float, approach_z: float | None = None,
                 raise                                   # the reason, from the limits themselves
             continue
         for pitch in np.arange(min(steepest, TOP_DOWN - _PITCH_STEP), -1e-9, -_PITCH_STEP):
-            if _vertical_ok(p, top_z, pitch, 0.0, model):
-                return GraspPose(p, heading, float(pitch), 0.0, False, face_misalignment(heading, pitch, 0.0, yaw))
+            for r in dict.fromkeys((tilted_roll(heading, pitch, yaw), 0.0)):   # square to the faces, else level
+                # a turned wrist must also keep one branch within the limits themselves, where the straight line
+                # (trajectory.cartesian_line) picks its branch
+                if _vertical_ok(p, top_z, pitch, r, model) and (r == 0.0 or _vertical_ok(p, top_z, pitch, r, robot)):
+                    return GraspPose(p, heading, float(pitch), r, False, face_misalignment(heading, pitch, r, yaw))
     raise Unreachable(f"the tool reaches ({p[0]:.1f}, {p[1]:.1f}, {p[2]:.1f}) mm (pitch up to "
                       f"{np.degrees(steepest):.1f} deg) but cannot come straight down to it from z = {top_z:.1f} mm "
                       f"at any pitch")

@@ -48,6 +48,7 @@ _MAX_RAISES = 8
 LOW_HOVER_MM = GRIPPER.fingertip_mm + 7.0   # a place may hover this little above the placed block's top (finger tips
                                             # 7 mm over it after the lift) to come straight down with the yaw
 _LOW_HOVER_STEP_MM = 5.0
+_OWN_COLUMN_MM = 5.0        # obstacles centred this close to a pick's target are the picked block's own column
 
 
 def _check_edge_depth(edge: float, grasp_depth: float | None) -> float:
@@ -133,15 +134,27 @@ def tilted_release_lift(edge: float, pitch: float) -> float:
     return float(edge / 2 * abs(np.cos(pitch)))
 
 
+def _line_or_none(p0: np.ndarray, p1: np.ndarray, grasp, robot: RobotModel):
+    """The straight descent p0 -> p1 (mm) at the grasp's pitch and roll, or None where it cannot be made (it would
+    switch IK branch on the way, e.g. where choose_grasp's branch is one the limits with a margin allow)."""
+    try:
+        return cartesian_line(p0, p1, grasp.pitch, grasp.roll, robot=robot)
+    except Unreachable:
+        return None
+
+
 def _approach(q_start, target: np.ndarray, yaw: float, floor_z: float, held_below: float, action: str,
               obstacles, clearance: float, scaling: str, robot: RobotModel, what: str,
-              low_hover: float | None = None) -> Plan:
+              low_hover: float | None = None, own_column: bool = False) -> Plan:
     """transit to the hover point over target, [open], descend, open/close, lift back (see the module notes).
 
     floor_z: the top (mm) the empty tool must clear at the hover point when the plan ends (the picked block's top, or
     the placed block's top); held_below: how far a held block hangs below the tool point during the transit.
     low_hover: when the straight descent from the transit height cannot be top-down, the lowest hover height (mm)
-    from which a shorter top-down descent is tried (in _LOW_HOVER_STEP_MM steps) before tilting.
+    from which shorter descents are tried (in _LOW_HOVER_STEP_MM steps): the first top-down one, else the steepest.
+    own_column: the obstacles standing at the target (the block being picked, the stack under it) only keep the
+    transit's tool from going lower over them than the hover point it ends at (the others: `clearance`), so a low
+    hover over the picked block is not refused because of that block itself.
     """
     if not np.isfinite(clearance) or clearance < 0:
         raise ValueError(f"clearance must be a non-negative length in mm, got {clearance}")
@@ -151,28 +164,39 @@ def _approach(q_start, target: np.ndarray, yaw: float, floor_z: float, held_belo
     if q0.shape != (5,):
         raise ValueError(f"q_start must have shape (5,) (rad), got {q0.shape}")
     obs = as_obstacles(obstacles)
+    column = [o for o in obs if own_column and np.hypot(o.x - target[0], o.y - target[1]) < _OWN_COLUMN_MM
+              and o.top <= floor_z + 1.0]
+    others = [o for o in obs if all(o is not c for c in column)]
     z_t = max(floor_z + clearance, float(target[2]))
-    near = _near_segment(obs, kinematics.fk(q0, robot)[:3, 3], target)
+    near = _near_segment(others, kinematics.fk(q0, robot)[:3, 3], target)
     if near:
         z_t = max(z_t, max(o.top for o in near) + clearance + held_below)
     lowered = False
     for _ in range(_MAX_RAISES + 1):
         hover = np.array([target[0], target[1], z_t])
         try:
-            grasp = choose_grasp(target, yaw, approach_z=z_t, robot=robot)
+            neighbours = others if action == "close" else ()      # a pick's open pads keep clear of them
+            grasp = choose_grasp(target, yaw, approach_z=z_t, robot=robot, obstacles=neighbours)
+            down = None
             if not grasp.top_down and low_hover is not None:       # a shorter straight descent keeps the yaw
                 for z in np.arange(z_t - _LOW_HOVER_STEP_MM, low_hover - 1e-9, -_LOW_HOVER_STEP_MM):
-                    low = choose_grasp(target, yaw, approach_z=z, robot=robot)
-                    if low.top_down:
-                        grasp, hover, lowered = low, np.array([target[0], target[1], z]), True
-                        break
-            down = cartesian_line(hover, target, grasp.pitch, grasp.roll, robot=robot)
+                    low = choose_grasp(target, yaw, approach_z=z, robot=robot, obstacles=neighbours)
+                    if low.pitch > grasp.pitch + 1e-9:             # steeper: less tilt, more of the yaw kept
+                        line = _line_or_none(np.array([target[0], target[1], z]), target, low, robot)
+                        if line is not None:
+                            grasp, hover, lowered, down = low, np.array([target[0], target[1], z]), True, line
+                            if low.top_down:
+                                break
+            if down is None:
+                down = cartesian_line(hover, target, grasp.pitch, grasp.roll, robot=robot)
             rise = _rise(q0, z_t, scaling, robot)
         except Unreachable as e:
             raise Unreachable(f"{what}: cannot move straight up or down to the transit height {z_t:.1f} mm: "
                               f"{e}") from None
         transit = joint_move(q0 if rise is None else rise.end, down.start, scaling, robot=robot)
-        c = transit_clearance(transit, obs, clearance, held_below)   # the rise only goes up from where the arm is
+        c = transit_clearance(transit, others, clearance, held_below)   # the rise only goes up from where the arm is
+        if c.clear and column:
+            c = transit_clearance(transit, column, min(clearance, hover[2] - floor_z), held_below)
         if c.clear:
             break
         o = c.obstacle
@@ -198,17 +222,21 @@ def plan_pick(q_start, top, yaw: float, edge: float, obstacles=(), clearance: fl
 
     Steps: transit (joint move) to the hover point, open, descend (Cartesian) to the grasp height, close, lift
     (Cartesian) back to the hover point. obstacles: everything standing on the board (the target may be included).
+    Where the descent from the transit height cannot be top-down (at long reach), a lower hover (down to
+    LOW_HOVER_MM above the block's top) that comes down top-down, or else steeper, is preferred, as for plan_place:
+    the steeper the grasp, the more of the block's yaw the pads can meet square (grasp.tilted_roll).
     """
     robot = robot or rx200()
     top = check_point(top, "block top")
     target = np.array([top[0], top[1], grasp_height(top[2], edge, grasp_depth)])
     return _approach(q_start, target, yaw, top[2], 0.0, "close", obstacles, clearance, scaling, robot,
-                     f"picking the block at ({top[0]:.1f}, {top[1]:.1f}, {top[2]:.1f}) mm")
+                     f"picking the block at ({top[0]:.1f}, {top[1]:.1f}, {top[2]:.1f}) mm",
+                     low_hover=top[2] + LOW_HOVER_MM, own_column=True)
 
 
 def plan_place(q_start, position, edge: float, yaw: float = 0.0, obstacles=(),
                clearance: float = DEFAULT_CLEARANCE_MM, grasp_depth: float | None = None, scaling: str = "trapezoid",
-               robot: RobotModel | None = None) -> Plan:
+               robot: RobotModel | None = None, held_in_tool=None) -> Plan:
     """Plan to put the held block's bottom-face centre at `position` (3,) world mm with yaw rad, from q_start (5,).
 
     Steps: transit to the hover point (the held block lifted `clearance` over everything near the path), descend
@@ -219,10 +247,17 @@ def plan_place(q_start, position, edge: float, yaw: float = 0.0, obstacles=(),
     square to the fingers: yaw = heading (mod 90 deg), up to 45 deg from the requested yaw (grasp module notes), and
     releases it tilted_release_lift(edge, pitch) higher, so that its lowest edge, not its bottom face's centre,
     comes down no lower than position's height.
+    held_in_tool: the held cube's pose in the tool frame T_tool_block (4, 4) mm (its centre), as the grasp left it
+    (e.g. tilted with the tool of a tilted pick); when given, the release is aimed with it instead: the plan is
+    redone with the tool target shifted until, at the end of the planned descent, the cube's centre is over
+    position's x, y and its lowest corner at position's height (within _AIM_TOL_MM, at most _RELEASE_TRIES plans).
     """
     robot = robot or rx200()
     position = check_point(position, "place position")
     depth = _check_edge_depth(edge, grasp_depth)
+    if held_in_tool is not None:
+        return _aimed_place(q_start, position, edge, depth, yaw, obstacles, clearance, scaling, robot,
+                            _check_pose(held_in_tool, "held_in_tool"))
     lift = 0.0
     for attempt in range(_RELEASE_TRIES):
         # a tilted descent's pitch depends on the hover height the plan settles on: plan, then again with the place
@@ -237,6 +272,36 @@ def plan_place(q_start, position, edge: float, yaw: float = 0.0, obstacles=(),
         if need <= lift + 1e-9:
             break
         lift = need + _RELEASE_OVERSHOOT_MM if attempt < _RELEASE_TRIES - 2 else edge / 2
+    return plan
+
+
+_AIM_TOL_MM = 0.1                # an aimed release is redone until it is off by at most this much per axis
+_CUBE_CORNERS = np.array([[x, y, z] for x in (-0.5, 0.5) for y in (-0.5, 0.5) for z in (-0.5, 0.5)])
+
+
+def _check_pose(T, name: str) -> np.ndarray:
+    T = np.asarray(T, dtype=float)
+    if T.shape != (4, 4) or not np.all(np.isfinite(T)):
+        raise ValueError(f"{name} must be a finite (4, 4) transform (mm), got shape {T.shape}")
+    return T
+
+
+def _aimed_place(q_start, position: np.ndarray, edge: float, depth: float, yaw: float, obstacles, clearance: float,
+                 scaling: str, robot: RobotModel, T_tool_block: np.ndarray) -> Plan:
+    """plan_place aimed with the held cube's pose in the tool frame (plan_place's held_in_tool)."""
+    offset = np.zeros(3)
+    for _ in range(_RELEASE_TRIES):
+        p = position + offset
+        target = np.array([p[0], p[1], place_tool_height(p[2], edge, depth)])
+        plan = _approach(q_start, target, yaw, p[2] + edge, edge - depth, "open", obstacles, clearance, scaling,
+                         robot, f"placing at ({position[0]:.1f}, {position[1]:.1f}, {position[2]:.1f}) mm",
+                         low_hover=p[2] + edge + LOW_HOVER_MM)
+        cube = kinematics.fk(next(s.trajectory for s in plan.steps if s.label == "descend").end, robot) @ T_tool_block
+        lowest = (_CUBE_CORNERS * edge @ cube[:3, :3].T + cube[:3, 3])[:, 2].min()
+        miss = np.array([position[0] - cube[0, 3], position[1] - cube[1, 3], position[2] - lowest])
+        if np.abs(miss).max() <= _AIM_TOL_MM:
+            break
+        offset += miss
     return plan
 
 

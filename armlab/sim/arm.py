@@ -30,10 +30,7 @@ from armlab.transforms import homogeneous, invert_transform, rot_z, rpy_from_mat
 __all__ = ["ArmRealism", "SimArm", "gravity_deflection"]
 
 GRAVITY = 9.81                 # m/s^2
-HELD_CONTACT_TOL_MM = 0.5      # a held block may press this far into another object (resting on it, placing it on a
-                               # stack, touching a neighbour): not a collision
-HELD_PATH_STEP_RAD = 0.01      # the held-object check's path step (coarser than motion_safety.PATH_STEP_RAD for the
-                               # board: each sample costs a separating-axis test per pair of object pieces)
+HELD_CONTACT_TOL_MM = motion_safety.HELD_CONTACT_TOL_MM     # the held-block rule's allowance (motion_safety)
 
 
 @dataclass(frozen=True)
@@ -275,12 +272,12 @@ class SimArm:
         of the world, or None.
 
         Each held object is its footprint prism (bottom to top face) carried with the tool; each other object is its
-        upright footprint prism where it stands (world frame, mm). At every path sample (as for the board) their
-        penetration depth is found by the separating axis theorem (geometry.convex_penetration). A pair collides
-        where the depth exceeds HELD_CONTACT_TOL_MM (resting on a stack, placing on one, touching a neighbour) and
-        what it already is at the start of the path (the block a held block rests on when the lift starts, pressed a
-        little further in by the weight the arm took on at the grasp): a held block never needs to go deeper into
-        anything than it already is. Objects held together (a grasped block and what is stacked on it) move as one.
+        upright footprint prism where it stands (world frame, mm). At every path sample
+        (motion_safety.held_path_fractions) their penetration depth is found by the separating axis theorem
+        (geometry.convex_penetration), and motion_safety.held_intrusion applies the rule: no deeper than
+        HELD_CONTACT_TOL_MM and than at the start of the path (the block a held block rests on when the lift starts,
+        pressed a little further in by the weight the arm took on at the grasp). Objects held together (a grasped
+        block and what is stacked on it) move as one.
         """
         if not self._held:
             return None
@@ -288,7 +285,7 @@ class SimArm:
         if not others:
             return None
         dq = np.asarray(q1) - np.asarray(q0)
-        s = motion_safety.path_fractions(q0, q1, HELD_PATH_STEP_RAD)
+        s = motion_safety.held_path_fractions(q0, q1)
         T = kinematics.fk_pox(physical(q0 + s[:, None] * dq), self.robot, check_limits=False)     # (n, 4, 4)
         fixed = [(o, [prism_features(p, o.edge / 2, homogeneous(rot_z(o.yaw), o.position))
                       for p in footprint(o.shape, o.edge)]) for o in others]
@@ -304,9 +301,9 @@ class SimArm:
                 depth = np.full(len(s), -np.inf)
                 # Footprints are unions of convex pieces: two objects go as deep into each other as their deepest pair.
                 depth[near] = np.max([convex_penetration(a, b) for a in moving for b in other_pieces], axis=0)
-                hits = np.flatnonzero(depth > max(HELD_CONTACT_TOL_MM, depth[0]) + 1e-9)
-                if hits.size and (first is None or hits[0] < first[0]):
-                    first = (int(hits[0]), held, other, depth, centres)
+                hit = motion_safety.held_intrusion(depth, HELD_CONTACT_TOL_MM)
+                if hit is not None and (first is None or hit < first[0]):
+                    first = (hit, held, other, depth, centres)
         if first is None:
             return None
         k, held, other, depth, centres = first

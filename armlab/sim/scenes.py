@@ -16,6 +16,7 @@ placed in file order).
 
 from __future__ import annotations
 
+import dataclasses
 import os
 from collections.abc import Callable
 from pathlib import Path
@@ -29,7 +30,7 @@ from armlab.sim.geometry import polygons_overlap
 from armlab.sim.world import World
 
 __all__ = ["PRESETS", "scene_objects", "load_scene", "save_scene", "scene_to_dict", "objects_from_dict",
-           "SceneError", "REACH_MM", "SWAP_SPOTS_MM"]
+           "with_objects_at", "SceneError", "REACH_MM", "SWAP_SPOTS_MM"]
 
 REACH_MM = (150.0, 350.0)       # radii (from the waist axis) where scattered objects go: top-down grasps work there
 TAG_CLEARANCE_MM = 35.0         # no object footprint within this distance of an AprilTag centre
@@ -244,6 +245,29 @@ def scene_objects(scene: str | os.PathLike | dict = "random", seed: int = 0, **o
             raise SceneError(f"scene options {sorted(options)} only apply to presets, not to a scene file")
         return load_scene(scene)
     raise SceneError(f"unknown scene {scene!r}: expected one of {sorted(PRESETS)}, a .json file or a dict")
+
+
+def with_objects_at(objects, added, keep_out_mm: float = 70.0) -> list[ObjectState]:
+    """A scene made of `added` objects (ObjectState, world mm: each dropped onto what lies below it, in order, so a
+    stack is listed bottom first) and those of `objects` (a scene) whose centres lie more than keep_out_mm from every
+    added one (horizontally): e.g. a block put at a chosen spot of a seeded random scene. Ids are renumbered after
+    the kept objects. Raises SceneError when the result is not physically valid (off the board, overlapping)."""
+    added = list(added)
+    if not np.isfinite(keep_out_mm) or keep_out_mm < 0:
+        raise SceneError(f"keep_out_mm must be a finite length >= 0 in mm, got {keep_out_mm}")
+    centres = np.array([a.position[:2] for a in added], float).reshape(-1, 2)
+    kept = [dataclasses.replace(o, position=np.array(o.position, float)) for o in objects
+            if not len(centres) or np.min(np.linalg.norm(centres - o.position[:2], axis=1)) > keep_out_mm]
+    world = World(kept)
+    first_id = max((o.id for o in kept), default=-1) + 1
+    for k, a in enumerate(added):
+        obj = dataclasses.replace(a, position=np.array([a.position[0], a.position[1], 1e6]), id=first_id + k)
+        world.add(obj, settle=True)
+    problems = world.problems()
+    if problems:
+        raise SceneError("the scene with the added objects is not valid: " + "; ".join(problems))
+    return world.objects
+
 
 
 # ---------------------------------------------------------------------------------------------------------------

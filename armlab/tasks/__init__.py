@@ -5,7 +5,7 @@ from . import teach
 from .click import ClickRefused, click_drop, click_grab, click_world, current_view
 from .click_widget import ClickResult, ClickToGrab
 from .guard import GuardedArm
-from .handling import RELEASE_GAP_MM, TaskContext, calibrate_sag, context, look, pick, place
+from .handling import RELEASE_GAP_MM, TaskContext, calibrate_sag, context, look, pick, place, put_back
 from .machine import STATES, MachineBusy, TaskMachine
 from .perception import Observation, calibrate_camera, clear_view, surface_point
 from .sag import LAB_BASELINE, SagModel, calibration_poses, fit_sag
@@ -15,6 +15,6 @@ from .teach import TeachFileError, TeachProgram, load_teach, plot_teach, repeat,
 __all__ = ["teach", "ClickRefused", "click_drop", "click_grab", "click_world", "current_view",
            "ClickResult", "ClickToGrab", "STATES", "MachineBusy", "TaskMachine",
            "GuardedArm", "Observation", "calibrate_camera", "clear_view", "surface_point", "RELEASE_GAP_MM",
-           "TaskContext", "calibrate_sag", "context", "look", "pick", "place", "LAB_BASELINE", "SagModel",
+           "TaskContext", "calibrate_sag", "context", "look", "pick", "place", "put_back", "LAB_BASELINE", "SagModel",
            "calibration_poses", "fit_sag", "TeachProgram", "TeachFileError", "load_teach", "save_teach",
            "repeat", "plot_teach", "StationPanel", "station_panel"]

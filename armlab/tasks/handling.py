@@ -11,9 +11,10 @@ compensates sag) and station.camera. Each station gets a TaskContext on first us
 - known: what stands on the board (detections from the last look, updated by picks and places), the obstacles plans
   avoid; held: the block in the gripper.
 place() releases the block RELEASE_GAP_MM above the requested bottom height, so a residual arm error never pushes
-it into what it is put on (the block drops that little and settles); at long reach, where the tool is tilted,
-planning.plan_place also lifts it by how far the tilted block's lowest edge hangs below its bottom-face centre
-(planning.tilted_release_lift). Every pick and place plan is checked whole before its first command
+it into what it is put on (the block drops that little and settles); the release is aimed with the held block's pose
+in the tool frame as planned at its grasp (planning.plan_place's held_in_tool): its centre over the spot and its
+lowest corner at the release height, so a block picked tilted at long reach, or placed tilted, is not lowered into
+the board or what it is put on. Every pick and place plan is checked whole before its first command
 (tasks.precheck: the commands the guarded arm would send, the pads and the held block along them, the sag model and
 the known blocks): an impossible one raises MotionRefused with nothing sent. Units: mm, rad; world (board) frame.
 """
@@ -35,7 +36,7 @@ from . import perception, precheck
 from .guard import GuardedArm
 from .sag import SagModel, calibration_poses, fit_sag, hover_pose
 
-__all__ = ["TaskContext", "context", "calibrate_sag", "pick", "place", "look", "RELEASE_GAP_MM"]
+__all__ = ["TaskContext", "context", "calibrate_sag", "pick", "place", "put_back", "look", "RELEASE_GAP_MM"]
 
 RELEASE_GAP_MM = 2.0
 
@@ -50,6 +51,7 @@ class TaskContext:
     known: list = field(default_factory=list)
     last: perception.Observation | None = None
     held_in_tool: np.ndarray | None = None  # T_tool_block (4, 4) mm of the held block as planned at its grasp
+    picked_down: object | None = None       # the held block's pick descent (its straight line down), for put_back
 
     @property
     def held_edge(self) -> float:
@@ -133,7 +135,37 @@ def pick(station, block, obstacles=None) -> bool:
     ctx.known = [k for k in ctx.known if not _same(k, block)]
     if held:
         ctx.held, ctx.held_in_tool = block, grasped.T_tool_block
+        ctx.picked_down = next(s.trajectory for s in plan.steps if s.label == "descend")
     return held
+
+
+def put_back(station) -> bool:
+    """Put the held block back where it was picked from (after a place that could not be done): a joint move to the
+    top of the pick's own straight descent (where the pick's lift ended), down that line (the path the block came up
+    in the gripper, checked whole with it then) to RELEASE_GAP_MM above the grasp, open, and up again. Checked whole before the first command like
+    every plan (the held block's own column, the stack it came from, is not an obstacle to it); raises ValueError
+    when nothing picked is held and MotionRefused with nothing sent when even this is refused. True when done."""
+    ctx = context(station)
+    if ctx.held is None or ctx.picked_down is None:
+        raise ValueError("put_back needs a block picked with tasks.pick in the gripper")
+    picked, block, edge = ctx.picked_down, ctx.held, ctx.held_edge
+    # the same straight line, stopping RELEASE_GAP_MM short of the grasp (the block drops that little, as in place)
+    down = planning.cartesian_line(picked.p0, picked.p1 + [0.0, 0.0, RELEASE_GAP_MM], picked.pitch, picked.roll,
+                                   current=picked.start, robot=ctx.arm.robot)
+    q = ctx.arm.joint_positions()
+    plan = planning.Plan((planning.MoveStep(planning.joint_move(q, down.start), "back over the pick spot"),
+                          planning.MoveStep(down, "descend"), planning.GripperStep("open", "release"),
+                          planning.MoveStep(planning.reverse(down), "lift")))
+    held = () if ctx.held_in_tool is None else (
+        motion_safety.HeldBlock(edge, ctx.held_in_tool, f"held {block.color} block"),)
+    top = np.asarray(block.position, float)
+    precheck.check_whole_plan(plan, ctx.arm, edge, held=held,
+                              known=precheck.known_boxes(ctx.known, top[:2], edge / 2),
+                              what=f"putting the {block.color} block back at ({top[0]:.1f}, {top[1]:.1f}) mm")
+    planning.execute(plan, ctx.arm)
+    ctx.held, ctx.held_in_tool, ctx.picked_down = None, None, None
+    ctx.known = [*ctx.known, Obstacle(float(top[0]), float(top[1]), float(top[2]), edge / np.sqrt(2))]
+    return True
 
 
 def _opening(station) -> float:
@@ -155,12 +187,12 @@ def place(station, position, yaw: float = 0.0, obstacles=None,
         raise ValueError(f"place position must be 3 finite numbers (x, y, z in world mm), got {position!r}")
     obs = ctx.known if obstacles is None else list(obstacles)
     plan = planning.plan_place(ctx.arm.joint_positions(), p + [0.0, 0.0, RELEASE_GAP_MM], edge, float(yaw),
-                               obstacles=obs, clearance=clearance)
+                               obstacles=obs, clearance=clearance, held_in_tool=ctx.held_in_tool)
     held = () if ctx.held_in_tool is None else (
         motion_safety.HeldBlock(edge, ctx.held_in_tool, f"held {ctx.held.color} block"),)
     precheck.check_whole_plan(plan, ctx.arm, edge, held=held, known=precheck.known_boxes(obs),
                               what=f"placing at ({p[0]:.1f}, {p[1]:.1f}, {p[2]:.1f}) mm")
     planning.execute(plan, ctx.arm)
-    ctx.held, ctx.held_in_tool = None, None
+    ctx.held, ctx.held_in_tool, ctx.picked_down = None, None, None
     ctx.known = [*ctx.known, Obstacle(float(p[0]), float(p[1]), float(p[2] + edge), edge / np.sqrt(2))]
     return True

@@ -10,8 +10,8 @@ What the arms refuse mid-plan, checked here first (MotionRefused names the step,
   sag model's residual;
 - the held block against the known blocks along every move it is carried: its surface sampled on a grid, each known
   block an upright box (a detection: its top-face centre, yaw and edge; an Obstacle from an earlier place: its
-  cylinder), and their top edges sampled against the held cube, with no penetration allowed (the simulator allows
-  0.5 mm: the margin covers detection error).
+  cylinder), and their top edges sampled against the held cube, under the arms' rule (motion_safety.held_intrusion)
+  with PRECHECK_MARGIN_MM less allowance (none: the simulator allows 0.5 mm, the margin covers detection error).
 The picked block itself and whatever stands in its column (the stack it comes from) are not obstacles to the lift.
 Units: mm, rad; world (board) frame; tool frame = ee_gripper_link.
 """
@@ -34,7 +34,6 @@ from .guard import GuardedArm
 __all__ = ["PRECHECK_MARGIN_MM", "KnownBox", "known_boxes", "held_pose_at_grasp", "plan_segments", "check_whole_plan"]
 
 PRECHECK_MARGIN_MM = 0.5        # the contact floor and the held block's clearance are this much stricter than the sim
-_HELD_STEP_RAD = 0.01           # path step of the held-block check (the simulator's HELD_PATH_STEP_RAD)
 _GRID = 7                       # samples per cube edge on each face of the held block
 
 
@@ -147,7 +146,7 @@ def _held_hits(q0, q1, held: Sequence[motion_safety.HeldBlock], boxes: Sequence[
     """Why carrying `held` along the straight planned joint path q0 -> q1 would push it into a known box, or None."""
     if not held or not boxes:
         return None
-    s = motion_safety.path_fractions(q0, q1, _HELD_STEP_RAD)
+    s = motion_safety.held_path_fractions(q0, q1)
     T = kinematics.fk(q0 + s[:, None] * (q1 - q0), check_limits=False)                 # (n, 4, 4)
     for block in held:
         T_b = T @ np.asarray(block.T_tool_block, float)                                 # (n, 4, 4) cube poses
@@ -157,13 +156,15 @@ def _held_hits(q0, q1, held: Sequence[motion_safety.HeldBlock], boxes: Sequence[
             near = np.hypot(centres[:, 0] - box.x, centres[:, 1] - box.y) < (block.edge_mm + 2 * box.half) * 0.75 + 1
             if not near.any() or centres[near, 2].min() - block.edge_mm > box.top:
                 continue
-            depth = _inside_box(surface[near], box).max(axis=1)                        # held surface into the box
+            inside = _inside_box(surface[near], box).max(axis=1)                       # held surface into the box
             edges = _box_edges(box)
             local = np.einsum("nji,nkj->nki", T_b[near, :3, :3], edges[None] - centres[near, None])
-            depth = np.maximum(depth, (block.edge_mm / 2 - np.abs(local).max(axis=2)).max(axis=1))  # box in the cube
-            if depth.max() > 0.0:       # the simulator allows 0.5 mm; PRECHECK_MARGIN_MM of it covers detection error
+            depth = np.full(len(s), -np.inf)
+            depth[near] = np.maximum(inside, (block.edge_mm / 2 - np.abs(local).max(axis=2)).max(axis=1))
+            # the arms' rule (motion_safety.held_intrusion); PRECHECK_MARGIN_MM of its allowance covers detection error
+            if motion_safety.held_intrusion(depth, motion_safety.HELD_CONTACT_TOL_MM - PRECHECK_MARGIN_MM) is not None:
                 i = int(np.argmax(depth))
-                c = centres[near][i]
+                c = centres[i]
                 return (f"the {block.name} would go {depth[i]:.1f} mm into the known block at ({box.x:.1f}, "
                         f"{box.y:.1f}) mm (top {box.top:.1f} mm), with its centre at ({c[0]:.1f}, {c[1]:.1f}, "
                         f"{c[2]:.1f}) mm")

@@ -208,8 +208,11 @@ def run_event(station, event: str, level: int = 1, time_limit_s: float | None = 
             handling.place(station, move.to, move.yaw, obstacles=obstacles, clearance=move.clearance)
         except (Unreachable, MotionRefused) as e:   # e.g. the tower is as high as the arm can stack: put it back
             why = f"cannot place the {key[0]} {key[1]} block ({e})"
-            back = np.asarray(move.block.position, float) - [0.0, 0.0, block_edge(move.block.size)]
-            handling.place(station, back, move.yaw, obstacles=obstacles)
+            try:       # back down the pick's own line (checked whole first: refused, nothing moves)
+                handling.put_back(station)
+            except MotionRefused as refused:
+                stopped = f"{why}; cannot put it back either ({refused}): the arm holds it where it stopped"
+                break
             board = [*obstacles, move.block]
             moves.append(MoveLog(move.describe() + " (cannot place: put back)", t_start, world.time_s - t0, True,
                                  False, np.full(3, np.nan)))
