@@ -142,9 +142,10 @@ def pick(station, block, obstacles=None) -> bool:
 def put_back(station) -> bool:
     """Put the held block back where it was picked from (after a place that could not be done): a joint move to the
     top of the pick's own straight descent (where the pick's lift ended), down that line (the path the block came up
-    in the gripper, checked whole with it then) to RELEASE_GAP_MM above the grasp, open, and up again. Checked whole before the first command like
-    every plan (the held block's own column, the stack it came from, is not an obstacle to it); raises ValueError
-    when nothing picked is held and MotionRefused with nothing sent when even this is refused. True when done."""
+    in the gripper, checked whole with it then) to RELEASE_GAP_MM above the grasp, open, and up again. Checked
+    whole before the first command like every plan (the held block's own column, the stack it came from, is not an
+    obstacle to it); raises ValueError when nothing picked is held and MotionRefused with nothing sent when even
+    this is refused. True when done."""
     ctx = context(station)
     if ctx.held is None or ctx.picked_down is None:
         raise ValueError("put_back needs a block picked with tasks.pick in the gripper")
