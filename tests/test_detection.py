@@ -481,7 +481,7 @@ def test_a_side_face_is_not_read_as_a_second_block():
     """Seed 2 seen through the camera a student calibrates (tasks.perception): the large yellow block far out on the
     board (y = -134 mm) shows a side face 19 mm deep to the camera, and a band of it within the plateau tolerance of
     22.7 mm passed as the top face of a small yellow block 16 mm beside it. Faces that are not level (their heights
-    rise 3 mm per sample there) are left out; with the rule off the phantom comes back."""
+    rise 2 mm per sample there, 4 times a top face) are left out; with the rule off the phantom comes back."""
     station = make_station("sim", seed=2)
     calib = perception.calibrate_camera(station)
     frame = station.camera.capture()

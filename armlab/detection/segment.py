@@ -10,7 +10,8 @@ stands on it.
 A top face is level, a side face is not: a side face seen obliquely (far from the camera's nadir, where it covers
 as much of the image as a top face) rises by its whole edge over a few rows, so a band of it can gather enough pixels
 within the tolerance of one height to pass as a plateau (seed 2's large yellow block read as a second, small one at
-22.7 mm next to it). Faces whose heights' plane fit rises more than `max_slope_mm` per sample are left out.
+22.7 mm next to it). Faces whose core's heights (within half the tolerance of the face's height) rise more than
+`max_slope_mm` per sample in a plane fit are left out.
 """
 
 from __future__ import annotations
@@ -82,8 +83,9 @@ def segment_faces(height_mm: np.ndarray, valid: np.ndarray, min_height_mm: float
     min_face_pixels: fewest pixels of a face on its plateau (scale it with the map's resolution); median_px: the
     median filter's size (3 or 5) that removes the depth's speckle: it also erases parts of objects thinner than about
     half of it, so use 3 on a reduced map (an arch's legs are 3-4 samples wide at half resolution); max_slope_mm: the
-    steepest a face's heights may rise, mm per sample (scale it with the map's resolution: a block's top face rises
-    less than 0.2 mm per sample at half resolution, a band of a side face 2-4)."""
+    steepest a face's core may rise, mm per sample (scale it with the map's resolution: at half resolution a block's
+    top face rises less than 0.3 mm per sample, 0.6 when the arm leaves only a few samples of it, a side face's band
+    2)."""
     h = np.zeros(np.shape(height_mm), np.float32)
     np.copyto(h, height_mm, where=valid & np.isfinite(height_mm), casting="unsafe")
     h = cv2.medianBlur(h, median_px)
@@ -122,8 +124,10 @@ def segment_faces(height_mm: np.ndarray, valid: np.ndarray, min_height_mm: float
                 sil = parts[fy:fy + fh, fx:fx + fw] == j
                 mask = sil & on_level[fy:fy + fh, fx:fx + fw]
                 heights = sub_h[fy:fy + fh, fx:fx + fw]
-                if _slope(heights, mask) > max_slope_mm:
-                    continue                                    # a band of a side face
                 face_h = _median(heights[mask])
+                # level? the plane fit of the face's core (within half the tolerance of its height): a top face's
+                # pixels include a band of its own side faces within the tolerance, which tilts a fit of them all
+                if _slope(heights, mask & (np.abs(heights - face_h) <= 0.5 * face_tolerance_mm)) > max_slope_mm:
+                    continue                                    # a band of a side face
                 faces.append(Face((int(x + fx), int(y + fy), int(fw), int(fh)), mask, face_h, sil))
     return faces

@@ -53,8 +53,9 @@ class DetectionSettings:
     edge_tolerance: a cube's measured edge is within this of one of the lab's block edges;
     max_levels: the tallest stack (blocks) a face may top: faces at no height of such a stack are not reported,
     so raise it (and max_height) for towers (the "to the sky" event);
-    max_face_slope: a top face's heights rise less than this (mm per full-resolution pixel; a side face seen
-    obliquely rises 1-2 mm per pixel, a top face less than 0.1);
+    max_face_slope: a top face's core (its pixels within 3 mm of its height) rises less than this in a plane fit
+    (mm per full-resolution pixel; the band of a side face seen obliquely that passed as a face rose 1 mm per pixel,
+    block tops rise less than 0.15, 0.3 when the arm leaves only a few of their pixels);
     min_face_pixels: fewest full-resolution pixels of a face (80: a small triangle or arch, 25 mm, far out on the
     board keeps fewer than 120 once the segmentation's median and opening have taken its corners and legs); step:
     segmentation works on every step-th pixel (each face is then measured at full resolution)."""
