@@ -137,20 +137,22 @@ def _side_face_width(half: np.ndarray, plane_z: np.ndarray, toward: np.ndarray, 
 
 
 def _interpolate(p: np.ndarray, s: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """The profiles p (N, K), sampled at offsets s (K,) mm every EDGE_STEP_MM, linearly interpolated at x (N,) mm
-    (clipped to the profiles' ends)."""
-    f = np.clip((x - s[0]) / EDGE_STEP_MM, 0.0, p.shape[-1] - 1.0)
-    i = np.minimum(f.astype(np.intp), p.shape[-1] - 2)
-    rows = np.arange(len(p))
-    return p[rows, i] + (f - i) * (p[rows, i + 1] - p[rows, i])
+    """The profiles p (N, K), sampled at offsets s (K,) mm every EDGE_STEP_MM, linearly interpolated at x (N, J) mm
+    (clipped to the profiles' ends): (N, J)."""
+    K = p.shape[-1]
+    f = np.clip((x - s[0]) / EDGE_STEP_MM, 0.0, K - 1.0)
+    i = np.minimum(f.astype(np.intp), K - 2)
+    at = np.arange(0, p.size, K)[:, None] + i                  # flat indices: a fraction of 2-d fancy indexing
+    p0 = p.ravel()[at]
+    return p0 + (f - i) * (p.ravel()[at + 1] - p0)
 
 
 def _crossings(p: np.ndarray, s: np.ndarray, level: np.ndarray) -> np.ndarray:
     """Where the profiles p (N, K), sampled at offsets s (K,) mm, first reach level (N,), linearly interpolated
     (mm; at the second sample when the first already does)."""
-    rows = np.arange(len(p))
     m = np.maximum((p >= level[:, None]).argmax(axis=-1), 1)
-    p0, p1 = p[rows, m - 1], p[rows, m]
+    at = np.arange(0, p.size, p.shape[-1]) + m
+    p0, p1 = p.ravel()[at - 1], p.ravel()[at]
     frac = np.minimum(np.maximum((level - p0) / np.where(p1 > p0, p1 - p0, 1.0), 0.0), 1.0)
     return s[0] + EDGE_STEP_MM * (m - 1 + frac)
 
@@ -178,16 +180,17 @@ def _edge_offsets(prof: np.ndarray, s: np.ndarray, inside_mm, outside_mm) -> tup
     p = prof.reshape(-1, K)
     inside = np.broadcast_to(np.asarray(inside_mm, float), shape).reshape(-1)
     outside = np.broadcast_to(np.asarray(outside_mm, float), shape).reshape(-1)
-    finite = np.isfinite(p).all(axis=-1)
-    p = np.where(finite[:, None], p, 0.0)
+    finite = np.isfinite(p.sum(axis=-1))           # no NaN in the row (colour distances are far from overflowing)
+    p = p.copy()
+    p[~finite] = 0.0
     k = (p >= EDGE_LEVEL).argmax(axis=-1)
     ok = finite & (k > 0)
     edge = s[0] + EDGE_STEP_MM * (k - 0.5)
     for _ in range(EDGE_MIDPOINT_ITERATIONS):
-        lo, hi = _interpolate(p, s, edge - inside), _interpolate(p, s, edge + outside)
+        lo, hi = _interpolate(p, s, np.stack([edge - inside, edge + outside], axis=-1)).T
         edge = _crossings(p, s, np.where(ok, 0.5 * (lo + hi), EDGE_LEVEL))
     rows, reach = np.arange(len(p)), int(round(EDGE_RISE_MM / EDGE_STEP_MM))
-    face = np.minimum.accumulate(p, axis=-1)[rows, np.maximum(k - 1, 0)]
+    face = np.where(np.arange(K) < np.maximum(k, 1)[:, None], p, np.inf).min(axis=-1)   # the least before k
     padded = np.concatenate([p, np.full((len(p), reach), -np.inf, p.dtype)], axis=-1)
     rise = padded[:, :K].copy()
     for d in range(1, reach + 1):
@@ -281,16 +284,20 @@ def refine_yaws(camera: Camera, faces: list[MeasuredFace], iterations: int = 3) 
         hb = np.einsum("fij,faj->fai", homographies, base).astype(f32)     # (F, 4, 3)
         hn = np.einsum("fij,faj->fai", homographies[:, :, :2], normal).astype(f32)
         ht = np.einsum("fij,faj->fai", homographies[:, :, :2], tangent).astype(f32)
-        hom = (hb[:, :, None, None] + s32[:, None] * hn[:, :, None, None]
-               + t32[..., None, None] * ht[:, :, None, None])             # (F, 4, M, K, 3)
-        px = hom[..., :2] / hom[..., 2:]                                   # patch pixels
-        # a sample off its patch reads the atlas's gap around the patch, NaN (feature) and 1 (occluded), as the
-        # border of a remap of the patch alone would: clipped to 1.5 px (linear) / 1 px (nearest) off the patch
-        np.minimum(np.maximum(px, f32(-1.5), out=px), size[:, None, None, None], out=px)
-        px += shift[:, None, None, None]
-        px = px.reshape(-1, len(s), 2)
-        p = cv2.remap(feature, px, None, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=np.nan)
-        hidden = cv2.remap(near, px, None, cv2.INTER_NEAREST, borderMode=cv2.BORDER_CONSTANT, borderValue=1)
+        # each image coordinate on its own (F, 4, M, K): no (..., 3) array, and remap takes the two maps apart
+        hb, hn, ht = (h[:, :, None, None] for h in (hb, hn, ht))               # (F, 4, 1, 1, 3)
+        den = hb[..., 2] + s32 * hn[..., 2] + t32[..., None] * ht[..., 2]
+        maps = []
+        for c in range(2):
+            x = hb[..., c] + s32 * hn[..., c] + t32[..., None] * ht[..., c]
+            x /= den
+            # a sample off its patch reads the atlas's gap around the patch, NaN (feature) and 1 (occluded), as the
+            # border of a remap of the patch alone would: clipped to 1.5 px (linear) / 1 px (nearest) off the patch
+            np.minimum(np.maximum(x, f32(-1.5), out=x), size[:, None, None, None, c], out=x)
+            x += shift[:, None, None, None, c]
+            maps.append(x.reshape(-1, len(s)))
+        p = cv2.remap(feature, *maps, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=np.nan)
+        hidden = cv2.remap(near, *maps, cv2.INTER_NEAREST, borderMode=cv2.BORDER_CONSTANT, borderValue=1)
         p[hidden > 0] = np.nan
         prof[:] = p.reshape(prof.shape)
         mid = centre[:, None] + normal * dist[..., None]
