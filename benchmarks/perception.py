@@ -6,9 +6,9 @@ extrinsics + depth-plane correction).
 
 The set: n_frames (default 32) realistic frames cycling through singles, stacks 2-3 high, the events' levels 2-3
 (stacks, distractors) and "to the sky", every other one with the arm posed over the board beside a block; seeds 100...
-(the colour model in data/colour_model.json was fitted on seeds 1000-1023). Prints one table from one run:
-recall, precision, colour / size / levels accuracy, position and yaw errors, the lab report's HSV table on the same
-faces, the 50 mm grid world error before and after calibration as notebook 01 measures it (visible grid points of
+(the colour model in data/colour_model.json was fitted on seeds 1000-1023). Prints one table from one run: recall,
+precision, colour / size / levels accuracy, position, yaw and size (edge) errors, the lab report's HSV table on the
+same faces, the 50 mm grid world error before and after calibration as notebook 01 measures it (visible grid points of
 the empty board, truth pixels), and ms per frame for detection (each frame's best of 3 runs, one core) and for tag
 calibration. Then crowded frames (CROWDED_BLOCKS blocks scattered over the whole board, true camera): detection ms
 median / worst of this detector and of the one at git revision BEFORE_REV (before the crowded-frame speed work: the
@@ -215,6 +215,11 @@ def main(n_frames: int = 32) -> None:
             ("yaw error max (deg)", "yaw_max_deg", "{:.2f}", "< 2")]
     for label, key, fmt, goal in rows:
         print(f"{label:<{W}}" + "".join(f"{fmt.format(m[k][key]):>14}" for k in scores) + f"{goal:>10}")
+    size = {k: np.array([d.edge_mm - t.obj.edge for d, t in s.block_pairs() if t.visible >= s.min_visible])
+            for k, s in scores.items()}
+    print(f"{'size (edge) error mean, signed (mm)':<{W}}" + "".join(f"{v.mean():>+14.2f}" for v in size.values())
+          + f"{'0':>10}")
+    print(f"{'size (edge) error max, |error| (mm)':<{W}}" + "".join(f"{np.abs(v).max():>14.2f}" for v in size.values()))
     print(f"{'colour accuracy, lab report HSV table (same faces)':<{W}}{hsv_hits / max(n_hsv, 1):>14.3f}{'':>14}"
           f"{'':>10}")
     print(f"{'  faces the HSV table leaves unlabelled':<{W}}{hsv_none:>14d}")
