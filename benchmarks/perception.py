@@ -2,7 +2,7 @@
 calibrates (checkerboard intrinsics from the frame's own camera, tasks.perception.station_intrinsics, + AprilTag
 extrinsics + depth-plane correction).
 
-    .venv/bin/python benchmarks/perception.py [n_frames]
+    .venv/bin/python benchmarks/perception.py [n_frames]     # or: perception.py crowded (only the crowded rows)
 
 The set: n_frames (default 32) realistic frames cycling through singles, stacks 2-3 high, the events' levels 2-3
 (stacks, distractors) and "to the sky", every other one with the arm posed over the board beside a block; seeds 100...
