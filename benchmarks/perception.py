@@ -2,22 +2,28 @@
 calibrates (checkerboard intrinsics from the frame's own camera, tasks.perception.station_intrinsics, + AprilTag
 extrinsics + depth-plane correction).
 
-    .venv/bin/python benchmarks/perception.py [n_frames]
+    .venv/bin/python benchmarks/perception.py [n_frames]     # or: perception.py crowded (only the crowded rows)
 
 The set: n_frames (default 32) realistic frames cycling through singles, stacks 2-3 high, the events' levels 2-3
 (stacks, distractors) and "to the sky", every other one with the arm posed over the board beside a block; seeds 100...
-(the colour model in data/colour_model.json was fitted on seeds 1000-1023). Prints one table from one run:
-recall, precision, colour / size / levels accuracy, position and yaw errors, the lab report's HSV table on the same
-faces, the 50 mm grid world error before and after calibration as notebook 01 measures it (visible grid points of
+(the colour model in data/colour_model.json was fitted on seeds 1000-1023). Prints one table from one run: recall,
+precision, colour / size / levels accuracy, position, yaw and size (edge) errors, the lab report's HSV table on the
+same faces, the 50 mm grid world error before and after calibration as notebook 01 measures it (visible grid points of
 the empty board, truth pixels), and ms per frame for detection (each frame's best of 3 runs, one core) and for tag
-calibration.
+calibration. Then crowded frames (CROWDED_BLOCKS blocks scattered over the whole board, true camera): detection ms
+median / worst of this detector and of the one at git revision BEFORE_REV (before the crowded-frame speed work: the
+same detections, checked), timed in turn in this process, and their ratio.
 """
 
 from __future__ import annotations
 
+import importlib
 import os
+import subprocess
 import sys
+import tempfile
 import time
+from pathlib import Path
 
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
@@ -25,8 +31,10 @@ import cv2  # noqa: E402
 import numpy as np  # noqa: E402
 
 from armlab import calibration, make_station  # noqa: E402
+from armlab.blocks import COLORS  # noqa: E402
 from armlab.camera import Camera  # noqa: E402
 from armlab.detection import detect_objects, hsv_table_classify  # noqa: E402
+from armlab.detection.masks import arm_mask  # noqa: E402
 from armlab.lab import lab_config  # noqa: E402
 from armlab.sim.camera import CameraRealism  # noqa: E402
 from armlab.sim.checkerboard import load_dataset  # noqa: E402
@@ -36,6 +44,10 @@ from armlab.tasks.perception import station_intrinsics  # noqa: E402
 cv2.setNumThreads(1)
 W = 78          # the metric column's width
 REPEATS = 3     # detection runs per frame (the table gives each frame's fastest)
+REPO = Path(__file__).resolve().parents[1]
+BEFORE_REV = "7957813"   # the detector before the crowded-frame speed work
+CROWDED_BLOCKS = 30
+CROWDED_SEEDS = range(6)
 
 
 def _timed_ms(fn, *args) -> float:
@@ -90,6 +102,82 @@ def grid_errors(K, dist) -> list[tuple[str, float, float]]:
     return rows
 
 
+def crowded_scene(seed: int, n: int = CROWDED_BLOCKS) -> dict:
+    """A scene dict of n blocks (colours in turn, small and large alternating, yaws random) scattered over the whole
+    board at least 62 mm apart (centres), clear of the robot's base (60 mm) and the tags (70 mm)."""
+    rng = np.random.default_rng([seed, n])
+    cfg = lab_config()
+    tags = np.array(list(cfg.tags.centres_mm.values()), float)
+    spots: list[np.ndarray] = []
+    while len(spots) < n:
+        xy = np.array([rng.uniform(cfg.board_x[0] + 60, cfg.board_x[1] - 60),
+                       rng.uniform(cfg.board_y[0] + 60, cfg.board_y[1] - 40)])
+        if (cfg.on_robot_base(xy, margin_mm=60) or np.min(np.linalg.norm(tags - xy, axis=1)) < 70
+                or (spots and np.min(np.linalg.norm(np.array(spots) - xy, axis=1)) < 62)):
+            continue
+        spots.append(xy)
+    return {"objects": [{"color": COLORS[k % len(COLORS)], "size": "large" if k % 2 else "small",
+                         "position_mm": [float(x), float(y)], "yaw_rad": float(rng.uniform(-np.pi / 4, np.pi / 4))}
+                        for k, (x, y) in enumerate(spots)]}
+
+
+def detector_at(rev: str):
+    """detect_objects of armlab.detection at git revision `rev` (its modules in a temporary package), or None and
+    the reason when git or the revision is not available."""
+    name = f"_armlab_detection_{rev}"
+    folder = Path(tempfile.mkdtemp(prefix="armlab_bench_")) / name
+    folder.mkdir()
+    try:
+        files = subprocess.run(["git", "-C", str(REPO), "ls-tree", "--name-only", f"{rev}:armlab/detection"],
+                               check=True, capture_output=True, text=True).stdout.split()
+        for file in (f for f in files if f.endswith(".py")):
+            src = subprocess.run(["git", "-C", str(REPO), "show", f"{rev}:armlab/detection/{file}"], check=True,
+                                 capture_output=True, text=True).stdout
+            (folder / file).write_text(src.replace("from armlab.detection.", f"from {name}."))
+    except (OSError, subprocess.CalledProcessError) as e:
+        return None, f"git show {rev} failed: {getattr(e, 'stderr', '') or e}".strip()
+    sys.path.insert(0, str(folder.parent))
+    return importlib.import_module(f"{name}.detect").detect_objects, None
+
+
+def _same(a, b) -> bool:
+    """Whether two detection lists agree (colour, size, shape, levels; positions, yaws and edges to 1e-9)."""
+    return len(a) == len(b) and all(
+        (x.color, x.size, x.shape, x.levels) == (y.color, y.size, y.shape, y.levels)
+        and np.allclose([*x.position, x.yaw, x.edge_mm], [*y.position, y.yaw, y.edge_mm], rtol=0, atol=1e-9)
+        for x, y in zip(a, b, strict=True))
+
+
+def crowded_rows() -> None:
+    """Detection ms on the crowded frames (CROWDED_SEEDS, true camera, corrected depth), median / worst, this
+    detector and BEFORE_REV's, each frame's best of REPEATS runs taken in turn."""
+    frames = []
+    for seed in CROWDED_SEEDS:
+        station = make_station("sim", seed=seed, scene=crowded_scene(seed))
+        frame, cam, q = station.camera.capture(), station.camera.truth, station.arm.joint_positions()
+        depth = calibration.fit_depth_correction(frame.depth, cam, exclude=arm_mask(cam, q)).apply(frame.depth)
+        frames.append((frame.rgb, depth, cam, q))
+    before, why = detector_at(BEFORE_REV)
+    detectors = [detect_objects] + ([before] if before else [])
+    found = [[d(*f) for f in frames] for d in detectors]        # also warms the per-camera caches
+    best = np.full((len(detectors), len(frames)), np.inf)
+    for _ in range(REPEATS):
+        for j, f in enumerate(frames):
+            for i, d in enumerate(detectors):
+                best[i, j] = min(best[i, j], _timed_ms(d, *f))
+    n = np.mean([len(x) for x in found[0]])
+    label = f"crowded frames ({len(frames)}, {CROWDED_BLOCKS} blocks, {n:.0f} found), ms median / worst"
+    print(f"{label:<{W}}{f'{np.median(best[0]):.1f} / {np.max(best[0]):.1f}':>14}")
+    if before is None:
+        print(f"  (revision {BEFORE_REV} not available: {why})")
+        return
+    same = all(_same(a, b) for a, b in zip(found[0], found[1], strict=True))
+    print(f"{f'  the same at {BEFORE_REV} (before the speed work; detections the same: {same})':<{W}}"
+          f"{f'{np.median(best[1]):.1f} / {np.max(best[1]):.1f}':>14}")
+    print(f"{'  ratio before / now, median / worst':<{W}}"
+          f"{f'{np.median(best[1]) / np.median(best[0]):.2f} / {np.max(best[1]) / np.max(best[0]):.2f}':>14}")
+
+
 def main(n_frames: int = 32) -> None:
     K, dist = checkerboard_intrinsics()
     cases = [sim_case(*spec) for spec in case_specs(n_frames, 100)]
@@ -127,6 +215,11 @@ def main(n_frames: int = 32) -> None:
             ("yaw error max (deg)", "yaw_max_deg", "{:.2f}", "< 2")]
     for label, key, fmt, goal in rows:
         print(f"{label:<{W}}" + "".join(f"{fmt.format(m[k][key]):>14}" for k in scores) + f"{goal:>10}")
+    size = {k: np.array([d.edge_mm - t.obj.edge for d, t in s.block_pairs() if t.visible >= s.min_visible])
+            for k, s in scores.items()}
+    print(f"{'size (edge) error mean, signed (mm)':<{W}}" + "".join(f"{v.mean():>+14.2f}" for v in size.values())
+          + f"{'0':>10}")
+    print(f"{'size (edge) error max, |error| (mm)':<{W}}" + "".join(f"{np.abs(v).max():>14.2f}" for v in size.values()))
     print(f"{'colour accuracy, lab report HSV table (same faces)':<{W}}{hsv_hits / max(n_hsv, 1):>14.3f}{'':>14}"
           f"{'':>10}")
     print(f"{'  faces the HSV table leaves unlabelled':<{W}}{hsv_none:>14d}")
@@ -136,7 +229,11 @@ def main(n_frames: int = 32) -> None:
           f"{f'{np.median(det_ms):.1f} / {np.max(det_ms):.1f}':>14}{'':>14}{'< 20':>10}")
     print(f"{'tag calibration ms per frame (median / max)':<{W}}"
           f"{f'{np.median(tag_ms):.1f} / {np.max(tag_ms):.1f}':>14}")
+    crowded_rows()
 
 
 if __name__ == "__main__":
-    main(int(sys.argv[1]) if len(sys.argv) > 1 else 32)
+    if sys.argv[1:] == ["crowded"]:
+        crowded_rows()
+    else:
+        main(int(sys.argv[1]) if len(sys.argv) > 1 else 32)

@@ -174,7 +174,8 @@ def detect_objects(rgb, depth_mm, camera: Camera, arm_q=None, color_model: Color
     gains = board_white_balance(rgb, height, valid, settings.step)
     faces = segment_faces(height, valid, settings.min_height,
                           min_face_pixels=max(8, settings.min_face_pixels // settings.step ** 2),
-                          median_px=5 if settings.step == 1 else 3)
+                          median_px=5 if settings.step == 1 else 3,
+                          max_slope_mm=settings.max_face_slope * settings.step)
     heights = stack_heights(settings.max_levels)
     faces = [face for face in faces if np.min(np.abs(heights - face.height_mm)) <= settings.level_tolerance]
     measured = [_measure(face, f, settings) for face in faces]

@@ -88,6 +88,12 @@ SEEN_SIDE_VAR = 1.4         # a side whose own side face is in view beyond it: i
                             # (measured: its squared slope error over its variance is 1.4 times a silhouette's, on
                             # seeds 300-315 with the renderer filling faces by pixel centre)
 EDGE_LEVEL = FACE_COLOR_LEVEL   # the face ends where the colour distance to its core colour first reaches this
+EDGE_STEP_HALF_PX = 2.0   # a blurred edge's levels are read this far (px) inside and outside it (the step's half-width)
+SIDE_FACE_MIN_READ_PX = 0.75   # beyond a side whose own side face is in view, the level is read at the side face's
+                               # middle, at least this far out (px): a narrower side face is blurred into the edge
+                               # (measured on seeds 0-23: 0.5 px reads cubes 0.04 mm small, 1 px 0.12 mm large)
+EDGE_MIDPOINT_ITERATIONS = 3   # steps of the half level's fixed point
+EDGE_RISE_MM = 1.5   # a side's direction: from the level at most this far beyond its first crossing (_edge_offsets)
 _PROFILE_T = np.linspace(-0.8, 0.8, EDGE_SAMPLES)
 _PROFILE_S = np.arange(-EDGE_SEARCH_MM, EDGE_SEARCH_MM + 1e-9, EDGE_STEP_MM)
 
@@ -120,32 +126,77 @@ def _line_fits(t: np.ndarray, y: np.ndarray, w: np.ndarray):
     return b, ym - b * tm, n, np.where(n > 0, spread, 0.0), sxx
 
 
-def _edge_offsets(prof: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _side_face_width(half: np.ndarray, plane_z: np.ndarray, toward: np.ndarray, camera_z: float) -> np.ndarray:
+    """(F, 4) mm: how far a face's own side face reaches beyond each side on the face's plane, as the camera sees it.
+    half (F, 2) mm: the face's half sides; plane_z (F,) mm: its height; toward (F, 4) mm: the camera's horizontal
+    distance beyond each side (> 0: that side face is in view); camera_z: the camera's height (mm). A side face as
+    tall as the cube's edge e, seen from a height H above the face's plane at a horizontal distance r, covers
+    e r / (H + e) of the plane beyond the side."""
+    e = 2 * np.sqrt(half[:, :1] * half[:, 1:])
+    return e * np.maximum(toward, 0.0) / (camera_z - plane_z[:, None] + e)
+
+
+def _interpolate(p: np.ndarray, s: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """The profiles p (N, K), sampled at offsets s (K,) mm every EDGE_STEP_MM, linearly interpolated at x (N, J) mm
+    (clipped to the profiles' ends): (N, J)."""
+    K = p.shape[-1]
+    f = np.clip((x - s[0]) / EDGE_STEP_MM, 0.0, K - 1.0)
+    i = np.minimum(f.astype(np.intp), K - 2)
+    at = np.arange(0, p.size, K)[:, None] + i                  # flat indices: a fraction of 2-d fancy indexing
+    p0 = p.ravel()[at]
+    return p0 + (f - i) * (p.ravel()[at + 1] - p0)
+
+
+def _crossings(p: np.ndarray, s: np.ndarray, level: np.ndarray) -> np.ndarray:
+    """Where the profiles p (N, K), sampled at offsets s (K,) mm, first reach level (N,), linearly interpolated
+    (mm; at the second sample when the first already does)."""
+    m = np.maximum((p >= level[:, None]).argmax(axis=-1), 1)
+    at = np.arange(0, p.size, p.shape[-1]) + m
+    p0, p1 = p.ravel()[at - 1], p.ravel()[at]
+    frac = np.minimum(np.maximum((level - p0) / np.where(p1 > p0, p1 - p0, 1.0), 0.0), 1.0)
+    return s[0] + EDGE_STEP_MM * (m - 1 + frac)
+
+
+def _edge_offsets(prof: np.ndarray, s: np.ndarray, inside_mm, outside_mm) -> tuple[np.ndarray, np.ndarray]:
     """Where the face ends along each profile (..., K) sampled at offsets s (K,) mm: the first sample whose colour
-    distance reaches EDGE_LEVEL finds the edge, which is then placed half-way between the face's level (inside) and
-    the level just beyond (within 1.5 mm), linearly interpolated: the middle of a blurred step, whatever lies beyond
-    it (board, grid line, the face's own shaded side). Returns the offsets (...) mm and whether each was found."""
+    distance reaches EDGE_LEVEL finds the edge, which is then placed where the profile is half-way between its level
+    `inside_mm` inside and its level `outside_mm` outside that point (mm, broadcast to (...)), linearly interpolated:
+    the middle of the blurred step, whatever lies farther beyond it (board, grid line). The point is a fixed point,
+    EDGE_MIDPOINT_ITERATIONS steps from the first crossing. The levels must be read beyond the blurred step (about
+    EDGE_STEP_HALF_PX pixels, in mm at the face: the blur spreads a step over pixels, not millimetres): a level read
+    on the rise puts the half level, and the edge, inside the face (the level at most 1.5 mm beyond the first
+    crossing, as before, read cubes 0.6 mm small under the simulator's 0.7 px blur, more far from the image centre),
+    and one read past a narrow side face of the cube, on the board, puts it outside (refine_yaws reads that one at
+    the side face's middle).
+
+    Returns the offsets (..., 2) mm and whether each was found (...). [..., 0] is that half level's crossing, where
+    the side is; [..., 1] is the crossing of the level half-way between the face's (the least before the first
+    crossing) and the greatest within EDGE_RISE_MM beyond the first crossing: still on a blurred step's rise, so
+    inside the side by a part of the blur, but by the same part all along a side, and the steadier of the two along
+    it: a side's direction comes from these (measured on the perception frames of seeds 100-115: yaw error 0.23 deg
+    mean with them, 0.29 with the half level's; as a side's position, the half level's crossings read cubes 0.06 mm
+    large, these 0.6 mm small)."""
     shape, K = prof.shape[:-1], prof.shape[-1]
     p = prof.reshape(-1, K)
-    finite = np.isfinite(p).all(axis=-1)
-    p = np.where(finite[:, None], p, 0.0)
+    inside = np.broadcast_to(np.asarray(inside_mm, float), shape).reshape(-1)
+    outside = np.broadcast_to(np.asarray(outside_mm, float), shape).reshape(-1)
+    finite = np.isfinite(p.sum(axis=-1))           # no NaN in the row (colour distances are far from overflowing)
+    p = p.copy()
+    p[~finite] = 0.0
     k = (p >= EDGE_LEVEL).argmax(axis=-1)
     ok = finite & (k > 0)
-    rows = np.arange(len(p))
-    reach = int(round(1.5 / EDGE_STEP_MM))
-    # inside: the least level before sample k (a running minimum); beyond: the greatest within reach from k on
-    inside = np.where(k > 0, np.minimum.accumulate(p, axis=-1)[rows, np.maximum(k - 1, 0)], np.inf)
+    edge = s[0] + EDGE_STEP_MM * (k - 0.5)
+    for _ in range(EDGE_MIDPOINT_ITERATIONS):
+        lo, hi = _interpolate(p, s, np.stack([edge - inside, edge + outside], axis=-1)).T
+        edge = _crossings(p, s, np.where(ok, 0.5 * (lo + hi), EDGE_LEVEL))
+    rows, reach = np.arange(len(p)), int(round(EDGE_RISE_MM / EDGE_STEP_MM))
+    face = np.where(np.arange(K) < np.maximum(k, 1)[:, None], p, np.inf).min(axis=-1)   # the least before k
     padded = np.concatenate([p, np.full((len(p), reach), -np.inf, p.dtype)], axis=-1)
-    window = padded[:, :K].copy()
+    rise = padded[:, :K].copy()
     for d in range(1, reach + 1):
-        np.maximum(window, padded[:, d:d + K], out=window)
-    beyond = window[rows, k]
-    with np.errstate(invalid="ignore"):
-        half = np.where(ok, 0.5 * (inside + beyond), EDGE_LEVEL)
-    m = np.maximum((p >= half[:, None]).argmax(axis=-1), 1)
-    p0, p1 = p[rows, m - 1], p[rows, m]
-    frac = np.minimum(np.maximum((half - p0) / np.where(p1 > p0, p1 - p0, 1.0), 0.0), 1.0)
-    return (s[0] + EDGE_STEP_MM * (m - 1 + frac)).reshape(shape), ok.reshape(shape)
+        np.maximum(rise, padded[:, d:d + K], out=rise)
+    steady = _crossings(p, s, np.where(ok, 0.5 * (face + rise[rows, k]), EDGE_LEVEL))
+    return np.stack([edge, steady], axis=-1).reshape(shape + (2,)), ok.reshape(shape)
 
 
 @dataclass
@@ -221,6 +272,7 @@ def refine_yaws(camera: Camera, faces: list[MeasuredFace], iterations: int = 3) 
     s32, t32 = s.astype(np.float32), t.astype(np.float32)
     prof = np.empty((n_faces, 4, len(_PROFILE_T), len(s)), np.float32)
     pixel_mm = np.repeat([m.pixel_mm for m in faces], 4)
+    plane_z = np.array([m.plane_z for m in faces], float)
     for _ in range(iterations):
         ang = theta[:, None] + np.arange(4) * (np.pi / 2)
         normal = np.stack([np.cos(ang), np.sin(ang)], axis=-1)            # (F, 4, 2) outward
@@ -232,26 +284,37 @@ def refine_yaws(camera: Camera, faces: list[MeasuredFace], iterations: int = 3) 
         hb = np.einsum("fij,faj->fai", homographies, base).astype(f32)     # (F, 4, 3)
         hn = np.einsum("fij,faj->fai", homographies[:, :, :2], normal).astype(f32)
         ht = np.einsum("fij,faj->fai", homographies[:, :, :2], tangent).astype(f32)
-        hom = (hb[:, :, None, None] + s32[:, None] * hn[:, :, None, None]
-               + t32[..., None, None] * ht[:, :, None, None])             # (F, 4, M, K, 3)
-        px = hom[..., :2] / hom[..., 2:]                                   # patch pixels
-        # a sample off its patch reads the atlas's gap around the patch, NaN (feature) and 1 (occluded), as the
-        # border of a remap of the patch alone would: clipped to 1.5 px (linear) / 1 px (nearest) off the patch
-        np.minimum(np.maximum(px, f32(-1.5), out=px), size[:, None, None, None], out=px)
-        px += shift[:, None, None, None]
-        px = px.reshape(-1, len(s), 2)
-        p = cv2.remap(feature, px, None, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=np.nan)
-        hidden = cv2.remap(near, px, None, cv2.INTER_NEAREST, borderMode=cv2.BORDER_CONSTANT, borderValue=1)
+        # each image coordinate on its own (F, 4, M, K): no (..., 3) array, and remap takes the two maps apart
+        hb, hn, ht = (h[:, :, None, None] for h in (hb, hn, ht))               # (F, 4, 1, 1, 3)
+        den = hb[..., 2] + s32 * hn[..., 2] + t32[..., None] * ht[..., 2]
+        maps = []
+        for c in range(2):
+            x = hb[..., c] + s32 * hn[..., c] + t32[..., None] * ht[..., c]
+            x /= den
+            # a sample off its patch reads the atlas's gap around the patch, NaN (feature) and 1 (occluded), as the
+            # border of a remap of the patch alone would: clipped to 1.5 px (linear) / 1 px (nearest) off the patch
+            np.minimum(np.maximum(x, f32(-1.5), out=x), size[:, None, None, None, c], out=x)
+            x += shift[:, None, None, None, c]
+            maps.append(x.reshape(-1, len(s)))
+        p = cv2.remap(feature, *maps, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=np.nan)
+        hidden = cv2.remap(near, *maps, cv2.INTER_NEAREST, borderMode=cv2.BORDER_CONSTANT, borderValue=1)
         p[hidden > 0] = np.nan
         prof[:] = p.reshape(prof.shape)
-        edge, ok = _edge_offsets(prof, s)
         mid = centre[:, None] + normal * dist[..., None]
-        sees_side = np.einsum("fij,fij->fi", normal, camera.position[:2] - mid) > 0
-        tt, ee, okk = (x.reshape(-1, t.shape[-1]) for x in (t, edge, ok))
+        toward = np.einsum("fij,fij->fi", normal, camera.position[:2] - mid)   # (F, 4) mm, > 0: side face in view
+        sees_side = toward > 0
+        reach = EDGE_STEP_HALF_PX * pixel_mm.reshape(n_faces, 4)
+        outside = np.where(sees_side, np.clip(0.5 * _side_face_width(dist[:, :2], plane_z, toward, camera.position[2]),
+                                              SIDE_FACE_MIN_READ_PX * pixel_mm.reshape(n_faces, 4), reach), reach)
+        edge, ok = _edge_offsets(prof, s, reach[..., None], outside[..., None])
+        # each side's line: its slope (and the outlier test, the residuals, the counts) from the steady crossings,
+        # its intercept (where the side is) from the half level's, with the same points
+        tt, ee, okk = (x.reshape(-1, t.shape[-1]) for x in (t, edge[..., 1], ok))
         b, a, _, _, _ = _line_fits(tt, ee, okk)
         use = okk & (np.abs(ee - (a[:, None] + b[:, None] * tt)) <= EDGE_FIT_TOL)
         b, a, n, spread, sxx = _line_fits(tt, ee, use)
         r = np.where(use, ee - (a[:, None] + b[:, None] * tt), 0.0)
+        _, a, _, _, _ = _line_fits(tt, edge[..., 0].reshape(tt.shape), use)
         sigma = np.maximum(np.sqrt((r * r).sum(axis=1) / np.maximum(n - 2, 1)), 0.1)
         good = ((n >= 5) & (spread >= 4.0)).reshape(n_faces, 4)
         turns = -np.arctan(b).reshape(n_faces, 4)

@@ -6,6 +6,12 @@ evenly. For each peak, the region's pixels at or above that height split into si
 enough pixels on the peak is one face. So a stack shows its top block's face, and a lower block's face where it is
 still visible (the ring of a large block around a small one on top of it), and the face's silhouette includes what
 stands on it.
+
+A top face is level, a side face is not: a side face seen obliquely (far from the camera's nadir, where it covers
+as much of the image as a top face) rises by its whole edge over a few rows, so a band of it can gather enough pixels
+within the tolerance of one height to pass as a plateau (seed 2's large yellow block read as a second, small one at
+22.7 mm next to it). Faces whose core's heights (within half the tolerance of the face's height) rise more than
+`max_slope_mm` per sample in a plane fit are left out.
 """
 
 from __future__ import annotations
@@ -58,13 +64,33 @@ def _plateau_levels(heights: np.ndarray, bin_mm: float, min_pixels: int) -> list
     return [float(0.5 * (edges[i] + edges[i + 1])) for i in peaks if window[i] >= min_pixels]
 
 
+def _slope(heights: np.ndarray, mask: np.ndarray) -> float:
+    """How steeply (mm per sample) the least-squares plane through the heights (h, w) mm at the mask's pixels rises
+    (0 for fewer than three pixels or pixels on one line): the normal equations in centred coordinates, a tenth of
+    np.linalg.lstsq's cost."""
+    r, c = np.nonzero(mask)
+    if len(r) < 3:
+        return 0.0
+    z = heights[r, c].astype(float)
+    r, c, z = r - r.mean(), c - c.mean(), z - z.mean()
+    scc, srr, scr, scz, srz = c @ c, r @ r, c @ r, c @ z, r @ z
+    det = scc * srr - scr * scr
+    if det <= 1e-9 * scc * srr:
+        return 0.0
+    return float(np.hypot(srr * scz - scr * srz, scc * srz - scr * scz) / det)
+
+
 def segment_faces(height_mm: np.ndarray, valid: np.ndarray, min_height_mm: float = 10.0,
-                  face_tolerance_mm: float = 6.0, min_face_pixels: int = 120, median_px: int = 5) -> list[Face]:
+                  face_tolerance_mm: float = 6.0, min_face_pixels: int = 120, median_px: int = 5,
+                  max_slope_mm: float = 1.0) -> list[Face]:
     """Top faces in a height map (H, W) mm (NaN allowed) restricted to `valid` (H, W) bool pixels.
 
     min_face_pixels: fewest pixels of a face on its plateau (scale it with the map's resolution); median_px: the
     median filter's size (3 or 5) that removes the depth's speckle: it also erases parts of objects thinner than about
-    half of it, so use 3 on a reduced map (an arch's legs are 3-4 samples wide at half resolution)."""
+    half of it, so use 3 on a reduced map (an arch's legs are 3-4 samples wide at half resolution); max_slope_mm: the
+    steepest a face's core may rise, mm per sample (scale it with the map's resolution: at half resolution a block's
+    top face rises less than 0.3 mm per sample, 0.6 when the arm leaves only a few samples of it, a side face's band
+    2)."""
     h = np.zeros(np.shape(height_mm), np.float32)
     np.copyto(h, height_mm, where=valid & np.isfinite(height_mm), casting="unsafe")
     h = cv2.medianBlur(h, median_px)
@@ -102,6 +128,11 @@ def segment_faces(height_mm: np.ndarray, valid: np.ndarray, min_height_mm: float
                 fx, fy, fw, fh, _ = part_stats[j]
                 sil = parts[fy:fy + fh, fx:fx + fw] == j
                 mask = sil & on_level[fy:fy + fh, fx:fx + fw]
-                face_h = _median(sub_h[fy:fy + fh, fx:fx + fw][mask])
+                heights = sub_h[fy:fy + fh, fx:fx + fw]
+                face_h = _median(heights[mask])
+                # level? the plane fit of the face's core (within half the tolerance of its height): a top face's
+                # pixels include a band of its own side faces within the tolerance, which tilts a fit of them all
+                if _slope(heights, mask & (np.abs(heights - face_h) <= 0.5 * face_tolerance_mm)) > max_slope_mm:
+                    continue                                    # a band of a side face
                 faces.append(Face((int(x + fx), int(y + fy), int(fw), int(fh)), mask, face_h, sil))
     return faces

@@ -53,6 +53,9 @@ class DetectionSettings:
     edge_tolerance: a cube's measured edge is within this of one of the lab's block edges;
     max_levels: the tallest stack (blocks) a face may top: faces at no height of such a stack are not reported,
     so raise it (and max_height) for towers (the "to the sky" event);
+    max_face_slope: a top face's core (its pixels within 3 mm of its height) rises less than this in a plane fit
+    (mm per full-resolution pixel; the band of a side face seen obliquely that passed as a face rose 1 mm per pixel,
+    block tops rise less than 0.15, 0.3 when the arm leaves only a few of their pixels);
     min_face_pixels: fewest full-resolution pixels of a face (80: a small triangle or arch, 25 mm, far out on the
     board keeps fewer than 120 once the segmentation's median and opening have taken its corners and legs); step:
     segmentation works on every step-th pixel (each face is then measured at full resolution)."""
@@ -65,6 +68,7 @@ class DetectionSettings:
     max_aspect: float = 1.15
     board_margin: float = 5.0
     min_face_pixels: int = 80
+    max_face_slope: float = 0.5
     step: int = 2
     level_tolerance: float = 4.0
     edge_tolerance: float = 4.0
@@ -75,6 +79,9 @@ class DetectionSettings:
             raise ValueError(f"DetectionSettings.max_levels must be a positive integer, got {self.max_levels!r}")
         if not isinstance(self.step, int) or self.step < 1:
             raise ValueError(f"DetectionSettings.step must be a positive integer, got {self.step!r}")
+        if not self.max_face_slope > 0:
+            raise ValueError(f"DetectionSettings.max_face_slope must be positive (mm per pixel), got "
+                             f"{self.max_face_slope!r}")
         if not 0 < self.min_height < self.max_height:
             raise ValueError(f"DetectionSettings needs 0 < min_height < max_height, got {self.min_height}, "
                              f"{self.max_height}")
