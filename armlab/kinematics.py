@@ -17,7 +17,6 @@ import operator
 import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from types import SimpleNamespace
 
 import numpy as np
 
@@ -324,11 +323,30 @@ def _numerical_candidates(P: np.ndarray, pitch: np.ndarray, roll: np.ndarray, ro
 
 # The math the closed-form IK needs, for numpy arrays (the batch: every target and branch at once) or for Python
 # floats (one target, one branch at a time: no numpy per-call cost). The same formulas run on either.
-_SCALAR_MATH = SimpleNamespace(pi=math.pi, cos=math.cos, sin=math.sin, arctan2=math.atan2, arccos=math.acos,
-                               hypot=math.hypot, sqrt=math.sqrt, abs=abs, mod=operator.mod,
-                               minimum=lambda a, b: b if b < a else a,      # what min(a, b) does, called quicker
-                               maximum=lambda a, b: b if b > a else a,
-                               where=lambda condition, a, b: a if condition else b)
+class _ScalarMath:
+    """numpy's names for the math module's functions, on Python floats (attribute lookups on a class are the
+    quickest Python has: the single-target IK calls these about 60 times a solve)."""
+
+    pi = math.pi
+    cos, sin, arctan2, arccos = staticmethod(math.cos), staticmethod(math.sin), staticmethod(math.atan2), \
+        staticmethod(math.acos)
+    hypot, sqrt, abs, mod = staticmethod(math.hypot), staticmethod(math.sqrt), staticmethod(abs), \
+        staticmethod(operator.mod)
+
+    @staticmethod
+    def minimum(a: float, b: float) -> float:
+        return b if b < a else a                     # what min(a, b) does, called quicker
+
+    @staticmethod
+    def maximum(a: float, b: float) -> float:
+        return b if b > a else a
+
+    @staticmethod
+    def where(condition: bool, a: float, b: float) -> float:
+        return a if condition else b
+
+
+_SCALAR_MATH = _ScalarMath
 
 
 def _heading(x, y, robot_o1, xp=np):
