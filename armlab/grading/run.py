@@ -1,7 +1,8 @@
 """Run one notebook of a grading work tree under `pytest --nbval` in a bounded subprocess and read its per-cell
 results. The subprocess uses the instructor's sanitize file and a configuration the grader writes itself (`-c`,
-`--rootdir`, `-p no:cacheprovider`) and the grader's nbval guard (armlab.grading.nbval_guard: a dead kernel fails
-its cell at once, stream outputs are cut). Every process of the run (pytest, the notebook's kernel, the hidden
+`--rootdir`, `-p no:cacheprovider`), the grader's nbval guard (armlab.grading.nbval_guard: a dead kernel fails
+its cell at once, stream outputs are cut) and a kernel profile of its own whose startup file caps what the kernel
+prints (armlab.grading.kernel_startup). Every process of the run (pytest, the notebook's kernel, the hidden
 checks' harness) gets a CPU-seconds limit, an address-space cap and a file-size cap (resource.setrlimit in the
 child, inherited by everything it starts); its console output goes to a file of which only the end is read, and
 the whole process group is killed at the wall-clock timeout."""
@@ -12,6 +13,7 @@ import json
 import os
 import re
 import resource
+import shutil
 import signal
 import subprocess
 import sys
@@ -110,9 +112,9 @@ def _parse_junit(path: Path) -> dict[int, CellResult]:
     return cells
 
 
-def _environment(worktree: Path) -> dict[str, str]:
+def _environment(worktree: Path, extra: dict[str, str] | None = None) -> dict[str, str]:
     env = {k: v for k, v in os.environ.items() if not k.startswith(("PYTEST", "ARMLAB_MESHCAT"))}
-    env.update(PYTHONPATH=str(worktree), MPLBACKEND="Agg", PYTHONDONTWRITEBYTECODE="1")
+    env.update(PYTHONPATH=str(worktree), MPLBACKEND="Agg", PYTHONDONTWRITEBYTECODE="1", **(extra or {}))
     return env
 
 
@@ -128,13 +130,15 @@ def _ended(returncode: int) -> str:
     return f"exit code {returncode}"
 
 
-def bounded(cmd: list[str], worktree: Path, limits: Limits) -> tuple[bool, str, int]:
-    """Run `cmd` in `worktree` in a new session under `limits`; (finished in time, the last OUTPUT_TAIL bytes of its
-    output, its return code). The output goes to a file (never all into memory); the whole process group (the
-    notebook's kernel, anything it started) is killed at the end."""
+def bounded(cmd: list[str], worktree: Path, limits: Limits, env: dict[str, str] | None = None
+            ) -> tuple[bool, str, int]:
+    """Run `cmd` in `worktree` in a new session under `limits` (with `env` added to the environment); (finished in
+    time, the last OUTPUT_TAIL bytes of its output, its return code). The output goes to a file (never all into
+    memory); the whole process group (the notebook's kernel, anything it started) is killed at the end."""
     with tempfile.TemporaryFile() as log:
-        proc = subprocess.Popen(cmd, cwd=worktree, env=_environment(worktree), stdout=log, stderr=subprocess.STDOUT,
-                                stdin=subprocess.DEVNULL, start_new_session=True, preexec_fn=_limit(limits))
+        proc = subprocess.Popen(cmd, cwd=worktree, env=_environment(worktree, env), stdout=log,
+                                stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL, start_new_session=True,
+                                preexec_fn=_limit(limits))
         try:
             proc.wait(timeout=limits.timeout_s)
             done = True
@@ -193,7 +197,10 @@ def run_notebook(worktree: Path, notebook: str, limits: Limits = DEFAULT_LIMITS,
            "no:cacheprovider", notebook, "--nbval-lax" if lax else "--nbval", "-p", "armlab.grading.nbval_guard",
            "--nbval-sanitize-with", "tests/nbval_sanitize.cfg",
            f"--nbval-cell-timeout={int(limits.timeout_s)}", f"--junitxml={junit}"]
-    done, out, code = bounded(cmd, worktree, limits)
+    ipython = worktree / ".grader-ipython"        # the kernel's own IPython profile: the output cap, nothing else
+    (ipython / "profile_default/startup").mkdir(parents=True, exist_ok=True)
+    shutil.copy2(Path(__file__).with_name("kernel_startup.py"), ipython / "profile_default/startup/00-grader.py")
+    done, out, code = bounded(cmd, worktree, limits, {"IPYTHONDIR": str(ipython)})
     if not done:
         return NotebookRun({}, f"the notebook did not finish within {limits.timeout_s:g} s (wall clock)")
     if not junit.is_file():
