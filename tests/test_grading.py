@@ -1,7 +1,9 @@
 """The grader, on submissions generated from the student release plus region edits: restored solutions score full
 marks, the blank release 0, a wrong answer costs its own exercise only, the tricks of issue 11 score below full
-marks, an infinite loop and a corrupt notebook are contained. One class is graded once (module fixture) on two
-exercises of two notebooks to keep the run short."""
+marks (a library or kit call in place of the exercise by the static check), an infinite loop, a kernel death, a
+memory hog, a huge output and a corrupt notebook are contained. One class is graded once (module fixture) on three
+exercises of the two cheapest notebooks to keep the run short; the hidden checks of every exercise are tried on the
+reference and on wrong answers in a few batched harness runs."""
 
 from __future__ import annotations
 
@@ -20,6 +22,14 @@ from armlab.grading.submission import exercise_file, regions_of, source_texts
 
 ROOT = Path(__file__).resolve().parents[1]
 GRADED = ["fk.dh_transform", "fk.fk_from_table", "ik.planar_ik"]
+CONTAINED = {   # region prefixes that break the run before the (correct) solution
+    "kernel_exit": "    import os\n    os._exit(1)\n",
+    "kernel_kill": "    import os\n    import signal\n    os.kill(os.getpid(), signal.SIGKILL)\n",
+    "memory_hog": "    hog = bytearray(12 * 2**30)   # past the 8 GB cap, within the RAM: only the cap stops it\n",
+    "huge_output": "    print('x' * (200 * 2**20))\n",
+}
+LIBRARY_DH = ("    from armlab.kinematics import dh_link_transform\n"     # right values, the kit's work
+              "    return dh_link_transform(theta, d, a, alpha)")
 WRONG = {"fk.dh_transform": "    ct, st, ca, sa = np.cos(theta), np.sin(theta), np.cos(alpha), np.sin(alpha)\n"
                             "    return np.array([[ct, -st * ca, st * sa, a * ct], [st, ct * ca, -ct * sa, a * st],\n"
                             "                     [0.0, sa, ca, -d], [0.0, 0.0, 0.0, 1.0]])",
@@ -86,6 +96,10 @@ def graded(tmp_path_factory) -> tuple[dict, Path]:
     edited_only = subs / "edited_only"     # only the edited file, the rest not submitted
     (edited_only / "notebooks").mkdir(parents=True)
     shutil.copy2(full / "notebooks/03_inverse_kinematics.ipynb", edited_only / "notebooks")
+    for name, prefix in CONTAINED.items():   # each then runs the reference: only the limits can make it score 0
+        write_regions(student(name), "fk.dh_transform", [prefix + _reference_bodies("fk.dh_transform")[0]])
+        write_regions(subs / name, "fk.fk_from_table", _reference_bodies("fk.fk_from_table"))
+    write_regions(student("library_call"), "fk.dh_transform", [LIBRARY_DH])
     kit = student("kit_call")            # the kit's reference function in place of the DH chain
     write_regions(kit, "fk.fk_from_table", ["    from armlab import kinematics\n"
                                     "    return kinematics.fk_pox(q, check_limits=False)"])
@@ -143,6 +157,34 @@ def test_infinite_loop_and_corrupt_notebook_are_contained(graded):
     corrupt = graded[0]["corrupt"]["fk.dh_transform"]
     assert corrupt.score == 0 and "not a readable notebook" in corrupt.reason
     assert _score(graded, "corrupt", "ik.planar_ik") == 0            # blank in that release copy, not broken
+
+
+@pytest.mark.parametrize("student, why", [("kernel_exit", "the kernel died"), ("kernel_kill", "the kernel died"),
+                                          ("memory_hog", "MemoryError"), ("huge_output", "")])
+def test_kernel_death_memory_hog_and_huge_output_are_contained(graded, student, why):
+    """Each scores 0 on its exercise with the reason in feedback.md, its other exercise keeps its points, the rest
+    of the class is graded (the grader survived). The memory hog's 12 GB fit this machine's RAM: only the address-space
+    cap on the kernel (and on the hidden checks' process) turns it into a MemoryError."""
+    results, out = graded
+    broken = results[student]["fk.dh_transform"]
+    assert broken.score == 0 and broken.checks and not any(c.passed for c in broken.checks)
+    assert _score(graded, student, "fk.fk_from_table") == exercise("fk.fk_from_table").points
+    feedback = (out / student / "feedback.md").read_text()
+    assert why in feedback and "FAILED" in feedback
+    assert len(feedback) < 50_000 and (out / student / "results.json").stat().st_size < 50_000
+    assert _score(graded, "full", "fk.dh_transform") == exercise("fk.dh_transform").points
+
+
+def test_a_library_call_in_place_of_the_exercise_scores_below_full_marks(graded):
+    """The kit's dh_link_transform computes the right values (every public and hidden check passes); the static
+    check fails naming the call."""
+    result = graded[0]["library_call"]["fk.dh_transform"]
+    static = [c for c in result.checks if c.name.startswith("static")]
+    assert all(c.passed for c in result.checks if not c.name.startswith("static"))
+    assert len(static) == 1 and not static[0].passed and "kinematics.dh_link_transform" in static[0].message
+    assert 0 < result.score < exercise("fk.dh_transform").points
+    kit = graded[0]["kit_call"]["fk.fk_from_table"]
+    assert any("kinematics.fk_pox" in c.message for c in kit.checks if c.name.startswith("static"))
 
 
 def test_a_submission_of_the_edited_files_only(graded):
@@ -228,57 +270,135 @@ def _replaced(exercise_id: str, old: str, new: str) -> list[str]:
     return [b.replace(old, new) for b in bodies]
 
 
-HIDDEN_WRONG = {   # per exercise: wrong answers the hidden checks must fail (hard-coded, a slip, the kit's reference)
+HIDDEN_WRONG = {   # per exercise: wrong answers its hidden checks must catch (a "hard-coded" one must fail them all)
+    "calib.project_pinhole": {"no translation": _replaced("calib.project_pinhole", " + T_cam_world[:3, 3]", "")},
+    "calib.pixel_to_world_pinhole": {
+        "rotation not transposed": _replaced("calib.pixel_to_world_pinhole", "T_cam_world[:3, :3].T @",
+                                             "T_cam_world[:3, :3] @")},
     "calib.tag_homography": {
         "hard-coded": ["    H = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])"],
         "normalisation not undone": _replaced("calib.tag_homography", "np.linalg.solve(T_dst, H_normalised @ T_src)",
                                               "H_normalised"),
     },
+    "calib.tag_extrinsics": {   # the refinement after the region would repair both: the adapter leaves it out
+        "hard-coded": ["    R, t = np.diag([1.0, -1.0, -1.0]), np.array([0.0, 150.0, 1000.0])"],
+        "pixels, not normalised points": _replaced("calib.tag_extrinsics", "dlt_homography(world[:, :2], normalised)",
+                                                   "dlt_homography(world[:, :2], pixels)"),
+    },
+    "calib.depth_plane": {"one fit, no rejection": _replaced("calib.depth_plane", "range(iterations)", "range(1)")},
+    "fk.dh_transform": {"d negated": [WRONG["fk.dh_transform"]]},
+    "fk.fk_from_table": {"joint offsets left out": _replaced("fk.fk_from_table", "qi + offset", "qi")},
+    "fk.dh_link_transform": {"d negated": _replaced("fk.dh_link_transform", "= sa, ca, d", "= sa, ca, -d")},
+    "ik.planar_ik": {"elbow branches swapped": _wrong_ik()},
     "ik.candidates": {
         "hard-coded": ["    q1 = q2 = q3 = q4 = heading * 0.0\n    ok, d2 = heading == heading, heading * 0.0 + 1.0"],
         "elbow sign swapped": _replaced("ik.candidates", "* delta_sign", "* -delta_sign"),
     },
-    "grab.sag_line": {
-        "hard-coded (the lab's rule)": ["    return 0.068, 3.0"],   # one wrong answer: each costs a notebook run
+    "detect.centroid": {"u and v swapped": _replaced("detect.centroid", 'm["m10"] / m["m00"], m["m01"] / m["m00"]',
+                                                     'm["m01"] / m["m00"], m["m10"] / m["m00"]')},
+    "detect.wrap_yaw": {"hard-coded": ["    return 0.0"]},
+    "detect.segment": {
+        "red's wrap ignored": _replaced("detect.segment", "if h0 <= h1:", "if True:"),
+        "ranges tuned too tight": _replaced("detect.segment", "120, 60)", "250, 250)"),
+    },
+    "detect.classify": {"per-class spreads ignored": _replaced(
+        "detect.classify", "d = self.distances(rgb_means)",
+        "d = np.linalg.norm(color_features(rgb_means)[:, None, :] - self.means[None], axis=-1)")},
+    "grab.pixel_to_world": {"NaN depths not skipped": _replaced("grab.pixel_to_world", "np.nanmedian", "np.median")},
+    "grab.sag_line": {"hard-coded (the lab's rule)": ["    return 0.068, 3.0"]},
+    "teach.record": {"recorded before posing": [
+        "        for q, g in zip(poses, gripper):\n            recorder.record(g)\n            arm.move_by_hand(q)"]},
+    "teach.time_scaled": {"no velocity floor": _replaced(
+        "teach.time_scaled", "np.maximum(np.maximum(lab_pace, velocity_floor), 0.4)", "np.maximum(lab_pace, 0.4)")},
+    "events.sky_points": {"the ninth block at 30": _replaced("events.sky_points", "max(n - 8, 0)", "max(n - 9, 0)")},
+    "events.strategy": {
+        "lowest first": _replaced("events.strategy", "max(free, key=", "min(free, key="),
+        "covered blocks picked": _replaced("events.strategy", "free = [b for b in todo if not covered(b, seen)]",
+                                           "free = todo"),
     },
 }
+# exercises whose function calls another's region go into a second batch, apart from the one they call
+SECOND_BATCH = {"calib.tag_extrinsics", "fk.fk_from_table", "fk.dh_link_transform"}
 
 
-@pytest.mark.parametrize("exercise_id", sorted(HIDDEN_WRONG))
-def test_hidden_checks_pass_the_reference_and_fail_wrong_answers(exercise_id):
+def test_every_exercise_has_hidden_checks_and_wrong_answers():
+    from armlab.exercises.registry import EXERCISES
+    from armlab.grading import hidden
+
+    assert sorted(hidden.SPECS) == sorted(e.id for e in EXERCISES) == sorted(HIDDEN_WRONG)
+    assert sorted(hidden.FORBIDDEN) == sorted(e.id for e in EXERCISES)
+
+
+def test_hidden_checks_pass_the_reference_and_fail_wrong_answers():
+    """All exercises' hidden checks: the reference (in one harness run after the one computing the expected values)
+    passes every one; each wrong answer (one batch per round of wrong answers and per group of exercises that do not
+    call each other) fails at least one, a hard-coded answer every one."""
     from armlab.grading.grade import Grader
 
-    grader = Grader(ROOT, Limits(timeout_s=240, cpu_s=120), [exercise_id])
-    reference = grader.hidden_checks(exercise_id, _reference_bodies(exercise_id))
-    assert len(reference) >= 4 and all(c.passed for c in reference), [c.message for c in reference]
-    for wrong, bodies in HIDDEN_WRONG[exercise_id].items():
-        checks = grader.hidden_checks(exercise_id, bodies)
-        assert not any(c.passed for c in checks), f"{exercise_id}, {wrong}: {[c.message for c in checks]}"
+    ids = sorted(HIDDEN_WRONG)
+    grader = Grader(ROOT, Limits(timeout_s=300, cpu_s=200), ids)
+    reference = grader.hidden_checks_together({e: _reference_bodies(e) for e in ids})
+    for exercise_id in ids:
+        checks = reference[exercise_id]
+        assert len(checks) >= 3 and all(c.passed for c in checks), (exercise_id, [c.message for c in checks])
+    rounds = max(len(w) for w in HIDDEN_WRONG.values())
+    for r in range(rounds):
+        for group in ([e for e in ids if e not in SECOND_BATCH], sorted(SECOND_BATCH)):
+            wrong = {e: list(HIDDEN_WRONG[e].items())[r] for e in group if len(HIDDEN_WRONG[e]) > r}
+            got = grader.hidden_checks_together({e: bodies for e, (_, bodies) in wrong.items()})
+            for exercise_id, (label, _) in wrong.items():
+                passed = [c.passed for c in got[exercise_id]]
+                assert not all(passed), f"{exercise_id}, {label}: every hidden check passed"
+                assert not (label == "hard-coded" and any(passed)), f"{exercise_id}, {label}: {passed}"
+
+
+def test_static_check_names_the_forbidden_call():
+    """Every reference region passes; each exercise's forbidden names and the kit's reference module, called,
+    imported, aliased or named in a string, fail the check with the name; the region's own names do not count."""
+    from armlab.exercises.registry import EXERCISES
+    from armlab.grading.hidden import FORBIDDEN
+    from armlab.grading.static import forbidden_uses, static_check
+
+    for ex in EXERCISES:
+        assert static_check(ex.id, _reference_bodies(ex.id)).passed, ex.id
+        for name in FORBIDDEN[ex.id]:
+            module, _, last = name.rpartition(".")
+            module = module or "lib"
+            uses = [f"    x = {module}.{last}(1)", f"    from {module} import {last}\n    x = {last}(2)",
+                    f"    f = getattr({module}, {last!r})"]
+            for body in uses:
+                result = static_check(ex.id, [body])
+                assert not result.passed and name in result.message, (ex.id, body, result)
+    ref = static_check("teach.time_scaled", ["    from armlab.exercises import references\n"
+                                             "    return references.scaled_durations_by_search(program, speed)"])
+    assert not ref.passed and "armlab.exercises.references" in ref.message
+    assert forbidden_uses("    fk = 1.0\n    return fk * 2", ("kinematics.fk",)) == []      # its own variable
+    assert forbidden_uses("    return sky_points(n - 1) + 30", ("scoring.sky_points",), ("sky_points",)) == []
+    assert forbidden_uses("    if x:\n        pass\n    H = cv2.findHomography(a, b)",
+                          ("cv2.findHomography",)) == [("cv2.findHomography", 3)]
 
 
 def test_regrading_gives_the_same_scores(graded):
-    """A fresh Grader (no shared cache) on the class's wrong and tampered submissions: the same scores and checks."""
+    """A fresh Grader (no shared cache) on the class's tampered submission: the same scores and checks."""
     from armlab.grading.grade import Grader
 
     results, out = graded
     grader = Grader(ROOT, Limits(timeout_s=240, cpu_s=25), GRADED)
-    for student in ("wrong_dh", "tampered"):
+    for student in ("tampered",):
         again = grader.grade(read_submission(out.parent / "submissions" / student, ROOT))
         for exercise_id in GRADED:
             first, second = results[student][exercise_id], again[exercise_id]
             assert (second.score, [(c.name, c.passed) for c in second.checks]) == \
                 (first.score, [(c.name, c.passed) for c in first.checks]), (student, exercise_id)
-    assert grader.runs == 2
+    assert grader.runs == 1
 
 
-def test_a_hard_coded_answer_scores_below_full_marks():
-    """sky_points as a lookup of the public check's values passes that check and fails the hidden ones."""
+def test_a_hard_coded_answer_fails_the_hidden_checks():
+    """sky_points as a lookup of the public check's values: the hidden checks' other tower heights fail it."""
     from armlab.grading.grade import Grader
 
     lookup = ("    return {0: 0, 1: 30, 5: 150, 7: 210, 8: 240, 9: 290, 12: 440, 13: 490, 20: 840, 24: 1040}[n]")
-    result = Grader(ROOT, Limits(timeout_s=240, cpu_s=60), ["events.sky_points"]).grade_exercise(
+    checks = Grader(ROOT, Limits(timeout_s=240, cpu_s=60), ["events.sky_points"]).hidden_checks(
         "events.sky_points", [lookup])
-    public = [c for c in result.checks if not c.name.startswith("hidden")]
-    assert public and all(c.passed for c in public), [c.message for c in public]
-    assert 0 < result.score < exercise("events.sky_points").points
-    assert any("KeyError" in c.message for c in result.checks if not c.passed)
+    assert checks and not all(c.passed for c in checks)
+    assert any("KeyError" in c.message for c in checks if not c.passed)

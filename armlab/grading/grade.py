@@ -2,9 +2,10 @@
 
 Score of an exercise: 0 when blank (nothing runs) or when its regions cannot be read or spliced; otherwise
 points x (passed checks / all checks), its checks being the notebook's code cells tagged `# CHECK <id>` (the public
-checks, run by the instructor's copy of the notebook) and its hidden checks (armlab.grading.hidden), each public
-cell and each hidden check counting one. A region byte-identical to one already graded in this run
-(the reference's, or another student's) reuses that result: the work tree is then identical, so is the outcome.
+checks, run by the instructor's copy of the notebook) and its hidden checks (armlab.grading.hidden), each counting
+one; a region calling a forbidden library or kit function (armlab.grading.static) gets one more check, failed.
+A region byte-identical to one already graded in this run (the reference's, or another student's) reuses that
+result: the work tree is then identical, so is the outcome.
 """
 
 from __future__ import annotations
@@ -20,7 +21,8 @@ from armlab.exercises.registry import EXERCISES, exercise
 
 from .results import CheckResult, ExerciseResult
 from .run import DEFAULT_LIMITS, Limits, check_cells, run_harness, run_notebook
-from .splice import RegionRejected, build_worktree
+from .splice import RegionRejected, build_worktree, splice_into
+from .static import static_check
 from .submission import Submission, read_submission
 
 __all__ = ["CheckResult", "ExerciseResult", "Grader", "grade_submission", "grade_class"]
@@ -47,7 +49,8 @@ class Grader:
         self._cache: dict[tuple[str, str], ExerciseResult] = {}
         self._locks: dict[tuple[str, str], threading.Lock] = {}
         self._guard = threading.Lock()
-        self._expected: dict[str, list[dict]] = {}
+        self._expected: dict[str, list[list[dict]]] = {}
+        self._expected_lock = threading.Lock()
         self.runs = 0
 
     def grade_exercise(self, exercise_id: str, bodies: list[str]) -> ExerciseResult:
@@ -77,47 +80,89 @@ class Grader:
         checks = [CheckResult(f"{ex.notebook} cell {i}", run.cells.get(i, None) is not None and run.cells[i].passed,
                               run.cells[i].message if i in run.cells else run.problem or "the cell did not run")
                   for i in tags]
-        return _score(exercise_id, checks + hidden, run.problem)
+        static = static_check(exercise_id, bodies)
+        return _score(exercise_id, checks + hidden + ([static] if static and not static.passed else []), run.problem)
 
     def hidden_checks(self, exercise_id: str, bodies: list[str]) -> list[CheckResult]:
         """Only the hidden checks of `bodies` spliced into the reference (no notebook run): for instructors trying a
         new HiddenSpec against wrong answers. RegionRejected for a body holding markers."""
-        with tempfile.TemporaryDirectory(prefix="armlab-grade-") as tmp:
-            return self._hidden(exercise_id, build_worktree(self.reference, Path(tmp) / "work", exercise_id, bodies))
+        return self.hidden_checks_together({exercise_id: bodies})[exercise_id]
 
-    def _request(self, exercise_id: str, tree: Path, spec_function: str, cases: list) -> dict:
+    def hidden_checks_together(self, bodies: dict[str, list[str]]) -> dict[str, list[CheckResult]]:
+        """The hidden checks of several exercises' bodies spliced into one work tree, run in one harness subprocess
+        (so one exercise's body is in place while another's is checked: for trying specs on exercises that do not
+        call each other, not for grading). RegionRejected for a body holding markers."""
+        with tempfile.TemporaryDirectory(prefix="armlab-grade-") as tmp:
+            tree = build_worktree(self.reference, Path(tmp) / "work")
+            for exercise_id, exercise_bodies in bodies.items():
+                splice_into(tree, exercise_id, exercise_bodies)
+            return self._hidden_of(tree, list(bodies))
+
+    def _jobs(self, exercise_id: str, tree: Path) -> list[dict]:
+        """The harness jobs of the exercise's hidden specs in `tree`: one per spec, every call of its checks."""
+        from . import hidden
+
         ex = exercise(exercise_id)
         notebook = None if ex.in_package else str(tree / f"notebooks/{ex.notebook}.ipynb")
-        return {"notebook": notebook, "function": spec_function, "cases": [args for case in cases for args in case]}
+        return [{"notebook": notebook, "function": spec.function, "adapter": spec.adapter, "prelude": spec.prelude,
+                 "cases": [args for check in checks for args in check]}
+                for spec, checks in zip(hidden.specs_of(exercise_id), hidden.cases_of(exercise_id), strict=True)]
+
+    def _expected_of(self, exercise_ids: list[str]) -> None:
+        """Compute (once per Grader, all missing ones in one harness run on the reference tree) the expected results
+        of the exercises' hidden checks; RuntimeError when the reference fails its own."""
+        with self._expected_lock:
+            missing = [e for e in exercise_ids if e not in self._expected]
+            if not missing:
+                return
+            with tempfile.TemporaryDirectory(prefix="armlab-grade-ref-") as tmp:
+                ref = build_worktree(self.reference, Path(tmp) / "work")
+                jobs = {e: self._jobs(e, ref) for e in missing}
+                expected, problem = run_harness(ref, [job for e in missing for job in jobs[e]], self.limits)
+            if expected is None:
+                raise RuntimeError(f"the reference's hidden checks of {', '.join(missing)} gave no results: {problem}")
+            k = 0
+            for e in missing:
+                mine = expected[k:k + len(jobs[e])]
+                k += len(jobs[e])
+                errors = [r["error"] for job in mine for r in job if "error" in r]
+                if errors:
+                    raise RuntimeError(f"the reference fails its own hidden checks of {e}: {errors[0]}")
+                self._expected[e] = mine
 
     def _hidden(self, exercise_id: str, tree: Path) -> list[CheckResult]:
         """The exercise's hidden checks (none without a spec, or in a student release, which lacks them): the
         student's results from `tree`, the expected ones from the reference tree (once per Grader)."""
+        return self._hidden_of(tree, [exercise_id])[exercise_id]
+
+    def _hidden_of(self, tree: Path, exercise_ids: list[str]) -> dict[str, list[CheckResult]]:
+        """The hidden checks of the exercises in `tree`, all in one harness run; numbered across an exercise's
+        specs."""
         try:
             from . import hidden
         except ImportError:
-            return []
-        cases = hidden.cases_of(exercise_id)
-        if cases is None:
-            return []
-        function = hidden.SPECS[exercise_id].function
-        with self._guard:
-            lock = self._locks.setdefault(("expected", exercise_id), threading.Lock())
-        with lock:
-            if exercise_id not in self._expected:
-                with tempfile.TemporaryDirectory(prefix="armlab-grade-ref-") as tmp:
-                    ref = build_worktree(self.reference, Path(tmp) / "work")
-                    expected, problem = run_harness(ref, self._request(exercise_id, ref, function, cases), self.limits)
-                if expected is None or any("error" in e for e in expected):
-                    raise RuntimeError(f"the reference fails its own hidden checks of {exercise_id}: "
-                                       f"{problem or expected}")
-                self._expected[exercise_id] = expected
-        got, problem = run_harness(tree, self._request(exercise_id, tree, function, cases), self.limits)
-        names = [f"hidden check {i + 1}" for i in range(len(cases))]
-        if got is None:
-            return [CheckResult(n, False, problem) for n in names]
-        verdicts = hidden.compare(exercise_id, got, self._expected[exercise_id], [len(c) for c in cases])
-        return [CheckResult(n, ok, message) for n, (ok, message) in zip(names, verdicts, strict=True)]
+            return {e: [] for e in exercise_ids}
+        out: dict[str, list[CheckResult]] = {e: [] for e in exercise_ids}
+        with_specs = [e for e in exercise_ids if hidden.specs_of(e)]
+        if not with_specs:
+            return out
+        self._expected_of(with_specs)
+        jobs = [job for e in with_specs for job in self._jobs(e, tree)]
+        got, problem = run_harness(tree, jobs, self.limits)
+        k = 0
+        for e in with_specs:
+            first = 1
+            for spec, checks, expected in zip(hidden.specs_of(e), hidden.cases_of(e), self._expected[e],
+                                              strict=True):
+                names = [f"hidden check {first + i}" for i in range(len(checks))]
+                if got is None:
+                    out[e] += [CheckResult(n, False, problem) for n in names]
+                else:
+                    verdicts = hidden.compare(spec, got[k], expected, [len(c) for c in checks], first)
+                    out[e] += [CheckResult(n, ok, msg) for n, (ok, msg) in zip(names, verdicts, strict=True)]
+                first += len(checks)
+                k += 1
+        return out
 
     def grade(self, submission: Submission) -> dict[str, ExerciseResult]:
         results = {}

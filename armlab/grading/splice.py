@@ -15,7 +15,8 @@ from armlab.exercises.registry import exercise
 
 from .submission import exercise_file
 
-__all__ = ["RegionRejected", "tracked_files", "check_body", "splice_text", "write_regions", "build_worktree"]
+__all__ = ["RegionRejected", "tracked_files", "check_body", "splice_text", "write_regions", "build_worktree",
+           "splice_into"]
 
 # nbval's comment markers, the kit's check tags and exercise markers: a student body may hold none of them.
 _FORBIDDEN = re.compile(r"^\s*#\s*(NBVAL_\w*|CHECK\b|BEGIN SOLUTION|END SOLUTION|PYTEST_VALIDATE_IGNORE_OUTPUT)",
@@ -95,10 +96,18 @@ def build_worktree(reference: Path, dest: Path, exercise_id: str | None = None,
         target = dest / name
         target.parent.mkdir(parents=True, exist_ok=True)
         shutil.copy2(src, target)
-    if exercise_id is None:
-        return dest
+    if exercise_id is not None:
+        splice_into(dest, exercise_id, bodies or [])
+    return dest
+
+
+def splice_into(tree: Path, exercise_id: str, bodies: list[str]) -> None:
+    """Replace the regions of `exercise_id` in the work tree `tree` by `bodies` (RegionRejected for a body with
+    markers, or a count of bodies other than the reference's regions)."""
+    for body in bodies:
+        check_body(body, exercise_id)
     name = exercise_file(exercise(exercise_id))
-    path = dest / name
+    path = tree / name
     if name.endswith(".ipynb"):
         nb = json.loads(path.read_text(encoding="utf-8"))
         used = 0
@@ -116,4 +125,3 @@ def build_worktree(reference: Path, dest: Path, exercise_id: str | None = None,
         path.write_text(new, encoding="utf-8")
     if used != len(bodies):
         raise RegionRejected(f"{exercise_id}: {len(bodies)} region(s) submitted, {used} in the reference")
-    return dest
