@@ -110,12 +110,12 @@ def refine_by_colour(face: Face, f: FrameData, pad: int = 6) -> ColourRegion:
         spread = 1.4826 * np.median(np.abs(pixels - mean), axis=0)
     spread = np.maximum(spread, 4.0)
     # the colour distance in core spreads: one affine transform per channel, then the root of the squares' sum
-    affine = np.zeros((3, 4))
-    affine[[0, 1, 2], [0, 1, 2]] = 1 / spread
-    affine[:, 3] = -mean / spread
+    affine = np.column_stack([np.diag(1 / spread), -mean / spread]).astype(float, copy=False)
     scaled = cv2.transform(rgb.astype(np.float32), affine)
-    distance = cv2.sqrt(cv2.transform(scaled * scaled, _SUM3))
-    height = f.depth[y0:y1, x0:x1] * f.kz[y0:y1, x0:x1] + f.tz
+    distance = cv2.sqrt(cv2.transform(np.multiply(scaled, scaled, out=scaled), _SUM3))
+    away = distance >= FACE_COLOR_LEVEL
+    height = np.multiply(f.depth[y0:y1, x0:x1], f.kz[y0:y1, x0:x1])
+    height += f.tz
     no_return = np.isnan(height)
     cv2.patchNaNs(height, face.height_mm)        # no return: neither below nor above
     height = cv2.medianBlur(height, 5)
@@ -131,16 +131,16 @@ def refine_by_colour(face: Face, f: FrameData, pad: int = 6) -> ColourRegion:
             # heights) or where it gave no return (unless the pixel has the face's colour: a dark face's dropouts)
             arm = arm & arm_coloured(rgb)
             not_below &= ~arm
-            occluder |= arm & no_return & (distance >= FACE_COLOR_LEVEL)
-    candidate = ((distance < FACE_COLOR_LEVEL) & not_below).astype(np.uint8)
+            occluder |= arm & no_return & away
+    candidate = (~away & not_below).view(np.uint8)     # bool as 0 / 1, no copy
     # what stands on the face: pixels not of its colour that rise above it (a block's side faces rise from the face,
     # so they are above it by less than `occluder` asks right next to it)
-    standing = (height > face.height_mm + STANDING_RISE_MM) & ~occluder & (distance >= FACE_COLOR_LEVEL)
+    standing = (height > face.height_mm + STANDING_RISE_MM) & ~occluder & away
     n, labels = cv2.connectedComponents(candidate, connectivity=4)
     if n <= 1:
         return ColourRegion(seed, (x0, y0), mean, occluder, standing, distance)
     overlap = np.bincount(labels[seed.view(bool)], minlength=n)
     overlap[0] = 0
-    mask = (labels == int(np.argmax(overlap))).astype(np.uint8)
+    mask = (labels == int(np.argmax(overlap))).view(np.uint8)
     return ColourRegion(cv2.morphologyEx(mask, cv2.MORPH_CLOSE, SQUARE3), (x0, y0), mean, occluder, standing,
                         distance)

@@ -35,41 +35,57 @@ from armlab.transforms import wrap_quarter
 
 __all__ = ["Block", "detect_blocks", "detect_objects", "DetectionSettings", "stack_levels"]
 
-def _measure(face: Face, f: FrameData, settings: DetectionSettings) -> MeasuredFace:
-    """A face's outline, intersected with the horizontal plane at the face's height (its world footprint without the
-    per-pixel depth noise), and the square fitted to it."""
-    region = refine_by_colour(face, f)
-    mask_u8, origin, occluder, standing = region.mask, region.origin, region.occluder, region.standing
-    contours, _ = cv2.findContours(mask_u8, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
-    contour = max(contours, key=cv2.contourArea).reshape(-1, 2)
-    near = cv2.dilate(occluder.view(np.uint8), SQUARE5)
-    blocked = (near | cv2.dilate(standing.view(np.uint8), STANDING_KERNEL))[contour[:, 1], contour[:, 0]] > 0
-    contour = contour + np.array(origin)
-    # the face's plane: the height of the lab's stack nearest to its measured height (faces are kept only within
-    # level_tolerance of one), which the depth reads a little low and, far out on the board, up to a few mm off; the
-    # image outline and edges are intersected with it (a plane 3 mm off moves a point 3 mm x its distance from the
-    # camera's nadir / the camera's height: 1-1.5 mm at the board's far corners)
+def _measure_all(faces: list[Face], f: FrameData, settings: DetectionSettings) -> list[MeasuredFace]:
+    """Every face's outline (its pixels by colour, refine_by_colour), intersected with the horizontal plane at the
+    face's height (its world footprint without the per-pixel depth noise), and the square fitted to it. The image
+    work runs per face on its patch; the planes, edge hints and the outlines' world points for all faces at once."""
+    if not faces:
+        return []
+    regions, contours, blocked, nears = [], [], [], []
+    for face in faces:
+        region = refine_by_colour(face, f)
+        found, _ = cv2.findContours(region.mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
+        contour = max(found, key=cv2.contourArea).reshape(-1, 2)
+        near = cv2.dilate(region.occluder.view(np.uint8), SQUARE5)
+        blocked.append((near | cv2.dilate(region.standing.view(np.uint8), STANDING_KERNEL))[contour[:, 1],
+                                                                                             contour[:, 0]] > 0)
+        regions.append(region)
+        nears.append(near)
+        contours.append(contour + np.array(region.origin))
+    counts = [len(c) for c in contours]
+    plane_z, hints = _planes_and_hints(np.array([face.height_mm for face in faces], float), settings)
+    outline_xyz = pixels_to_plane(f.camera, np.concatenate(contours), np.repeat(plane_z, counts))
+    cam, sizes = f.camera, tuple(lab_config().block_edges_mm.values())
+    out = []
+    for i, (face, region, start, n) in enumerate(zip(faces, regions, np.cumsum(counts) - counts, counts)):
+        outline, z = outline_xyz[start:start + n, :2], float(plane_z[i])
+        centre_guess = outline.mean(axis=0)
+        pixel_mm = float((cam.T_cam_world[2, :2] @ centre_guess + cam.T_cam_world[2, 2] * z
+                          + cam.T_cam_world[2, 3]) / cam.K[0, 0])                     # the face's depth / fx
+        centre_xy, sides, theta, complete = fit_square(outline, blocked[i], pixel_mm, hints[i], sizes)
+        centre_xy, sides = np.asarray(centre_xy, float), np.asarray(sides, float)
+        out.append(MeasuredFace(face, centre_xy.copy(), sides.copy(), float(theta), bool(complete),
+                                _cube_sized(sides, settings, CUBE_SIZE_SLACK), outline, centre_xy, sides, blocked[i],
+                                pixel_mm, contours[i], region.mean_rgb, region.distance, nears[i], region.origin, z))
+    return out
+
+
+def _planes_and_hints(height_mm: np.ndarray, settings: DetectionSettings) -> tuple[np.ndarray, list[float | None]]:
+    """Per face of measured heights (F,) mm: its plane (F,) mm and the hint for its edge (mm, or None).
+
+    The plane is the height of the lab's stack nearest to the measured height (faces are kept only within
+    level_tolerance of one), which the depth reads a little low and, far out on the board, up to a few mm off; the
+    image outline and edges are intersected with it (a plane 3 mm off moves a point 3 mm x its distance from the
+    camera's nadir / the camera's height: 1-1.5 mm at the board's far corners). The hint, for when part of the face
+    is hidden, is the block size whose stacks reach the height best (None when both sizes' stacks reach it within
+    1.5 mm, as 3 x 25 and 2 x 38 do: then the free outline decides)."""
     heights = stack_heights(settings.max_levels)
-    plane_z = float(heights[np.argmin(np.abs(heights - face.height_mm))])
-    outline = pixels_to_plane(f.camera, contour, plane_z)[:, :2]
-    cam = f.camera
-    centre_guess = outline.mean(axis=0)
-    pixel_mm = float((cam.T_cam_world[2, :2] @ centre_guess + cam.T_cam_world[2, 2] * plane_z
-                      + cam.T_cam_world[2, 3]) / cam.K[0, 0])                     # the face's depth / fx
-    edges = lab_config().block_edges_mm
-    # a hint for the edge when part of the face is hidden: the size whose stacks reach this height best (None when
-    # both sizes' stacks reach it within 1.5 mm, as 3 x 25 and 2 x 38 do: then the free outline decides)
-    sizes = tuple(edges.values())
-    below = face.height_mm - np.array(sizes)[:, None] - stack_heights(settings.max_levels, include_zero=True)
-    misfit = dict(zip(sizes, np.abs(below).min(axis=1).tolist()))
-    hint = min(misfit, key=misfit.get)
-    if max(misfit.values()) - min(misfit.values()) < 1.5:
-        hint = None
-    centre_xy, sides, theta, complete = fit_square(outline, blocked, pixel_mm, hint, tuple(edges.values()))
-    centre_xy, sides = np.asarray(centre_xy, float), np.asarray(sides, float)
-    return MeasuredFace(face, centre_xy.copy(), sides.copy(), float(theta), bool(complete),
-                     _cube_sized(sides, settings, CUBE_SIZE_SLACK), outline, centre_xy, sides, blocked, pixel_mm,
-                     contour, region.mean_rgb, region.distance, near, origin, plane_z)
+    plane_z = heights[np.argmin(np.abs(heights - height_mm[:, None]), axis=1)]
+    sizes = np.array(tuple(lab_config().block_edges_mm.values()))
+    below = height_mm[:, None, None] - sizes[:, None] - stack_heights(settings.max_levels, include_zero=True)
+    misfit = np.abs(below).min(axis=2)                                     # (F, sizes)
+    fits = np.ptp(misfit, axis=1) >= 1.5
+    return plane_z, [float(sizes[k]) if fit else None for k, fit in zip(np.argmin(misfit, axis=1), fits)]
 
 
 def _cube_sized(sides, settings: DetectionSettings, slack: tuple[float, float] = (0.0, 0.0)) -> bool:
@@ -178,7 +194,7 @@ def detect_objects(rgb, depth_mm, camera: Camera, arm_q=None, color_model: Color
                           max_slope_mm=settings.max_face_slope * settings.step)
     heights = stack_heights(settings.max_levels)
     faces = [face for face in faces if np.min(np.abs(heights - face.height_mm)) <= settings.level_tolerance]
-    measured = [_measure(face, f, settings) for face in faces]
+    measured = _measure_all(faces, f, settings)
     # what cannot be a cube is not worth refining; what is near enough is judged again on its refined square
     cubes = [m for m in measured if m.cube_sized]
     for m, theta in zip(cubes, refine_yaws(camera, cubes)):

@@ -64,9 +64,9 @@ def height_from_depth(depth_mm: np.ndarray, camera: Camera, step: int = 1) -> np
     return depth_mm[::step, ::step] * kz + np.float32(camera.T_world_cam[2, 3])
 
 
-def pixels_to_plane(camera: Camera, uv: np.ndarray, z_world: float) -> np.ndarray:
-    """World points (N, 3) mm where the rays of integer pixels uv (N, 2) (u, v) meet the plane z = z_world (mm);
-    the cached equivalent of Camera.pixel_to_plane for whole pixels."""
+def pixels_to_plane(camera: Camera, uv: np.ndarray, z_world) -> np.ndarray:
+    """World points (N, 3) mm where the rays of integer pixels uv (N, 2) (u, v) meet the plane z = z_world (mm; one
+    plane, or one per pixel (N,)); the cached equivalent of Camera.pixel_to_plane for whole pixels."""
     k = world_coefficients(camera)
     u, v = uv[:, 0].astype(np.intp), uv[:, 1].astype(np.intp)
     rays = k[:, v, u].T.astype(float)
