@@ -22,8 +22,10 @@ from armlab.detection import (
     hsv_table_classify,
     stack_levels,
 )
+from armlab.detection.detect import _planes_and_hints
 from armlab.detection.heightmap import pixels_to_plane
 from armlab.detection.masks import arm_mask
+from armlab.detection.stacks import stack_heights
 from armlab.sim.detection_eval import DetectionScore, corrected_depth, score_frame, sim_case, truth_faces, yaw_error
 from armlab.sim.realism import CameraRealism
 from armlab.sim.render import render_exact
@@ -322,6 +324,32 @@ def test_height_map_and_plane_rays_agree_with_the_camera(ideal):
     assert height_from_depth(depth.astype(np.float32), cam, step=2).shape == (360, 640)
     uv = np.array([[0, 0], [640, 360], [1279, 719], [100, 600]])
     assert np.allclose(pixels_to_plane(cam, uv, 38.0), cam.pixel_to_plane(uv.astype(float), 38.0), atol=1e-3)
+
+
+def test_one_plane_per_pixel_is_each_pixel_on_its_own_plane(ideal):
+    """pixels_to_plane with a plane per pixel (all faces' outlines in one call) gives each pixel exactly what its own
+    plane's call gives."""
+    cam = ideal[0].camera.truth
+    uv = np.array([[0, 0], [640, 360], [1279, 719], [100, 600], [33, 700]])
+    z = np.array([0.0, 25.0, 38.0, 101.0, -3.5])
+    together = pixels_to_plane(cam, uv, z)
+    assert np.array_equal(together, np.array([pixels_to_plane(cam, uv[i:i + 1], z[i])[0] for i in range(len(uv))]))
+
+
+def test_planes_and_hints_of_many_faces_are_those_of_each_face():
+    """The faces' planes and edge hints in one pass equal the rule face by face: the nearest stack height, and the
+    size whose stacks reach the face's height best unless both reach it within 1.5 mm."""
+    settings = DetectionSettings()
+    heights = stack_heights(settings.max_levels)
+    edges = (25.0, 38.0)
+    measured = np.array([24.1, 25.0, 37.2, 38.9, 49.3, 63.0, 75.8, 76.0, 88.4, 101.2, 114.0, 12.6, 31.5])
+    planes, hints = _planes_and_hints(measured, settings)
+    for h, z, hint in zip(measured, planes, hints, strict=True):
+        assert z == heights[np.argmin(np.abs(heights - h))]
+        misfit = [min(abs(h - e - s) for s in stack_heights(settings.max_levels, include_zero=True)) for e in edges]
+        expected = None if max(misfit) - min(misfit) < 1.5 else edges[int(np.argmin(misfit))]
+        assert hint == expected, (h, hint, expected)
+    assert hints[measured.tolist().index(76.0)] is None            # 3 x 25 and 2 x 38: the outline decides
 
 
 def test_reduced_height_map_is_the_full_one_subsampled(ideal):
