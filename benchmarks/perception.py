@@ -11,8 +11,9 @@ precision, colour / size / levels accuracy, position, yaw and size (edge) errors
 same faces, the 50 mm grid world error before and after calibration as notebook 01 measures it (visible grid points of
 the empty board, truth pixels), and ms per frame for detection (each frame's best of 3 runs, one core) and for tag
 calibration. Then crowded frames (CROWDED_BLOCKS blocks scattered over the whole board, true camera): detection ms
-median / worst of this detector and of the one at git revision BEFORE_REV (before the crowded-frame speed work: the
-same detections, checked), timed in turn in this process, and their ratio.
+median / worst, and the worst over the median of 32 usual frames (the set's seeds, true camera), of this detector and
+of the one at git revision BEFORE_REV (before this round of the crowded-frame speed work: the same detections,
+checked), timed in turn in this process, and their ratios.
 """
 
 from __future__ import annotations
@@ -45,7 +46,7 @@ cv2.setNumThreads(1)
 W = 78          # the metric column's width
 REPEATS = 3     # detection runs per frame (the table gives each frame's fastest)
 REPO = Path(__file__).resolve().parents[1]
-BEFORE_REV = "7957813"   # the detector before the crowded-frame speed work
+BEFORE_REV = "5c9fe87"   # the detector before this round of the crowded-frame speed work
 CROWDED_BLOCKS = 30
 CROWDED_SEEDS = range(6)
 
@@ -148,34 +149,46 @@ def _same(a, b) -> bool:
         for x, y in zip(a, b, strict=True))
 
 
-def crowded_rows() -> None:
-    """Detection ms on the crowded frames (CROWDED_SEEDS, true camera, corrected depth), median / worst, this
-    detector and BEFORE_REV's, each frame's best of REPEATS runs taken in turn."""
+def crowded_rows(n_usual: int = 32) -> None:
+    """Detection ms on the crowded frames (CROWDED_SEEDS, true camera, corrected depth), median / worst, against the
+    median of n_usual usual frames (the perception set's seeds 100..., true camera), for this detector and
+    BEFORE_REV's: each frame's best of REPEATS runs, the detectors taken in turn frame by frame."""
     frames = []
     for seed in CROWDED_SEEDS:
         station = make_station("sim", seed=seed, scene=crowded_scene(seed))
         frame, cam, q = station.camera.capture(), station.camera.truth, station.arm.joint_positions()
         depth = calibration.fit_depth_correction(frame.depth, cam, exclude=arm_mask(cam, q)).apply(frame.depth)
         frames.append((frame.rgb, depth, cam, q))
+    usual = [(c.rgb, corrected_depth(c, c.camera), c.camera, c.arm_q)
+             for c in (sim_case(*spec) for spec in case_specs(n_usual, 100))]
     before, why = detector_at(BEFORE_REV)
     detectors = [detect_objects] + ([before] if before else [])
-    found = [[d(*f) for f in frames] for d in detectors]        # also warms the per-camera caches
-    best = np.full((len(detectors), len(frames)), np.inf)
-    for _ in range(REPEATS):
-        for j, f in enumerate(frames):
+    found = [[d(*f) for f in frames] for d in detectors]
+    all_frames = frames + usual
+    best = np.full((len(detectors), len(all_frames)), np.inf)
+    for j, f in enumerate(all_frames):      # frame by frame: the per-camera caches stay warm for its runs
+        for _ in range(REPEATS):
             for i, d in enumerate(detectors):
                 best[i, j] = min(best[i, j], _timed_ms(d, *f))
+    crowded, typical = best[:, :len(frames)], np.median(best[:, len(frames):], axis=1)
     n = np.mean([len(x) for x in found[0]])
+    n_usual_found = np.median([len(detect_objects(*f)) for f in usual])
     label = f"crowded frames ({len(frames)}, {CROWDED_BLOCKS} blocks, {n:.0f} found), ms median / worst"
-    print(f"{label:<{W}}{f'{np.median(best[0]):.1f} / {np.max(best[0]):.1f}':>14}")
+    print(f"{label:<{W}}{f'{np.median(crowded[0]):.1f} / {np.max(crowded[0]):.1f}':>14}")
+    label = f"  usual frames ({len(usual)}, median {n_usual_found:.0f} found), ms median; crowded worst / that"
+    print(f"{label:<{W}}{f'{typical[0]:.1f}; {np.max(crowded[0]) / typical[0]:.2f}':>14}")
     if before is None:
         print(f"  (revision {BEFORE_REV} not available: {why})")
         return
     same = all(_same(a, b) for a, b in zip(found[0], found[1], strict=True))
     print(f"{f'  the same at {BEFORE_REV} (before the speed work; detections the same: {same})':<{W}}"
-          f"{f'{np.median(best[1]):.1f} / {np.max(best[1]):.1f}':>14}")
-    print(f"{'  ratio before / now, median / worst':<{W}}"
-          f"{f'{np.median(best[1]) / np.median(best[0]):.2f} / {np.max(best[1]) / np.max(best[0]):.2f}':>14}")
+          f"{f'{np.median(crowded[1]):.1f} / {np.max(crowded[1]):.1f}':>14}")
+    print(f"{f'  {BEFORE_REV}: usual frames ms median; crowded worst / that':<{W}}"
+          f"{f'{typical[1]:.1f}; {np.max(crowded[1]) / typical[1]:.2f}':>14}")
+    ratios = (np.median(crowded[1]) / np.median(crowded[0]), np.max(crowded[1]) / np.max(crowded[0]),
+              typical[1] / typical[0])
+    print(f"{'  ratio before / now: crowded median / worst / usual median':<{W}}"
+          f"{' / '.join(f'{r:.2f}' for r in ratios):>20}")
 
 
 def main(n_frames: int = 32) -> None:
