@@ -26,6 +26,14 @@ __all__ = ["Face", "segment_faces"]
 _KERNEL = np.ones((3, 3), np.uint8)
 
 
+def _label(mask: np.ndarray) -> tuple[int, np.ndarray]:
+    """cv2.connectedComponents of a uint8 0/1 image, 4-connected: the same labels (OpenCV numbers components in the
+    raster order of their first pixels) by its SAUF algorithm, into 16-bit labels when fewer than 2**16 pixels are
+    set: a third faster than the default algorithm into 32-bit labels."""
+    ltype = cv2.CV_16U if mask.size < 1 << 16 or cv2.countNonZero(mask) < 1 << 16 else cv2.CV_32S
+    return cv2.connectedComponentsWithAlgorithm(mask, 4, ltype, cv2.CCL_SAUF)
+
+
 @dataclass(frozen=True)
 class Face:
     """A flat top face: the bounding box (x, y, w, h) of its silhouette, its visible pixels (mask over the box),
@@ -64,35 +72,37 @@ def _plateau_levels(heights: np.ndarray, bin_mm: float, min_pixels: int) -> list
     return [float(0.5 * (edges[i] + edges[i + 1])) for i in peaks if window[i] >= min_pixels]
 
 
+def _runs(starts: np.ndarray, lengths: np.ndarray) -> np.ndarray:
+    """The integer runs starts[i], starts[i] + 1, ..., starts[i] + lengths[i] - 1, end to end (lengths >= 0)."""
+    ends = np.cumsum(lengths)
+    return np.arange(int(ends[-1]) if len(ends) else 0) + np.repeat(starts - (ends - lengths), lengths)
+
+
 def _component_levels(heights: np.ndarray, starts: np.ndarray, counts: np.ndarray, bin_mm: float,
                       min_pixels: int) -> tuple[np.ndarray, np.ndarray]:
     """_plateau_levels of every component at once: heights (N,) float32 mm of the components' pixels, component c's
-    at [starts[c], starts[c] + counts[c]). Returns (component (L,), level (L,) mm), by component and, within one,
-    ascending: the same values in the same order as _plateau_levels of each in turn.
+    at [starts[c], starts[c] + counts[c]) (counts >= 1). Returns (component (L,), level (L,) mm), by component and,
+    within one, ascending: the same values in the same order as _plateau_levels of each in turn.
 
     The histograms lie end to end with two empty bins between them, so one convolution smooths them all as
     np.convolve smooths each alone; a component whose histogram is shorter than the kernel (all its heights within
     one bin: np.convolve's "same" then returns the kernel's length) goes through _plateau_levels itself."""
     comp = np.repeat(np.arange(len(counts)), counts)
-    lo = np.minimum.reduceat(heights, starts).astype(np.float64) - bin_mm             # float(min) - bin_mm
-    bins = ((heights - lo.astype(np.float32)[comp]) / bin_mm).astype(np.intp)         # the float32 arithmetic
-    lengths = np.maximum.reduceat(bins, starts) + 3                                   # of heights - lo
+    lo = np.minimum.reduceat(heights, starts).astype(np.float64) - bin_mm             # float(min) - bin_mm, and
+    bins = ((heights - lo.astype(np.float32)[comp]) / bin_mm).astype(np.intp)         # heights - lo in float32
+    lengths = np.maximum.reduceat(bins, starts) + 3
     offsets = np.cumsum(lengths + 2) - lengths                                        # two empty bins before each
     hist = np.bincount(offsets[comp] + bins, minlength=int(offsets[-1] + lengths[-1] + 2))
     smooth = np.convolve(hist, [1, 2, 3, 2, 1], mode="same")
     window = np.convolve(hist, [1, 1, 1], mode="same")
-    # candidates: bins 1 .. length - 2 of each histogram of at least 5 bins
-    long = lengths >= 5
-    edge = np.zeros(len(hist) + 1, np.intp)
-    np.add.at(edge, offsets[long] + 1, 1)
-    np.add.at(edge, offsets[long] + lengths[long] - 1, -1)
-    inner = np.cumsum(edge[:-1]) > 0
-    inner[1:-1] &= (smooth[1:-1] >= smooth[:-2]) & (smooth[1:-1] > smooth[2:]) & (window[1:-1] >= min_pixels)
-    peaks = np.flatnonzero(inner)
+    peaks = np.flatnonzero((smooth[1:-1] >= smooth[:-2]) & (smooth[1:-1] > smooth[2:]) & (window[1:-1] >= min_pixels))
+    peaks += 1
     of = np.searchsorted(offsets, peaks, side="right") - 1
     i = peaks - offsets[of]
+    inner = (i >= 1) & (i <= lengths[of] - 2) & (lengths[of] >= 5)     # bins 1 .. length - 2, not in the gaps
+    of, i = of[inner], i[inner]
     levels = 0.5 * ((lo[of] + bin_mm * i) + (lo[of] + bin_mm * (i + 1)))              # the bins' centres
-    short = np.flatnonzero(~long)
+    short = np.flatnonzero(lengths < 5)
     if len(short):
         extra = [(c, level) for c in short.tolist()
                  for level in _plateau_levels(heights[starts[c]:starts[c] + counts[c]], bin_mm, min_pixels)]
@@ -106,72 +116,81 @@ def _component_levels(heights: np.ndarray, starts: np.ndarray, counts: np.ndarra
 def _pack_boxes(heights: np.ndarray, widths: np.ndarray) -> tuple[np.ndarray, np.ndarray, tuple[int, int]]:
     """Places rectangles (B,) pixels high and wide side by side in shelves of an atlas (tallest first, so little is
     wasted), none overlapping. Returns their top rows (B,), left columns (B,) and the atlas's (height, width)."""
-    width = max(int(widths.max()), int(np.ceil(np.sqrt(float(np.dot(heights, widths))))))
-    top, left = np.empty(len(heights), np.intp), np.empty(len(heights), np.intp)
+    hs, ws = heights.tolist(), widths.tolist()
+    width = max(max(ws), int(np.ceil(np.sqrt(float(np.dot(heights, widths))))))
+    top, left = [0] * len(hs), [0] * len(hs)
     x = y = shelf = 0
-    for b in np.argsort(-heights, kind="stable").tolist():
-        if x + widths[b] > width:
+    for b in sorted(range(len(hs)), key=lambda b: -hs[b]):
+        if x + ws[b] > width:
             x, y, shelf = 0, y + shelf, 0
         top[b], left[b] = y, x
-        x, shelf = x + int(widths[b]), max(shelf, int(heights[b]))
-    return top, left, (y + shelf, width)
+        x, shelf = x + ws[b], max(shelf, hs[b])
+    return np.array(top, np.intp), np.array(left, np.intp), (y + shelf, width)
 
 
-def _paint_frames(shape: tuple[int, int], top: np.ndarray, left: np.ndarray, heights: np.ndarray,
-                  widths: np.ndarray) -> np.ndarray:
-    """An image of `shape` with 1 on the one-pixel rim of each rectangle (top, left, heights, widths: (B,) pixels,
-    not overlapping) and 2 inside it, 0 elsewhere: corner marks of a 2-d difference image, summed along both axes."""
-    corners = []
-    for t, lf, b, r in ((top, left, top + heights, left + widths),
-                        (top + 1, left + 1, top + heights - 1, left + widths - 1)):
-        corners.append((np.concatenate([t, t, b, b]), np.concatenate([lf, r, lf, r]),
-                        np.repeat([1, -1, -1, 1], len(t))))
-    rows, cols, signs = (np.concatenate(parts) for parts in zip(*corners))
-    marks = np.zeros((shape[0] + 1, shape[1] + 1), np.int32)
-    np.add.at(marks, (rows, cols), signs)
-    return marks.cumsum(axis=0).cumsum(axis=1)[:-1, :-1].astype(np.uint8)
+def _rims(top: np.ndarray, left: np.ndarray, heights: np.ndarray, widths: np.ndarray, width: int) -> np.ndarray:
+    """Flat indices, in an image `width` pixels wide, of the one-pixel rims of rectangles (B,) (top, left, heights,
+    widths pixels, all >= 3)."""
+    cols, rows = _runs(left, widths), _runs(top + 1, heights - 2)
+    sides = rows * width + np.repeat(left, heights - 2)
+    return np.concatenate([np.repeat(top * width, widths) + cols, np.repeat((top + heights - 1) * width, widths) + cols,
+                           sides, sides + np.repeat(widths - 1, heights - 2)])
 
 
-def _open_each_box(on: np.ndarray, frames: np.ndarray) -> np.ndarray:
-    """cv2.MORPH_OPEN (3 x 3) of each box of an atlas (uint8 0/1 pixels; frames: _paint_frames's image) as if the box
-    were an image of its own: OpenCV's erosion and dilation leave an image's border out, so the rim is 1 for the
-    erosion (which takes minima) and 0 for the dilation (maxima). Returns the opened atlas (uint8 0/1) inside the
-    boxes (the rims hold anything)."""
-    inside = (frames == 2).view(np.uint8)
-    eroded = cv2.erode(on | (frames == 1).view(np.uint8), _KERNEL)
-    return cv2.dilate(eroded & inside, _KERNEL)
+def _open_each_box(atlas: np.ndarray, rims: np.ndarray) -> np.ndarray:
+    """cv2.MORPH_OPEN (3 x 3) of each box of an atlas (uint8 0/1 pixels, each box inside a one-pixel rim: `rims`,
+    flat indices, 0 in the atlas) as if the box were an image of its own: OpenCV's erosion and dilation leave an
+    image's border out, so the rims are 1 for the erosion (which takes minima) and 0 for the dilation (maxima).
+    Returns the opened atlas (uint8 0/1) inside the boxes (the rims hold anything); `atlas` is left as it was."""
+    flat = atlas.reshape(-1)
+    flat[rims] = 1
+    eroded = cv2.erode(atlas, _KERNEL)
+    flat[rims] = 0
+    eroded.reshape(-1)[rims] = 0
+    return cv2.dilate(eroded, _KERNEL)
 
 
-def _slope_of_centred(c: np.ndarray, r: np.ndarray, z: np.ndarray) -> float:
-    """How steeply (mm per sample) the least-squares plane through heights z (n,) mm at columns c and rows r rises,
-    all three centred (float64, n >= 3): the normal equations, a tenth of np.linalg.lstsq's cost (0 for pixels on
-    one line)."""
-    scc, srr, scr, scz, srz = c @ c, r @ r, c @ r, c @ z, r @ z
+def _plane_slopes(scc, srr, scr, scz, srz):
+    """How steeply (mm per sample) least-squares planes rise, from the sums over each one's centred columns c, rows
+    r and heights z (mm): c @ c, r @ r, c @ r, c @ z, r @ z (arrays or scalars); 0 where the pixels lie on one
+    line. The normal equations, a tenth of np.linalg.lstsq's cost."""
     det = scc * srr - scr * scr
-    if det <= 1e-9 * scc * srr:
-        return 0.0
-    return float(np.hypot(srr * scz - scr * srz, scc * srz - scr * scz) / det)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        slope = np.hypot(srr * scz - scr * srz, scc * srz - scr * scz) / det
+    return np.where(det <= 1e-9 * scc * srr, 0.0, slope)
 
 
-def _face_slopes(face: np.ndarray, r: np.ndarray, c: np.ndarray, z: np.ndarray, n_faces: int) -> np.ndarray:
-    """The plane fit's slope (mm per sample, 0 for fewer than three pixels) of each face's pixels: face (N,) their
-    face's index (ascending), r, c (N,) int rows and columns in its box (raster order within a face), z (N,) float32
-    heights mm. The same values as centring each face's coordinates and heights (np.mean) and calling
-    _slope_of_centred: the means' sums are exact here in any order (integers; float32 heights >= 1 mm whose sum
-    stays below 2**29, all multiples of 2**-23), else each face's np.mean; the dot products stay per face (BLAS's
-    order)."""
-    n = np.bincount(face, minlength=n_faces)
-    z = z.astype(np.float64)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        mean_r = np.bincount(face, r, n_faces) / n
-        mean_c = np.bincount(face, c, n_faces) / n
-        mean_z = np.bincount(face, z, n_faces) / n
+def _face_slopes(n: np.ndarray, r: np.ndarray, c: np.ndarray, z: np.ndarray) -> np.ndarray:
+    """The plane fit's slope (mm per sample, 0 for fewer than three pixels) of each face's pixels: n (F,) how many
+    pixels each face has, its at [sum(n[:f]), sum(n[:f + 1])) of r, c (N,) int rows and columns in its box (in
+    raster order) and z (N,) float32 heights mm. The same values as centring each face's coordinates and heights
+    (np.mean) and taking the dot products for _plane_slopes: the means' sums are exact here in any order (integers;
+    float32 heights >= 1 mm, all multiples of 2**-23, whose sums stay below 2**29), else each face's np.mean; the dot
+    products stay one BLAS call each per face (in BLAS's own order)."""
+    face = np.repeat(np.arange(len(n)), n)
     ends = np.cumsum(n)
     bounds = list(zip((ends - n).tolist(), ends.tolist()))
-    if len(z) and not (z.min() >= 1.0 and float(mean_z[n > 0].max() * n.max()) < 2.0 ** 29):
+    z = z.astype(np.float64)
+    sum_z = np.bincount(face, z, len(n))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mean_r, mean_c, mean_z = np.bincount(face, r, len(n)) / n, np.bincount(face, c, len(n)) / n, sum_z / n
+    if len(z) and not (z.min() >= 1.0 and sum_z.max() < 2.0 ** 29):
         mean_z = np.array([np.mean(z[a:b]) if b > a else np.nan for a, b in bounds])
     r, c, z = r - mean_r[face], c - mean_c[face], z - mean_z[face]
-    return np.array([_slope_of_centred(c[a:b], r[a:b], z[a:b]) if b - a >= 3 else 0.0 for a, b in bounds])
+    fitted = np.flatnonzero(n >= 3)
+    sums = []
+    for f in fitted.tolist():
+        a, b = bounds[f]
+        cf, rf, zf = c[a:b], r[a:b], z[a:b]
+        sums += (cf @ cf, rf @ rf, cf @ rf, cf @ zf, rf @ zf)
+    slopes = np.zeros(len(n))
+    slopes[fitted] = _plane_slopes(*np.array(sums, np.float64).reshape(-1, 5).T)
+    return slopes
+
+
+def _grouped(keys: np.ndarray, n_keys: int) -> np.ndarray:
+    """A stable argsort of non-negative int keys below n_keys (a radix sort of 16-bit keys when they fit)."""
+    return np.argsort(keys.astype(np.uint16) if n_keys <= 1 << 16 else keys, kind="stable")
 
 
 def segment_faces(height_mm: np.ndarray, valid: np.ndarray, min_height_mm: float = 10.0,
@@ -186,16 +205,17 @@ def segment_faces(height_mm: np.ndarray, valid: np.ndarray, min_height_mm: float
     top face rises less than 0.3 mm per sample, 0.6 when the arm leaves only a few samples of it, a side face's band
     2).
 
-    Each object region's plateau levels are one "slot": its bounding box (the region's pixels, the rest empty) with
+    Each object region's plateau level is one "slot": the region's bounding box (its pixels, the rest empty) with
     the level's masks. All slots are batched: the histograms in one convolution (_component_levels), the boxes in one
     atlas (_pack_boxes) opened (_open_each_box) and labelled by one OpenCV call each, the faces' pixels as flat
-    lists; only the median and the plane fit's dot products run per face. The faces come in the order of one box at a
-    time: by region (label), level (ascending), silhouette (OpenCV's raster order)."""
-    h = np.zeros(np.shape(height_mm), np.float32)
-    np.copyto(h, height_mm, where=valid & np.isfinite(height_mm), casting="unsafe")
+    lists; only the median and the plane fit's dot products run per face. The faces come as one box at a time would
+    give them: by region (label), level (ascending), silhouette (OpenCV's raster order)."""
+    ok = valid & np.isfinite(height_mm)
+    h = np.array(height_mm, np.float32)
+    np.copyto(h, 0.0, where=~ok)
     h = cv2.medianBlur(h, median_px)
     objects = h > min_height_mm
-    n, labels = cv2.connectedComponents(objects.view(np.uint8), connectivity=4)
+    n, labels = _label(objects.view(np.uint8))
     if n <= 1:
         return []
     # the pixels of regions large enough for a face, by region, each in raster order, from the object pixels only
@@ -208,7 +228,8 @@ def segment_faces(height_mm: np.ndarray, valid: np.ndarray, min_height_mm: float
     keep = large[lab]
     if not keep.any():
         return []
-    idx = idx[keep][np.argsort(lab[keep], kind="stable")]
+    idx, lab = idx[keep], lab[keep]
+    idx = idx[_grouped(lab, n)]
     counts = areas[large]
     starts = np.cumsum(counts) - counts
     rows, cols = np.divmod(idx, h.shape[1])
@@ -216,58 +237,69 @@ def segment_faces(height_mm: np.ndarray, valid: np.ndarray, min_height_mm: float
     y0, x0 = np.minimum.reduceat(rows, starts), np.minimum.reduceat(cols, starts)
     box_h, box_w = np.maximum.reduceat(rows, starts) + 1 - y0, np.maximum.reduceat(cols, starts) + 1 - x0
 
-    # slots: one per (region, plateau level), each a box with a one-pixel rim in the atlas
+    # slots: one per (region, plateau level), each its region's box inside a one-pixel rim in the atlas; the slots'
+    # pixels as flat indices into the atlas
     region, level = _component_levels(z, starts, counts, 2.0, min_face_pixels // 2)
     if not len(level):
         return []
-    sy, sx, sh, sw = y0[region], x0[region], box_h[region], box_w[region]
-    top, left, shape = _pack_boxes(sh + 2, sw + 2)
+    fh, fw = box_h[region] + 2, box_w[region] + 2
+    top, left, shape = _pack_boxes(fh, fw)
+    width = shape[1]
     npix = counts[region]
-    pix = np.arange(int(npix.sum())) + np.repeat(starts[region] - (np.cumsum(npix) - npix), npix)
-    ar = rows[pix] + np.repeat(top + 1 - sy, npix)                       # the slots' pixels in the atlas
-    ac = cols[pix] + np.repeat(left + 1 - sx, npix)
-    zp = z[pix]
-    on = np.abs(zp - np.repeat(level.astype(np.float32), npix)) < face_tolerance_mm
-    above = zp > np.repeat((level - face_tolerance_mm).astype(np.float32), npix)
+    if not np.array_equal(region, np.arange(len(counts))):   # not one level per region: the slots' pixels
+        pix = _runs(starts[region], npix)
+        rows, cols, z = rows[pix], cols[pix], z[pix]
+    slot = np.repeat(np.arange(len(level)), npix)
+    at = (rows * width + cols) + ((top + 1 - y0[region]) * width + (left + 1 - x0[region]))[slot]
+    on = np.abs(z - level.astype(np.float32)[slot]) < face_tolerance_mm
+    above = z > (level - face_tolerance_mm).astype(np.float32)[slot]
 
     atlas = np.zeros(shape, np.uint8)
-    atlas[ar, ac] = on
-    on = _open_each_box(atlas, _paint_frames(shape, top, left, sh + 2, sw + 2))[ar, ac].view(bool)   # no thin
-    atlas[ar, ac] = above                                                                           # side bands
-    m, parts, stats, _ = cv2.connectedComponentsWithStats(atlas, connectivity=4)
-    part = parts[ar, ac]
+    flat = atlas.reshape(-1)
+    flat[at] = on
+    opened = _open_each_box(atlas, _rims(top, left, fh, fw, width))     # no thin side bands
+    on = opened.reshape(-1)[at].view(bool)
+    flat[at] = above
+    m, parts = _label(atlas)
+    part = parts.reshape(-1)[at]
     sil = np.flatnonzero(np.bincount(part[on], minlength=m) >= min_face_pixels)
     sil = sil[sil > 0]
-    slot_of = np.zeros(m, np.intp)
-    slot_of[part] = np.repeat(np.arange(len(level)), npix)
-    sil = sil[np.lexsort((sil, slot_of[sil]))]                            # one box at a time
     if not len(sil):
         return []
 
-    # each face's pixels (on its level and its silhouette), by face, in raster order
+    # each silhouette's pixels, by silhouette (label), each in raster order; its box; its face's pixels (on level)
     face_of = np.full(m, -1, np.intp)
     face_of[sil] = np.arange(len(sil))
-    fp = np.flatnonzero(on & (face_of[part] >= 0))
-    fp = fp[np.argsort(face_of[part[fp]], kind="stable")]
-    face, fz = face_of[part[fp]], zp[fp]
+    sp = np.flatnonzero(face_of[part] >= 0)
+    face = face_of[part[sp]]
+    o = _grouped(face, len(sil))
+    sp, face = sp[o], face[o]
+    size = np.bincount(face, minlength=len(sil))
+    first = np.cumsum(size) - size
+    sr, sc = np.divmod(at[sp], width)
+    y, x = sr[first], np.minimum.reduceat(sc, first)                     # atlas box of each silhouette
+    hh, w = np.maximum.reduceat(sr, first) + 1 - y, np.maximum.reduceat(sc, first) + 1 - x
+    sil_slot = slot[sp[first]]
+    keep = on[sp]
+    fp, face, sr, sc = sp[keep], face[keep], sr[keep], sc[keep]
+    fz = z[fp]
     nf = np.bincount(face, minlength=len(sil))
-    ends = np.cumsum(nf)
-    face_h = [_median(fz[a:b]) for a, b in zip((ends - nf).tolist(), ends.tolist())]
+    fends = np.cumsum(nf)
+    face_h = [_median(fz[a:b]) for a, b in zip((fends - nf).tolist(), fends.tolist())]
     # level? the plane fit of the face's core (within half the tolerance of its height): a top face's pixels include
     # a band of its own side faces within the tolerance, which tilts a fit of them all
     core = np.abs(fz - np.repeat(np.array(face_h, np.float32), nf)) <= 0.5 * face_tolerance_mm
-    fx, fy, fw, fhh = (stats[sil, i] for i in range(4))
     cf = face[core]
-    slopes = _face_slopes(cf, ar[fp][core] - fy[cf], ac[fp][core] - fx[cf], fz[core], len(sil))
+    slopes = _face_slopes(np.bincount(cf, minlength=len(sil)), sr[core] - y[cf], sc[core] - x[cf], fz[core])
 
-    opened = np.zeros(shape, bool)
-    opened[ar[on], ac[on]] = True
+    opened = opened.view(bool)
+    ox, oy = x0[region][sil_slot] - left[sil_slot] - 1, y0[region][sil_slot] - top[sil_slot] - 1   # atlas -> image
     faces: list[Face] = []
-    slot = slot_of[sil]
-    ox, oy = sx[slot] - left[slot] - 1, sy[slot] - top[slot] - 1        # atlas -> image
-    for f in np.flatnonzero(~(slopes > max_slope_mm)).tolist():         # not a band of a side face
-        x, y, w, hh = int(fx[f]), int(fy[f]), int(fw[f]), int(fhh[f])
-        silhouette = parts[y:y + hh, x:x + w] == sil[f]
-        faces.append(Face((int(ox[f]) + x, int(oy[f]) + y, w, hh), silhouette & opened[y:y + hh, x:x + w],
-                          face_h[f], silhouette))
+    for f in np.lexsort((sil, sil_slot)).tolist():                      # one box at a time
+        if slopes[f] > max_slope_mm:                                     # a band of a side face
+            continue
+        fx, fy, fwid, fhei = int(x[f]), int(y[f]), int(w[f]), int(hh[f])
+        silhouette = parts[fy:fy + fhei, fx:fx + fwid] == sil[f]
+        faces.append(Face((int(ox[f]) + fx, int(oy[f]) + fy, fwid, fhei),
+                          silhouette & opened[fy:fy + fhei, fx:fx + fwid], face_h[f], silhouette))
     return faces
