@@ -87,6 +87,9 @@ def _random_map(rng, shape=(90, 130)):
                          + rng.normal(0, 0.3, h[ys, xs].shape)).astype(np.float32)
         else:
             h[ys, xs] = top + rng.normal(0, 0.6, h[ys, xs].shape).astype(np.float32)
+    speckle = rng.random(shape) < 0.004                    # the depth's isolated speckle, and a few pairs
+    speckle[:, :-1] |= speckle[:, 1:] & (rng.random((shape[0], shape[1] - 1)) < 0.2)
+    h[speckle] = rng.uniform(11, 90, int(speckle.sum()))
     h[rng.random(shape) < 0.01] = np.nan
     valid = rng.random(shape) > 0.02
     if rng.random() < 0.3:
@@ -217,10 +220,45 @@ def test_face_slopes_equal_one_plane_fit_per_face():
 def test_object_window_holds_every_object():
     h = np.zeros((50, 60), np.float32)
     valid = np.ones(h.shape, bool)
+    everything = (slice(None), slice(None))
     assert seg._object_window(h, valid, 10.0, 1) is None
-    assert seg._object_window(h, valid, -1.0, 1) == (slice(None), slice(None))
+    assert seg._object_window(h, valid, -1.0, 1) == (everything, everything)
     h[20:25, 30:33] = 30.0
-    h[0, 59] = 40.0
-    assert seg._object_window(h, valid, 10.0, 2) == (slice(0, 29), slice(26, 64))
-    valid[0, 59] = False
-    assert seg._object_window(h, valid, 10.0, 1) == (slice(18, 27), slice(28, 35))
+    h[3, 55] = h[45, 5] = 40.0                             # isolated speckle: no median rises above 10 there
+    crop, inner = seg._object_window(h, valid, 10.0, 2)
+    assert crop == (slice(16, 29), slice(26, 37)) and inner == (slice(2, 11), slice(2, 9))
+    h[3, 54] = 40.0                                        # a pair: a 5 x 5 median there could (it does not)
+    assert seg._object_window(h, valid, 10.0, 1) == ((slice(1, 27), slice(28, 58)), (slice(1, 25), slice(1, 29)))
+    valid[3, 54] = False
+    assert seg._object_window(h, valid, 10.0, 1) == ((slice(18, 27), slice(28, 35)), (slice(1, 8), slice(1, 6)))
+    h[0, 59] = 40.0                                        # on the border, which OpenCV's filters repeat
+    assert seg._object_window(h, valid, 10.0, 1) == ((slice(0, 27), slice(28, 62)), (slice(0, 26), slice(1, 33)))
+    assert seg._object_window(h, valid, 10.0, 0) == (everything, everything)
+
+
+def test_objects_equal_filtering_the_whole_map():
+    """The window's filtered heights and objects are the whole map's, even where the depth's speckle sits on the
+    window's edge (where OpenCV's replicated border could lift a median above min_height: a speckle at a corner of a
+    5 x 5 window counts 9 times)."""
+    rng = np.random.default_rng(13)
+    for _ in range(80):
+        h, valid = _random_map(rng, (60, 80))
+        median_px = int(rng.choice([3, 5]))
+        h[30:40, 30:42] = 38.0                             # a block, so that there is a window
+        valid[30:40, 30:42] = True
+        crop, _ = seg._object_window(h, valid, 10.0, median_px // 2)
+        y1, x1 = min(crop[0].stop, 60) - 1, min(crop[1].stop, 80) - 1
+        h[y1, x1] = h[y1 - 2, x1] = h[y1, x1 - 2] = h[y1 - 2, x1 - 2] = 80.0    # speckle around the corner
+        valid[y1 - 2:y1 + 1, x1 - 2:x1 + 1] = True
+        full = np.zeros(h.shape, np.float32)
+        np.copyto(full, h, where=valid & np.isfinite(h))
+        full = cv2.medianBlur(full, median_px)
+        found = seg._objects(h, valid, 10.0, median_px)
+        if not (full > 10.0).any():
+            assert found is None
+            continue
+        part, objects, (y0, x0) = found
+        embedded = np.zeros(h.shape, bool)
+        embedded[y0:y0 + objects.shape[0], x0:x0 + objects.shape[1]] = objects
+        assert np.array_equal(embedded, full > 10.0)
+        assert np.array_equal(part[objects], full[embedded])
