@@ -7,6 +7,7 @@ import cv2
 import numpy as np
 import pytest
 
+from armlab.detection import box_atlas
 from armlab.detection import segment as seg
 
 _KERNEL = np.ones((3, 3), np.uint8)
@@ -161,13 +162,13 @@ def test_open_each_box_equals_opening_each_box_alone():
         b = int(rng.integers(1, 12))
         hs, ws = rng.integers(1, 25, b), rng.integers(1, 25, b)
         boxes = [(rng.random((hh, ww)) < rng.uniform(0.3, 1.0)).astype(np.uint8) for hh, ww in zip(hs, ws, strict=True)]
-        top, left, shape = seg._pack_boxes(hs + 2, ws + 2)
+        top, left, shape = box_atlas.pack_boxes(hs + 2, ws + 2)
         atlas = np.zeros(shape, np.uint8)
         for t, lf, box in zip(top, left, boxes, strict=True):
             assert not atlas[t:t + box.shape[0] + 2, lf:lf + box.shape[1] + 2].any()   # the frames do not overlap
             atlas[t + 1:t + 1 + box.shape[0], lf + 1:lf + 1 + box.shape[1]] = box
         before = atlas.copy()
-        opened = seg._open_each_box(atlas, seg._rims(top, left, hs + 2, ws + 2, shape[1]))
+        opened = box_atlas.open_each_box(atlas, box_atlas.rims(top, left, hs + 2, ws + 2, shape[1]))
         assert np.array_equal(atlas, before)
         for t, lf, box in zip(top, left, boxes, strict=True):
             alone = cv2.morphologyEx(box, cv2.MORPH_OPEN, _KERNEL)

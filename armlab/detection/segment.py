@@ -17,13 +17,15 @@ within the tolerance of one height to pass as a plateau (seed 2's large yellow b
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import cv2
 import numpy as np
 
+from armlab.detection.box_atlas import grouped, open_each_box, pack_boxes, rims, runs
+
 __all__ = ["Face", "segment_faces"]
 
-_KERNEL = np.ones((3, 3), np.uint8)
 _NEIGHBOURS = np.array([[1, 1, 1], [1, 0, 1], [1, 1, 1]], np.uint8)
 
 
@@ -123,12 +125,6 @@ def _plateau_levels(heights: np.ndarray, bin_mm: float, min_pixels: int) -> list
     return [float(0.5 * (edges[i] + edges[i + 1])) for i in peaks if window[i] >= min_pixels]
 
 
-def _runs(starts: np.ndarray, lengths: np.ndarray) -> np.ndarray:
-    """The integer runs starts[i], starts[i] + 1, ..., starts[i] + lengths[i] - 1, end to end (lengths >= 0)."""
-    ends = np.cumsum(lengths)
-    return np.arange(int(ends[-1]) if len(ends) else 0) + np.repeat(starts - (ends - lengths), lengths)
-
-
 def _component_levels(heights: np.ndarray, starts: np.ndarray, counts: np.ndarray, bin_mm: float,
                       min_pixels: int) -> tuple[np.ndarray, np.ndarray]:
     """_plateau_levels of every component at once: heights (N,) float32 mm of the components' pixels, component c's
@@ -162,43 +158,6 @@ def _component_levels(heights: np.ndarray, starts: np.ndarray, counts: np.ndarra
         order = np.argsort(of, kind="stable")
         of, levels = of[order], levels[order]
     return of, levels
-
-
-def _pack_boxes(heights: np.ndarray, widths: np.ndarray) -> tuple[np.ndarray, np.ndarray, tuple[int, int]]:
-    """Places rectangles (B,) pixels high and wide side by side in shelves of an atlas (tallest first, so little is
-    wasted), none overlapping. Returns their top rows (B,), left columns (B,) and the atlas's (height, width)."""
-    hs, ws = heights.tolist(), widths.tolist()
-    width = max(max(ws), int(np.ceil(np.sqrt(float(np.dot(heights, widths))))))
-    top, left = [0] * len(hs), [0] * len(hs)
-    x = y = shelf = 0
-    for b in sorted(range(len(hs)), key=lambda b: -hs[b]):
-        if x + ws[b] > width:
-            x, y, shelf = 0, y + shelf, 0
-        top[b], left[b] = y, x
-        x, shelf = x + ws[b], max(shelf, hs[b])
-    return np.array(top, np.intp), np.array(left, np.intp), (y + shelf, width)
-
-
-def _rims(top: np.ndarray, left: np.ndarray, heights: np.ndarray, widths: np.ndarray, width: int) -> np.ndarray:
-    """Flat indices, in an image `width` pixels wide, of the one-pixel rims of rectangles (B,) (top, left, heights,
-    widths pixels, all >= 3)."""
-    cols, rows = _runs(left, widths), _runs(top + 1, heights - 2)
-    sides = rows * width + np.repeat(left, heights - 2)
-    return np.concatenate([np.repeat(top * width, widths) + cols, np.repeat((top + heights - 1) * width, widths) + cols,
-                           sides, sides + np.repeat(widths - 1, heights - 2)])
-
-
-def _open_each_box(atlas: np.ndarray, rims: np.ndarray) -> np.ndarray:
-    """cv2.MORPH_OPEN (3 x 3) of each box of an atlas (uint8 0/1 pixels, each box inside a one-pixel rim: `rims`,
-    flat indices, 0 in the atlas) as if the box were an image of its own: OpenCV's erosion and dilation leave an
-    image's border out, so the rims are 1 for the erosion (which takes minima) and 0 for the dilation (maxima).
-    Returns the opened atlas (uint8 0/1) inside the boxes (the rims hold anything); `atlas` is left as it was."""
-    flat = atlas.reshape(-1)
-    flat[rims] = 1
-    eroded = cv2.erode(atlas, _KERNEL)
-    flat[rims] = 0
-    eroded.reshape(-1)[rims] = 0
-    return cv2.dilate(eroded, _KERNEL)
 
 
 def _plane_slopes(scc, srr, scr, scz, srz):
@@ -239,9 +198,90 @@ def _face_slopes(n: np.ndarray, r: np.ndarray, c: np.ndarray, z: np.ndarray) -> 
     return slopes
 
 
-def _grouped(keys: np.ndarray, n_keys: int) -> np.ndarray:
-    """A stable argsort of non-negative int keys below n_keys (a radix sort of 16-bit keys when they fit)."""
-    return np.argsort(keys.astype(np.uint16) if n_keys <= 1 << 16 else keys, kind="stable")
+class _Regions(NamedTuple):
+    """The object regions large enough for a face: their pixels (N,) by region, each in raster order (rows, cols in
+    the filtered part of the map, heights z float32 mm), region r's at [starts[r], starts[r] + counts[r]), and their
+    bounding boxes (R,) (y0, x0, box_h, box_w), pixels."""
+
+    rows: np.ndarray
+    cols: np.ndarray
+    z: np.ndarray
+    starts: np.ndarray
+    counts: np.ndarray
+    y0: np.ndarray
+    x0: np.ndarray
+    box_h: np.ndarray
+    box_w: np.ndarray
+
+
+def _regions(h: np.ndarray, objects: np.ndarray, min_pixels: int) -> _Regions | None:
+    """The 4-connected regions of `objects` (bool) with at least min_pixels pixels, heights from h (float32 mm);
+    None when there is none. From the object pixels only (a few percent of the map), without OpenCV's per-component
+    statistics (5x the labelling's cost)."""
+    n, labels = _label(objects.view(np.uint8))
+    idx = np.flatnonzero(objects)
+    lab = labels.ravel()[idx]
+    areas = np.bincount(lab, minlength=n)
+    large = areas >= min_pixels
+    large[0] = False
+    keep = large[lab]
+    if not keep.any():
+        return None
+    idx, lab = idx[keep], lab[keep]
+    idx = idx[grouped(lab, n)]
+    counts = areas[large]
+    starts = np.cumsum(counts) - counts
+    rows, cols = np.divmod(idx, h.shape[1])
+    y0, x0 = np.minimum.reduceat(rows, starts), np.minimum.reduceat(cols, starts)
+    return _Regions(rows, cols, h.ravel()[idx], starts, counts, y0, x0,
+                    np.maximum.reduceat(rows, starts) + 1 - y0, np.maximum.reduceat(cols, starts) + 1 - x0)
+
+
+class _Slots(NamedTuple):
+    """One slot per (region, plateau level): its region (S,), its box's place in the atlas (top, left, S,: the rim's
+    corner, pixels), and the slots' pixels (M,), slot by slot: their slot, flat index in the atlas, height z (float32
+    mm), whether they are on the level (after the opening) and their silhouette's label in `parts`; the atlas's
+    opened on-level pixels (bool) and labelling of the pixels above the level (0: none), n_parts labels."""
+
+    region: np.ndarray
+    top: np.ndarray
+    left: np.ndarray
+    width: int
+    slot: np.ndarray
+    at: np.ndarray
+    z: np.ndarray
+    on: np.ndarray
+    part: np.ndarray
+    opened: np.ndarray
+    parts: np.ndarray
+    n_parts: int
+
+
+def _slots(reg: _Regions, min_pixels: int, tolerance_mm: float) -> _Slots | None:
+    """Each region's plateau levels (_component_levels, at least min_pixels // 2 pixels) as slots, their boxes packed
+    in one atlas: the pixels within tolerance_mm of the level opened (3 x 3, each box as an image of its own) and
+    those above level - tolerance_mm labelled, one OpenCV call each. None when no region has a level."""
+    region, level = _component_levels(reg.z, reg.starts, reg.counts, 2.0, min_pixels // 2)
+    if not len(level):
+        return None
+    fh, fw = reg.box_h[region] + 2, reg.box_w[region] + 2                 # each box with its rim
+    top, left, shape = pack_boxes(fh, fw)
+    width = shape[1]
+    npix = reg.counts[region]
+    rows, cols, z = reg.rows, reg.cols, reg.z
+    if not np.array_equal(region, np.arange(len(reg.counts))):   # not one level per region: the slots' pixels
+        pix = runs(reg.starts[region], npix)
+        rows, cols, z = rows[pix], cols[pix], z[pix]
+    slot = np.repeat(np.arange(len(level)), npix)
+    at = (rows * width + cols) + ((top + 1 - reg.y0[region]) * width + (left + 1 - reg.x0[region]))[slot]
+    atlas = np.zeros(shape, np.uint8)
+    flat = atlas.reshape(-1)
+    flat[at] = np.abs(z - level.astype(np.float32)[slot]) < tolerance_mm          # float32, as sub_h - level
+    opened = open_each_box(atlas, rims(top, left, fh, fw, width))                  # no thin side bands
+    flat[at] = z > (level - tolerance_mm).astype(np.float32)[slot]
+    n_parts, parts = _label(atlas)
+    return _Slots(region, top, left, width, slot, at, z, opened.reshape(-1)[at].view(bool), parts.reshape(-1)[at],
+                  opened.view(bool), parts, n_parts)
 
 
 def segment_faces(height_mm: np.ndarray, valid: np.ndarray, min_height_mm: float = 10.0,
@@ -258,61 +298,16 @@ def segment_faces(height_mm: np.ndarray, valid: np.ndarray, min_height_mm: float
 
     Each object region's plateau level is one "slot": the region's bounding box (its pixels, the rest empty) with
     the level's masks. All slots are batched: the histograms in one convolution (_component_levels), the boxes in one
-    atlas (_pack_boxes) opened (_open_each_box) and labelled by one OpenCV call each, the faces' pixels as flat
+    atlas (box_atlas) opened (box_atlas.open_each_box) and labelled by one OpenCV call each, the faces' pixels as flat
     lists; only the median and the plane fit's dot products run per face. The faces come as one box at a time would
     give them: by region (label), level (ascending), silhouette (OpenCV's raster order)."""
     found = _objects(height_mm, valid, min_height_mm, median_px)
-    if found is None:
+    reg = None if found is None else _regions(found[0], found[1], min_face_pixels)
+    sl = None if reg is None else _slots(reg, min_face_pixels, face_tolerance_mm)
+    if sl is None:
         return []
-    h, objects, (wy, wx) = found
-    n, labels = _label(objects.view(np.uint8))
-    if n <= 1:
-        return []
-    # the pixels of regions large enough for a face, by region, each in raster order, from the object pixels only
-    # (a few percent of the map), without OpenCV's per-component statistics (5x the labelling's cost)
-    idx = np.flatnonzero(objects)
-    lab = labels.ravel()[idx]
-    areas = np.bincount(lab, minlength=n)
-    large = areas >= min_face_pixels
-    large[0] = False
-    keep = large[lab]
-    if not keep.any():
-        return []
-    idx, lab = idx[keep], lab[keep]
-    idx = idx[_grouped(lab, n)]
-    counts = areas[large]
-    starts = np.cumsum(counts) - counts
-    rows, cols = np.divmod(idx, h.shape[1])
-    z = h.ravel()[idx]
-    y0, x0 = np.minimum.reduceat(rows, starts), np.minimum.reduceat(cols, starts)
-    box_h, box_w = np.maximum.reduceat(rows, starts) + 1 - y0, np.maximum.reduceat(cols, starts) + 1 - x0
-
-    # slots: one per (region, plateau level), each its region's box inside a one-pixel rim in the atlas; the slots'
-    # pixels as flat indices into the atlas
-    region, level = _component_levels(z, starts, counts, 2.0, min_face_pixels // 2)
-    if not len(level):
-        return []
-    fh, fw = box_h[region] + 2, box_w[region] + 2
-    top, left, shape = _pack_boxes(fh, fw)
-    width = shape[1]
-    npix = counts[region]
-    if not np.array_equal(region, np.arange(len(counts))):   # not one level per region: the slots' pixels
-        pix = _runs(starts[region], npix)
-        rows, cols, z = rows[pix], cols[pix], z[pix]
-    slot = np.repeat(np.arange(len(level)), npix)
-    at = (rows * width + cols) + ((top + 1 - y0[region]) * width + (left + 1 - x0[region]))[slot]
-    on = np.abs(z - level.astype(np.float32)[slot]) < face_tolerance_mm
-    above = z > (level - face_tolerance_mm).astype(np.float32)[slot]
-
-    atlas = np.zeros(shape, np.uint8)
-    flat = atlas.reshape(-1)
-    flat[at] = on
-    opened = _open_each_box(atlas, _rims(top, left, fh, fw, width))     # no thin side bands
-    on = opened.reshape(-1)[at].view(bool)
-    flat[at] = above
-    m, parts = _label(atlas)
-    part = parts.reshape(-1)[at]
-    sil = np.flatnonzero(np.bincount(part[on], minlength=m) >= min_face_pixels)
+    m = sl.n_parts
+    sil = np.flatnonzero(np.bincount(sl.part[sl.on], minlength=m) >= min_face_pixels)
     sil = sil[sil > 0]
     if not len(sil):
         return []
@@ -320,37 +315,36 @@ def segment_faces(height_mm: np.ndarray, valid: np.ndarray, min_height_mm: float
     # each silhouette's pixels, by silhouette (label), each in raster order; its box; its face's pixels (on level)
     face_of = np.full(m, -1, np.intp)
     face_of[sil] = np.arange(len(sil))
-    sp = np.flatnonzero(face_of[part] >= 0)
-    face = face_of[part[sp]]
-    o = _grouped(face, len(sil))
+    sp = np.flatnonzero(face_of[sl.part] >= 0)
+    face = face_of[sl.part[sp]]
+    o = grouped(face, len(sil))
     sp, face = sp[o], face[o]
     size = np.bincount(face, minlength=len(sil))
     first = np.cumsum(size) - size
-    sr, sc = np.divmod(at[sp], width)
+    sr, sc = np.divmod(sl.at[sp], sl.width)
     y, x = sr[first], np.minimum.reduceat(sc, first)                     # atlas box of each silhouette
     hh, w = np.maximum.reduceat(sr, first) + 1 - y, np.maximum.reduceat(sc, first) + 1 - x
-    sil_slot = slot[sp[first]]
-    keep = on[sp]
+    slot = sl.slot[sp[first]]
+    keep = sl.on[sp]
     fp, face, sr, sc = sp[keep], face[keep], sr[keep], sc[keep]
-    fz = z[fp]
+    fz = sl.z[fp]
     nf = np.bincount(face, minlength=len(sil))
-    fends = np.cumsum(nf)
-    face_h = [_median(fz[a:b]) for a, b in zip((fends - nf).tolist(), fends.tolist())]
+    ends = np.cumsum(nf)
+    face_h = [_median(fz[a:b]) for a, b in zip((ends - nf).tolist(), ends.tolist())]
     # level? the plane fit of the face's core (within half the tolerance of its height): a top face's pixels include
     # a band of its own side faces within the tolerance, which tilts a fit of them all
     core = np.abs(fz - np.repeat(np.array(face_h, np.float32), nf)) <= 0.5 * face_tolerance_mm
     cf = face[core]
     slopes = _face_slopes(np.bincount(cf, minlength=len(sil)), sr[core] - y[cf], sc[core] - x[cf], fz[core])
 
-    opened = opened.view(bool)
-    ox = x0[region][sil_slot] - left[sil_slot] - 1 + wx                 # atlas -> image
-    oy = y0[region][sil_slot] - top[sil_slot] - 1 + wy
+    (wy, wx), r = found[2], sl.region[slot]
+    ox, oy = reg.x0[r] - sl.left[slot] - 1 + wx, reg.y0[r] - sl.top[slot] - 1 + wy   # atlas -> map
     faces: list[Face] = []
-    for f in np.lexsort((sil, sil_slot)).tolist():                      # one box at a time
+    for f in np.lexsort((sil, slot)).tolist():                          # one box at a time
         if slopes[f] > max_slope_mm:                                     # a band of a side face
             continue
         fx, fy, fwid, fhei = int(x[f]), int(y[f]), int(w[f]), int(hh[f])
-        silhouette = parts[fy:fy + fhei, fx:fx + fwid] == sil[f]
+        silhouette = sl.parts[fy:fy + fhei, fx:fx + fwid] == sil[f]
         faces.append(Face((int(ox[f]) + fx, int(oy[f]) + fy, fwid, fhei),
-                          silhouette & opened[fy:fy + fhei, fx:fx + fwid], face_h[f], silhouette))
+                          silhouette & sl.opened[fy:fy + fhei, fx:fx + fwid], face_h[f], silhouette))
     return faces
