@@ -96,6 +96,7 @@ EDGE_MIDPOINT_ITERATIONS = 3   # steps of the half level's fixed point
 EDGE_RISE_MM = 1.5   # a side's direction: from the level at most this far beyond its first crossing (_edge_offsets)
 _PROFILE_T = np.linspace(-0.8, 0.8, EDGE_SAMPLES)
 _PROFILE_S = np.arange(-EDGE_SEARCH_MM, EDGE_SEARCH_MM + 1e-9, EDGE_STEP_MM)
+_QUARTER_TURNS = np.arange(4) * (np.pi / 2)   # (4,) rad: a face's sides' outward normals from its yaw
 
 
 def plane_homographies(camera: Camera, centres, z, reach) -> np.ndarray:
@@ -157,11 +158,12 @@ def _row_starts(p: np.ndarray) -> np.ndarray:
 
 def _interpolate(p: np.ndarray, s: np.ndarray, x: np.ndarray, starts: np.ndarray | None = None) -> np.ndarray:
     """The profiles p (N, K), C-contiguous, sampled at offsets s (K,) mm every EDGE_STEP_MM, linearly interpolated at
-    x (N, J) mm (clipped to the profiles' ends): (N, J). starts: _row_starts(p), when the caller has it."""
+    x (J, N) mm (row j: one point on each profile; clipped to the profiles' ends): (J, N). starts: _row_starts(p),
+    when the caller has it."""
     K = p.shape[-1]
     f = np.clip((x - s[0]) / EDGE_STEP_MM, 0.0, K - 1.0)
     i = np.minimum(f.astype(np.intp), K - 2)
-    at = (_row_starts(p) if starts is None else starts)[:, None] + i
+    at = (_row_starts(p) if starts is None else starts) + i
     flat = p.ravel()
     p0 = flat[at]
     return p0 + (f - i) * (flat[at + 1] - p0)
@@ -241,7 +243,7 @@ def _edge_offsets(prof: np.ndarray, s: np.ndarray, inside_mm, outside_mm) -> tup
     ok = finite & (k > 0)
     edge = s[0] + EDGE_STEP_MM * (k - 0.5)
     for _ in range(EDGE_MIDPOINT_ITERATIONS):
-        lo, hi = _interpolate(p, s, np.stack([edge - inside, edge + outside], axis=-1), starts).T
+        lo, hi = _interpolate(p, s, np.stack([edge - inside, edge + outside]), starts)
         edge = _crossings(p, s, np.where(ok, 0.5 * (lo + hi), EDGE_LEVEL), starts)
     face = _prefix_min(p, np.maximum(k, 1), starts)                                 # the least before k
     rise = _window_max(p, k, int(round(EDGE_RISE_MM / EDGE_STEP_MM)), starts)       # the greatest within the reach
@@ -317,21 +319,23 @@ def refine_yaws(camera: Camera, faces: list[MeasuredFace], iterations: int = 3) 
         h, w = m.feature.shape
         feature[top[i]:top[i] + h, gap:gap + w] = m.feature
         near[top[i]:top[i] + h, gap:gap + w] = m.near
-        homographies[i, :2] -= np.outer(m.origin, homographies[i, 2])     # pixels of the face's patch
+    origins = np.array([m.origin for m in faces], float)                   # (F, 2) px: the patches' image corners
+    homographies[:, :2] -= origins[:, :, None] * homographies[:, None, 2]  # pixels of each face's patch
     size = (shapes[:, ::-1] + 0.5).astype(np.float32)                      # (F, 2) patch width, height + 0.5
     shift = np.column_stack([np.full(n_faces, gap), top]).astype(np.float32)   # (F, 2) patch origin in the atlas
     s32, t32 = s.astype(np.float32), t.astype(np.float32)
-    prof = np.empty((n_faces, 4, len(_PROFILE_T), len(s)), np.float32)
     pixel_mm = np.repeat([m.pixel_mm for m in faces], 4)
     plane_z = np.array([m.plane_z for m in faces], float)
+    reach = EDGE_STEP_HALF_PX * pixel_mm.reshape(n_faces, 4)              # (F, 4) mm: the levels' reading distance
+    nearest_read = SIDE_FACE_MIN_READ_PX * pixel_mm.reshape(n_faces, 4)
+    f32 = np.float32                # patch pixels are small numbers: float32 is exact to 1e-5 px
     for _ in range(iterations):
-        ang = theta[:, None] + np.arange(4) * (np.pi / 2)
+        ang = theta[:, None] + _QUARTER_TURNS
         normal = np.stack([np.cos(ang), np.sin(ang)], axis=-1)            # (F, 4, 2) outward
         tangent = np.stack([-normal[..., 1], normal[..., 0]], axis=-1)
         # the samples' world points c + (dist + s) n + t tangent are affine in (s, t): so are their homogeneous
         # pixels, H [c + dist n, 1] + s H [n, 0] + t H [tangent, 0]
         base = np.concatenate([centre[:, None] + dist[..., None] * normal, np.ones((n_faces, 4, 1))], axis=-1)
-        f32 = np.float32                # patch pixels are small numbers: float32 is exact to 1e-5 px
         hb = np.einsum("fij,faj->fai", homographies, base).astype(f32)     # (F, 4, 3)
         hn = np.einsum("fij,faj->fai", homographies[:, :, :2], normal).astype(f32)
         ht = np.einsum("fij,faj->fai", homographies[:, :, :2], tangent).astype(f32)
@@ -350,14 +354,13 @@ def refine_yaws(camera: Camera, faces: list[MeasuredFace], iterations: int = 3) 
         p = cv2.remap(feature, *maps, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=np.nan)
         hidden = cv2.remap(near, *maps, cv2.INTER_NEAREST, borderMode=cv2.BORDER_CONSTANT, borderValue=1)
         p[hidden > 0] = np.nan
-        prof[:] = p.reshape(prof.shape)
         mid = centre[:, None] + normal * dist[..., None]
         toward = np.einsum("fij,fij->fi", normal, camera.position[:2] - mid)   # (F, 4) mm, > 0: side face in view
         sees_side = toward > 0
-        reach = EDGE_STEP_HALF_PX * pixel_mm.reshape(n_faces, 4)
         outside = np.where(sees_side, np.clip(0.5 * _side_face_width(dist[:, :2], plane_z, toward, camera.position[2]),
-                                              SIDE_FACE_MIN_READ_PX * pixel_mm.reshape(n_faces, 4), reach), reach)
-        edge, ok = _edge_offsets(prof, s, reach[..., None], outside[..., None])
+                                              nearest_read, reach), reach)
+        edge, ok = _edge_offsets(p.reshape(n_faces, 4, len(_PROFILE_T), len(s)), s, reach[..., None],
+                                 outside[..., None])
         # each side's line: its slope (and the outlier test, the residuals, the counts) from the steady crossings,
         # its intercept (where the side is) from the half level's, with the same points
         ee, okk = (x.reshape(tt.shape) for x in (edge[..., 1], ok))
