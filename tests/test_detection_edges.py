@@ -131,3 +131,40 @@ def test_line_fits_with_shared_points_are_the_same_fits(rows):
 
 def test_refine_yaws_of_no_faces():
     assert E.refine_yaws(None, []).shape == (0,)
+
+
+def _square_outline(centre, edge: float, yaw: float, per_side: int = 30) -> np.ndarray:
+    """(4 per_side, 2) mm: points along a square's sides, counterclockwise."""
+    u = np.linspace(0.0, 1.0, per_side, endpoint=False)
+    corners = np.array([[-0.5, -0.5], [0.5, -0.5], [0.5, 0.5], [-0.5, 0.5]])
+    local = np.concatenate([a + (b - a) * u[:, None] for a, b in zip(corners, np.roll(corners, -1, axis=0),
+                                                                       strict=True)]) * edge
+    c, s = np.cos(yaw), np.sin(yaw)
+    return local @ np.array([[c, s], [-s, c]]) + centre
+
+
+@pytest.mark.parametrize("n_blocked, complete", [(0, True), (2, True), (30, False), (110, True)])
+def test_fit_square_by_the_blocked_share(n_blocked, complete):
+    """No blocked outline, or under 2 % of it: the whole outline, complete; a side's worth: the free points and the
+    hint, incomplete; more than 80 % blocked: too little to tell, measured whole again."""
+    points = _square_outline([100.0, -50.0], 25.0, 0.2)
+    blocked = np.zeros(len(points), bool)
+    blocked[:n_blocked] = True
+    centre, sides, theta, done = E.fit_square(points, blocked, 0.5, 25.0)
+    assert done is complete
+    np.testing.assert_allclose(centre, [100.0, -50.0], atol=0.3)
+    np.testing.assert_allclose(sides, 25.0, atol=0.6)
+    assert np.cos(4 * (theta - 0.2)) > np.cos(4 * np.radians(0.5))
+    whole = E.fit_square(points, np.zeros(len(points), bool), 0.5, 25.0)
+    if n_blocked == 110:
+        for got, want in zip((centre, sides, theta, done), whole, strict=True):
+            np.testing.assert_array_equal(got, want)
+
+
+def test_edge_direction_of_a_turned_square_and_its_free_chords():
+    points = _square_outline([0.0, 0.0], 38.0, -0.3)
+    assert E.edge_direction(points, -0.28) == pytest.approx(-0.3, abs=1e-9)
+    free = np.ones(len(points), bool)
+    assert E.edge_direction(points, -0.28, free=free) == E.edge_direction(points, -0.28)
+    assert E.edge_direction(points, -0.28, free=~free) == -0.28      # no free chord: the hint stays
+    assert E.edge_direction(points[:10], 0.1) == 0.1                  # too few points

@@ -18,6 +18,9 @@ __all__ = ["MeasuredFace", "fit_square", "edge_direction", "refine_yaws", "plane
            "EDGE_SEARCH_MM", "CUBE_SIZE_SLACK"]
 
 
+_CORNER_COS = np.cos(np.radians(80))   # edge_direction: chords within 20 deg of theta (80 deg at four times the angle)
+
+
 def edge_direction(points: np.ndarray, theta: float, span: int = 4, free: np.ndarray | None = None) -> float:
     """The square's yaw (rad) from its outline (N, 2) mm: the mean of the outline's chord directions with the
     angles multiplied by four (a square's four sides then agree), weighted by chord length; chords around the
@@ -29,12 +32,13 @@ def edge_direction(points: np.ndarray, theta: float, span: int = 4, free: np.nda
     z = d[:, 0] + 1j * d[:, 1]
     length = np.abs(z)
     quad = (z / np.where(length > 0, length, 1.0)) ** 4              # unit vectors at four times the chord angles
-    w = length * ((quad * np.exp(-4j * theta)).real > np.cos(np.radians(80)))
+    w = length * ((quad * np.exp(-4j * theta)).real > _CORNER_COS)
     if free is not None:
         w = w * (free & np.concatenate([free[span:], free[:span]]))
     if w.sum() <= 0:
         return theta
-    return float(np.angle((w * quad).sum()) / 4)
+    mean = (w * quad).sum()
+    return float(np.arctan2(mean.imag, mean.real) / 4)                # np.angle's arithmetic, without its wrapper
 
 
 def fit_square(points: np.ndarray, blocked: np.ndarray, pixel_mm: float, edge_hint: float | None,
@@ -45,14 +49,15 @@ def fit_square(points: np.ndarray, blocked: np.ndarray, pixel_mm: float, edge_hi
     orientation comes from the free points, and along each side direction the centre is set from the edges the
     free points show (both: their middle; one: half an edge, `edge_hint`, inside it). With no hint (None), the edge
     is the lab edge (`edges`, mm) nearest to a side length the free points show whole (else the largest)."""
-    if blocked.sum() > 0.8 * len(points) or len(points) - blocked.sum() < 12:
-        blocked = np.zeros(len(points), bool)   # too little free outline to tell: measure the whole outline
-    free = points[~blocked] if blocked.any() else points
+    n_blocked = int(np.count_nonzero(blocked))
+    if n_blocked > 0.8 * len(points) or len(points) - n_blocked < 12:
+        blocked, n_blocked = np.zeros(len(points), bool), 0   # too little free outline to tell: the whole outline
+    free = points[~blocked] if n_blocked else points
     (cx, cy), (w, h), angle = cv2.minAreaRect(free.astype(np.float32))
     # The outline runs through the centres of the boundary pixels: half a pixel inside the true edge on each side.
     sides = np.array([w, h]) + pixel_mm
     theta = np.radians(angle)
-    if not blocked.any() or blocked.mean() < 0.02:
+    if not n_blocked or n_blocked / len(points) < 0.02:        # (the blocked share, as blocked.mean() has it)
         return np.array([cx, cy]), sides, edge_direction(points, theta), True
     axes = np.array([[np.cos(theta), np.sin(theta)], [-np.sin(theta), np.cos(theta)]])
     local = (free - [cx, cy]) @ axes.T
