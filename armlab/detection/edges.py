@@ -114,8 +114,8 @@ def plane_homographies(camera: Camera, centres, z, reach) -> np.ndarray:
     z, reach = np.broadcast_to(np.asarray(z, float), (n,)), np.broadcast_to(np.asarray(reach, float), (n,))
     square = centres[:, None] + reach[:, None, None] * np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]], float)
     uv = camera.project(np.column_stack([square.reshape(-1, 2), np.repeat(z, 4)])).reshape(n, 4, 2)
-    return np.array([cv2.getPerspectiveTransform(sq.astype(np.float32), p.astype(np.float32))
-                     for sq, p in zip(square, uv)]).reshape(n, 3, 3)
+    square32, uv32 = square.astype(np.float32), uv.astype(np.float32)
+    return np.array([cv2.getPerspectiveTransform(sq, p) for sq, p in zip(square32, uv32)]).reshape(n, 3, 3)
 
 
 def _fit_points(t: np.ndarray, w: np.ndarray):
