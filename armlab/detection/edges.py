@@ -334,6 +334,7 @@ def refine_yaws(camera: Camera, faces: list[MeasuredFace], iterations: int = 3) 
     reach = EDGE_STEP_HALF_PX * pixel_mm.reshape(n_faces, 4)              # (F, 4) mm: the levels' reading distance
     nearest_read = SIDE_FACE_MIN_READ_PX * pixel_mm.reshape(n_faces, 4)
     f32 = np.float32                # patch pixels are small numbers: float32 is exact to 1e-5 px
+    camera_xy, camera_z = camera.position[:2], camera.position[2]          # mm, world
     for _ in range(iterations):
         ang = theta[:, None] + _QUARTER_TURNS
         normal = np.stack([np.cos(ang), np.sin(ang)], axis=-1)            # (F, 4, 2) outward
@@ -356,13 +357,15 @@ def refine_yaws(camera: Camera, faces: list[MeasuredFace], iterations: int = 3) 
             np.minimum(np.maximum(x, f32(-1.5), out=x), size[:, None, None, None, c], out=x)
             x += shift[:, None, None, None, c]
             maps.append(x.reshape(-1, len(s)))
+        # (the maps stay one profile a row: OpenCV 4.14's linear remap computes the vector-wide part of each row and
+        # its tail a last bit differently, so reshaping the same samples into wider rows changes the profiles)
         p = cv2.remap(feature, *maps, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=np.nan)
         hidden = cv2.remap(near, *maps, cv2.INTER_NEAREST, borderMode=cv2.BORDER_CONSTANT, borderValue=1)
         p[hidden > 0] = np.nan
         mid = centre[:, None] + normal * dist[..., None]
-        toward = np.einsum("fij,fij->fi", normal, camera.position[:2] - mid)   # (F, 4) mm, > 0: side face in view
+        toward = np.einsum("fij,fij->fi", normal, camera_xy - mid)          # (F, 4) mm, > 0: side face in view
         sees_side = toward > 0
-        outside = np.where(sees_side, np.clip(0.5 * _side_face_width(dist[:, :2], plane_z, toward, camera.position[2]),
+        outside = np.where(sees_side, np.clip(0.5 * _side_face_width(dist[:, :2], plane_z, toward, camera_z),
                                               nearest_read, reach), reach)
         edge, ok = _edge_offsets(p.reshape(n_faces, 4, len(_PROFILE_T), len(s)), s, reach[..., None],
                                  outside[..., None])
