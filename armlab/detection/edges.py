@@ -18,6 +18,9 @@ __all__ = ["MeasuredFace", "fit_square", "edge_direction", "refine_yaws", "plane
            "EDGE_SEARCH_MM", "CUBE_SIZE_SLACK"]
 
 
+_CORNER_COS = np.cos(np.radians(80))   # edge_direction: chords within 20 deg of theta (80 deg at four times the angle)
+
+
 def edge_direction(points: np.ndarray, theta: float, span: int = 4, free: np.ndarray | None = None) -> float:
     """The square's yaw (rad) from its outline (N, 2) mm: the mean of the outline's chord directions with the
     angles multiplied by four (a square's four sides then agree), weighted by chord length; chords around the
@@ -29,12 +32,13 @@ def edge_direction(points: np.ndarray, theta: float, span: int = 4, free: np.nda
     z = d[:, 0] + 1j * d[:, 1]
     length = np.abs(z)
     quad = (z / np.where(length > 0, length, 1.0)) ** 4              # unit vectors at four times the chord angles
-    w = length * ((quad * np.exp(-4j * theta)).real > np.cos(np.radians(80)))
+    w = length * ((quad * np.exp(-4j * theta)).real > _CORNER_COS)
     if free is not None:
         w = w * (free & np.concatenate([free[span:], free[:span]]))
     if w.sum() <= 0:
         return theta
-    return float(np.angle((w * quad).sum()) / 4)
+    mean = (w * quad).sum()
+    return float(np.arctan2(mean.imag, mean.real) / 4)                # np.angle's arithmetic, without its wrapper
 
 
 def fit_square(points: np.ndarray, blocked: np.ndarray, pixel_mm: float, edge_hint: float | None,
@@ -45,14 +49,15 @@ def fit_square(points: np.ndarray, blocked: np.ndarray, pixel_mm: float, edge_hi
     orientation comes from the free points, and along each side direction the centre is set from the edges the
     free points show (both: their middle; one: half an edge, `edge_hint`, inside it). With no hint (None), the edge
     is the lab edge (`edges`, mm) nearest to a side length the free points show whole (else the largest)."""
-    if blocked.sum() > 0.8 * len(points) or len(points) - blocked.sum() < 12:
-        blocked = np.zeros(len(points), bool)   # too little free outline to tell: measure the whole outline
-    free = points[~blocked] if blocked.any() else points
+    n_blocked = int(np.count_nonzero(blocked))
+    if n_blocked > 0.8 * len(points) or len(points) - n_blocked < 12:
+        blocked, n_blocked = np.zeros(len(points), bool), 0   # too little free outline to tell: the whole outline
+    free = points[~blocked] if n_blocked else points
     (cx, cy), (w, h), angle = cv2.minAreaRect(free.astype(np.float32))
     # The outline runs through the centres of the boundary pixels: half a pixel inside the true edge on each side.
     sides = np.array([w, h]) + pixel_mm
     theta = np.radians(angle)
-    if not blocked.any() or blocked.mean() < 0.02:
+    if not n_blocked or n_blocked / len(points) < 0.02:        # (the blocked share, as blocked.mean() has it)
         return np.array([cx, cy]), sides, edge_direction(points, theta), True
     axes = np.array([[np.cos(theta), np.sin(theta)], [-np.sin(theta), np.cos(theta)]])
     local = (free - [cx, cy]) @ axes.T
@@ -96,6 +101,7 @@ EDGE_MIDPOINT_ITERATIONS = 3   # steps of the half level's fixed point
 EDGE_RISE_MM = 1.5   # a side's direction: from the level at most this far beyond its first crossing (_edge_offsets)
 _PROFILE_T = np.linspace(-0.8, 0.8, EDGE_SAMPLES)
 _PROFILE_S = np.arange(-EDGE_SEARCH_MM, EDGE_SEARCH_MM + 1e-9, EDGE_STEP_MM)
+_QUARTER_TURNS = np.arange(4) * (np.pi / 2)   # (4,) rad: a face's sides' outward normals from its yaw
 
 
 def plane_homographies(camera: Camera, centres, z, reach) -> np.ndarray:
@@ -108,22 +114,35 @@ def plane_homographies(camera: Camera, centres, z, reach) -> np.ndarray:
     z, reach = np.broadcast_to(np.asarray(z, float), (n,)), np.broadcast_to(np.asarray(reach, float), (n,))
     square = centres[:, None] + reach[:, None, None] * np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]], float)
     uv = camera.project(np.column_stack([square.reshape(-1, 2), np.repeat(z, 4)])).reshape(n, 4, 2)
-    return np.array([cv2.getPerspectiveTransform(sq.astype(np.float32), p.astype(np.float32))
-                     for sq, p in zip(square, uv)]).reshape(n, 3, 3)
+    square32, uv32 = square.astype(np.float32), uv.astype(np.float32)
+    return np.array([cv2.getPerspectiveTransform(sq, p) for sq, p in zip(square32, uv32)]).reshape(n, 3, 3)
 
 
-def _line_fits(t: np.ndarray, y: np.ndarray, w: np.ndarray):
-    """Least-squares lines y = a + b t through the rows of t, y (S, M) using the points where w (S, M) bool: slopes b
-    (S,), intercepts a (S,), point counts n (S,), spread of the used t (S,) and sum of squared t deviations (S,)."""
+def _fit_points(t: np.ndarray, w: np.ndarray):
+    """The part of least-squares lines through the rows of t (S, M) that depends only on which points are used, w
+    (S, M) bool, shared by every y fitted with the same points (_line_fits): the point counts n (S,), n at least 1
+    (S,), the used t's mean (S,), their deviations from it (S, M; 0 where unused) and the sum of their squares
+    (S,)."""
     n = w.sum(axis=1)
     nz = np.maximum(n, 1)
     tm = np.where(w, t, 0.0).sum(axis=1) / nz
-    ym = np.where(w, y, 0.0).sum(axis=1) / nz
     dt = np.where(w, t - tm[:, None], 0.0)
-    sxx = (dt * dt).sum(axis=1)
+    return n, nz, tm, dt, (dt * dt).sum(axis=1)
+
+
+def _line_fits(t: np.ndarray, y: np.ndarray, w: np.ndarray, points=None) -> tuple[np.ndarray, np.ndarray]:
+    """Least-squares lines y = a + b t through the rows of t, y (S, M) using the points where w (S, M) bool: slopes b
+    (S,) and intercepts a (S,). points: _fit_points(t, w), when the caller has it (several y with the same points)."""
+    _, nz, tm, dt, sxx = _fit_points(t, w) if points is None else points
+    ym = np.where(w, y, 0.0).sum(axis=1) / nz
     b = (dt * np.where(w, y - ym[:, None], 0.0)).sum(axis=1) / np.maximum(sxx, 1e-9)
+    return b, ym - b * tm
+
+
+def _spread(t: np.ndarray, w: np.ndarray, n: np.ndarray) -> np.ndarray:
+    """(S,): how far apart the used t of each row of t (S, M) lie (w (S, M) bool; 0 for a row of none, n (S,) = 0)."""
     spread = np.where(w, t, -np.inf).max(axis=1) - np.where(w, t, np.inf).min(axis=1)
-    return b, ym - b * tm, n, np.where(n > 0, spread, 0.0), sxx
+    return np.where(n > 0, spread, 0.0)
 
 
 def _side_face_width(half: np.ndarray, plane_z: np.ndarray, toward: np.ndarray, camera_z: float) -> np.ndarray:
@@ -136,25 +155,66 @@ def _side_face_width(half: np.ndarray, plane_z: np.ndarray, toward: np.ndarray, 
     return e * np.maximum(toward, 0.0) / (camera_z - plane_z[:, None] + e)
 
 
-def _interpolate(p: np.ndarray, s: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """The profiles p (N, K), sampled at offsets s (K,) mm every EDGE_STEP_MM, linearly interpolated at x (N, J) mm
-    (clipped to the profiles' ends): (N, J)."""
+def _row_starts(p: np.ndarray) -> np.ndarray:
+    """The flat index of each row's first element in the C-contiguous profiles p (N, K): (N,) intp. Gathering one
+    element per row through these costs a fraction of 2-d fancy indexing."""
+    return np.arange(0, p.size, p.shape[-1])
+
+
+def _interpolate(p: np.ndarray, s: np.ndarray, x: np.ndarray, starts: np.ndarray | None = None) -> np.ndarray:
+    """The profiles p (N, K), C-contiguous, sampled at offsets s (K,) mm every EDGE_STEP_MM, linearly interpolated at
+    x (J, N) mm (row j: one point on each profile; clipped to the profiles' ends): (J, N). starts: _row_starts(p),
+    when the caller has it."""
     K = p.shape[-1]
     f = np.clip((x - s[0]) / EDGE_STEP_MM, 0.0, K - 1.0)
     i = np.minimum(f.astype(np.intp), K - 2)
-    at = np.arange(0, p.size, K)[:, None] + i                  # flat indices: a fraction of 2-d fancy indexing
-    p0 = p.ravel()[at]
-    return p0 + (f - i) * (p.ravel()[at + 1] - p0)
+    at = (_row_starts(p) if starts is None else starts) + i
+    flat = p.ravel()
+    p0 = flat[at]
+    return p0 + (f - i) * (flat[at + 1] - p0)
 
 
-def _crossings(p: np.ndarray, s: np.ndarray, level: np.ndarray) -> np.ndarray:
-    """Where the profiles p (N, K), sampled at offsets s (K,) mm, first reach level (N,), linearly interpolated
-    (mm; at the second sample when the first already does)."""
+def _crossings(p: np.ndarray, s: np.ndarray, level: np.ndarray, starts: np.ndarray | None = None) -> np.ndarray:
+    """Where the profiles p (N, K), C-contiguous, sampled at offsets s (K,) mm, first reach level (N,), linearly
+    interpolated (mm; at the second sample when the first already does). starts: _row_starts(p), when the caller has
+    it."""
     m = np.maximum((p >= level[:, None]).argmax(axis=-1), 1)
-    at = np.arange(0, p.size, p.shape[-1]) + m
-    p0, p1 = p.ravel()[at - 1], p.ravel()[at]
+    at = (_row_starts(p) if starts is None else starts) + m
+    flat = p.ravel()
+    p0, p1 = flat[at - 1], flat[at]
     frac = np.minimum(np.maximum((level - p0) / np.where(p1 > p0, p1 - p0, 1.0), 0.0), 1.0)
     return s[0] + EDGE_STEP_MM * (m - 1 + frac)
+
+
+def _finite_rows(p: np.ndarray, starts: np.ndarray) -> np.ndarray:
+    """(N,) bool: whether the row of p (N, K) holds no NaN or inf. The first non-finite element of each row (argmax of
+    the flags; the first element when there is none) decides: one gather instead of a reduction over each short row."""
+    bad = ~np.isfinite(p)
+    return ~bad.ravel()[starts + bad.argmax(axis=-1)]
+
+
+def _prefix_min(p: np.ndarray, stop: np.ndarray, starts: np.ndarray) -> np.ndarray:
+    """(N,): the least of p[i, :stop[i]] for the rows of p (N, K) without NaN, stop (N,) in 1..K. The running minimum
+    one column at a time (K ops on N elements each, not N reductions of a few elements), then one gather; a minimum
+    is exact in any order."""
+    n, K = p.shape
+    running = np.empty((K, n), p.dtype)
+    running[0] = p[:, 0]
+    for j in range(1, K):
+        np.minimum(running[j - 1], p[:, j], out=running[j])
+    return running.ravel()[(stop - 1) * n + np.arange(n)]
+
+
+def _window_max(p: np.ndarray, first: np.ndarray, reach: int, starts: np.ndarray) -> np.ndarray:
+    """(N,): the greatest of p[i, first[i]:first[i] + reach + 1] (cut at the row's end) for the rows of p (N, K)
+    without NaN, first (N,) in 0..K-1: reach + 1 gathers; an index past the row's end is clipped to its last element,
+    which the window then holds already."""
+    last = p.shape[-1] - 1
+    flat = p.ravel()
+    out = flat[starts + first]
+    for d in range(1, reach + 1):
+        np.maximum(out, flat[starts + np.minimum(first + d, last)], out=out)
+    return out
 
 
 def _edge_offsets(prof: np.ndarray, s: np.ndarray, inside_mm, outside_mm) -> tuple[np.ndarray, np.ndarray]:
@@ -180,22 +240,19 @@ def _edge_offsets(prof: np.ndarray, s: np.ndarray, inside_mm, outside_mm) -> tup
     p = prof.reshape(-1, K)
     inside = np.broadcast_to(np.asarray(inside_mm, float), shape).reshape(-1)
     outside = np.broadcast_to(np.asarray(outside_mm, float), shape).reshape(-1)
-    finite = np.isfinite(p.sum(axis=-1))           # no NaN in the row (colour distances are far from overflowing)
+    starts = _row_starts(p)
+    finite = _finite_rows(p, starts)
     p = p.copy()
     p[~finite] = 0.0
     k = (p >= EDGE_LEVEL).argmax(axis=-1)
     ok = finite & (k > 0)
     edge = s[0] + EDGE_STEP_MM * (k - 0.5)
     for _ in range(EDGE_MIDPOINT_ITERATIONS):
-        lo, hi = _interpolate(p, s, np.stack([edge - inside, edge + outside], axis=-1)).T
-        edge = _crossings(p, s, np.where(ok, 0.5 * (lo + hi), EDGE_LEVEL))
-    rows, reach = np.arange(len(p)), int(round(EDGE_RISE_MM / EDGE_STEP_MM))
-    face = np.where(np.arange(K) < np.maximum(k, 1)[:, None], p, np.inf).min(axis=-1)   # the least before k
-    padded = np.concatenate([p, np.full((len(p), reach), -np.inf, p.dtype)], axis=-1)
-    rise = padded[:, :K].copy()
-    for d in range(1, reach + 1):
-        np.maximum(rise, padded[:, d:d + K], out=rise)
-    steady = _crossings(p, s, np.where(ok, 0.5 * (face + rise[rows, k]), EDGE_LEVEL))
+        lo, hi = _interpolate(p, s, np.stack([edge - inside, edge + outside]), starts)
+        edge = _crossings(p, s, np.where(ok, 0.5 * (lo + hi), EDGE_LEVEL), starts)
+    face = _prefix_min(p, np.maximum(k, 1), starts)                                 # the least before k
+    rise = _window_max(p, k, int(round(EDGE_RISE_MM / EDGE_STEP_MM)), starts)       # the greatest within the reach
+    steady = _crossings(p, s, np.where(ok, 0.5 * (face + rise), EDGE_LEVEL), starts)
     return np.stack([edge, steady], axis=-1).reshape(shape + (2,)), ok.reshape(shape)
 
 
@@ -251,6 +308,7 @@ def refine_yaws(camera: Camera, faces: list[MeasuredFace], iterations: int = 3) 
     half = np.array([m.sides for m in faces], float) / 2
     dist = half[:, [0, 1, 0, 1]]                                           # (F, 4) centre to side
     t = _PROFILE_T[None, None] * half[:, [1, 0, 1, 0], None]               # (F, 4, M) along each side
+    tt = t.reshape(-1, t.shape[-1])                                        # (F * 4, M): one row a side
     s = _PROFILE_S
     # one plane homography per face (world (x, y) at the face's height -> pixels), from one projection of all faces'
     # corner points; then into an atlas that stacks the faces' patches (feature and occluder masks) with gaps, so
@@ -266,21 +324,24 @@ def refine_yaws(camera: Camera, faces: list[MeasuredFace], iterations: int = 3) 
         h, w = m.feature.shape
         feature[top[i]:top[i] + h, gap:gap + w] = m.feature
         near[top[i]:top[i] + h, gap:gap + w] = m.near
-        homographies[i, :2] -= np.outer(m.origin, homographies[i, 2])     # pixels of the face's patch
+    origins = np.array([m.origin for m in faces], float)                   # (F, 2) px: the patches' image corners
+    homographies[:, :2] -= origins[:, :, None] * homographies[:, None, 2]  # pixels of each face's patch
     size = (shapes[:, ::-1] + 0.5).astype(np.float32)                      # (F, 2) patch width, height + 0.5
     shift = np.column_stack([np.full(n_faces, gap), top]).astype(np.float32)   # (F, 2) patch origin in the atlas
     s32, t32 = s.astype(np.float32), t.astype(np.float32)
-    prof = np.empty((n_faces, 4, len(_PROFILE_T), len(s)), np.float32)
     pixel_mm = np.repeat([m.pixel_mm for m in faces], 4)
     plane_z = np.array([m.plane_z for m in faces], float)
+    reach = EDGE_STEP_HALF_PX * pixel_mm.reshape(n_faces, 4)              # (F, 4) mm: the levels' reading distance
+    nearest_read = SIDE_FACE_MIN_READ_PX * pixel_mm.reshape(n_faces, 4)
+    f32 = np.float32                # patch pixels are small numbers: float32 is exact to 1e-5 px
+    camera_xy, camera_z = camera.position[:2], camera.position[2]          # mm, world
     for _ in range(iterations):
-        ang = theta[:, None] + np.arange(4) * (np.pi / 2)
+        ang = theta[:, None] + _QUARTER_TURNS
         normal = np.stack([np.cos(ang), np.sin(ang)], axis=-1)            # (F, 4, 2) outward
         tangent = np.stack([-normal[..., 1], normal[..., 0]], axis=-1)
         # the samples' world points c + (dist + s) n + t tangent are affine in (s, t): so are their homogeneous
         # pixels, H [c + dist n, 1] + s H [n, 0] + t H [tangent, 0]
         base = np.concatenate([centre[:, None] + dist[..., None] * normal, np.ones((n_faces, 4, 1))], axis=-1)
-        f32 = np.float32                # patch pixels are small numbers: float32 is exact to 1e-5 px
         hb = np.einsum("fij,faj->fai", homographies, base).astype(f32)     # (F, 4, 3)
         hn = np.einsum("fij,faj->fai", homographies[:, :, :2], normal).astype(f32)
         ht = np.einsum("fij,faj->fai", homographies[:, :, :2], tangent).astype(f32)
@@ -296,25 +357,28 @@ def refine_yaws(camera: Camera, faces: list[MeasuredFace], iterations: int = 3) 
             np.minimum(np.maximum(x, f32(-1.5), out=x), size[:, None, None, None, c], out=x)
             x += shift[:, None, None, None, c]
             maps.append(x.reshape(-1, len(s)))
+        # (the maps stay one profile a row: OpenCV 4.14's linear remap computes the vector-wide part of each row and
+        # its tail a last bit differently, so reshaping the same samples into wider rows changes the profiles)
         p = cv2.remap(feature, *maps, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=np.nan)
         hidden = cv2.remap(near, *maps, cv2.INTER_NEAREST, borderMode=cv2.BORDER_CONSTANT, borderValue=1)
         p[hidden > 0] = np.nan
-        prof[:] = p.reshape(prof.shape)
         mid = centre[:, None] + normal * dist[..., None]
-        toward = np.einsum("fij,fij->fi", normal, camera.position[:2] - mid)   # (F, 4) mm, > 0: side face in view
+        toward = np.einsum("fij,fij->fi", normal, camera_xy - mid)          # (F, 4) mm, > 0: side face in view
         sees_side = toward > 0
-        reach = EDGE_STEP_HALF_PX * pixel_mm.reshape(n_faces, 4)
-        outside = np.where(sees_side, np.clip(0.5 * _side_face_width(dist[:, :2], plane_z, toward, camera.position[2]),
-                                              SIDE_FACE_MIN_READ_PX * pixel_mm.reshape(n_faces, 4), reach), reach)
-        edge, ok = _edge_offsets(prof, s, reach[..., None], outside[..., None])
+        outside = np.where(sees_side, np.clip(0.5 * _side_face_width(dist[:, :2], plane_z, toward, camera_z),
+                                              nearest_read, reach), reach)
+        edge, ok = _edge_offsets(p.reshape(n_faces, 4, len(_PROFILE_T), len(s)), s, reach[..., None],
+                                 outside[..., None])
         # each side's line: its slope (and the outlier test, the residuals, the counts) from the steady crossings,
         # its intercept (where the side is) from the half level's, with the same points
-        tt, ee, okk = (x.reshape(-1, t.shape[-1]) for x in (t, edge[..., 1], ok))
-        b, a, _, _, _ = _line_fits(tt, ee, okk)
+        ee, okk = (x.reshape(tt.shape) for x in (edge[..., 1], ok))
+        b, a = _line_fits(tt, ee, okk)
         use = okk & (np.abs(ee - (a[:, None] + b[:, None] * tt)) <= EDGE_FIT_TOL)
-        b, a, n, spread, sxx = _line_fits(tt, ee, use)
+        points = _fit_points(tt, use)
+        n, sxx, spread = points[0], points[4], _spread(tt, use, points[0])
+        b, a = _line_fits(tt, ee, use, points)
         r = np.where(use, ee - (a[:, None] + b[:, None] * tt), 0.0)
-        _, a, _, _, _ = _line_fits(tt, edge[..., 0].reshape(tt.shape), use)
+        _, a = _line_fits(tt, edge[..., 0].reshape(tt.shape), use, points)
         sigma = np.maximum(np.sqrt((r * r).sum(axis=1) / np.maximum(n - 2, 1)), 0.1)
         good = ((n >= 5) & (spread >= 4.0)).reshape(n_faces, 4)
         turns = -np.arctan(b).reshape(n_faces, 4)
