@@ -1,9 +1,10 @@
 """Block detection in RGB-D: height map from depth, arm and board masks, flat top faces, colour, size, yaw, world
 position. Units: mm and rad in the world (board) frame; images RGB uint8, depth float mm.
 
-Modules by job: types (Block, DetectionSettings), heightmap, masks, segment (flat faces), colour_region (a face's
-pixels by colour, white balance), edges (square fit, sub-pixel sides and yaw), stacks (stack arithmetic), color
-(the colour model), color_labels (labelled frames for its fit), detect (the pipeline), draw."""
+Modules by job: types (Block, DetectionSettings), heightmap, masks, segment (flat faces), box_atlas (many small
+boxes through one OpenCV call, for segment), colour_region (a face's pixels by colour, white balance), edges (square
+fit, sub-pixel sides and yaw), stacks (stack arithmetic), color (the colour model), color_labels (labelled frames for
+its fit), detect (the pipeline), draw."""
 
 from armlab.detection.color import (
     ColorModel,
