@@ -46,9 +46,13 @@ def _measure_all(faces: list[Face], f: FrameData, settings: DetectionSettings) -
         region = refine_by_colour(face, f)
         found, _ = cv2.findContours(region.mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
         contour = max(found, key=cv2.contourArea).reshape(-1, 2)
-        near = cv2.dilate(region.occluder.view(np.uint8), SQUARE5)
-        blocked.append((near | cv2.dilate(region.standing.view(np.uint8), STANDING_KERNEL))[contour[:, 1],
-                                                                                             contour[:, 0]] > 0)
+        if region.occluder.any() or region.standing.any():   # outline points next to an occluder are not the edge
+            near = cv2.dilate(region.occluder.view(np.uint8), SQUARE5)
+            margin = near | cv2.dilate(region.standing.view(np.uint8), STANDING_KERNEL)
+            blocked.append(margin[contour[:, 1], contour[:, 0]] > 0)
+        else:                                                # nothing hides the face: the dilations' zeros
+            near = np.zeros(region.occluder.shape, np.uint8)
+            blocked.append(np.zeros(len(contour), bool))
         regions.append(region)
         nears.append(near)
         contours.append(contour + np.array(region.origin))
