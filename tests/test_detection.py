@@ -22,6 +22,7 @@ from armlab.detection import (
     hsv_table_classify,
     stack_levels,
 )
+from armlab.detection.colour_region import _fill_dropouts
 from armlab.detection.detect import _planes_and_hints
 from armlab.detection.heightmap import pixels_to_plane
 from armlab.detection.masks import arm_mask
@@ -350,6 +351,35 @@ def test_planes_and_hints_of_many_faces_are_those_of_each_face():
         expected = None if max(misfit) - min(misfit) < 1.5 else edges[int(np.argmin(misfit))]
         assert hint == expected, (h, hint, expected)
     assert hints[measured.tolist().index(76.0)] is None            # 3 x 25 and 2 x 38: the outline decides
+
+
+def test_dropouts_take_the_height_of_a_lower_face_of_the_same_colour_only():
+    """A patch: the face (100 mm) on the left, a band without depth returns, then a lower surface (75 mm). The band's
+    pixels take the face's height, unless the lower surface has the face's colour: then those nearer to it take its
+    height (its ring would otherwise join the face across the band)."""
+    height = np.full((5, 12), 100.0, np.float32)
+    height[:, 5:8] = np.nan
+    height[:, 8:] = 75.0
+    no_return = np.isnan(height)
+    for same_colour, expected in ((False, [100, 100, 100]), (True, [100, 100, 75])):
+        coloured = np.ones(height.shape, bool) if same_colour else np.arange(12)[None, :].repeat(5, 0) < 8
+        filled = height.copy()
+        _fill_dropouts(filled, no_return, coloured, 100.0)
+        assert not np.isnan(filled).any()
+        assert filled[2, 5:8].tolist() == expected, (same_colour, filled[2].tolist())
+        assert np.array_equal(filled[~no_return], height[~no_return])
+
+
+def test_a_small_block_on_a_large_one_of_its_colour_is_a_small_cube():
+    """Seed 117's line-up level 3: a small green block on a large green one, next to the arm. The dropout band at the
+    small block's edge used to join the large one's ring to its face (29 mm, a distractor)."""
+    case = sim_case("line_up_3", 117, True)
+    found = detect_objects(case.rgb, corrected_depth(case, case.camera), case.camera, case.arm_q)
+    truth = next(t for t in case.truth if t.obj.color == "green" and t.obj.size == "small")
+    block = min(found, key=lambda b: np.linalg.norm(b.position - truth.centre))
+    assert np.linalg.norm(block.position - truth.centre) < 3.0
+    assert (block.shape, block.size, block.color, block.levels) == ("cube", "small", "green", 3), block
+    assert abs(block.edge_mm - truth.obj.edge) < 3.0
 
 
 def test_reduced_height_map_is_the_full_one_subsampled(ideal):

@@ -83,6 +83,22 @@ def board_white_balance(rgb: np.ndarray, height_small: np.ndarray, valid: np.nda
     return white_balance_gains(np.array(cv2.mean(sub, mask=bright)[:3]))
 
 
+def _fill_dropouts(height: np.ndarray, no_return: np.ndarray, face_coloured: np.ndarray, face_mm: float) -> None:
+    """Heights (mm, in place) for a patch's pixels without a depth return: the face's own height (neither below nor
+    above it: a dark face's dropouts, the band along its own edge), except where the nearest return is a surface of
+    the face's colour clearly below it (BELOW_FACE_MM): a lower block of the same colour under the face, whose
+    visible ring would otherwise join the face across the dropout band at the upper block's edge. Those take the
+    nearest return's height."""
+    lower = face_coloured & ~no_return & (height < face_mm - BELOW_FACE_MM)
+    if no_return.any() and lower.any():
+        _, nearest = cv2.distanceTransformWithLabels(no_return.view(np.uint8), cv2.DIST_L2, 3,
+                                                     labelType=cv2.DIST_LABEL_PIXEL)
+        below = lower[~no_return][nearest[no_return] - 1]       # labels: the returns in raster order, from 1
+        fill = height[~no_return][nearest[no_return] - 1]
+        height[no_return] = np.where(below, fill, np.float32(face_mm))
+    cv2.patchNaNs(height, face_mm)
+
+
 def refine_by_colour(face: Face, f: FrameData, pad: int = 6) -> ColourRegion:
     """The face's full-resolution pixels by colour. The top face is evenly lit and brighter than the shaded sides, so
     pixels near the depth-seeded face whose colour matches the face's core colour, and that are not clearly below
@@ -117,7 +133,7 @@ def refine_by_colour(face: Face, f: FrameData, pad: int = 6) -> ColourRegion:
     height = np.multiply(f.depth[y0:y1, x0:x1], f.kz[y0:y1, x0:x1])
     height += f.tz
     no_return = np.isnan(height)
-    cv2.patchNaNs(height, face.height_mm)        # no return: neither below nor above
+    _fill_dropouts(height, no_return, distance < FACE_COLOR_LEVEL, face.height_mm)
     height = cv2.medianBlur(height, 5)
     not_below = height > face.height_mm - BELOW_FACE_MM
     occluder = height > face.height_mm + OCCLUDER_RISE_MM
