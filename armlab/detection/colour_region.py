@@ -133,7 +133,7 @@ def refine_by_colour(face: Face, f: FrameData, pad: int = 6) -> ColourRegion:
     height = np.multiply(f.depth[y0:y1, x0:x1], f.kz[y0:y1, x0:x1])
     height += f.tz
     no_return = np.isnan(height)
-    _fill_dropouts(height, no_return, distance < FACE_COLOR_LEVEL, face.height_mm)
+    _fill_dropouts(height, no_return, ~away, face.height_mm)
     height = cv2.medianBlur(height, 5)
     not_below = height > face.height_mm - BELOW_FACE_MM
     occluder = height > face.height_mm + OCCLUDER_RISE_MM
