@@ -89,13 +89,15 @@ def _fill_dropouts(height: np.ndarray, no_return: np.ndarray, face_coloured: np.
     the face's colour clearly below it (BELOW_FACE_MM): a lower block of the same colour under the face, whose
     visible ring would otherwise join the face across the dropout band at the upper block's edge. Those take the
     nearest return's height."""
-    lower = face_coloured & ~no_return & (height < face_mm - BELOW_FACE_MM)
-    if no_return.any() and lower.any():
-        _, nearest = cv2.distanceTransformWithLabels(no_return.view(np.uint8), cv2.DIST_L2, 3,
-                                                     labelType=cv2.DIST_LABEL_PIXEL)
-        below = lower[~no_return][nearest[no_return] - 1]       # labels: the returns in raster order, from 1
-        fill = height[~no_return][nearest[no_return] - 1]
-        height[no_return] = np.where(below, fill, np.float32(face_mm))
+    lower = face_coloured & (height < face_mm - BELOW_FACE_MM)      # (a pixel without a return compares False)
+    if lower.any():
+        holes = np.flatnonzero(no_return)
+        if len(holes):
+            _, nearest = cv2.distanceTransformWithLabels(no_return.view(np.uint8), cv2.DIST_L2, 3,
+                                                         labelType=cv2.DIST_LABEL_PIXEL)
+            source = np.flatnonzero(~no_return)[nearest.ravel()[holes] - 1]   # labels: the returns in raster order
+            flat = height.ravel()                                            # a view: height is contiguous
+            flat[holes] = np.where(lower.ravel()[source], flat[source], np.float32(face_mm))
     cv2.patchNaNs(height, face_mm)
 
 
