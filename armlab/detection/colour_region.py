@@ -29,6 +29,7 @@ class FrameData:
         self.tz = np.float32(camera.T_world_cam[2, 3])
 
 _SUM3 = np.ones((1, 3))                     # cv2.transform: the sum of three channels
+_DIAG3 = np.diag_indices(3)
 SQUARE3, SQUARE5, SQUARE7 = (np.ones((k, k), np.uint8) for k in (3, 5, 7))   # morphology kernels
 STANDING_RISE_MM = 3.0    # a pixel not of a face's colour this far above it is something standing on the face
 FACE_COLOR_LEVEL = 3.5    # a pixel this near the face's core colour (distance in core spreads) has the face's colour
@@ -128,7 +129,9 @@ def refine_by_colour(face: Face, f: FrameData, pad: int = 6) -> ColourRegion:
         spread = 1.4826 * np.median(np.abs(pixels - mean), axis=0)
     spread = np.maximum(spread, 4.0)
     # the colour distance in core spreads: one affine transform per channel, then the root of the squares' sum
-    affine = np.column_stack([np.diag(1 / spread), -mean / spread]).astype(float, copy=False)
+    affine = np.zeros((3, 4))
+    affine[_DIAG3] = 1 / spread
+    affine[:, 3] = -mean / spread
     scaled = cv2.transform(rgb.astype(np.float32), affine)
     distance = cv2.sqrt(cv2.transform(np.multiply(scaled, scaled, out=scaled), _SUM3))
     away = distance >= FACE_COLOR_LEVEL
