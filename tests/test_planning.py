@@ -568,3 +568,15 @@ def test_a_place_is_aimed_with_the_held_blocks_pose_in_the_tool_frame():
     assert low == pytest.approx(spot[2], abs=0.1) and np.abs(centre - spot[:2]).max() <= 0.1
     with pytest.raises(ValueError, match="held_in_tool"):
         planning.plan_place(planning.CAMERA_CLEAR_POSE, spot, e, held_in_tool=np.eye(3))
+
+
+def test_face_misalignment_is_exact_at_zero_and_the_angle_elsewhere():
+    # a top-down grasp closing along a face normal is aligned to rounding, whatever the heading and yaw (arccos of
+    # the dot product gave 1.5e-8 rad from a last-bit error, and which CPU decided it); a turn of d off the face is d
+    rng = np.random.default_rng(5)
+    for heading, yaw, d in zip(rng.uniform(-np.pi, np.pi, 50), rng.uniform(-np.pi / 4, np.pi / 4, 50),
+                               rng.uniform(0.01, np.pi / 4 - 0.01, 50), strict=True):
+        aligned = planning.face_roll(heading, float(yaw))
+        assert planning.face_misalignment(heading, np.pi / 2, aligned, float(yaw)) < 1e-12
+        for turned in (aligned + d, aligned - d):
+            assert planning.face_misalignment(heading, np.pi / 2, turned, float(yaw)) == pytest.approx(d, abs=1e-12)

@@ -123,7 +123,11 @@ def face_misalignment(heading: float, pitch: float, roll: float, yaw: float) -> 
     tool_orientation(heading, pitch, roll) and the nearest face normal of a block of yaw `yaw`."""
     y_tool = kinematics.tool_orientation(heading, pitch, roll)[:, 1]
     normals = np.array([[np.cos(yaw), np.sin(yaw), 0.0], [-np.sin(yaw), np.cos(yaw), 0.0]])
-    return float(np.arccos(np.clip(np.abs(normals @ y_tool).max(), 0.0, 1.0)))
+    dots = normals @ y_tool
+    k = int(np.argmax(np.abs(dots)))
+    # atan2(|n x y|, |n . y|), not arccos(|n . y|): arccos turns a last-bit error of an aligned pair's dot product
+    # into 1.5e-8 rad, which then depends on the CPU's rounding
+    return float(np.arctan2(np.linalg.norm(np.cross(normals[k], y_tool)), abs(dots[k])))
 
 
 def inner_limits(robot: RobotModel | None = None, margin: float = LIMIT_MARGIN_RAD) -> RobotModel:
