@@ -30,13 +30,9 @@ def main(argv: list[str] | None = None) -> int:
     colors_fit.add_argument("--out", default=None,
                             help="where to write the model (default: color_model.json in $ARMLAB_DATA when set, "
                                  "else the package's data folder)")
-    grade = sub.add_parser("grade", help="grade a folder of submissions (one folder per student) into OUT")
-    grade.add_argument("submissions")
-    grade.add_argument("--out", required=True, help="folder for grades.csv and <student>/results.json, feedback.md")
-    grade.add_argument("--jobs", type=int, default=1, help="submissions graded in parallel (default: 1)")
-    grade.add_argument("--timeout", type=float, default=300.0, help="wall-clock seconds per notebook run")
-    grade.add_argument("--reference", default=".", help="the instructor's checkout (default: .)")
-    sub.add_parser("check", help="run the public checks of each exercise in this checkout (students)")
+    from armlab.grading.cli import add_parsers as add_grading_parsers
+
+    add_grading_parsers(sub)
     sub.add_parser("record", add_help=False,
                    help="record the RealSense camera to a .bag (replay: make_station('real', arm=False, playback=...))")
     args, rest = parser.parse_known_args(argv)

@@ -15,7 +15,8 @@ from armlab.exercises.registry import exercise
 
 from .results import ExerciseResult
 
-__all__ = ["atomic_write", "results_json", "feedback_md", "grades_csv", "table", "write_reports"]
+__all__ = ["atomic_write", "results_json", "feedback_md", "grades_csv", "table", "self_check_report",
+           "write_reports"]
 
 
 def atomic_write(path: Path, text: str) -> None:
@@ -57,6 +58,25 @@ def table(results: dict[str, ExerciseResult]) -> str:
     total = sum(r.score for r in results.values())
     lines.append(f"{'total'.ljust(width)}  {total:>5g}/{sum(r.max_score for r in results.values())}")
     return "\n".join(lines)
+
+
+def self_check_report(results: dict[str, ExerciseResult], blocked: dict[str, str]) -> str:
+    """`python -m armlab check`'s report: the table, then per exercise that is not full its first failing check's
+    message (or the exercise it needs, which fails), and a last line saying whether everything passed."""
+    lines = [table(results), ""]
+    for r in results.values():
+        if r.score == r.max_score:
+            continue
+        if r.exercise_id in blocked:
+            lines.append(f"- {r.exercise_id}: not checked on its own: it needs {blocked[r.exercise_id]}, which fails")
+            continue
+        first = next((c for c in r.checks if not c.passed), None)
+        lines.append(f"- {r.exercise_id}: " + (f"{first.name}: {first.message}" if first else r.reason))
+    failing = sum(r.score < r.max_score for r in results.values())
+    lines.append("" if failing else "all checks passed")
+    if failing:
+        lines.append(f"{failing} exercise(s) not yet passing (public checks only: the grader also runs hidden ones)")
+    return "\n".join(ln for ln in lines).rstrip() + "\n"
 
 
 def feedback_md(student: str, results: dict[str, ExerciseResult]) -> str:

@@ -10,7 +10,8 @@ from pathlib import Path
 from armlab.exercises.markers import ExerciseMarkerError, find_regions, is_blank
 from armlab.exercises.registry import EXERCISES, Exercise
 
-__all__ = ["Submission", "read_submission", "exercise_file", "regions_of", "source_texts"]
+__all__ = ["Submission", "read_submission", "strict_file", "MAX_FILE_BYTES", "exercise_file", "regions_of",
+           "source_texts"]
 
 
 @dataclass
@@ -54,6 +55,29 @@ def regions_of(texts: list[str], exercise_id: str, where: str) -> list[str]:
     return bodies
 
 
+MAX_FILE_BYTES = 64 * 2**20     # a submitted file larger than this is refused unread
+
+
+def strict_file(folder: Path, name: str) -> Path | None:
+    """The submitted file `name` of `folder`, read strictly: None when it is absent; ValueError naming the problem
+    when the folder, a folder on the way or the file is a symbolic link, or the file is not a regular file or is
+    too large."""
+    if folder.is_symlink():
+        raise ValueError(f"the submission folder {folder.name} is a symbolic link: submit the folder itself")
+    path = folder
+    for part in Path(name).parts:
+        path = path / part
+        if path.is_symlink():
+            raise ValueError(f"{path.relative_to(folder)} is a symbolic link: submit the file itself")
+        if not path.exists():
+            return None
+    if not path.is_file():
+        raise ValueError(f"{name} is not a regular file")
+    if path.stat().st_size > MAX_FILE_BYTES:
+        raise ValueError(f"{name} is larger than {MAX_FILE_BYTES // 2**20} MB")
+    return path
+
+
 def read_submission(folder: Path | str, reference: Path | str) -> Submission:
     """The regions of every registered exercise in the submission `folder`, checked against the number of regions
     of the instructor's checkout `reference`."""
@@ -63,9 +87,9 @@ def read_submission(folder: Path | str, reference: Path | str) -> Submission:
     for ex in EXERCISES:
         name = exercise_file(ex)
         if name not in cache:
-            path = folder / name
             try:
-                cache[name] = source_texts(path) if path.is_file() else "missing"
+                path = strict_file(folder, name)
+                cache[name] = source_texts(path) if path is not None else "missing"
             except (ValueError, OSError) as e:
                 cache[name] = str(e)
         texts = cache[name]
