@@ -37,7 +37,7 @@ from .run import DEFAULT_LIMITS, Limits, NotebookRun, Runner, check_cells
 from .sandbox import WORK, Sandbox, detect
 from .splice import RegionRejected, build_worktree, check_body, splice_into
 from .static import STATIC_CHECK, static_check
-from .submission import Submission, read_submission
+from .submission import Submission, exercise_file, read_submission, regions_of, source_texts
 
 try:
     from . import hidden as _hidden
@@ -109,11 +109,12 @@ class Grader:
         self._tmp = tempfile.TemporaryDirectory(prefix="armlab-grade-")
         self._root = Path(self._tmp.name)
         self._pristine = build_worktree(self.reference, self._root / "reference")
+        self._pristine.chmod(0o700)            # never entered by a run's user (the "user" sandbox)
+        (self._root / "runs").mkdir(mode=0o711)
         self.runner = Runner(self.sandbox, limits, _hidden_source())
         self._cache: dict[tuple, object] = {}
         self._locks: dict[tuple, threading.Lock] = {}
         self._guard = threading.Lock()
-        self._count = 0
         self.runs = 0
         self._expected = self._compute_expected()
 
@@ -138,10 +139,7 @@ class Grader:
     # -- trees and runs ---------------------------------------------------------------------------------------
     def _fresh(self, tree: Path) -> Path:
         """A new private copy of `tree` for one run."""
-        with self._guard:
-            self._count += 1
-            n = self._count
-        dest = self._root / "runs" / f"{n:05d}" / "work"
+        dest = Path(tempfile.mkdtemp(dir=self._root / "runs")) / "work"
         shutil.copytree(tree, dest, symlinks=True)
         return dest
 
@@ -309,6 +307,12 @@ class Grader:
         finally:
             self._discard(tree)
 
+    def _reference_bodies(self, exercise_id: str) -> list[str]:
+        """The reference's region bodies of the exercise (from the grader's private copy)."""
+        name = exercise_file(exercise(exercise_id))
+        return self._once(("reference", exercise_id),
+                          lambda: regions_of(source_texts(self._pristine / name), exercise_id, name))
+
     def grade(self, submission: Submission) -> dict[str, ExerciseResult]:
         results: dict[str, ExerciseResult] = {}
         written: dict[str, list[str]] = {}
@@ -327,8 +331,13 @@ class Grader:
                     results[exercise_id] = ExerciseResult(exercise_id, 0.0, points, [], str(e))
         if written:
             together = self._once(("together", self._digest(written)), lambda: self._together(written))
+            failing = {e for e, checks in together.items() if not checks or not all(c.passed for c in checks)}
             for exercise_id, checks in together.items():
-                if checks and all(c.passed for c in checks):
+                others_fail = failing - {exercise_id}
+                if exercise_id not in failing or not any(written[e] != self._reference_bodies(e)
+                                                         for e in others_fail):
+                    # every check passed, or each other exercise that failed is the reference itself: the pass
+                    # was already this exercise alone as far as a failure can tell
                     results[exercise_id] = _score(exercise_id, checks)
                 else:
                     results[exercise_id] = self.grade_exercise(exercise_id, written[exercise_id])

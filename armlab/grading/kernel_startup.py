@@ -57,7 +57,6 @@ def _armlab_grader_start() -> None:
     class GraderIntegrityError(RuntimeError):
         """The kernel's checking machinery was changed by an earlier cell."""
 
-    watched_prefixes = ("numpy", "math", "cmath", "operator", "builtins", "cv2", "armlab")
     watched_exact = {"numpy", "numpy.linalg", "numpy.testing", "math", "cmath", "operator", "builtins", "cv2"}
     method_names = ("run_cell", "run_cell_async", "run_ast_nodes", "run_code", "transform_cell", "transform_ast",
                     "showtraceback", "_showtraceback", "should_run_async", "ex", "ev")

@@ -26,7 +26,7 @@ import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
-from .sandbox import Sandbox
+from .sandbox import PidsGroup, Sandbox
 
 __all__ = ["DEFAULT_LIMITS", "Limits", "CellResult", "NotebookRun", "Runner", "check_cells", "verify_signed",
            "CHILD_FILES"]
@@ -46,11 +46,12 @@ _KEEP_PREFIXES = ("LC_", "OPENBLAS", "NPY_", "OPENCV_", "OMP_", "MKL_")
 @dataclass(frozen=True)
 class Limits:
     """timeout_s: wall-clock seconds for one run; cpu_s: CPU seconds per process; memory_mb: address space per
-    process."""
+    process; max_procs: processes of one run at once (a pids cgroup, or the run's own user's RLIMIT_NPROC)."""
 
     timeout_s: float = 300.0
     cpu_s: int = 300
     memory_mb: int = 8192
+    max_procs: int = 256
 
 
 DEFAULT_LIMITS = Limits()
@@ -164,6 +165,9 @@ class Runner:
         OUTPUT_TAIL bytes of its output, its return code). Everything the run started is gone when this returns."""
         with self.sandbox.slot(worktree, self.files) as uid:
             argv = self.sandbox.argv(cmd, worktree, self.files, self.limits, uid)
+            group = PidsGroup(self.limits.max_procs) if PidsGroup.available() else None
+            if group is not None:
+                argv = group.wrap(argv)
             with tempfile.TemporaryFile() as log:
                 proc = subprocess.Popen(argv, cwd=worktree, env=self._environment(worktree), stdout=log,
                                         stderr=subprocess.STDOUT, stdin=subprocess.PIPE, start_new_session=True)
@@ -183,6 +187,8 @@ class Runner:
                     except ProcessLookupError:
                         pass
                     proc.wait()
+                    if group is not None:
+                        group.close()
                 size = log.seek(0, os.SEEK_END)
                 log.seek(max(0, size - OUTPUT_TAIL))
                 out = log.read().decode(errors="replace")

@@ -19,6 +19,7 @@ Backends, chosen by `detect()` once per process (or by ARMLAB_SANDBOX=bwrap|user
 
 from __future__ import annotations
 
+import itertools
 import os
 import shutil
 import signal
@@ -50,6 +51,7 @@ def _python_roots() -> list[str]:
              str(Path(os.path.realpath(sys.executable)).parents[1])}
     for key in ("purelib", "platlib", "stdlib", "platstdlib"):
         roots.add(sysconfig.get_paths()[key])
+    roots.update(p for p in sys.path if p.endswith(("site-packages", "dist-packages")) and os.path.isdir(p))
     kept: list[str] = []
     for root in sorted(roots, key=len):
         if not any(root == k or root.startswith(k.rstrip("/") + "/") for k in kept):
@@ -57,12 +59,58 @@ def _python_roots() -> list[str]:
     return kept
 
 
-def _limits_argv(limits) -> list[str]:
+def _limits_argv(limits, nproc: bool = False) -> list[str]:
     """`prlimit` with the run's limits: CPU seconds (soft: SIGXCPU, hard 5 s later: SIGKILL), address space, file
-    size, no core files."""
+    size, no core files; with `nproc`, the process count of the run's own user (the "user" backend)."""
     cap = limits.memory_mb * 2**20
+    procs = [f"--nproc={limits.max_procs}:{limits.max_procs}"] if nproc else []
     return ["prlimit", f"--cpu={limits.cpu_s}:{limits.cpu_s + 5}", f"--as={cap}:{cap}", f"--fsize={2**30}:{2**30}",
-            "--core=0:0", "--"]
+            "--core=0:0", *procs, "--"]
+
+
+_PIDS_V1 = Path("/sys/fs/cgroup/pids")
+
+
+class PidsGroup:
+    """A cgroup of the pids controller for one run (cgroup v1 here, where a root grader can make one): at most
+    `max_procs` processes (a fork bomb stops there), and every process in it listed and killed when the run ends,
+    whatever it did to its session, group or namespace. `available()` says whether this machine has one."""
+
+    def __init__(self, max_procs: int) -> None:
+        self.path = _PIDS_V1 / f"armlab-{os.getpid()}-{next(_GROUP_IDS)}"
+        self.path.mkdir()
+        (self.path / "pids.max").write_text(str(max_procs))
+
+    @staticmethod
+    def available() -> bool:
+        return os.getuid() == 0 and (_PIDS_V1 / "cgroup.procs").is_file() and os.access(_PIDS_V1, os.W_OK)
+
+    def wrap(self, argv: list[str]) -> list[str]:
+        """`argv` started inside the group (a shell moves itself in, then execs it)."""
+        return ["sh", "-c", 'echo $$ > "$0/cgroup.procs" && exec "$@"', str(self.path), *argv]
+
+    def close(self) -> None:
+        """Kill every process of the group until none is left, then remove it."""
+        for _ in range(100):
+            try:
+                pids = [int(p) for p in (self.path / "cgroup.procs").read_text().split()]
+            except OSError:
+                return
+            if not pids:
+                break
+            for pid in pids:
+                try:
+                    os.kill(pid, signal.SIGKILL)
+                except ProcessLookupError:
+                    pass
+            time.sleep(0.02)
+        try:
+            self.path.rmdir()
+        except OSError:
+            pass
+
+
+_GROUP_IDS = itertools.count()
 
 
 @dataclass(frozen=True)
@@ -81,7 +129,7 @@ class Sandbox:
 
     def argv(self, cmd: list[str], worktree: Path, grader: Path, limits, uid: int | None = None) -> list[str]:
         """The command line that runs `cmd` (its paths already as seen inside) in this sandbox."""
-        bounded = _limits_argv(limits) + cmd
+        bounded = _limits_argv(limits, nproc=self.kind == "user") + cmd
         if self.kind == "bwrap":
             binds: list[str] = []
             for path in _SYSTEM:
@@ -113,13 +161,15 @@ class Sandbox:
             return
         uid = _USERS.take()
         try:
-            home = Path(self.home(worktree))
-            home.mkdir(exist_ok=True)
-            for path in (worktree, home):
-                _chown_tree(path, uid)
-            for parent in (worktree.parent, *worktree.parent.parents):
-                if parent.stat().st_uid == os.getuid() and not parent.stat().st_mode & 0o001:
-                    parent.chmod(parent.stat().st_mode | 0o001)      # traversable, not listable
+            run_dir = worktree.parent                      # the run's own folder: the work tree and a home
+            Path(self.home(worktree)).mkdir(exist_ok=True)
+            _chown_tree(run_dir, uid)
+            run_dir.chmod(0o700)
+            for base in (run_dir.parent, grader.parent):
+                for parent in (base, *base.parents):       # traversable by the run's user, not listable
+                    mode = parent.stat().st_mode
+                    if parent.stat().st_uid == os.getuid() and not mode & 0o001:
+                        parent.chmod((mode & ~0o004) | 0o001)
             _readable_tree(grader)
             yield uid
         finally:
@@ -157,7 +207,7 @@ def _chown_tree(path: Path, uid: int) -> None:
 def _readable_tree(path: Path) -> None:
     """Make the grader's own read-only folder readable by the run's user (it holds nothing secret: the harness and
     the kernel's start-up file)."""
-    for root, dirs, files in os.walk(path):
+    for root, _dirs, files in os.walk(path):
         os.chmod(root, 0o755)
         for name in files:
             os.chmod(os.path.join(root, name), 0o644)
