@@ -24,7 +24,7 @@ from .sandbox import detect
 from .splice import build_worktree
 from .submission import read_submission
 
-__all__ = ["SelfCheck", "self_check", "missing_tools"]
+__all__ = ["SelfCheck", "self_check", "missing_tools", "is_blank_result"]
 
 
 @dataclass
@@ -36,7 +36,13 @@ class SelfCheck:
 
     @property
     def ok(self) -> bool:
-        return all(r.score == r.max_score for r in self.results.values())
+        """Every written exercise passes every check (blank ones are only counted, not failed)."""
+        return all(r.score == r.max_score for r in self.results.values() if not is_blank_result(r))
+
+
+def is_blank_result(result: ExerciseResult) -> bool:
+    """The exercise was not written (its region is still the stub)."""
+    return not result.checks and result.reason == "not written (blank region)"
 
 
 def missing_tools() -> list[str]:
@@ -85,7 +91,8 @@ def self_check(checkout: Path | str = ".", limits: Limits = DEFAULT_LIMITS, unsa
     for ex in failing:
         text = "\n".join(sub.bodies.get(ex.id, [])) + "\n".join(
             sources[ex.notebook][int(c.name.rsplit(" ", 1)[-1])] for c in results[ex.id].checks if not c.passed)
-        needed = next((a for a in failing if a is not ex and _uses(a, text)), None)
+        earlier = [a for a in failing if EXERCISES.index(a) < EXERCISES.index(ex)]   # what ex may build on
+        needed = next((a for a in earlier if _uses(a, text)), None)
         if needed is not None:
             blocked[ex.id] = needed.id
     return SelfCheck(results, blocked)

@@ -66,9 +66,11 @@ def write_signed(path: str, payload: object, key: bytes) -> None:
 
 
 def first_line(text: str, limit: int = 600) -> str:
-    """The assertion or error line of a failure report (terminal colours removed), shortened."""
-    lines = [ln.strip() for ln in _ANSI.sub("", text).splitlines() if ln.strip()]
-    for ln in lines:
-        if re.match(r"^(E\s+)?(AssertionError|[A-Za-z_.]*(Error|Exception|Timeout)\b)", ln):
-            return re.sub(r"^E\s+", "", ln)[:limit]
-    return (lines[0] if lines else "failed")[:limit]
+    """The exception line of a failure report (terminal colours removed), shortened: the last line naming an error
+    with its message (a traceback ends with it), else the last one naming an error, else the first line."""
+    lines = [re.sub(r"^E\s+", "", ln.strip()) for ln in _ANSI.sub("", text).splitlines() if ln.strip()]
+    named = [ln for ln in lines if re.match(r"^[A-Za-z_.]*(Error|Exception|Timeout)\b", ln)
+             and "most recent call last" not in ln]
+    with_message = [ln for ln in named if re.match(r"^[A-Za-z_.]*(Error|Exception|Timeout)\b:", ln)]
+    pick = (with_message or named or lines or ["failed"])[-1]
+    return pick[:limit]

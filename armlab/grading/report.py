@@ -61,22 +61,29 @@ def table(results: dict[str, ExerciseResult]) -> str:
 
 
 def self_check_report(results: dict[str, ExerciseResult], blocked: dict[str, str]) -> str:
-    """`python -m armlab check`'s report: the table, then per exercise that is not full its first failing check's
-    message (or the exercise it needs, which fails), and a last line saying whether everything passed."""
+    """`python -m armlab check`'s report: the table, then per written exercise that is not full its first failing
+    check's message (or the exercise it needs, which fails), and a last line saying where the student stands."""
+    blank = [r for r in results.values() if not r.checks and r.reason == "not written (blank region)"]
     lines = [table(results), ""]
+    failing = 0
     for r in results.values():
-        if r.score == r.max_score:
+        if r.score == r.max_score or r in blank:
             continue
+        failing += 1
         if r.exercise_id in blocked:
             lines.append(f"- {r.exercise_id}: not checked on its own: it needs {blocked[r.exercise_id]}, which fails")
             continue
         first = next((c for c in r.checks if not c.passed), None)
         lines.append(f"- {r.exercise_id}: " + (f"{first.name}: {first.message}" if first else r.reason))
-    failing = sum(r.score < r.max_score for r in results.values())
-    lines.append("" if failing else "all checks passed")
     if failing:
-        lines.append(f"{failing} exercise(s) not yet passing (public checks only: the grader also runs hidden ones)")
-    return "\n".join(ln for ln in lines).rstrip() + "\n"
+        lines.append(f"{failing} written exercise(s) not yet passing (public checks only: the grader also runs "
+                     f"hidden ones)")
+    else:
+        lines.append("all checks of the written exercises passed (public checks only: the grader also runs hidden "
+                     "ones)")
+    if blank:
+        lines.append(f"{len(blank)} exercise(s) not written yet: {', '.join(r.exercise_id for r in blank)}")
+    return "\n".join(lines).rstrip() + "\n"
 
 
 def feedback_md(student: str, results: dict[str, ExerciseResult]) -> str:

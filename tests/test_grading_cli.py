@@ -1,0 +1,101 @@
+"""`python -m armlab grade` and `python -m armlab check` as instructors and students meet them: every bad option or
+path is one line and a non-zero exit; the self-check prints the first failing check's message, does not charge a
+wrong DH matrix to the chain that calls it, and exits non-zero when anything fails or cannot run."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from armlab.exercises import make_student_release
+from armlab.exercises.registry import exercise
+from armlab.grading.splice import write_regions
+from armlab.grading.submission import exercise_file, regions_of, source_texts
+
+ROOT = Path(__file__).resolve().parents[1]
+DH, CHAIN = "fk.dh_transform", "fk.fk_from_table"
+
+
+def _armlab(*args: str, cwd: Path = ROOT, env: dict | None = None) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "armlab", *args], cwd=cwd, capture_output=True, text=True,
+                          timeout=900, env={**os.environ, **(env or {})})
+
+
+def _reference(exercise_id: str) -> list[str]:
+    name = exercise_file(exercise(exercise_id))
+    return regions_of(source_texts(ROOT / name), exercise_id, name)
+
+
+@pytest.mark.parametrize("args, words", [
+    (["--reference", "/nonexistent"], "--reference /nonexistent: no such folder"),
+    (["--timeout", "nan"], "--timeout: must be a finite number of seconds above 0, got 'nan'"),
+    (["--timeout", "-3"], "--timeout: must be a finite number of seconds above 0"),
+    (["--jobs", "0"], "--jobs: must be at least 1, got '0'"),
+    (["--jobs", "two"], "--jobs: must be a whole number, got 'two'"),
+])
+def test_grade_refuses_bad_options_in_one_line(tmp_path, args, words):
+    (tmp_path / "subs" / "alice").mkdir(parents=True)
+    done = _armlab("grade", str(tmp_path / "subs"), "--out", str(tmp_path / "out"), *args)
+    assert done.returncode == 2 and words in done.stderr.strip().splitlines()[-1], done.stderr
+    assert "Traceback" not in done.stderr, done.stderr
+    assert not (tmp_path / "out").exists()
+
+
+def test_grade_refuses_a_student_release_as_reference(tmp_path):
+    make_student_release(ROOT, tmp_path / "release")
+    (tmp_path / "subs" / "alice").mkdir(parents=True)
+    done = _armlab("grade", str(tmp_path / "subs"), "--out", str(tmp_path / "out"), "--reference",
+                   str(tmp_path / "release"))
+    assert done.returncode == 2 and "no hidden checks" in done.stderr and "Traceback" not in done.stderr
+
+
+def test_grade_has_a_version():
+    done = _armlab("grade", "--version")
+    assert done.returncode == 0 and done.stdout.startswith("armlab ")
+
+
+@pytest.fixture(scope="module")
+def student(tmp_path_factory) -> Path:
+    """A release with a wrong DH matrix (d negated) and the reference chain that calls it."""
+    folder = tmp_path_factory.mktemp("check") / "student"
+    make_student_release(ROOT, folder)
+    write_regions(folder, DH, [_reference(DH)[0].replace("[0.0, sa, ca, d]", "[0.0, sa, ca, -d]")])
+    write_regions(folder, CHAIN, _reference(CHAIN))
+    return folder
+
+
+def test_check_names_the_first_failing_check_and_does_not_charge_the_caller(student):
+    done = _armlab("check", cwd=student)
+    assert done.returncode == 1, done.stdout + done.stderr
+    lines = done.stdout.splitlines()
+    dh = next(ln for ln in lines if ln.startswith(f"- {DH}:"))
+    assert "02_forward_kinematics cell" in dh and "tool point" in dh, done.stdout    # the check's own message
+    chain = next(ln for ln in lines if ln.startswith(f"- {CHAIN}:"))
+    assert f"it needs {DH}, which fails" in chain
+    assert "2 written exercise(s) not yet passing" in done.stdout and "not written yet" in done.stdout
+
+
+def test_check_passes_with_exit_0_when_everything_written_passes(tmp_path):
+    folder = tmp_path / "student"
+    make_student_release(ROOT, folder)
+    write_regions(folder, DH, _reference(DH))
+    done = _armlab("check", cwd=folder)
+    assert done.returncode == 0 and "all checks of the written exercises passed" in done.stdout, \
+        done.stdout + done.stderr
+
+
+def test_check_says_what_is_missing_when_it_cannot_run(tmp_path):
+    """Without nbval (a Python whose path hides it) the self-check exits 2 naming the missing package."""
+    shadow = tmp_path / "shadow"
+    shadow.mkdir()
+    (shadow / "nbval.py").write_text("raise ImportError('hidden for the test')\n")
+    (shadow / "sitecustomize.py").write_text(
+        "import importlib.util, sys\n_real = importlib.util.find_spec\n"
+        "importlib.util.find_spec = lambda name, *a: None if name == 'nbval' else _real(name, *a)\n")
+    make_student_release(ROOT, tmp_path / "student")
+    done = _armlab("check", cwd=tmp_path / "student", env={"PYTHONPATH": str(shadow)})
+    assert done.returncode == 2 and "nbval not installed" in done.stderr, done.stderr
