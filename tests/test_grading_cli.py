@@ -99,3 +99,26 @@ def test_check_says_what_is_missing_when_it_cannot_run(tmp_path):
     make_student_release(ROOT, tmp_path / "student")
     done = _armlab("check", cwd=tmp_path / "student", env={"PYTHONPATH": str(shadow)})
     assert done.returncode == 2 and "nbval not installed" in done.stderr, done.stderr
+
+
+def _fake_pythons(folder: Path, minors: list[int]) -> dict[str, str]:
+    folder.mkdir()
+    for minor in minors:
+        path = folder / f"python3.{minor}"
+        path.write_text(f"#!/bin/sh\necho {minor}\n")
+        path.chmod(0o755)
+    return {"PATH": f"{folder}:/usr/bin:/bin"}
+
+
+@pytest.mark.parametrize("minors, picked", [([10], None), ([10, 12], "python3.12"), ([11, 13, 10], "python3.13")])
+def test_gradescope_setup_picks_a_python_the_pins_can_install_on(tmp_path, minors, picked):
+    """tools/autograder/pick-python (setup.sh's choice): the newest python3.X >= 3.11 on PATH, else one line naming
+    what to install or which base image to choose. The fake interpreters print only their minor version."""
+    env = _fake_pythons(tmp_path / "bin", minors)
+    env["PATH"] = env["PATH"].replace(":/usr/bin:/bin", ":/nonexistent")
+    done = subprocess.run(["/bin/bash", str(ROOT / "tools/autograder/pick-python"), "3.11"], env=env,
+                          capture_output=True, text=True)
+    if picked is None:
+        assert done.returncode == 1 and "Ubuntu 24.04" in done.stderr and "python3.11" in done.stderr
+    else:
+        assert done.returncode == 0 and done.stdout.strip() == str(tmp_path / "bin" / picked)

@@ -322,6 +322,9 @@ class Grader:
                 results[exercise_id] = ExerciseResult(exercise_id, 0.0, points, [], submission.problems[exercise_id])
             elif exercise_id in submission.blank:
                 results[exercise_id] = ExerciseResult(exercise_id, 0.0, points, [], "not written (blank region)")
+            elif exercise_id in submission.answers:
+                results[exercise_id] = ExerciseResult(exercise_id, 0.0, points, [], "graded by hand",
+                                                      submission.answers[exercise_id])
             else:
                 try:
                     for body in submission.bodies[exercise_id]:
