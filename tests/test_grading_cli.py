@@ -80,9 +80,15 @@ def test_check_names_the_first_failing_check_and_does_not_charge_the_caller(stud
 
 
 def test_check_passes_with_exit_0_when_everything_written_passes(tmp_path):
+    """The DH matrix written alone: its check cell, shared with the chain, waits for the chain (not written yet), and
+    that is no failure; with the chain written too, both pass."""
     folder = tmp_path / "student"
     make_student_release(ROOT, folder)
     write_regions(folder, DH, _reference(DH))
+    done = _armlab("check", cwd=folder)
+    assert done.returncode == 0 and f"it needs {CHAIN}, which is not written yet" in done.stdout, \
+        done.stdout + done.stderr
+    write_regions(folder, CHAIN, _reference(CHAIN))
     done = _armlab("check", cwd=folder)
     assert done.returncode == 0 and "all checks of the written exercises passed" in done.stdout, \
         done.stdout + done.stderr

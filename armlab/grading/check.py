@@ -29,15 +29,18 @@ __all__ = ["SelfCheck", "self_check", "missing_tools", "is_blank_result"]
 
 @dataclass
 class SelfCheck:
-    """results: per exercise; blocked: exercise id -> the exercise it needs that fails."""
+    """results: per exercise; blocked: exercise id -> (the exercise it needs, "fails" or "is not written yet")."""
 
     results: dict[str, ExerciseResult]
-    blocked: dict[str, str]
+    blocked: dict[str, tuple[str, str]]
 
     @property
     def ok(self) -> bool:
-        """Every written exercise passes every check (blank ones are only counted, not failed)."""
-        return all(r.score == r.max_score for r in self.results.values() if not is_blank_result(r) and not r.by_hand)
+        """Every written exercise passes every check, or fails only because one it needs is not written yet (blank
+        ones are counted, not failed; written answers are graded by hand)."""
+        return all(r.score == r.max_score for e, r in self.results.items()
+                   if not is_blank_result(r) and not r.by_hand and self.blocked.get(e, ("", ""))[1] != "is not written"
+                   " yet")
 
 
 def is_blank_result(result: ExerciseResult) -> bool:
@@ -89,13 +92,18 @@ def self_check(checkout: Path | str = ".", limits: Limits = DEFAULT_LIMITS, unsa
                               run.cells[i].message if i in run.cells else run.problem or "the cell did not run")
                   for i, ids in tags.items() if ex.id in ids]
         results[ex.id] = _score(ex.id, checks, run.problem)
-    blocked: dict[str, str] = {}
+    blocked: dict[str, tuple[str, str]] = {}
     failing = [e for e in written if results[e.id].score < results[e.id].max_score]
     for ex in failing:
+        messages = " ".join(c.message for c in results[ex.id].checks if not c.passed)
+        missing = next((b for b in sorted(sub.blank) if f"exercise {b} (" in messages), None)
+        if missing is not None:
+            blocked[ex.id] = (missing, "is not written yet")
+            continue
         text = "\n".join(sub.bodies.get(ex.id, [])) + "\n".join(
             sources[ex.notebook][int(c.name.rsplit(" ", 1)[-1])] for c in results[ex.id].checks if not c.passed)
         earlier = [a for a in failing if EXERCISES.index(a) < EXERCISES.index(ex)]   # what ex may build on
         needed = next((a for a in earlier if _uses(a, text)), None)
         if needed is not None:
-            blocked[ex.id] = needed.id
+            blocked[ex.id] = (needed.id, "fails")
     return SelfCheck(results, blocked)

@@ -76,7 +76,7 @@ def table(results: dict[str, ExerciseResult]) -> str:
     return "\n".join(lines)
 
 
-def self_check_report(results: dict[str, ExerciseResult], blocked: dict[str, str]) -> str:
+def self_check_report(results: dict[str, ExerciseResult], blocked: dict[str, tuple[str, str]]) -> str:
     """`python -m armlab check`'s report: the table, then per written exercise that is not full its first failing
     check's message (or the exercise it needs, which fails), and a last line saying where the student stands."""
     blank = [r for r in results.values() if not r.checks and r.reason == "not written (blank region)"]
@@ -85,10 +85,12 @@ def self_check_report(results: dict[str, ExerciseResult], blocked: dict[str, str
     for r in results.values():
         if r.score == r.max_score or r in blank or r.by_hand:
             continue
-        failing += 1
         if r.exercise_id in blocked:
-            lines.append(f"- {r.exercise_id}: not checked on its own: it needs {blocked[r.exercise_id]}, which fails")
+            needed, why = blocked[r.exercise_id]
+            failing += why == "fails"
+            lines.append(f"- {r.exercise_id}: not checked on its own: it needs {needed}, which {why}")
             continue
+        failing += 1
         first = next((c for c in r.checks if not c.passed), None)
         lines.append(f"- {r.exercise_id}: " + (f"{first.name}: {first.message}" if first else r.reason))
     if failing:
