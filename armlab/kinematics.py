@@ -390,18 +390,22 @@ def _branch_joints(heading, r, z, pitch, flipped, delta_sign, geometry, xp=np):
     return q1, q2, q3, q4, ok, d2
 
 
-_GEOMETRY: dict[int, tuple[RobotModel, tuple[float, ...]]] = {}   # id(robot) -> (robot, its geometry)
+_GEOMETRY: dict[bytes, tuple[float, ...]] = {}   # DH table's bytes -> its geometry (no model kept: the planner
+_GEOMETRY_ENTRIES = 16                            # makes a model with inner limits per grasp; they must be freed)
 
 
 def _ik_geometry(robot: RobotModel) -> tuple[float, ...]:
     """(shoulder height, upper arm, forearm, wrist-to-tool) mm and the DH offsets o1, o2, o3 rad, as Python floats
-    (computed once per robot model: its arrays are read-only)."""
-    cached = _GEOMETRY.get(id(robot))
-    if cached is None or cached[0] is not robot:
-        dh = robot.dh
+    (computed once per DH table: it is all they depend on)."""
+    dh = np.asarray(robot.dh, dtype=float)
+    key = dh.tobytes()
+    geometry = _GEOMETRY.get(key)
+    if geometry is None:
         geometry = (*(float(v) for v in _planar_geometry(robot)), float(dh[0, 0]), float(dh[1, 0]), float(dh[2, 0]))
-        cached = _GEOMETRY[id(robot)] = (robot, geometry)
-    return cached[1]
+        if len(_GEOMETRY) >= _GEOMETRY_ENTRIES:
+            _GEOMETRY.clear()
+        _GEOMETRY[key] = geometry
+    return geometry
 
 
 @reference_fallback(course.IK_BRANCHES, _numerical_candidates, "inverse kinematics is solved numerically on the PoX "

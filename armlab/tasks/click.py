@@ -14,9 +14,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from armlab import motion_safety
 from armlab.blocks import block_edge
 from armlab.kinematics import Unreachable
-from armlab.lab import lab_config
 
 from . import perception
 from .handling import context, look, pick, place
@@ -30,7 +30,8 @@ class ClickRefused(ValueError):
 
 def click_world(station, uv, frame=None) -> np.ndarray:
     """World point (3,) mm of the surface at pixel uv of `frame` (default: a new capture), depth corrected; raises
-    ClickRefused off the board or on the robot's base."""
+    ClickRefused where the placement rule refuses the point itself (motion_safety.placement_problem: off the board,
+    on the robot's base plate)."""
     ctx = context(station)
     frame = frame or station.camera.capture()
     depth = ctx.calibration.depth_correction.apply(frame.depth)
@@ -38,12 +39,9 @@ def click_world(station, uv, frame=None) -> np.ndarray:
         p = perception.surface_point(ctx.calibration, depth, uv)
     except ValueError as e:
         raise ClickRefused(f"click at {tuple(np.round(np.asarray(uv, float), 1))}: {e}") from None
-    cfg = lab_config()
-    if not cfg.on_board(p[:2]):
-        raise ClickRefused(f"click at ({p[0]:.0f}, {p[1]:.0f}) mm is off the board (x in {cfg.board_x}, "
-                           f"y in {cfg.board_y} mm)")
-    if cfg.on_robot_base(p[:2], margin_mm=10.0):
-        raise ClickRefused(f"click at ({p[0]:.0f}, {p[1]:.0f}) mm is on the robot's base")
+    problem = motion_safety.placement_problem(p, reach=False)      # reach: the pick's or the drop's to judge
+    if problem:
+        raise ClickRefused(f"click at {problem}")
     return p
 
 
@@ -87,6 +85,9 @@ def click_drop(station, uv, yaw: float = 0.0) -> bool:
     held = ctx.held
     if np.hypot(*(p[:2] - held.position[:2])) < held.edge_mm / 2 and p[2] > held.position[2] - held.edge_mm / 2:
         p[2] = held.position[2] - block_edge(held.size)      # the frame still shows the block the arm now holds
+    problem = motion_safety.placement_problem(p, block_edge(held.size), yaw)      # the rule tasks.place applies
+    if problem:
+        raise ClickRefused(f"cannot drop at ({p[0]:.0f}, {p[1]:.0f}, {p[2]:.0f}) mm: {problem}")
     try:
         done = place(station, p, yaw)
     except Unreachable as e:

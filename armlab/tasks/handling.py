@@ -31,6 +31,7 @@ from armlab.blocks import block_edge
 from armlab.calibration import Calibration
 from armlab.gripper_geometry import GRIPPER
 from armlab.planning import Obstacle
+from armlab.station.contract import MotionRefused
 
 from . import perception, precheck
 from .guard import GuardedArm
@@ -179,13 +180,18 @@ def place(station, position, yaw: float = 0.0, obstacles=None,
     """Put the held block's bottom-face centre at `position` (3,) world mm with yaw (rad); True when the plan ran
     through (the gripper opened there). clearance: how far (mm) the held block's bottom passes above the obstacles'
     tops in transit, and the empty tool point ends above the placed block (planning.plan_place). Raises ValueError
-    when nothing is held or for bad input, Unreachable when the spot cannot be reached and MotionRefused when the
-    whole plan fails the pre-check, e.g. the held block would go into a known block (nothing moves then)."""
+    when nothing is held or for bad input, MotionRefused when the placement rule refuses the spot (off the board, on
+    the robot's base plate, out of reach: motion_safety.placement_problem, the rule the clicks use), Unreachable when
+    the arm cannot get there and MotionRefused when the whole plan fails the pre-check, e.g. the held block would go
+    into a known block (nothing moves then)."""
     ctx = context(station)
     edge = ctx.held_edge
     p = np.asarray(position, dtype=float)
     if p.shape != (3,) or not np.all(np.isfinite(p)):
         raise ValueError(f"place position must be 3 finite numbers (x, y, z in world mm), got {position!r}")
+    problem = motion_safety.placement_problem(p, edge, float(yaw))
+    if problem:
+        raise MotionRefused(f"placing at ({p[0]:.1f}, {p[1]:.1f}, {p[2]:.1f}) mm refused before moving: {problem}")
     obs = ctx.known if obstacles is None else list(obstacles)
     plan = planning.plan_place(ctx.arm.joint_positions(), p + [0.0, 0.0, RELEASE_GAP_MM], edge, float(yaw),
                                obstacles=obs, clearance=clearance, held_in_tool=ctx.held_in_tool)
