@@ -11,7 +11,11 @@ import warnings
 import cv2
 import numpy as np
 
-__all__ = ["check_rgb", "check_gray_or_rgb", "check_depth", "to_gray", "sample_depth"]
+from armlab.arguments import finite_array, int_in_range
+
+__all__ = ["check_rgb", "check_gray_or_rgb", "check_depth", "to_gray", "sample_depth", "MAX_SAMPLE_RADIUS_PX"]
+
+MAX_SAMPLE_RADIUS_PX = 50    # sample_depth's largest window half-size (a 101 x 101 px median per pixel)
 
 
 def check_rgb(rgb, name: str = "rgb") -> np.ndarray:
@@ -42,7 +46,11 @@ def to_gray(image) -> np.ndarray:
 
 
 def check_depth(depth, shape: tuple[int, int] | None = None, name: str = "depth_mm") -> np.ndarray:
-    """Validate a depth image: float (H, W) mm, NaN allowed; optionally of the given (H, W). Returns float32."""
+    """Validate a depth image: float (H, W) mm, NaN allowed; optionally of the given (H, W). Returns float32, with
+    zeros (a RealSense's "no return") read as NaN like every other missing depth. Raises ValueError for negative or
+    infinite depths (camera-frame Z is never negative: such an image is not a depth image in mm)."""
+    if depth is None:
+        raise TypeError(f"{name} must be a float depth image (H, W) in mm, got None")
     a = np.asarray(depth)
     if not np.issubdtype(a.dtype, np.floating):
         raise ValueError(f"{name} must be a float depth image in mm (NaN = no return), got dtype {a.dtype}")
@@ -50,7 +58,17 @@ def check_depth(depth, shape: tuple[int, int] | None = None, name: str = "depth_
         raise ValueError(f"{name} must have shape (H, W), got shape {a.shape}")
     if shape is not None and a.shape != tuple(shape):
         raise ValueError(f"{name} has shape {a.shape} but the colour image is {tuple(shape)}: align depth to colour")
-    return a.astype(np.float32, copy=False)
+    a = a.astype(np.float32, copy=False)
+    flat = a.ravel()
+    lowest, highest = np.fmin.reduce(flat), np.fmax.reduce(flat)       # NaN-skipping: one fast pass each
+    if highest == np.inf or lowest == -np.inf:
+        raise ValueError(f"{name} contains infinity: depth is camera-frame Z in mm, NaN where there is no return")
+    if lowest < 0:
+        raise ValueError(f"{name} has {int((a < 0).sum())} negative values (lowest {float(lowest):.1f} mm): depth "
+                         f"is camera-frame Z in mm and never negative")
+    if lowest == 0:
+        a = np.where(a == 0, np.float32(np.nan), a)   # zero = no return (RealSense), as NaN everywhere in the kit
+    return a
 
 
 def sample_depth(depth: np.ndarray, uv, radius: int = 2) -> np.ndarray:
@@ -58,7 +76,8 @@ def sample_depth(depth: np.ndarray, uv, radius: int = 2) -> np.ndarray:
 
     Pixels are rounded to the nearest pixel centre; windows are clipped at the image border.
     """
-    uv = np.asarray(uv, dtype=float).reshape(-1, 2)
+    radius = int_in_range(radius, "radius", 0, MAX_SAMPLE_RADIUS_PX, "px around each pixel")
+    uv = finite_array(uv, "uv", [(2,), (None, 2)], "pixels (u, v)", allow_nan=True).reshape(-1, 2)
     h, w = depth.shape
     out = np.full(len(uv), np.nan)
     finite = np.all(np.isfinite(uv), axis=1)

@@ -13,6 +13,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from armlab.arguments import finite_array, instance_of
 from armlab.camera import Camera
 from armlab.detection.color import ColorModel, default_color_model
 from armlab.detection.colour_region import (
@@ -173,10 +174,14 @@ def detect_objects(rgb, depth_mm, camera: Camera, arm_q=None, color_model: Color
     """
     rgb = check_rgb(rgb)
     depth = check_depth(depth_mm, rgb.shape[:2])
+    instance_of(camera, "camera", Camera, "the calibrated camera: calibration.camera")
     if rgb.shape[:2] != camera.image_shape:
         raise ValueError(f"image is {rgb.shape[1]}x{rgb.shape[0]} but the camera is {camera.width}x{camera.height}")
-    settings = settings or DetectionSettings()
-    color_model = color_model or default_color_model()
+    if arm_q is not None:
+        arm_q = finite_array(arm_q, "arm_q", (5,), "the arm's joint angles in rad")
+    settings = DetectionSettings() if settings is None else instance_of(settings, "settings", DetectionSettings)
+    color_model = default_color_model() if color_model is None else instance_of(color_model, "color_model",
+                                                                                 ColorModel)
     arm_small = None if arm_q is None else arm_mask(camera, arm_q, step=settings.step)
     f = FrameData(rgb, depth, camera, arm_small, settings.step)
     height = height_from_depth(depth, camera, settings.step)
