@@ -149,8 +149,13 @@ def _problem(e: jsonschema.ValidationError) -> str:
         words = {"minimum": "at least", "maximum": "at most", "exclusiveMinimum": "greater than",
                  "exclusiveMaximum": "less than"}[e.validator]
         return f"must be {words} {e.validator_value}, got {_plain(e.instance)}"
-    if e.validator in ("minItems", "maxItems", "anyOf") and isinstance(e.instance, list):
-        return f"has {len(e.instance)} values, which is the wrong number ({e.message.split(' is ', 1)[-1]})"
+    if e.validator in ("minItems", "maxItems") and isinstance(e.instance, list):
+        bound = "at least" if e.validator == "minItems" else "at most"
+        exact = e.schema.get("minItems") == e.schema.get("maxItems")
+        return f"has {len(e.instance)} values, expected {'' if exact else bound + ' '}{e.validator_value}"
+    if e.validator == "anyOf" and isinstance(e.instance, list) and all("minItems" in a for a in e.validator_value):
+        return (f"has {len(e.instance)} values, expected "
+                + " or ".join(str(a["minItems"]) for a in e.validator_value))
     if e.validator == "additionalProperties":
         return e.message.replace("Additional properties are not allowed", "unknown key(s)")
     return e.message if len(e.message) <= 200 else e.message[:197] + "..."
