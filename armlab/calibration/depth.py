@@ -15,7 +15,7 @@ import numpy as np
 from armlab.arguments import finite_float, instance_of, int_in_range
 from armlab.camera import Camera
 from armlab.exercises.fallback import reference_fallback
-from armlab.images import check_depth
+from armlab.images import check_depth, check_mask
 from armlab.lab import lab_config
 
 __all__ = ["DepthCorrection", "fit_depth_correction", "board_depth", "board_samples"]
@@ -79,8 +79,8 @@ def board_samples(depth_mm, camera: Camera, step: int = 4, exclude=None) -> tupl
     instance_of(camera, "camera", Camera)
     step = int_in_range(step, "step", 1, MAX_STEP_PX, "px between samples")
     depth = check_depth(depth_mm, camera.image_shape)
-    if exclude is not None and np.shape(exclude) != camera.image_shape:
-        raise ValueError(f"exclude must be a (H, W) = {camera.image_shape} mask, got shape {np.shape(exclude)}")
+    if exclude is not None:
+        exclude = check_mask(exclude, camera.image_shape, "exclude")
     expected, on_board = board_depth(camera, step)
     measured = depth[::step, ::step]
     v, u = np.mgrid[0:camera.height:step, 0:camera.width:step]

@@ -11,6 +11,7 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
+from armlab.arguments import finite_float, int_in_range, plain
 from armlab.images import check_gray_or_rgb
 from armlab.repeatable import opencv_single_thread
 
@@ -48,15 +49,13 @@ def _check_pattern(pattern_size, square_mm) -> tuple[tuple[int, int], float]:
     """Validate (inner-corner columns, rows) and the square edge (mm)."""
     try:
         cols, rows = (int(n) for n in pattern_size)
-        ok = (cols, rows) == tuple(pattern_size)
-    except (TypeError, ValueError):
+        ok = (cols, rows) == tuple(pattern_size) and 2 <= cols <= 1000 and 2 <= rows <= 1000
+    except (TypeError, ValueError, OverflowError):
         ok = False
-    if not ok or cols < 2 or rows < 2:
-        raise ValueError(f"pattern_size must be two whole numbers of INNER corners (columns, rows), each >= 2, "
-                         f"got {pattern_size!r}")
-    if not np.isfinite(square_mm) or square_mm <= 0:
-        raise ValueError(f"square_mm must be a positive number of mm, got {square_mm!r}")
-    return (cols, rows), float(square_mm)
+    if not ok:
+        raise ValueError(f"pattern_size must be two whole numbers of INNER corners (columns, rows), each from 2 to "
+                         f"1000, got {plain(pattern_size)}")
+    return (cols, rows), finite_float(square_mm, "square_mm", positive=True, what="mm")
 
 
 def checkerboard_points(pattern_size: tuple[int, int], square_mm: float) -> np.ndarray:
@@ -98,11 +97,13 @@ def calibrate_intrinsics(images, pattern_size: tuple[int, int] = (9, 6), square_
     pattern_size, square_mm = _check_pattern(pattern_size, square_mm)
     if isinstance(images, np.ndarray) and (images.ndim == 2 or (images.ndim == 3 and images.shape[2] == 3)):
         raise ValueError(f"images must be a list of images, got one array of shape {images.shape}")
-    images = list(images)
+    try:
+        images = list(images)
+    except TypeError:
+        raise TypeError(f"images must be a list of checkerboard images, got {type(images).__name__}") from None
     if len(images) == 0:
         raise ValueError("calibrate_intrinsics needs a list of checkerboard images, got none")
-    if int(min_views) < 3:
-        raise ValueError(f"min_views must be at least 3 (Zhang's method needs 3 views of a plane), got {min_views}")
+    min_views = int_in_range(min_views, "min_views", 3, 10_000, "Zhang's method needs 3 views of a plane")
     object_points = checkerboard_points(pattern_size, square_mm)
     size = None
     obj, img, used, rejected = [], [], [], {}

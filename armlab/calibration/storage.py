@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from armlab.arguments import finite_array
 from armlab.calibration.depth import DepthCorrection
 from armlab.camera import MAX_DISTANCE_MM, MAX_IMAGE_SIDE_PX, Camera, check_intrinsics
 from armlab.files import read_json, write_json_atomic
@@ -41,7 +42,7 @@ class Calibration:
         bias-corrected, read as the median of the valid pixels within `radius` px, and back-projected through the
         camera. NaN rows where the depth has no return."""
         depth = self.depth_correction.apply(check_depth(depth_mm, self.camera.image_shape))
-        uv = np.asarray(uv, float).reshape(-1, 2)
+        uv = finite_array(uv, "uv", [(2,), (None, 2)], "pixels (u, v)", allow_nan=True).reshape(-1, 2)
         return self.camera.pixel_to_world(uv, sample_depth(depth, uv, radius))
 
     def to_dict(self) -> dict:
