@@ -2,11 +2,11 @@
 building blocks they are written with, and `validate`, which refuses a file with its path and the field at fault.
 
 Each loader declares its file's schema beside its format (lab.lab_schema, calibration.storage.SCHEMA,
-detection.color.SCHEMA, tasks.teach.SCHEMA, sim.scenes.SCHEMA, calibration.views.SCHEMA,
-detection.color_labels.SCHEMA) and passes it to files.read_json. The schema says the types, that every number is
-finite (here "number" and "integer" exclude NaN, infinity, booleans and integers beyond a float's range), the ranges,
-the lengths and the allowed keys; what a schema cannot say (bounds in order, one value against another) the loader
-checks after it, naming the field the same way (`field_error`).
+detection.color.SCHEMA, tasks.teach.SCHEMA, sim.scenes.SCHEMA, calibration.views.SCHEMA (checkerboard.json),
+detection.color_labels.SCHEMA (labels.json)) and passes it to files.read_json. The schema says the types, that
+every number is finite (here "number" and "integer" exclude NaN, infinity, booleans and integers beyond a float's
+range), the ranges, the lengths and the allowed keys; what a schema cannot say (bounds in order, one value against
+another) the loader checks after it, naming the field the same way (`field_error`).
 
 Fields are named as a reader finds them: `board.grid_mm`, `waypoints[1].q[3]`.
 """
@@ -21,8 +21,8 @@ import jsonschema
 from jsonschema import Draft202012Validator
 from jsonschema.exceptions import best_match
 
-__all__ = ["number", "integer", "vector", "matrix", "camera_matrix", "strict_object", "comment", "validate",
-           "field_name", "field_error", "MAX_FLOAT_INT"]
+__all__ = ["number", "integer", "vector", "matrix", "camera_matrix", "strict_object", "comment", "file_name",
+           "validate", "field_name", "field_error", "MAX_FLOAT_INT"]
 
 MAX_FLOAT_INT = 2**53        # larger integers do not survive a float: no field of the kit's files needs them
 
@@ -94,6 +94,11 @@ def camera_matrix(limit: float = 1e7) -> dict:
         return {"type": "array", "prefixItems": list(items), "minItems": 3, "maxItems": 3}
 
     return row(row(focal, entry, entry), row({"const": 0}, focal, entry), row({"const": 0}, {"const": 0}, {"const": 1}))
+
+
+def file_name() -> dict:
+    """A file name inside the folder that holds the JSON file (no folders, no "..": nothing outside it is read)."""
+    return {"type": "string", "pattern": r"^(?!\.\.?$)[^/\\\x00]{1,255}$"}
 
 
 def comment() -> dict:
