@@ -59,11 +59,9 @@ def positive_seconds(text: str) -> float:
 def output_folder(text: str, option: str = "--out") -> Path:
     """An output folder option: not empty, not a file, creatable and writable (created here, before any work, so
     that a bad one is refused at once). ValueError saying why otherwise."""
-    if not text.strip():
-        raise ValueError(f"{option} is empty: name a folder (e.g. {option} out)")
-    out = Path(text)
+    out = _named(text, option, "folder")
     if out.exists() and not out.is_dir():
-        raise ValueError(f"{option} {text} is a file, not a folder")
+        raise ValueError(f"{option} {text}: is a file, not a folder")
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as e:
@@ -75,23 +73,25 @@ def output_folder(text: str, option: str = "--out") -> Path:
 
 def output_file(text: str, option: str) -> Path:
     """An output file option: not empty, not a folder, in a folder that exists. ValueError saying why otherwise."""
-    if not text.strip():
-        raise ValueError(f"{option} is empty: name a file")
-    path = Path(text)
-    if path.is_dir():
-        raise ValueError(f"{option} {text} is a folder, not a file")
-    if not path.parent.is_dir():
-        raise ValueError(f"{option} {text}: folder {path.parent} does not exist")
+    path = _named(text, option, "file")
+    problem = ("is a folder, not a file" if path.is_dir()
+               else f"folder {path.parent} does not exist" if not path.parent.is_dir() else None)
+    if problem:
+        raise ValueError(f"{option} {text}: {problem}")
     return path
 
 
 def input_folder(text: str, option: str) -> Path:
     """An input folder option: it exists and is a folder. ValueError saying why otherwise."""
-    if not text.strip():
-        raise ValueError(f"{option} is empty: name a folder")
-    path = Path(text)
-    if not path.exists():
-        raise ValueError(f"{option} {text}: no such folder")
-    if not path.is_dir():
-        raise ValueError(f"{option} {text} is a file, not a folder")
+    path = _named(text, option, "folder")
+    problem = "no such folder" if not path.exists() else "is a file, not a folder" if not path.is_dir() else None
+    if problem:
+        raise ValueError(f"{option} {text}: {problem}")
     return path
+
+
+def _named(text: str, option: str, what: str) -> Path:
+    """The path an option names; ValueError when it names nothing (an empty or blank option)."""
+    if not text.strip():
+        raise ValueError(f"{option} is empty: name a {what}" + (f" (e.g. {option} out)" if what == "folder" else ""))
+    return Path(text)

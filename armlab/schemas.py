@@ -161,6 +161,10 @@ def _problem(e: jsonschema.ValidationError) -> str:
     if e.validator == "anyOf" and isinstance(e.instance, list) and all("minItems" in a for a in e.validator_value):
         return (f"has {len(e.instance)} values, expected "
                 + " or ".join(str(a["minItems"]) for a in e.validator_value))
+    if e.validator == "enum":
+        return f"must be one of {tuple(e.validator_value)}, got {_plain(e.instance)}"
+    if e.validator == "const":
+        return f"must be {e.validator_value!r}, got {_plain(e.instance)}"
     if e.validator == "additionalProperties":
         return e.message.replace("Additional properties are not allowed", "unknown key(s)")
     return e.message if len(e.message) <= 200 else e.message[:197] + "..."
