@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from armlab.arguments import finite_array, finite_float, int_in_range
 from armlab.exercises import registry as course
 from armlab.exercises.fallback import reference_fallback
 from armlab.exercises.registry import ExerciseNotWritten
@@ -62,12 +63,7 @@ def check_joints(q, robot: RobotModel | None = None, check_limits: bool = True) 
     Raises ValueError naming the problem (shape, NaN, or which joint of which row is out of its limits).
     """
     robot = robot or rx200()
-    q = np.asarray(q, dtype=float)
-    if q.ndim not in (1, 2) or q.shape[-1] != 5:
-        raise ValueError(f"joint angles must have shape (5,) or (N, 5) (waist, shoulder, elbow, wrist_angle, "
-                         f"wrist_rotate in rad), got shape {q.shape}")
-    if not np.isfinite(q).all():
-        raise ValueError("joint angles contain NaN or infinity")
+    q = finite_array(q, "joint angles", [(5,), (None, 5)], _JOINTS_WHAT, plural=True)
     if check_limits:
         ok = robot.within_limits(q)
         if not ok.all():
@@ -78,20 +74,15 @@ def check_joints(q, robot: RobotModel | None = None, check_limits: bool = True) 
     return q
 
 
+_JOINTS_WHAT = "waist, shoulder, elbow, wrist_angle, wrist_rotate in rad"
+
+
 def _check_position(position, name: str = "position") -> np.ndarray:
-    p = np.asarray(position, dtype=float)
-    if p.ndim not in (1, 2) or p.shape[-1] != 3:
-        raise ValueError(f"{name} must have shape (3,) or (N, 3) (x, y, z in world mm), got shape {p.shape}")
-    if not np.isfinite(p).all():
-        raise ValueError(f"{name} contains NaN or infinity")
-    return p
+    return finite_array(position, name, [(3,), (None, 3)], "x, y, z in world mm")
 
 
 def _check_angle(value, name: str) -> np.ndarray:
-    a = np.asarray(value, dtype=float)
-    if not np.isfinite(a).all():
-        raise ValueError(f"{name} contains NaN or infinity")
-    return a
+    return finite_array(value, name, what="rad")
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -461,7 +452,7 @@ def _ik_one(position, pitch, roll, current, robot: RobotModel) -> np.ndarray | N
         x, y, z = _floats(position, 3)
         pitch, roll = _real(pitch), _real(roll)
         cur = None if current is None else _floats(current, 5)
-    except TypeError:
+    except (TypeError, OverflowError):       # not plain floats: the general path validates and names the argument
         return None
     if not (math.isfinite(x + y + z + pitch + roll) and (cur is None or math.isfinite(sum(cur)))):
         return None
@@ -632,11 +623,12 @@ def steepest_pitch(position, roll: float = 0.0, max_pitch: float = np.pi / 2, mi
     P = _check_position(position)
     if P.ndim != 1:
         raise ValueError("steepest_pitch takes one position (3,)")
-    _check_angle([roll, min_pitch, max_pitch], "roll, min_pitch and max_pitch")
+    roll, min_pitch, max_pitch = (finite_float(v, n, what="rad") for v, n in
+                                  ((roll, "roll"), (min_pitch, "min_pitch"), (max_pitch, "max_pitch")))
     if not min_pitch <= max_pitch:
         raise ValueError(f"min_pitch ({min_pitch} rad) must not exceed max_pitch ({max_pitch} rad)")
-    if not (step > 0 and tol > 0):
-        raise ValueError(f"step ({step} rad) and tol ({tol} rad) must be positive")
+    step = finite_float(step, "step", positive=True, maximum=np.pi, what="rad")
+    tol = finite_float(tol, "tol", positive=True, what="rad")
     grid = np.linspace(max_pitch, min_pitch, max(2, int(np.ceil((max_pitch - min_pitch) / step)) + 1))
     ok = ik_batch(np.repeat(P[None], grid.size, 0), grid, roll, robot=robot).success
     if not ok.any():
@@ -683,7 +675,12 @@ def ik_numerical(position, pitch, roll: float = 0.0, q0=None, damping: float = 0
     P = _check_position(position)
     if P.ndim != 1:
         raise ValueError("ik_numerical takes one position (3,)")
-    pitch, roll = float(_check_angle(pitch, "pitch")), float(_check_angle(roll, "roll"))
+    pitch, roll = finite_float(pitch, "pitch", what="rad"), finite_float(roll, "roll", what="rad")
+    damping = finite_float(damping, "damping", positive=True, what="of the damped least squares step")
+    tol_mm = finite_float(tol_mm, "tol_mm", positive=True, what="mm")
+    max_iterations = int_in_range(max_iterations, "max_iterations", 1, 1_000_000)
+    orientation_scale_mm = finite_float(orientation_scale_mm, "orientation_scale_mm", positive=True, what="mm")
+    max_step = finite_float(max_step, "max_step", positive=True, what="rad per iteration")
     x, y, _ = P
     heading = np.arctan2(y, x) if np.hypot(x, y) > 1e-9 else robot.dh[0, 0]
     R_target = tool_orientation(heading, pitch, roll)

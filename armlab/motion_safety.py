@@ -40,6 +40,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from armlab.arguments import finite_float
 from armlab.gripper_geometry import GripperGeometry
 from armlab.kinematics import check_joints, joint_positions, link_frames
 from armlab.lab import LabConfig, lab_config
@@ -138,14 +139,16 @@ def check_timing(q_from, q_to, moving_time: float | None = None, accel_time: flo
     """The (moving_time, accel_time) s to send for a move q_from -> q_to (5,) rad (defaults filled in), or
     MotionRefused for an impossible time profile or a joint faster than its velocity limit (the joint named)."""
     robot = robot or rx200()
-    T = default_moving_time(q_from, q_to, robot, ACCEL_FRACTION) if moving_time is None else float(moving_time)
-    if not np.isfinite(T) or T <= 0:
-        raise refusal("time profile", f"moving_time must be a positive number of seconds, got {T}")
+    try:
+        T = (default_moving_time(q_from, q_to, robot, ACCEL_FRACTION) if moving_time is None
+             else finite_float(moving_time, "moving_time", positive=True, what="s"))
+        Ta = T * ACCEL_FRACTION if accel_time is None else finite_float(accel_time, "accel_time", what="s")
+    except (TypeError, ValueError) as e:
+        raise refusal("time profile", str(e)) from None
     if T > MAX_MOVING_TIME_S:
         raise refusal("time profile", f"moving_time {T:g} s is longer than the servos' time profile allows "
                                       f"({MAX_MOVING_TIME_S} s): split the move")
-    Ta = T * ACCEL_FRACTION if accel_time is None else float(accel_time)
-    if not np.isfinite(Ta) or not 0 <= Ta <= T / 2 + 1e-12:
+    if not 0 <= Ta <= T / 2 + 1e-12:
         raise refusal("time profile", f"accel_time {Ta} s must lie in [0, moving_time / 2] = [0, {T / 2:g}] s")
     too_fast = velocity_violations(q_from, q_to, T, robot)
     if too_fast:

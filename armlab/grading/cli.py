@@ -4,36 +4,15 @@ by armlab.__main__) and what they do (main). Every bad option or path is one lin
 from __future__ import annotations
 
 import argparse
-import math
 import sys
 import time
 from pathlib import Path
 
+from armlab.command_line import int_at_least, positive_seconds
+
 from .run import Limits
 
-__all__ = ["add_parsers", "main", "positive_seconds", "job_count"]
-
-
-def positive_seconds(text: str) -> float:
-    """An argparse type: a finite number of seconds above 0."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"must be a number of seconds, got {text!r}") from None
-    if not math.isfinite(value) or value <= 0:
-        raise argparse.ArgumentTypeError(f"must be a finite number of seconds above 0, got {text!r}")
-    return value
-
-
-def job_count(text: str) -> int:
-    """An argparse type: a whole number of parallel jobs, at least 1."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"must be a whole number, got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be at least 1, got {text!r}")
-    return value
+__all__ = ["add_parsers", "main"]
 
 
 def _version() -> str:
@@ -50,7 +29,7 @@ def add_parsers(sub) -> None:
     grade = sub.add_parser("grade", help="grade a folder of submissions (one folder per student) into OUT")
     grade.add_argument("submissions")
     grade.add_argument("--out", required=True, help="folder for grades.csv and <student>/results.json, feedback.md")
-    grade.add_argument("--jobs", type=job_count, default=1, help="submissions graded in parallel (default: 1)")
+    grade.add_argument("--jobs", type=int_at_least(1, 512), default=1, help="submissions graded in parallel (default: 1)")
     grade.add_argument("--timeout", type=positive_seconds, default=300.0,
                        help="wall-clock seconds per notebook run (default: 300)")
     grade.add_argument("--reference", default=".", help="the instructor's checkout (default: .)")

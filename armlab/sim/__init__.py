@@ -13,6 +13,8 @@ import os
 
 import numpy as np
 
+from armlab.arguments import plain
+from armlab.command_line import MAX_SEED
 from armlab.sim.arm import ArmRealism, SimArm
 from armlab.sim.gripper import GripperGeometry
 from armlab.sim.scenes import PRESETS, SceneError, load_scene, save_scene, scene_objects
@@ -46,7 +48,9 @@ def make_sim_station(seed: int = 0, scene: str | os.PathLike | dict = "random",
     command raises StationClosed.
     """
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
-        raise ValueError(f"seed must be an integer, got {seed!r}")
+        raise ValueError(f"seed must be an integer, got {plain(seed)}")
+    if not 0 <= seed <= MAX_SEED:
+        raise ValueError(f"seed must be an integer from 0 to {MAX_SEED}, got {plain(seed)}")
     scene_seed, arm_seed, camera_seed = (int(s.generate_state(1)[0]) for s in np.random.SeedSequence(seed).spawn(3))
     world = World(scene_objects(scene, scene_seed, **scene_options), real_time=real_time)
     arm = SimArm(world, realism=realism, gripper=gripper, seed=arm_seed, real_time=real_time)

@@ -15,6 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from armlab import motion_safety
+from armlab.arguments import finite_array, finite_float, plain
 from armlab.blocks import block_edge
 from armlab.kinematics import Unreachable
 
@@ -32,17 +33,23 @@ def click_world(station, uv, frame=None) -> np.ndarray:
     """World point (3,) mm of the surface at pixel uv of `frame` (default: a new capture), depth corrected; raises
     ClickRefused where the placement rule refuses the point itself (motion_safety.placement_problem: off the board,
     on the robot's base plate)."""
+    uv = _pixel(uv)
     ctx = context(station)
     frame = frame or station.camera.capture()
     depth = ctx.calibration.depth_correction.apply(frame.depth)
     try:
         p = perception.surface_point(ctx.calibration, depth, uv)
     except ValueError as e:
-        raise ClickRefused(f"click at {tuple(np.round(np.asarray(uv, float), 1))}: {e}") from None
+        raise ClickRefused(f"click at {plain(tuple(np.round(uv, 1)))}: {e}") from None
     problem = motion_safety.placement_problem(p, reach=False)      # reach: the pick's or the drop's to judge
     if problem:
         raise ClickRefused(f"click at {problem}")
     return p
+
+
+def _pixel(uv) -> np.ndarray:
+    """A clicked pixel (2,) (u, v) px, or the kit's ValueError / TypeError naming uv."""
+    return finite_array(uv, "uv", (2,), "the clicked pixel (u, v) of the current frame")
 
 
 def current_view(station):
@@ -54,6 +61,7 @@ def current_view(station):
 def click_grab(station, uv) -> bool:
     """Pick the block under pixel uv = (u, v) of the current frame; True when it is held (see tasks.pick). The view
     is refreshed (tasks.look) after the pick."""
+    uv = _pixel(uv)
     ctx = context(station)
     if ctx.held is not None:
         raise ClickRefused(f"the gripper already holds the {ctx.held.color} block: drop it first")
@@ -78,6 +86,7 @@ def click_grab(station, uv) -> bool:
 def click_drop(station, uv, yaw: float = 0.0) -> bool:
     """Put the held block on the surface under pixel uv = (u, v) of the current frame (see tasks.place); a click
     where the held block itself stood puts it on what it stood on. The view is refreshed after the drop."""
+    uv, yaw = _pixel(uv), finite_float(yaw, "yaw", what="rad")
     ctx = context(station)
     if ctx.held is None:
         raise ClickRefused("the gripper holds no block: grab one first")
