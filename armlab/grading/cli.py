@@ -29,7 +29,8 @@ def add_parsers(sub) -> None:
     grade = sub.add_parser("grade", help="grade a folder of submissions (one folder per student) into OUT")
     grade.add_argument("submissions")
     grade.add_argument("--out", required=True, help="folder for grades.csv and <student>/results.json, feedback.md")
-    grade.add_argument("--jobs", type=int_at_least(1, 512), default=1, help="submissions graded in parallel (default: 1)")
+    grade.add_argument("--jobs", type=int_at_least(1, 512), default=1,
+                       help="submissions graded in parallel (default: 1)")
     grade.add_argument("--timeout", type=positive_seconds, default=300.0,
                        help="wall-clock seconds per notebook run (default: 300)")
     grade.add_argument("--reference", default=".", help="the instructor's checkout (default: .)")
