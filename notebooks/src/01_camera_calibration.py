@@ -440,7 +440,7 @@ for name, g in [("before", before), ("after", after)]:
           f"growth {g.border_growth():+.2f} mm per 100 mm from the centre")
 
 # %%
-fig, axes = plt.subplots(1, 3, figsize=(9, 3.2))
+fig, axes = plt.subplots(1, 3, figsize=(8.6, 3.2))
 for ax, g, title in [(axes[0], before, "before"), (axes[1], after, "after")]:
     sc = ax.scatter(g.world[:, 0], g.world[:, 1], c=g.norm, cmap="magma", marker="s", s=22)
     fig.colorbar(sc, ax=ax, label="world error (mm)")

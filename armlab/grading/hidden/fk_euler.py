@@ -44,5 +44,4 @@ SPECS: tuple[HiddenSpec, ...] = (HiddenSpec("euler_angles_from_T", _rotations, a
                                             prelude="definitions"),)
 FORBIDDEN: tuple[str, ...] = (
     "transforms.euler_zyz_from_matrix", "transforms.rpy_from_matrix", "scipy.spatial.transform.Rotation",
-    "Rotation.as_euler",
 )
