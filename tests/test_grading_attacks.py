@@ -3,7 +3,8 @@ class with honest classmates (two jobs at once, so an attack and a classmate run
 honest equivalent deserves; classmates' grades and the instructor's checkout are unchanged; no process of a run
 survives it. The sandbox is the one the grader picks here (bubblewrap; `make test` installs it).
 
-The exercises are the two of notebook 02 (a notebook exercise: the DH link matrix, and the chain that calls it)."""
+The exercises are two notebook exercises of notebook 02: the Euler angles of a pose (attacked) and the DH table
+(written as the reference beside it)."""
 
 from __future__ import annotations
 
@@ -28,10 +29,10 @@ from armlab.grading.splice import check_body, write_regions
 from armlab.grading.submission import exercise_file, read_submission, regions_of, source_texts
 
 ROOT = Path(__file__).resolve().parents[1]
-DH, CHAIN = "fk.dh_transform", "fk.fk_from_table"
+DH, CHAIN = "fk.euler", "fk.dh_table"
 GRADED = [DH, CHAIN]
 MARK = "armlab-attack-7f3c"          # in every process an attack starts: none may be left after the run
-EYE = "    return np.eye(4)"        # the honest "no work" answer
+EYE = "    return np.zeros(3)"      # the honest "no work" answer
 
 
 def _reference(exercise_id: str) -> list[str]:
@@ -62,11 +63,11 @@ READ_SOLUTION = _body(f'''
             continue
         for cell in cells:
             text = "".join(cell["source"])
-            if {BEGIN!r} in text and "np.cos(theta)" in text:
+            if {BEGIN!r} in text and "np.hypot" in text:
                 body = text.split({BEGIN!r})[1].split("# END " + "SOLUTION")[0]
                 space = {{"np": np}}
-                exec("def solution(theta, d, a, alpha):\\n" + body, space)
-                return space["solution"](theta, d, a, alpha)
+                exec("def solution(T):\\n" + body, space)
+                return space["solution"](T)
     raise RuntimeError("no solution found")
 ''')
 CHANGE_GRADER = _body(f'''
@@ -77,10 +78,10 @@ CHANGE_GRADER = _body(f'''
             try:
                 with open(path, "a") as f:
                     f.write("\\n# {MARK}\\n_score = lambda e, c, r='': __import__('armlab').grading.results"
-                            ".ExerciseResult(e, 4.0, 4, c, r)\\n")
+                            ".ExerciseResult(e, 5.0, 5, c, r)\\n")
             except OSError:
                 pass
-    return np.eye(4)
+    return np.zeros(3)
 ''')
 OUTLIVE = _body(f'''
     import subprocess, sys
@@ -120,24 +121,25 @@ NO_ASSERTS = _body('''
         def visit_Assert(self, node):
             return ast.Pass()
     get_ipython().ast_transformers.append(NoAsserts())
-    return np.eye(4)
+    return np.zeros(3)
 ''')
 PATCH_ALLCLOSE = _body('''
     np.allclose = lambda *args, **kwargs: True
     import numpy
     numpy.testing.assert_allclose = lambda *args, **kwargs: None
-    return np.eye(4)
+    numpy.isclose = lambda a, b, **kwargs: numpy.ones(numpy.broadcast(a, b).shape, bool)
+    return np.zeros(3)
 ''')
 BUILT_UP_NAME = _body('''
-    from armlab import kinematics as kin
-    return getattr(kin, "dh_link" + "_transform")(theta, d, a, alpha)
+    from armlab import transforms as tf
+    return getattr(tf, "euler_zyz" + "_from" + "_matrix")(np.asarray(T, float)[:3, :3])
 ''')
 TELL_HIDDEN = _body('''
     import sys
     from pathlib import Path
     if len(sys.argv) > 1 or any(Path(".").glob(".grader*request*")) or "harness" in " ".join(sys.argv):
         raise RuntimeError("under the hidden checks")
-    return np.eye(4)
+    return np.zeros(3)
 ''')
 LEAK_PATHS = _body('''
     import os, sys
@@ -257,7 +259,7 @@ def test_switching_the_checks_off_does_not_pass_them(attacked, student):
 def test_a_forbidden_call_by_a_built_up_name_is_caught_at_run_time(attacked):
     result = attacked["results"]["built_up_name"][DH]
     forbidden = [c for c in result.checks if c.name.startswith("static")]
-    assert forbidden and not forbidden[0].passed and "dh_link_transform" in forbidden[0].message
+    assert forbidden and not forbidden[0].passed and "euler_zyz_from_matrix" in forbidden[0].message
     assert result.score < exercise(DH).points
 
 

@@ -1,6 +1,6 @@
 """`python -m armlab grade` and `python -m armlab check` as instructors and students meet them: every bad option or
 path is one line and a non-zero exit; the self-check prints the first failing check's message, does not charge a
-wrong DH matrix to the chain that calls it, and exits non-zero when anything fails or cannot run."""
+wrong homography to the camera pose that calls it, and exits non-zero when anything fails or cannot run."""
 
 from __future__ import annotations
 
@@ -17,7 +17,7 @@ from armlab.grading.splice import write_regions
 from armlab.grading.submission import exercise_file, regions_of, source_texts
 
 ROOT = Path(__file__).resolve().parents[1]
-DH, CHAIN = "fk.dh_transform", "fk.fk_from_table"
+HOMOGRAPHY, POSE = "calib.tag_homography", "calib.tag_extrinsics"   # the pose calls the homography
 
 
 def _armlab(*args: str, cwd: Path = ROOT, env: dict | None = None) -> subprocess.CompletedProcess:
@@ -60,11 +60,13 @@ def test_grade_has_a_version():
 
 @pytest.fixture(scope="module")
 def student(tmp_path_factory) -> Path:
-    """A release with a wrong DH matrix (d negated) and the reference chain that calls it."""
+    """A release with a wrong homography (the normalisation not undone) and the reference pose that calls it."""
     folder = tmp_path_factory.mktemp("check") / "student"
     make_student_release(ROOT, folder)
-    write_regions(folder, DH, [_reference(DH)[0].replace("[0.0, sa, ca, d]", "[0.0, sa, ca, -d]")])
-    write_regions(folder, CHAIN, _reference(CHAIN))
+    wrong = _reference(HOMOGRAPHY)[0].replace("np.linalg.solve(T_dst, H_normalised @ T_src)", "H_normalised")
+    assert wrong != _reference(HOMOGRAPHY)[0]
+    write_regions(folder, HOMOGRAPHY, [wrong])
+    write_regions(folder, POSE, _reference(POSE))
     return folder
 
 
@@ -72,26 +74,23 @@ def test_check_names_the_first_failing_check_and_does_not_charge_the_caller(stud
     done = _armlab("check", cwd=student)
     assert done.returncode == 1, done.stdout + done.stderr
     lines = done.stdout.splitlines()
-    dh = next(ln for ln in lines if ln.startswith(f"- {DH}:"))
-    assert "02_forward_kinematics cell" in dh and "tool point" in dh, done.stdout    # the check's own message
-    chain = next(ln for ln in lines if ln.startswith(f"- {CHAIN}:"))
-    assert f"it needs {DH}, which fails" in chain
-    assert "2 written exercise(s) not yet passing" in done.stdout and "not written yet" in done.stdout
+    homography = next(ln for ln in lines if ln.startswith(f"- {HOMOGRAPHY}:"))
+    assert "01_camera_calibration cell" in homography and "AssertionError: " in homography, done.stdout
+    pose = next(ln for ln in lines if ln.startswith(f"- {POSE}:"))
+    assert f"it needs {HOMOGRAPHY}, which fails" in pose, done.stdout
+    assert "1 written exercise(s) not yet passing" in done.stdout and "not written yet" in done.stdout
 
 
 def test_check_passes_with_exit_0_when_everything_written_passes(tmp_path):
-    """The DH matrix written alone: its check cell, shared with the chain, waits for the chain (not written yet), and
-    that is no failure; with the chain written too, both pass."""
+    """The homography and the pose written as the reference: every check of theirs passes, except the pose's check
+    cell shared with the depth plane, which waits for it (not written yet): that is no failure (exit 0)."""
     folder = tmp_path / "student"
     make_student_release(ROOT, folder)
-    write_regions(folder, DH, _reference(DH))
+    for exercise_id in (HOMOGRAPHY, POSE):
+        write_regions(folder, exercise_id, _reference(exercise_id))
     done = _armlab("check", cwd=folder)
-    assert done.returncode == 0 and f"it needs {CHAIN}, which is not written yet" in done.stdout, \
-        done.stdout + done.stderr
-    write_regions(folder, CHAIN, _reference(CHAIN))
-    done = _armlab("check", cwd=folder)
-    assert done.returncode == 0 and "all checks of the written exercises passed" in done.stdout, \
-        done.stdout + done.stderr
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert "1 written" not in done.stdout and "not written yet" in done.stdout, done.stdout
 
 
 def test_check_says_what_is_missing_when_it_cannot_run(tmp_path):
