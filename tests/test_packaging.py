@@ -80,7 +80,7 @@ def test_every_imported_package_has_a_declared_version_range():
         assert "<" in spec and ">=" in spec, f"{spec!r}: give a compatible range (>= tested, < next major)"
     imported_as = {"numpy": "numpy", "cv2": "opencv-python-headless", "pupil_apriltags": "pupil-apriltags",
                    "meshcat": "meshcat", "zmq": "pyzmq", "matplotlib": "matplotlib", "ipywidgets": "ipywidgets",
-                   "ipyevents": "ipyevents", "IPython": "ipython", "scipy": "scipy"}
+                   "ipyevents": "ipyevents", "IPython": "ipython", "scipy": "scipy", "platformdirs": "platformdirs"}
     third_party = set()
     for path in (REPO / "armlab").rglob("*.py"):
         if "hardware" in path.parts:            # vendor modules, imported lazily (HardwareUnavailable if missing)
@@ -99,11 +99,12 @@ def test_every_imported_package_has_a_declared_version_range():
     for module in third_party:
         assert imported_as[module] in declared, f"armlab imports {module} but pyproject.toml does not declare " \
                                                 f"{imported_as[module]}"
-    assert "opencv-python-headless>=4.10,<5" in project["dependencies"]   # 5.x drops undistortPointsIter
+    assert "opencv-python-headless>=4.10,<6" in project["dependencies"]   # 5.x: armlab.camera's fallback
 
 
 def test_a_lab_data_folder_overrides_packaged_files_one_by_one(tmp_path, monkeypatch):
     packaged = _paths.packaged_data_dir()
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "user"))
     assert (packaged / "lab.json").is_file() and packaged.parent.name == "armlab"
     monkeypatch.setenv(_paths.DATA_ENV, str(tmp_path))
     assert _paths.data_path("lab.json") == packaged / "lab.json"          # not in the lab's folder: the package's
@@ -120,3 +121,23 @@ def test_a_missing_colour_model_is_an_error_not_other_colours(tmp_path, monkeypa
     monkeypatch.delenv(_paths.DATA_ENV, raising=False)
     with pytest.raises(ValueError, match="color_model.json: colour model file not found"):
         color.default_color_model()
+
+
+def test_the_users_data_folder_sits_between_the_lab_folder_and_the_package(tmp_path, monkeypatch):
+    """Without ARMLAB_DATA the kit writes to the per-user folder (never into site-packages) and reads what it wrote
+    there before the packaged file; a lab's folder still wins over both."""
+    packaged = _paths.packaged_data_dir()
+    monkeypatch.delenv(_paths.DATA_ENV, raising=False)
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "user"))
+    user = tmp_path / "user" / "armlab"
+    assert _paths.user_data_dir() == user
+    assert _paths.data_path("lab.json") == packaged / "lab.json"
+    target = _paths.data_write_path("lab.json")
+    assert target == user / "lab.json" and user.is_dir()          # the folder is made; nothing in the package
+    target.write_text("{}")
+    assert _paths.data_path("lab.json") == user / "lab.json"
+    lab = tmp_path / "lab"
+    (lab / "lab.json").parent.mkdir()
+    (lab / "lab.json").write_text("{}")
+    monkeypatch.setenv(_paths.DATA_ENV, str(lab))
+    assert _paths.data_path("lab.json") == lab / "lab.json"
