@@ -23,15 +23,53 @@ tomllib = pytest.importorskip("tomllib")        # Python 3.11+
 REPO = Path(__file__).resolve().parents[1]
 
 
-@pytest.fixture(scope="module")
-def wheel(tmp_path_factory) -> Path:
-    out = tmp_path_factory.mktemp("wheel")
-    run = subprocess.run([sys.executable, "-m", "pip", "wheel", "--quiet", "--no-deps", "-w", str(out), str(REPO)],
+def build_wheel(source: Path, out: Path) -> Path:
+    """The wheel `pip wheel` builds from the project folder `source`, in `out`."""
+    run = subprocess.run([sys.executable, "-m", "pip", "wheel", "--quiet", "--no-deps", "-w", str(out), str(source)],
                          capture_output=True, text=True, timeout=600)
     if run.returncode != 0:
         pytest.fail(f"pip wheel failed: {run.stderr[-2000:]}")
     (path,) = out.glob("armlab-*.whl")
     return path
+
+
+@pytest.fixture(scope="module")
+def wheel(tmp_path_factory) -> Path:
+    return build_wheel(REPO, tmp_path_factory.mktemp("wheel"))
+
+
+@pytest.fixture(scope="module")
+def student_wheel(tmp_path_factory) -> Path:
+    """The wheel to publish: built from the student release (make student), as docs/release.md says."""
+    from armlab.exercises import make_student_release
+
+    release = tmp_path_factory.mktemp("release") / "student"
+    make_student_release(REPO, release)
+    return build_wheel(release, tmp_path_factory.mktemp("student_wheel"))
+
+
+def test_the_student_wheel_holds_no_hidden_checks_and_no_solution(student_wheel):
+    """Every module of the published wheel is the instructor's with each exercise region stubbed (so no solution
+    line is left, whatever it is), and the grader's hidden checks are not in it; data, licence and py.typed are."""
+    from armlab.exercises.markers import find_regions, stub_regions
+
+    wheel = zipfile.ZipFile(student_wheel)
+    names = set(wheel.namelist())
+    assert "armlab/grading/hidden.py" not in names
+    assert not any("hidden" in n for n in names), sorted(n for n in names if "hidden" in n)
+    assert "armlab/py.typed" in names and "armlab/data/lab.json" in names
+    assert any(n.endswith(".dist-info/licenses/LICENSE") for n in names), "the licence travels with the wheel"
+    modules = sorted(n for n in names if n.startswith("armlab/") and n.endswith(".py"))
+    stubbed = []
+    for name in modules:
+        shipped = wheel.read(name).decode()
+        instructors = (REPO / name).read_text()
+        assert shipped == stub_regions(instructors, name), f"{name} in the student wheel is not the stubbed source"
+        if find_regions(instructors, name):
+            assert shipped != instructors
+            stubbed.append(name)
+    assert len(stubbed) >= 5, stubbed          # the package exercises (DH, IK, calibration, detection, tasks)
+    assert "armlab/kinematics.py" in stubbed
 
 
 def test_the_wheel_carries_every_data_file(wheel):
