@@ -24,4 +24,4 @@ def test_the_package_table_matches_the_layout():
     modules = {f"armlab.{m.name}" for m in pkgutil.iter_modules(armlab.__path__) if not m.name.startswith("_")}
     listed = _table_modules()
     assert not modules - listed, f"docs/architecture.md's package table misses {sorted(modules - listed)}"
-    assert not listed - modules, f"docs/architecture.md's package table names modules that do not exist: {sorted(listed - modules)}"
+    assert not listed - modules, f"docs/architecture.md's table names missing modules {sorted(listed - modules)}"
