@@ -4,14 +4,14 @@ module found in the source tree, and carries the docstrings it is built from."""
 from __future__ import annotations
 
 import html
-import importlib.machinery
-import importlib.util
 import re
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
+
+from tools import load_tool
 
 ROOT = Path(__file__).resolve().parents[1]
 TOOL = ROOT / "tools" / "api-docs"
@@ -20,10 +20,7 @@ pytest.importorskip("pdoc")
 
 
 def api_docs_tool():
-    loader = importlib.machinery.SourceFileLoader("api_docs", str(TOOL))
-    module = importlib.util.module_from_spec(importlib.util.spec_from_loader("api_docs", loader))
-    loader.exec_module(module)
-    return module
+    return load_tool("api-docs")
 
 
 @pytest.fixture(scope="module")

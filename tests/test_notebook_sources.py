@@ -4,12 +4,12 @@ here. (The student release has no sources: nothing to compare there.)"""
 
 from __future__ import annotations
 
-import importlib.machinery
-import importlib.util
 from pathlib import Path
 
 import nbformat
 import pytest
+
+from tools import load_tool
 
 ROOT = Path(__file__).resolve().parents[1]
 TOOL = ROOT / "tools" / "build-notebook"
@@ -20,10 +20,7 @@ if not TOOL.exists() or not SOURCES:
 
 
 def build_notebook_tool():
-    loader = importlib.machinery.SourceFileLoader("build_notebook", str(TOOL))
-    module = importlib.util.module_from_spec(importlib.util.spec_from_loader("build_notebook", loader))
-    loader.exec_module(module)
-    return module
+    return load_tool("build-notebook")
 
 
 def test_every_source_has_its_notebook_and_every_notebook_its_source():
