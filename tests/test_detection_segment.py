@@ -137,6 +137,7 @@ def frame(request):
     return sim_case(*request.param)
 
 
+@pytest.mark.exercise("calib.depth_plane")           # the frame's depth bias corrected by the kit's own fit
 def test_every_visible_top_of_a_simulated_frame_is_a_face_at_its_height(frame):
     """On a realistic frame (noise, bias corrected, lens), at the detector's resolution and settings: every object
     top seen whole has a face under its centre pixel within 2 mm of its height, and every face is some object's
