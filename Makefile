@@ -9,7 +9,7 @@ NBVAL   := --nbval --nbval-sanitize-with tests/nbval_sanitize.cfg --nbval-cell-t
 # (one kernel), stay together in one process (pytest-xdist's loadfile).
 PAR     := -n auto --maxprocesses 4 --dist loadfile
 
-.PHONY: demo test lint unit notebooks lab bench browser camera sandbox student autograder clean
+.PHONY: demo test lint unit notebooks lab bench browser camera sandbox student autograder docs clean
 
 $(STAMP): requirements.txt pyproject.toml
 	test -x $(PY) || python3 -m venv .venv
@@ -33,7 +33,7 @@ else
 endif
 
 lint: $(STAMP)
-	$(PY) -m ruff check armlab tests notebooks $(wildcard benchmarks tools/build-notebook tools/student-release)
+	$(PY) -m ruff check armlab tests notebooks $(wildcard benchmarks tools/build-notebook tools/student-release tools/api-docs)
 
 unit: $(STAMP) camera sandbox
 	MPLBACKEND=Agg $(PY) -m pytest -q $(PAR) tests
@@ -59,6 +59,11 @@ lab: $(STAMP)
 ## make bench: speed and accuracy tables
 bench: $(STAMP)
 	MPLBACKEND=Agg $(PY) benchmarks/run_all.py
+
+## make docs: the API reference from the docstrings (pdoc) in docs/api/index.html
+docs: $(STAMP)
+	rm -rf docs/api
+	$(PY) tools/api-docs docs/api
 
 ## make student: the student release (exercise regions stubbed, notebook outputs cleared) in dist/student
 student: $(STAMP)

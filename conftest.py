@@ -13,6 +13,7 @@ naming it, and runs as soon as the student has written it.
 from __future__ import annotations
 
 import os
+import tempfile
 from pathlib import Path
 
 import pytest
@@ -23,6 +24,11 @@ from armlab.exercises.release import RELEASE_MARKER
 from armlab.viz.server import ZMQ_ENV, ServerProcess, start_server
 
 ROOT = Path(__file__).resolve().parent
+
+# The kit reads a user's own data (armlab._paths.user_data_dir: a refitted colour model, ...) before the packaged
+# files. The tests, and the notebook kernels they start (which inherit the environment), see an empty per-user folder
+# instead of the machine's, so that their results depend on the repository only.
+os.environ["XDG_DATA_HOME"] = tempfile.mkdtemp(prefix="armlab-test-user-data-")
 
 _state: dict[str, ServerProcess | None] = {"server": None}
 

@@ -5,11 +5,12 @@ Public entry points: `armlab.kinematics`, `armlab.calibration`, `armlab.detectio
 """
 
 from armlab.station import make_station
+from armlab.station.contract import Station
 
 __all__ = ["make_station", "station_panel"]
 
 
-def station_panel(station, viewer=None, **options):
+def station_panel(station: Station, viewer=None, **options):
     """The lab's control station in JupyterLab for a station (armlab.tasks.station_panel: live camera, mouse-over
     world coordinates, click-to-grab/drop, teach/repeat, emergency stop, joint sliders, the inline 3D view)."""
     from armlab.tasks.station_panel import station_panel as make

@@ -18,6 +18,10 @@ __all__ = ["Camera", "look_at", "distort_normalized", "check_intrinsics", "MAX_I
 MAX_IMAGE_SIDE_PX = 100_000       # no camera makes images wider or taller (px)
 MAX_DISTANCE_MM = 1e7             # no camera is placed 10 km from the board (mm)
 
+# OpenCV 4 names undistortPoints with stop criteria undistortPointsIter; OpenCV 5 folds it into undistortPoints
+# (same arguments by keyword).
+_UNDISTORT_POINTS = getattr(cv2, "undistortPointsIter", None) or cv2.undistortPoints
+
 
 def check_intrinsics(K, dist) -> tuple[np.ndarray, np.ndarray]:
     """Validate a 3x3 camera matrix (positive focal lengths, last row 0 0 1) and 4, 5 or 8 distortion terms."""
@@ -142,8 +146,8 @@ class Camera:
         uv = _points(uv, 2, "uv")
         if uv.shape[0] == 0:
             return np.zeros((0, 2))
-        return cv2.undistortPointsIter(uv.reshape(-1, 1, 2), self.K, self.dist, None, None,
-                                       (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 50, 1e-12)).reshape(-1, 2)
+        return _UNDISTORT_POINTS(uv.reshape(-1, 1, 2), self.K, self.dist, R=None, P=None,
+                                 criteria=(cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 50, 1e-12)).reshape(-1, 2)
 
     def pixel_to_camera(self, uv, depth_mm) -> np.ndarray:
         """Camera-frame points (N, 3) mm seen at pixels uv (N, 2) with depth Z (N,) mm."""

@@ -18,7 +18,7 @@ Regions (issue 14): in front close in and at full reach, beside the base, behind
 random spots over the whole board; per region: placed, refused before moving, refused mid-plan, errors.
     .venv/bin/python benchmarks/manipulation.py [stations]       # default 13 stations x 8 blocks
     .venv/bin/python benchmarks/manipulation.py regions [n]      # n spots per region (default 6)
-Grid (issue 14): armlab.tasks.board_grid's spots over the whole reachable board (in front close in and at full
+Grid (issue 14): scenarios/board_grid.py's spots over the whole reachable board (in front close in and at full
 reach, beside and behind the base, on stacks) plus seeded random spots; each spot is picked from once (a block put
 there in a seeded scene) and placed at once; per region and action: done, refused before moving, refused mid-plan,
 not grasped, and the errors (places: the block's true bottom-face centre minus the target, world mm; picks: the
@@ -34,9 +34,10 @@ import sys
 import numpy as np
 
 from armlab import make_station, tasks
-from armlab.tasks import board_grid
 from armlab.tasks.experiments import LAB_TABLE_III_ERROR_MM, format_table, reach_experiment
 from armlab.tasks.sag import LAB_BASELINE, SagModel
+
+from scenarios import board_grid
 
 METHODS = ("none", "lab rule", "tasks.sag")
 

@@ -1,9 +1,12 @@
-"""Pick and place over the whole board (issue 14): on a cheap subset of the benchmark grid (armlab.tasks.board_grid,
+"""Pick and place over the whole board: on a cheap subset of the benchmark grid (benchmarks/scenarios/board_grid.py,
 the full grid in benchmarks/manipulation.py grid), every pick and place across the regions is done, none is refused
 mid-plan (that would be a pre-check bug), and the placed blocks land within the issue's 3 mm; the scene helper that
 puts a block at a chosen spot of a seeded scene."""
 
 from __future__ import annotations
+
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -11,7 +14,12 @@ import pytest
 from armlab.blocks import ObjectState
 from armlab.sim.scenes import SceneError, scene_objects, with_objects_at
 from armlab.sim.world import World
-from armlab.tasks import board_grid
+
+BENCHMARKS = Path(__file__).resolve().parents[1] / "benchmarks"
+if not (BENCHMARKS / "scenarios" / "board_grid.py").is_file():
+    pytest.skip("no benchmarks here (a student release)", allow_module_level=True)
+sys.path.insert(0, str(BENCHMARKS))
+from scenarios import board_grid  # noqa: E402
 
 
 def _spot(region: str, x: float, y: float) -> board_grid.GridSpot:

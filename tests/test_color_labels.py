@@ -84,3 +84,25 @@ def test_a_label_no_face_holds_is_an_error_and_writes_nothing(labelled_folder, t
         load_labelled_frames(bad)
     with pytest.raises(ValueError, match="colour labels file not found"):
         load_labelled_frames(tmp_path)
+
+
+def test_colors_fit_without_out_writes_the_users_data_folder_not_the_package(labelled_folder, tmp_path):
+    """Without --out (and without ARMLAB_DATA) the model goes to the per-user data folder ($XDG_DATA_HOME/armlab),
+    which the kit then reads before the packaged model; the installed package is left as it was."""
+    from armlab import _paths
+
+    packaged = _paths.packaged_data_dir() / "color_model.json"
+    before = packaged.read_bytes()
+    xdg = tmp_path / "xdg"
+    env = {k: v for k, v in os.environ.items() if k != _paths.DATA_ENV}
+    env.update(PYTHONPATH=str(REPO), MPLBACKEND="Agg", XDG_DATA_HOME=str(xdg))
+    run = subprocess.run([sys.executable, "-m", "armlab", "colors", "fit", "--frames", str(labelled_folder)],
+                         cwd=tmp_path, env=env, capture_output=True, text=True, timeout=600)
+    assert run.returncode == 0, run.stderr[-2000:]
+    written = xdg / "armlab" / "color_model.json"
+    assert f"wrote {written} from 24 faces" in run.stdout
+    assert packaged.read_bytes() == before
+    code = "from armlab import _paths; print(_paths.data_path('color_model.json'))"
+    read = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, env=env, capture_output=True, text=True,
+                          timeout=120)
+    assert read.stdout.strip() == str(written), read.stderr[-2000:]

@@ -249,10 +249,11 @@ def test_ik_batch_equals_first_ik_solution():
 
 
 @pytest.mark.exercise("ik.candidates")
-def test_the_fast_single_target_path_gives_the_batch_machinerys_answers():
-    """ik() solves one plain target on Python floats (_ik_one); the batch machinery (_ik_general) gives the same
-    solutions in the same order to 1e-12 rad and the same reasons, over reachable, joint-limited and unreachable
-    targets, either elbow, any current pose."""
+def test_ik_gives_the_same_answers_whatever_form_the_numbers_take():
+    """ik() answers one target the same, solutions in the same order to 1e-12 rad and the same reasons, whether the
+    numbers come as Python floats or as numpy arrays of one value (ik solves plain floats its quick way and arrays
+    through the batch machinery): over reachable, joint-limited and unreachable targets, either elbow, any current
+    pose."""
     rng = np.random.default_rng(21)
     q = random_q(2500, seed=22)
     P, pitch, roll = target_of(q)                                  # reachable: every branch of the arm's poses
@@ -263,29 +264,29 @@ def test_the_fast_single_target_path_gives_the_batch_machinerys_answers():
     current = random_q(5000, seed=23)
     counts = {"one": 0, "several": 0, "elbow down first": 0, "limits": 0, "reach": 0}
     for i in range(len(P)):
-        args = (P[i], pitch[i], roll[i], current[i] if i % 2 else None, ROBOT)
-        fast = k._ik_one(*args)
+        cur = current[i] if i % 2 else None
+        plain = dict(position=P[i].tolist(), pitch=float(pitch[i]), roll=float(roll[i]),
+                     current=None if cur is None else cur.tolist())
+        arrays = dict(position=P[i], pitch=pitch[i:i + 1], roll=roll[i:i + 1], current=cur)
         try:
-            general = k._ik_general(*args)
+            general = k.ik(**arrays)
         except k.Unreachable as e:
-            assert fast is None, (i, fast)
             with pytest.raises(k.Unreachable) as again:
-                k.ik(P[i], pitch[i], roll[i], current=args[3])
+                k.ik(**plain)
             assert str(again.value) == str(e)
             counts["limits" if "joint limit" in str(e) else "reach"] += 1
             continue
-        assert fast is not None and fast.shape == general.shape, (i, fast, general)
+        fast = k.ik(**plain)
+        assert fast.shape == general.shape, (i, fast, general)
         np.testing.assert_allclose(fast, general, rtol=0, atol=1e-12)
         counts["one" if len(fast) == 1 else "several"] += 1
         counts["elbow down first"] += not elbow_up(fast, P[i])[0]
     assert all(n >= 100 for n in counts.values()), counts
-    # what the fast path does not take as is (shapes, NaN, arrays of pitch) goes the general way and its checks
+    # what ik does not take as is (shapes, NaN) is refused saying why
     with pytest.raises(ValueError, match="shape"):
         k.ik(np.zeros((3, 1)), 1.0)
     with pytest.raises(ValueError, match="NaN"):
         k.ik([0.0, np.nan, 19.0], 1.0)
-    assert k._ik_one([0, 250, 19], np.array([1.5]), 0.0, None, ROBOT) is None
-    np.testing.assert_allclose(k.ik([0, 250, 19], np.array([1.5])), k.ik([0, 250, 19], 1.5), rtol=0, atol=1e-12)
 
 
 def test_unreachable_says_why():

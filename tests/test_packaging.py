@@ -23,15 +23,53 @@ tomllib = pytest.importorskip("tomllib")        # Python 3.11+
 REPO = Path(__file__).resolve().parents[1]
 
 
-@pytest.fixture(scope="module")
-def wheel(tmp_path_factory) -> Path:
-    out = tmp_path_factory.mktemp("wheel")
-    run = subprocess.run([sys.executable, "-m", "pip", "wheel", "--quiet", "--no-deps", "-w", str(out), str(REPO)],
+def build_wheel(source: Path, out: Path) -> Path:
+    """The wheel `pip wheel` builds from the project folder `source`, in `out`."""
+    run = subprocess.run([sys.executable, "-m", "pip", "wheel", "--quiet", "--no-deps", "-w", str(out), str(source)],
                          capture_output=True, text=True, timeout=600)
     if run.returncode != 0:
         pytest.fail(f"pip wheel failed: {run.stderr[-2000:]}")
     (path,) = out.glob("armlab-*.whl")
     return path
+
+
+@pytest.fixture(scope="module")
+def wheel(tmp_path_factory) -> Path:
+    return build_wheel(REPO, tmp_path_factory.mktemp("wheel"))
+
+
+@pytest.fixture(scope="module")
+def student_wheel(tmp_path_factory) -> Path:
+    """The wheel to publish: built from the student release (make student), as docs/release.md says."""
+    from armlab.exercises import make_student_release
+
+    release = tmp_path_factory.mktemp("release") / "student"
+    make_student_release(REPO, release)
+    return build_wheel(release, tmp_path_factory.mktemp("student_wheel"))
+
+
+def test_the_student_wheel_holds_no_hidden_checks_and_no_solution(student_wheel):
+    """Every module of the published wheel is the instructor's with each exercise region stubbed (so no solution
+    line is left, whatever it is), and the grader's hidden checks are not in it; data, licence and py.typed are."""
+    from armlab.exercises.markers import find_regions, stub_regions
+
+    wheel = zipfile.ZipFile(student_wheel)
+    names = set(wheel.namelist())
+    assert "armlab/grading/hidden.py" not in names
+    assert not any("hidden" in n for n in names), sorted(n for n in names if "hidden" in n)
+    assert "armlab/py.typed" in names and "armlab/data/lab.json" in names
+    assert any(n.endswith(".dist-info/licenses/LICENSE") for n in names), "the licence travels with the wheel"
+    modules = sorted(n for n in names if n.startswith("armlab/") and n.endswith(".py"))
+    stubbed = []
+    for name in modules:
+        shipped = wheel.read(name).decode()
+        instructors = (REPO / name).read_text()
+        assert shipped == stub_regions(instructors, name), f"{name} in the student wheel is not the stubbed source"
+        if find_regions(instructors, name):
+            assert shipped != instructors
+            stubbed.append(name)
+    assert len(stubbed) >= 5, stubbed          # the package exercises (DH, IK, calibration, detection, tasks)
+    assert "armlab/kinematics.py" in stubbed
 
 
 def test_the_wheel_carries_every_data_file(wheel):
@@ -80,7 +118,8 @@ def test_every_imported_package_has_a_declared_version_range():
         assert "<" in spec and ">=" in spec, f"{spec!r}: give a compatible range (>= tested, < next major)"
     imported_as = {"numpy": "numpy", "cv2": "opencv-python-headless", "pupil_apriltags": "pupil-apriltags",
                    "meshcat": "meshcat", "zmq": "pyzmq", "matplotlib": "matplotlib", "ipywidgets": "ipywidgets",
-                   "ipyevents": "ipyevents", "IPython": "ipython", "scipy": "scipy", "jsonschema": "jsonschema"}
+                   "ipyevents": "ipyevents", "IPython": "ipython", "scipy": "scipy", "jsonschema": "jsonschema",
+                   "platformdirs": "platformdirs"}
     third_party = set()
     for path in (REPO / "armlab").rglob("*.py"):
         if "hardware" in path.parts:            # vendor modules, imported lazily (HardwareUnavailable if missing)
@@ -99,11 +138,12 @@ def test_every_imported_package_has_a_declared_version_range():
     for module in third_party:
         assert imported_as[module] in declared, f"armlab imports {module} but pyproject.toml does not declare " \
                                                 f"{imported_as[module]}"
-    assert "opencv-python-headless>=4.10,<5" in project["dependencies"]   # 5.x drops undistortPointsIter
+    assert "opencv-python-headless>=4.10,<6" in project["dependencies"]   # 5.x: armlab.camera's fallback
 
 
 def test_a_lab_data_folder_overrides_packaged_files_one_by_one(tmp_path, monkeypatch):
     packaged = _paths.packaged_data_dir()
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "user"))
     assert (packaged / "lab.json").is_file() and packaged.parent.name == "armlab"
     monkeypatch.setenv(_paths.DATA_ENV, str(tmp_path))
     assert _paths.data_path("lab.json") == packaged / "lab.json"          # not in the lab's folder: the package's
@@ -120,3 +160,23 @@ def test_a_missing_colour_model_is_an_error_not_other_colours(tmp_path, monkeypa
     monkeypatch.delenv(_paths.DATA_ENV, raising=False)
     with pytest.raises(ValueError, match="color_model.json: colour model file not found"):
         color.default_color_model()
+
+
+def test_the_users_data_folder_sits_between_the_lab_folder_and_the_package(tmp_path, monkeypatch):
+    """Without ARMLAB_DATA the kit writes to the per-user folder (never into site-packages) and reads what it wrote
+    there before the packaged file; a lab's folder still wins over both."""
+    packaged = _paths.packaged_data_dir()
+    monkeypatch.delenv(_paths.DATA_ENV, raising=False)
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "user"))
+    user = tmp_path / "user" / "armlab"
+    assert _paths.user_data_dir() == user
+    assert _paths.data_path("lab.json") == packaged / "lab.json"
+    target = _paths.data_write_path("lab.json")
+    assert target == user / "lab.json" and user.is_dir()          # the folder is made; nothing in the package
+    target.write_text("{}")
+    assert _paths.data_path("lab.json") == user / "lab.json"
+    lab = tmp_path / "lab"
+    (lab / "lab.json").parent.mkdir()
+    (lab / "lab.json").write_text("{}")
+    monkeypatch.setenv(_paths.DATA_ENV, str(lab))
+    assert _paths.data_path("lab.json") == lab / "lab.json"

@@ -18,6 +18,7 @@ from armlab import motion_safety
 from armlab.arguments import finite_array, finite_float, plain
 from armlab.blocks import block_edge
 from armlab.kinematics import Unreachable
+from armlab.station.contract import Station
 
 from . import perception
 from .handling import context, look, pick, place
@@ -29,7 +30,7 @@ class ClickRefused(ValueError):
     """A click that cannot be acted on (off the board, on the robot, nothing there, out of reach); nothing moved."""
 
 
-def click_world(station, uv, frame=None) -> np.ndarray:
+def click_world(station: Station, uv, frame=None) -> np.ndarray:
     """World point (3,) mm of the surface at pixel uv of `frame` (default: a new capture), depth corrected; raises
     ClickRefused where the placement rule refuses the point itself (motion_safety.placement_problem: off the board,
     on the robot's base plate)."""
@@ -52,13 +53,13 @@ def _pixel(uv) -> np.ndarray:
     return finite_array(uv, "uv", (2,), "the clicked pixel (u, v) of the current frame")
 
 
-def current_view(station):
+def current_view(station: Station):
     """The frame the user sees: the last look (taken now, arm out of view, when there is none yet)."""
     ctx = context(station)
     return ctx.last if ctx.last is not None else look(station)
 
 
-def click_grab(station, uv) -> bool:
+def click_grab(station: Station, uv) -> bool:
     """Pick the block under pixel uv = (u, v) of the current frame; True when it is held (see tasks.pick). The view
     is refreshed (tasks.look) after the pick."""
     uv = _pixel(uv)
@@ -83,7 +84,7 @@ def click_grab(station, uv) -> bool:
     return held
 
 
-def click_drop(station, uv, yaw: float = 0.0) -> bool:
+def click_drop(station: Station, uv, yaw: float = 0.0) -> bool:
     """Put the held block on the surface under pixel uv = (u, v) of the current frame (see tasks.place); a click
     where the held block itself stood puts it on what it stood on. The view is refreshed after the drop."""
     uv, yaw = _pixel(uv), finite_float(yaw, "yaw", what="rad")

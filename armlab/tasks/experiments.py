@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from armlab import kinematics, planning
+from armlab.station.contract import Station
 
 from .click import click_world
 from .handling import context
@@ -43,7 +44,7 @@ class ReachRow:
         return np.abs(self.actual - self.desired)
 
 
-def reach_experiment(station, arm, measure, locations=LAB_LOCATIONS_MM, z: float = LAB_Z_MM, pixels=None,
+def reach_experiment(station: Station, arm, measure, locations=LAB_LOCATIONS_MM, z: float = LAB_Z_MM, pixels=None,
                      hover_mm: float = 60.0) -> list[ReachRow]:
     """Click, convert, reach and measure at each location (see the module notes). arm: e.g. the raw station.arm
     (no compensation) or tasks.context(station).arm (sag-compensated); measure() -> tool point (3,) mm."""

@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from armlab import planning
-from armlab.station.contract import EmergencyStopped
+from armlab.station.contract import EmergencyStopped, Station
 
 from . import click, handling, perception, teach
 
@@ -35,7 +35,7 @@ class MachineBusy(RuntimeError):
 class TaskMachine:
     """The lab's state machine over a station (sim or real)."""
 
-    def __init__(self, station):
+    def __init__(self, station: Station):
         self.station = station
         self.state = "idle"
         self.history: list[str] = ["idle"]

@@ -24,7 +24,7 @@ from armlab._paths import data_path
 from armlab.calibration import Calibration
 from armlab.camera import Camera
 from armlab.kinematics import Unreachable
-from armlab.station.contract import Frame
+from armlab.station.contract import Frame, Station
 
 __all__ = ["Observation", "calibrate_camera", "clear_view", "observe", "surface_point", "checkerboard_intrinsics",
            "station_intrinsics", "CLEAR_VIEW_MIN_CLEARANCE_MM", "REAL_CHECKERBOARD_FOLDER"]
@@ -57,7 +57,7 @@ def checkerboard_intrinsics(folder=None, image_size: tuple[int, int] | None = No
     return result.K, result.dist
 
 
-def station_intrinsics(station, folder=None) -> tuple[np.ndarray, np.ndarray]:
+def station_intrinsics(station: Station, folder=None) -> tuple[np.ndarray, np.ndarray]:
     """K (3, 3) and dist (5,) of the station's own camera, from a checkerboard set captured with THAT camera (cameras
     differ by ~0.3 % in focal length and ~4 px in principal point: another camera's K misplaces the camera by mm).
 
@@ -104,7 +104,7 @@ def clear_view(arm, obstacles=(), held_below: float = 0.0) -> None:
     raise Unreachable("cannot move the arm out of the camera's view without passing too low over a block")
 
 
-def calibrate_camera(station, intrinsics="checkerboard", arm=None) -> Calibration:
+def calibrate_camera(station: Station, intrinsics="checkerboard", arm=None) -> Calibration:
     """Calibrate the station's camera (see the module notes).
 
     intrinsics: "checkerboard" (station_intrinsics: the station camera's own checkerboard set), "factory"
@@ -132,7 +132,7 @@ def calibrate_camera(station, intrinsics="checkerboard", arm=None) -> Calibratio
                                                  f"residual {correction.residual_mm:.1f} mm")
 
 
-def observe(station, calib: Calibration, arm=None, obstacles=(), clear: bool = True, held_below: float = 0.0,
+def observe(station: Station, calib: Calibration, arm=None, obstacles=(), clear: bool = True, held_below: float = 0.0,
             all_objects: bool = False, settings: detection.DetectionSettings | None = None) -> Observation:
     """Move the arm out of view (clear_view, unless clear=False), capture a frame, correct its depth and detect.
 

@@ -2,15 +2,21 @@
 
 An event is one module that defines a module-level `EVENT = EventSpec(...)`: its name, levels, time limit (simulated
 s), scene per level, detection settings, strategy and scorer (and, for an event whose blocks arrive during the run,
-a supply). The registry finds every module of this package that defines one, and the modules named in the
-environment variable ARMLAB_EVENT_MODULES (comma-separated importable names: a lab's own events, outside the kit);
-register(spec) adds one in the running process. The runner, event_station, score_event and the command line
-(`python -m armlab demo --event NAME`) read only the registry, so adding an event touches no other file.
+a supply). The registry finds every module of this package that defines one, the events installed distributions
+declare in the entry-point group `armlab.events` (a lab's own events, outside the kit: the value names the module,
+or its EventSpec as "module:EVENT"), and the modules named in the environment variable ARMLAB_EVENT_MODULES
+(comma-separated importable names); register(spec) adds one in the running process. The runner, event_station,
+score_event and the command line (`python -m armlab demo --event NAME`) read only the registry, so adding an event
+touches no other file.
 
     # my_event.py, on the path, with ARMLAB_EVENT_MODULES=my_event
     from armlab.tasks.events.registry import EventSpec
     EVENT = EventSpec("corner", "the corner", levels=(1,), time_limit_s=120.0, strategy=Corner, scorer=score_corner,
                       scene=lambda level: "swap")
+
+    # or, installed: the lab's pyproject.toml
+    [project.entry-points."armlab.events"]
+    corner = "my_event"
 """
 
 from __future__ import annotations
@@ -20,14 +26,16 @@ import os
 import pkgutil
 from collections.abc import Callable
 from dataclasses import dataclass
+from importlib.metadata import entry_points
 from typing import Any, Protocol, runtime_checkable
 
 from armlab.detection import DetectionSettings
 
 __all__ = ["EventSpec", "Strategy", "Supply", "events", "event", "register", "score_event", "max_points",
-           "EVENT_MODULES_ENV"]
+           "EVENT_MODULES_ENV", "ENTRY_POINT_GROUP"]
 
 EVENT_MODULES_ENV = "ARMLAB_EVENT_MODULES"
+ENTRY_POINT_GROUP = "armlab.events"
 
 
 @runtime_checkable
@@ -125,6 +133,20 @@ def _module_event(name: str) -> None:
         register(spec)
 
 
+def _entry_point_event(point) -> None:
+    """Register the event an installed distribution's entry point names: its EventSpec, or a module defining EVENT.
+    ImportError or TypeError naming the entry point otherwise."""
+    where = f"entry point {point.name!r} ({point.value}) in {ENTRY_POINT_GROUP}"
+    try:
+        target = point.load()
+    except ImportError as e:
+        raise ImportError(f"{where} does not import: {e}") from e
+    spec = getattr(target, "EVENT", target)
+    if not isinstance(spec, EventSpec):
+        raise TypeError(f"{where} is neither an EventSpec nor a module defining EVENT = EventSpec(...)")
+    register(spec)
+
+
 def _discover() -> None:
     global _discovered
     if _discovered:
@@ -133,6 +155,8 @@ def _discover() -> None:
     package = __name__.rsplit(".", 1)[0]
     for info in sorted(pkgutil.iter_modules(importlib.import_module(package).__path__), key=lambda m: m.name):
         _module_event(f"{package}.{info.name}")
+    for point in entry_points(group=ENTRY_POINT_GROUP):
+        _entry_point_event(point)
     for name in filter(None, (n.strip() for n in os.environ.get(EVENT_MODULES_ENV, "").split(","))):
         try:
             _module_event(name)

@@ -17,6 +17,7 @@ import numpy as np
 
 from armlab.blocks import ObjectState
 from armlab.files import atomic_path
+from armlab.station.contract import Station
 
 __all__ = ["Replay", "ReplayRecorder", "snapshot_objects", "objects_from_snapshot"]
 
@@ -120,7 +121,7 @@ class ReplayRecorder:
     """Records an event's Replay (teach.Recorder records taught waypoints instead): samples a simulated station's
     arm every dt simulated seconds from now on (see the module notes)."""
 
-    def __init__(self, station, dt: float = 0.1, limit_s: float | None = None):
+    def __init__(self, station: Station, dt: float = 0.1, limit_s: float | None = None):
         self.world, self.arm = station.world, station.arm
         self.t0 = self.world.time_s
         self.dt, self.limit_s = float(dt), limit_s

@@ -23,6 +23,7 @@ from armlab.detection import DetectionSettings
 from armlab.kinematics import Unreachable
 from armlab.planning import Obstacle
 from armlab.station import MotionRefused
+from armlab.station.contract import Station
 from armlab.tasks import handling, perception
 
 from .layout import Move, footprint_radius
@@ -96,7 +97,7 @@ class Look:
     objects: list
 
 
-def see(station, ctx, obstacles=(), settings: DetectionSettings | None = None) -> Look:
+def see(station: Station, ctx, obstacles=(), settings: DetectionSettings | None = None) -> Look:
     """Arm out of the camera's view, one frame, corrected depth, every object's top face (tasks.perception.observe with
     all_objects: distractors included, which the plans avoid)."""
     obs = perception.observe(station, ctx.calibration, ctx.arm, obstacles, all_objects=True, settings=settings)
@@ -149,7 +150,7 @@ def _with_protocol_defaults(strategy) -> Strategy:
     return _WithDefaults(strategy)
 
 
-def run_event(station, event: str, level: int = 1, time_limit_s: float | None = None, seed: int = 0,
+def run_event(station: Station, event: str, level: int = 1, time_limit_s: float | None = None, seed: int = 0,
               max_moves: int = 60, record: bool = True, strategy=None) -> EventResult:
     """Run one event autonomously on a simulated station and score it (see the module notes).
 

@@ -1,4 +1,4 @@
-"""Pick and place over the whole board, on the simulated station (issue 14): a grid of spots by region, and a trial
+"""Pick and place over the whole board, on the simulated station: a grid of spots by region, and a trial
 that picks a block put at one spot of a seeded scene and places it at another.
 
 Regions (heading: the angle of the spot from world +y about the waist axis, positive towards -x; reach: mm from
@@ -28,8 +28,7 @@ from armlab.blocks import ObjectState, block_edge
 from armlab.kinematics import Unreachable
 from armlab.lab import lab_config
 from armlab.station.contract import MotionRefused
-
-from . import handling
+from armlab.tasks import handling
 
 __all__ = ["GridSpot", "GRID", "REGIONS", "OUTCOMES", "Outcome", "random_spots", "grid_pairs", "run_trial"]
 
