@@ -407,7 +407,7 @@ class Viewer:
         (arm.move_to; a refused move, e.g. into the board, is reported under the sliders and they return to the
         arm's pose) and the viewer then shows where the arm is; the gripper is an open/close toggle. Blocking
         moves run in the kernel: for an emergency stop during motions, use the station panel
-        (armlab.tasks.station_panel). After close() the sliders are disabled with a note. Returns a VBox
+        (armlab.ui.station_panel). After close() the sliders are disabled with a note. Returns a VBox
         (attributes sliders, gripper, note); display it in a live notebook."""
         import ipywidgets as widgets
 

@@ -32,7 +32,7 @@ import numpy as np
 from IPython import get_ipython
 
 from armlab import make_station, tasks
-from armlab.tasks.station_panel import station_panel
+from armlab.ui import station_panel
 from armlab.viz import Viewer
 
 get_ipython().run_line_magic("matplotlib", "inline")
