@@ -281,7 +281,6 @@ def test_readout_and_click_use_one_pixel_to_world_rule(panel):
 
 
 def test_status_and_slider_readouts_follow_a_real_time_move(panel):
-    station = panel.station
     panel.set_real_time(True)
     try:
         readouts, statuses = [], []
