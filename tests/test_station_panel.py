@@ -14,6 +14,7 @@ import pytest
 
 from armlab import make_station, tasks
 from armlab.robot import rx200
+from armlab.tasks.perception import pointed_point
 from armlab.ui.station_panel import StationPanel, depth_rgb, station_panel
 from armlab.viz import Viewer
 
@@ -275,7 +276,10 @@ def test_readout_and_click_use_one_pixel_to_world_rule(panel):
     station = panel.station
     for uv in (top_pixel(station, "red"), board_pixel(station, (250.0, 80.0)), board_pixel(station, (-300.0, 350.0))):
         shown = panel.world_at(uv)
-        np.testing.assert_array_equal(shown, tasks.surface_point(panel.ctx.calibration, panel._depth, uv))
+        np.testing.assert_array_equal(shown, pointed_point(panel.ctx.calibration, panel._depth, uv))
+        frame = station.camera.capture()                                 # what a click on that frame acts on
+        np.testing.assert_array_equal(tasks.click_world(panel.station, uv, frame), pointed_point(
+            panel.ctx.calibration, panel.ctx.calibration.depth_correction.apply(frame.depth), uv))
         _, p = readout(panel.mouse(uv))
         np.testing.assert_allclose(p, shown, atol=0.051)                 # the readout prints 0.1 mm
 

@@ -50,7 +50,7 @@ from armlab.lab import lab_config
 from armlab.tasks.click import ClickRefused
 from armlab.tasks.handling import context
 from armlab.tasks.machine import TaskMachine
-from armlab.tasks.perception import surface_point
+from armlab.tasks.perception import pointed_point
 from armlab.ui.click_widget import ClickToGrab, encode_view, event_pixel, holding_text, scaled_size, view_is_current
 
 __all__ = ["StationPanel", "station_panel", "VIEW_MODES", "depth_rgb", "depth_scale_html"]
@@ -200,16 +200,14 @@ class StationPanel:
         return self._frame_is_look
 
     def status_text(self) -> str:
-        """One line: what runs (the command and the machine's state while it runs) or the machine's state, then
-        what is held / what the next click does."""
+        """One line: the machine's state, what is held / what the next click does, then what runs (the command, and
+        the machine's state while it runs) or that the panel is ready."""
         state = self.machine.state
         if self.busy:
-            doing = f"running: {self._job_name} (machine: {state if state != 'idle' else 'starting'}; E-STOP stops it)"
-        elif state == "estop":
-            doing = "state estop | EMERGENCY-STOPPED: press reset"
-        else:
-            doing = f"state {state} | ready"
-        return f"{doing} | {holding_text(self.station)}"
+            return (f"running: {self._job_name} (machine: {state if state != 'idle' else 'starting'}; E-STOP stops "
+                    f"it) | {holding_text(self.station)}")
+        doing = "EMERGENCY-STOPPED: press reset" if state == "estop" else "ready"
+        return f"state {state} | {holding_text(self.station)} | {doing}"
 
     def offers_real_time(self) -> bool:
         """True when the station can switch its clock (Capabilities.pacing: a simulated station offers it)."""
@@ -287,10 +285,10 @@ class StationPanel:
     # -- mouse-over ---------------------------------------------------------------------------------------------
     def world_at(self, uv) -> np.ndarray:
         """The world point (3,) mm of the surface at camera pixel uv = (u, v) of the shown frame (what the mouse-over
-        readout shows): the same rule as a click's (tasks.surface_point: the median corrected depth of the window
-        around the pixel, through the calibrated camera), so the point shown under the pointer is the point a click
-        acts on. Raises ValueError outside the image or where the camera saw nothing."""
-        return surface_point(self.ctx.calibration, self._depth, np.asarray(uv, dtype=float).reshape(2))
+        readout shows): the rule a click acts by (tasks.perception.pointed_point: the median corrected depth of the
+        surface around the pixel, through the calibrated camera), so the point shown under the pointer is the point a
+        click acts on. Raises ValueError outside the image or where the camera saw nothing."""
+        return pointed_point(self.ctx.calibration, self._depth, np.asarray(uv, dtype=float).reshape(2))
 
     def mouse(self, uv) -> str:
         """The readout for the pointer at camera pixel uv = (u, v) of the shown frame: world_at(uv) in mm, or why
