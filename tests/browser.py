@@ -119,6 +119,10 @@ class JupyterLab:
             d.mkdir(parents=True, exist_ok=True)
         (settings / "@jupyterlab" / "apputils-extension" / "notification.jupyterlab-settings").write_text(
             '{"fetchNews": "false", "checkForUpdates": false}')
+        # every cell in the page (JupyterLab 4 otherwise leaves out cells scrolled far away: a test reads them all)
+        (settings / "@jupyterlab" / "notebook-extension").mkdir(parents=True, exist_ok=True)
+        (settings / "@jupyterlab" / "notebook-extension" / "tracker.jupyterlab-settings").write_text(
+            '{"windowingMode": "none"}')
         self.env = dict(os.environ, JUPYTER_RUNTIME_DIR=str(self.runtime_dir), JUPYTER_CONFIG_DIR=str(self.home /
                         "config"), JUPYTER_DATA_DIR=str(self.home / "data"), JUPYTERLAB_SETTINGS_DIR=str(settings),
                         JUPYTERLAB_WORKSPACES_DIR=str(self.home / "workspaces"))

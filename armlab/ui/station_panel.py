@@ -716,7 +716,7 @@ class StationPanel:
         }
         widgets["sliders"] = [w.FloatSlider(value=0.0, min=float(lo), max=float(hi), step=SLIDER_STEP_RAD,
                                             description=name, readout_format=".2f", continuous_update=False,
-                                            layout=w.Layout(width="100%"))
+                                            layout=w.Layout(width="100%", margin="2px 0"))   # no overflow
                               for name, lo, hi in zip(self.robot.joint_names, self.robot.lower, self.robot.upper)]
         for name in ("estop", "reset", "calibrate", "detect", "teach", "record", "repeat", "home", "sleep",
                      "refresh", "image", "mouse", "caption", "mode", "live", "gripper"):

@@ -134,7 +134,9 @@ class SceneView(anywidget.AnyWidget):
     def __init__(self, window: MirroredWindow, height_px: int = 420):
         if not 100 <= int(height_px) <= 4000:
             raise ValueError(f"height_px must lie in [100, 4000] px, got {height_px}")
-        super().__init__(_esm=_esm(), height_px=int(height_px))
+        import ipywidgets
+
+        super().__init__(_esm=_esm(), height_px=int(height_px), layout=ipywidgets.Layout(width="100%"))
         self._window = window
         self.errors: list[str] = []
         self.on_msg(self._on_view_message)
