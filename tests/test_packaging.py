@@ -119,7 +119,8 @@ def test_every_imported_package_has_a_declared_version_range():
     imported_as = {"numpy": "numpy", "cv2": "opencv-python-headless", "pupil_apriltags": "pupil-apriltags",
                    "meshcat": "meshcat", "zmq": "pyzmq", "matplotlib": "matplotlib", "ipywidgets": "ipywidgets",
                    "ipyevents": "ipyevents", "IPython": "ipython", "scipy": "scipy", "jsonschema": "jsonschema",
-                   "platformdirs": "platformdirs"}
+                   "platformdirs": "platformdirs",
+                   "anywidget": "anywidget", "traitlets": "traitlets", "umsgpack": "u-msgpack-python"}
     third_party = set()
     for path in (REPO / "armlab").rglob("*.py"):
         if "hardware" in path.parts:            # vendor modules, imported lazily (HardwareUnavailable if missing)

@@ -2,7 +2,8 @@
 
 The current frame is the last look at the board (tasks.look: arm out of view; tasks.context(station).last.frame is
 what a GUI shows; both functions look again after acting). The pixel goes to the world through the calibrated camera
-and the corrected depth (perception.surface_point: the median depth around the pixel, Camera.pixel_to_world).
+and the corrected depth (perception.pointed_point: the median depth of the surface around the pixel, the rule
+the control station's readout shows too; Camera.pixel_to_world).
 click_grab picks the detected block under the click (the nearest detected top-face centre, within one block edge);
 click_drop puts the held block's bottom face on the surface under the click (the board, or the top of a block or
 stack). Everything is checked and planned before anything moves: a click off the board, on the robot, on bare board
@@ -39,7 +40,7 @@ def click_world(station: Station, uv, frame=None) -> np.ndarray:
     frame = frame or station.camera.capture()
     depth = ctx.calibration.depth_correction.apply(frame.depth)
     try:
-        p = perception.surface_point(ctx.calibration, depth, uv)
+        p = perception.pointed_point(ctx.calibration, depth, uv)
     except ValueError as e:
         raise ClickRefused(f"click at {plain(tuple(np.round(uv, 1)))}: {e}") from None
     problem = motion_safety.placement_problem(p, reach=False)      # reach: the pick's or the drop's to judge

@@ -32,7 +32,7 @@ import numpy as np
 from IPython import get_ipython
 
 from armlab import make_station, tasks
-from armlab.tasks.station_panel import station_panel
+from armlab.ui import station_panel
 from armlab.viz import Viewer
 
 get_ipython().run_line_magic("matplotlib", "inline")
@@ -52,14 +52,15 @@ print("state:", panel.machine.state, "| the panel's states:", ", ".join(tasks.ST
 # - **view**: the camera image (*camera*), its depth in colour (*depth*, near = bright), or the image with the last
 #   look's detections drawn (*detections*). *refresh view* takes a frame now; *live camera* refreshes it on a timer.
 # - **mouse over the image**: the world point under the pointer, through the calibrated camera and the depth image
-#   (the median depth of a 7 × 7 window, corrected for the camera's planar bias as in notebook 01).
+#   (the median depth of the surface in a 17 × 17 window, corrected for the camera's planar bias as in notebook 01:
+#   the very point a click acts on).
 # - **click on the image**: grabs the block under the click (gripper empty) or drops the held block there.
 # - **calibrate**, **detect**, **home**, **sleep**; **teach** turns the torque off (hold the real arm first!) and on
 #   the simulator makes the sliders your hand; **record waypoint** stores the pose with the gripper state you pick;
 #   **finish teaching** turns the torque on; **repeat** replays the program.
 # - **joint sliders** start from the arm's pose and move the arm within the joint limits when you release them.
 # - **real-time (simulator)**: the simulated arm then moves at its real speed, so you can watch it in the 3D view
-#   (below the panel: drag to turn, scroll to zoom) and stop it with the red button.
+#   (beside the camera: drag to turn, scroll to zoom) and stop it with the red button.
 
 # %%
 panel.widget()
