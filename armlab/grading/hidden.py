@@ -130,16 +130,6 @@ def _homographies(rng):
     return cases
 
 
-def _noisy_lines(rng):
-    cases = []
-    for _ in range(4):
-        n = int(rng.integers(6, 30))
-        reach = rng.uniform(100, 500, n)
-        sag = rng.uniform(-0.2, 0.2) * reach + rng.uniform(-20, 20) + rng.normal(0, rng.uniform(0.1, 3), n)
-        cases.append([[reach.tolist(), sag.tolist()]])
-    return cases
-
-
 def _ik_all_solutions(rng):
     # every solution of ik() (K, 5) at random targets the instructor's kit reaches (the harness reports an
     # unreachable target as an error): per check two with one solution in the joint limits and two with several
@@ -290,26 +280,48 @@ def _call_segment_tuned(function, rgb):
     return function(np.asarray(rgb, np.uint8), function.__globals__["tuned_hsv_ranges"]())
 
 
-def _clicks(rng):
-    # a small distorted camera, a depth image with noise and dropouts, clicks at fractional pixels, several radii
-    cases = []
+def _grab_scenes(rng):
+    # three blocks of random sizes and yaws at random spots the arm reaches top-down or nearly (150-340 mm from the
+    # waist axis, in front of the base, 90 mm apart), and a free drop spot for each nearer the robot
+    checks = []
     for _ in range(3):
-        K, T = _camera_over_board(rng, 64, 48)
-        dist = [float(rng.uniform(-0.05, 0.05)), float(rng.uniform(-0.02, 0.02)), 0.0, 0.0, 0.0]
-        v, u = np.mgrid[0:48, 0:64]
-        depth = 1000 + rng.uniform(-0.5, 0.5) * u + rng.uniform(-0.5, 0.5) * v + rng.normal(0, 2, (48, 64))
-        depth[rng.random(depth.shape) < 0.1] = np.nan
-        calls = [[K, dist, T, depth.tolist(), [float(rng.uniform(6, 57)), float(rng.uniform(6, 41))],
-                  int(rng.integers(1, 5))] for _ in range(4)]
-        cases.append(calls)
-    return cases
+        blocks, spots = [], []
+        while len(blocks) < 3:
+            r, h = rng.uniform(170, 340), rng.uniform(np.radians(25), np.radians(155))
+            xy = [float(r * np.cos(h)), float(r * np.sin(h))]
+            if all(np.hypot(xy[0] - b[2][0], xy[1] - b[2][1]) > 90 for b in blocks):
+                blocks.append([["red", "green", "blue", "yellow"][len(blocks)], str(rng.choice(["large", "small"])),
+                               xy, float(rng.uniform(-np.pi / 4, np.pi / 4))])
+        for x in rng.permutation([-240.0, 0.0, 240.0]):
+            spots.append([float(x + rng.uniform(-20, 20)), float(rng.uniform(-60, 40) if x else rng.uniform(190, 230)),
+                          0.0])
+        checks.append([[int(rng.integers(0, 1000)), blocks, spots]])
+    return checks
 
 
-def _call_pixel_to_world(function, K, dist, T, depth, uv, radius):
-    from armlab.camera import Camera
+def _call_move_path(function, seed, blocks, spots):
+    """Per block of a fresh sim scene, clicked at its detected top: [grasped, landed within 3 mm of its spot] (1.0 /
+    0.0) with the student's move_path through the kit's checked runners; a refused or failed plan scores 0 for it and
+    the blocks after it."""
+    from armlab import tasks
+    from armlab.station import make_station
+    from armlab.tasks.move_path import drop_with, grab_with
 
-    camera = Camera(np.asarray(K, float), np.asarray(dist, float), np.asarray(T, float), 64, 48)
-    return function(np.asarray(uv, float), np.asarray(depth, float), camera, radius=int(radius))
+    station = make_station("sim", seed=int(seed), scene={"objects": [
+        {"color": c, "size": s, "position_mm": xy, "yaw_rad": yaw} for c, s, xy, yaw in blocks]})
+    seen = {b.color: b for b in tasks.look(station).blocks}
+    out = []
+    for (color, *_), spot in zip(blocks, spots, strict=True):
+        truth = next(o for o in station.world.blocks if o.color == color)
+        try:
+            held = grab_with(station, seen[color], path=function) and truth.id in station.world.held
+            drop_with(station, np.asarray(spot, float), 0.0, path=function)
+            bottom = truth.position - [0.0, 0.0, truth.edge / 2]
+            landed = not station.world.held and float(np.abs(bottom - spot).max()) < 3.0
+        except Exception:           # refused, unreachable or broken: this block and the rest score 0
+            break
+        out += [float(held), float(landed)]
+    return out + [0.0] * (2 * len(blocks) - len(out))
 
 
 def _teach_sessions(rng):
@@ -420,7 +432,6 @@ SPECS: dict[str, HiddenSpec | tuple[HiddenSpec, ...]] = {
     "detect.wrap_yaw": HiddenSpec("wrap_yaw", _angles, atol=1e-9, prelude="definitions"),
     "events.sky_points": HiddenSpec("sky_points", _towers, atol=0),
     "calib.tag_homography": HiddenSpec("armlab.calibration.homography.dlt_homography", _homographies, atol=1e-7),
-    "grab.sag_line": HiddenSpec("sag_line", _noisy_lines, atol=1e-8, prelude="definitions"),
     "ik.candidates": HiddenSpec("armlab.kinematics.ik", _ik_all_solutions, atol=1e-6),
     "calib.tag_extrinsics": HiddenSpec("armlab.calibration.extrinsics.pose_from_corners", _tag_views, atol=1e-6,
                                        adapter="_call_initial_pose"),
@@ -432,8 +443,8 @@ SPECS: dict[str, HiddenSpec | tuple[HiddenSpec, ...]] = {
                                   prelude="definitions"),
                        HiddenSpec("segment_colours", _balanced_faces, atol=0, adapter="_call_segment_tuned",
                                   prelude="definitions", agree=0.9)),
-    "grab.pixel_to_world": HiddenSpec("pixel_to_world", _clicks, atol=1e-6, adapter="_call_pixel_to_world",
-                                      prelude="definitions"),
+    "grab.move_path": HiddenSpec("armlab.tasks.move_path.move_path", _grab_scenes, atol=0,
+                                 adapter="_call_move_path"),
     "teach.record": HiddenSpec("teach_program", _teach_sessions, atol=1e-9, adapter="_call_teach",
                                prelude="definitions"),
     "teach.time_scaled": HiddenSpec("scaled_durations", _replays, atol=1e-9, adapter="_call_scaled_durations",
@@ -466,8 +477,9 @@ FORBIDDEN: dict[str, tuple[str, ...]] = {
     "detect.wrap_yaw": ("transforms.wrap_quarter",),
     "detect.segment": ("ColorModel", "segment_by_colour_model"),
     "detect.classify": ("ColorModel._nearest_mean",),
-    "grab.pixel_to_world": ("tasks.surface_point", "Camera.pixel_to_world", "Camera.pixel_to_camera"),
-    "grab.sag_line": ("scipy.stats.linregress", "scipy.optimize.curve_fit", "Polynomial.fit"),
+    "grab.move_path": ("planning.plan_pick", "planning.plan_place", "planning.plan_pick_place", "choose_grasp",
+                       "kit_move_path", "grasp_height", "place_tool_height", "default_grasp_depth", "tasks.pick",
+                       "tasks.place", "handling"),
     "teach.record": ("teach.load_teach", "kit_recording", "data_path"),
     "teach.time_scaled": ("TeachProgram.to_plan",),
     "events.sky_points": ("scoring.sky_points", "score_event", "scoring"),
