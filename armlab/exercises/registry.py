@@ -86,9 +86,8 @@ EXERCISES: tuple[Exercise, ...] = (
              ("teach_program",)),
     Exercise("teach.time_scaled", "a time-scaled replay: segment times within every limit", 5, _NB["06"],
              _src("06"), ("scaled_durations",)),
-    Exercise("events.sky_points", "the 'to the sky' scoring rule", 2, _NB["07"], _src("07"), ("sky_points",)),
-    Exercise("events.strategy", "a sort 'n stack level 1 strategy from what the robot sees", 7, _NB["07"],
-             _src("07"), ("SortLevel1.next_move",)),
+    Exercise("events.sort_stack", "a sort 'n stack strategy for levels 2 and 3 from what the robot sees", 12,
+             _NB["07"], _src("07"), ("SortStackStrategy",)),
 )
 
 _BY_ID = {e.id: e for e in EXERCISES}

@@ -113,10 +113,6 @@ def _link_batches(rng):
               rng.uniform(-300, 300, 6).tolist(), rng.uniform(-np.pi, np.pi, 6).tolist()]] for _ in range(3)]
 
 
-def _towers(rng):
-    return [[[int(n)] for n in rng.integers(0, 7, 4)], [[int(n)] for n in rng.integers(8, 16, 4)], [[8], [9], [0]]]
-
-
 def _homographies(rng):
     # exact pairs through a random homography (a camera looking at a plane), 4 points and more
     cases = []
@@ -372,53 +368,19 @@ def _call_scaled_durations(function, q, speed):
     return function(TeachProgram(q, ("open",) * len(q), "hidden"), float(speed))
 
 
-def _sort_scenes(rng):
-    # what the robot might see: cubes on the board (z noisy by a millimetre), some under a cube or a distractor, some
-    # already in a slot or beside one, a distractor; the next move's block and destination, or none
-    from armlab.tasks.events.sort_stack import ROW_XY
-
-    edges = {"large": 38.0, "small": 25.0}
-    checks = []
-    for _ in range(4):
-        calls = []
-        for _ in range(4):
-            seen = []
-            for _ in range(int(rng.integers(2, 7))):
-                size = ["small", "large"][int(rng.integers(0, 2))]
-                kind = rng.random()
-                if kind < 0.3:                                     # in a slot (sorted), or 25 mm off it
-                    xy = np.asarray(ROW_XY[size][int(rng.integers(0, 5))]) + rng.choice([0.0, 25.0]) * \
-                        np.array([1.0, 0.0]) + rng.uniform(-5, 5, 2)
-                else:
-                    xy = np.array([rng.uniform(-300, 300), rng.uniform(50, 300)])
-                z = edges[size] + rng.uniform(-1, 1)
-                seen.append([int(rng.integers(0, 6)), size == "large", float(xy[0]), float(xy[1]), float(z), True])
-                if rng.random() < 0.5:                             # a small cube or a distractor on top of it
-                    seen.append([int(rng.integers(0, 6)), False, float(xy[0] + rng.uniform(-3, 3)),
-                                 float(xy[1] + rng.uniform(-3, 3)), float(z + 25 + rng.uniform(-1, 1)),
-                                 bool(rng.random() < 0.5)])
-            if rng.random() < 0.3:
-                seen.append([0, True, float(rng.uniform(-300, 300)), float(rng.uniform(50, 300)), 40.0, False])
-            calls.append([seen])
-        checks.append(calls)
-    all_sorted = [[[int(i), True, x, y, 38.0 + 0.3 * i, True] for i, (x, y) in enumerate(ROW_XY["large"][:3])]]
-    checks[-1].append(all_sorted)
-    return checks
+def _sort_stack_seeds(rng):
+    # sort 'n stack at levels 2 and 3, two fresh seeds each: one hidden check per run
+    return [[[level, int(seed)]] for level in (2, 3) for seed in rng.integers(100, 10_000, 2)]
 
 
-def _call_next_move(function, seen):
-    """SortLevel1().next_move on detections [colour index, large, x, y, z, cube]: [index of the block moved, the
-    destination (3,)], or [-1, nan, nan, nan] for no move."""
-    from armlab.detection.color import COLORS
-    from armlab.detection.types import Block
+def _call_sort_stack(function, level, seed):
+    """The student's strategy class, SortStackStrategy(level), runs the event on a fresh seeded station: [full marks,
+    within the time limit] (1.0 / 0.0), scored from the simulator's ground truth."""
+    from armlab.tasks.events import event_station, run_event
 
-    blocks = [Block(COLORS[int(c)], "large" if large else "small", np.array([x, y, z], float), 0.0, (0.0, 0.0),
-                    38.0 if large else 25.0, "cube" if cube else "distractor") for c, large, x, y, z, cube in seen]
-    move = function().next_move(blocks)
-    if move is None:
-        return [-1.0, np.nan, np.nan, np.nan]
-    index = next((i for i, b in enumerate(blocks) if b is move.block), -2)
-    return [float(index), *np.asarray(move.to, float)[:3]]
+    station = event_station("sort_stack", int(level), seed=int(seed))
+    result = run_event(station, "sort_stack", int(level), strategy=function(int(level)), record=False)
+    return [float(result.score.full_marks), float(result.within_limit)]
 
 
 SPECS: dict[str, HiddenSpec | tuple[HiddenSpec, ...]] = {
@@ -430,7 +392,6 @@ SPECS: dict[str, HiddenSpec | tuple[HiddenSpec, ...]] = {
     "ik.planar_ik": HiddenSpec("planar_ik", _planar_targets, atol=1e-6),
     "detect.centroid": HiddenSpec("centroid", _masks, atol=1e-6, prelude="definitions"),
     "detect.wrap_yaw": HiddenSpec("wrap_yaw", _angles, atol=1e-9, prelude="definitions"),
-    "events.sky_points": HiddenSpec("sky_points", _towers, atol=0),
     "calib.tag_homography": HiddenSpec("armlab.calibration.homography.dlt_homography", _homographies, atol=1e-7),
     "ik.candidates": HiddenSpec("armlab.kinematics.ik", _ik_all_solutions, atol=1e-6),
     "calib.tag_extrinsics": HiddenSpec("armlab.calibration.extrinsics.pose_from_corners", _tag_views, atol=1e-6,
@@ -449,8 +410,8 @@ SPECS: dict[str, HiddenSpec | tuple[HiddenSpec, ...]] = {
                                prelude="definitions"),
     "teach.time_scaled": HiddenSpec("scaled_durations", _replays, atol=1e-9, adapter="_call_scaled_durations",
                                     prelude="definitions"),
-    "events.strategy": HiddenSpec("SortLevel1", _sort_scenes, atol=1e-9, adapter="_call_next_move",
-                                  prelude="definitions"),
+    "events.sort_stack": HiddenSpec("SortStackStrategy", _sort_stack_seeds, atol=0, adapter="_call_sort_stack",
+                                    prelude="definitions"),
 }
 
 # Calls that would do an exercise for the student: a name matches any reference to it in the region (a call, an
@@ -482,8 +443,7 @@ FORBIDDEN: dict[str, tuple[str, ...]] = {
                        "tasks.place", "handling"),
     "teach.record": ("teach.load_teach", "kit_recording", "data_path"),
     "teach.time_scaled": ("TeachProgram.to_plan",),
-    "events.sky_points": ("scoring.sky_points", "score_event", "scoring"),
-    "events.strategy": ("SortStack",),
+    "events.sort_stack": ("SortStack", "make_strategy", "sort_stack.EVENT"),
 }
 
 
