@@ -63,24 +63,6 @@ def _planar_targets(rng):
     return cases
 
 
-def _masks(rng):
-    cases = []
-    for _ in range(4):
-        mask = np.zeros((60, 80), dtype=bool)
-        for _ in range(3):
-            u, v, w, h = rng.integers(0, 70), rng.integers(0, 50), rng.integers(3, 20), rng.integers(3, 20)
-            mask[v:v + h, u:u + w] = True
-        cases.append([[mask.astype(int).tolist()]])
-    return cases
-
-
-def _angles(rng):
-    # wide angles, and angles 1e-3 rad either side of the wrap's edges (odd multiples of pi/4)
-    edges = [(2 * int(k) + 1) * np.pi / 4 + s * 1e-3 for k in rng.integers(-6, 6, 10) for s in (-1, 1)]
-    return [[[float(a)] for a in rng.uniform(-10, 10, 20)], [[float(a)] for a in rng.uniform(-100, 100, 20)],
-            [[float(a)] for a in edges]]
-
-
 def _pinhole(rng):
     K = [[900.0 + rng.uniform(-50, 50), 0.0, 640 + rng.uniform(-20, 20)],
          [0.0, 900.0 + rng.uniform(-50, 50), 360 + rng.uniform(-20, 20)], [0.0, 0.0, 1.0]]
@@ -233,47 +215,54 @@ def _call_classify(function, names, means, stds, rgb):
     return [[float(model.names.index(b)) for b in best], np.asarray(margin, float).tolist()]
 
 
-def _hsv_boxes(rng):
-    # random images and random HSV boxes (red's wrapping around H = 0), labels exact
-    cases = []
+def _square_faces(rng):
+    # filled squares drawn at random centres and yaws, a large (38 mm) or small (25 mm) cube's face within 5 % at
+    # 0.7-1.6 mm per px (15-57 px across); the adapter scores the student's answer against the truth
+    checks = []
     for _ in range(3):
-        boxes = []
-        for name in ("red", "orange", "yellow", "green", "blue", "violet"):
-            if name == "red":
-                h0, h1 = int(rng.integers(160, 178)), int(rng.integers(3, 12))
-            else:
-                h0 = int(rng.integers(5, 150))
-                h1 = h0 + int(rng.integers(5, 30))
-            boxes.append([name, [h0, int(rng.integers(20, 150)), int(rng.integers(20, 150))], [h1, 255, 255]])
-        cases.append([[rng.integers(0, 256, (30, 40, 3)).tolist(), boxes]])
-    return cases
+        calls = []
+        for _ in range(4):
+            large, mm_per_px = bool(rng.random() < 0.5), float(rng.uniform(0.7, 1.6))
+            edge = (38.0 if large else 25.0) * rng.uniform(0.95, 1.05) / mm_per_px
+            calls.append([rng.uniform(45, 55, 2).tolist(), float(edge), float(rng.uniform(-3, 3)), mm_per_px])
+        checks.append(calls)
+    return checks
 
 
-def _call_segment(function, rgb, boxes):
-    ranges = {str(name): (tuple(int(x) for x in lo), tuple(int(x) for x in hi)) for name, lo, hi in boxes}
-    return function(np.asarray(rgb, np.uint8), ranges)
+def _call_face(function, centre, edge, yaw, mm_per_px):
+    """face_geometry on a drawn square (100 x 100 px): [centre within 1 px, yaw within 5 deg modulo quarter turns and
+    in [-pi/4, pi/4), size class right] (1.0 / 0.0)."""
+    import cv2
+
+    c, s = np.cos(yaw), np.sin(yaw)
+    corners = np.asarray(centre) + 0.5 * edge * np.array([[c - s, s + c], [-c - s, -s + c], [-c + s, -s - c],
+                                                          [c + s, s - c]])
+    mask = np.zeros((100, 100), np.uint8)
+    cv2.fillPoly(mask, [np.round(corners * 16).astype(np.int32)], 1, cv2.LINE_8, shift=4)
+    u, v, got_yaw, size = function(mask, float(mm_per_px))
+    err = abs((float(got_yaw) - yaw + np.pi / 4) % (np.pi / 2) - np.pi / 4)
+    want = "large" if edge * mm_per_px > (38.0 + 25.0) / 2 else "small"
+    return [float(np.hypot(u - centre[0], v - centre[1]) < 1.0),
+            float(err < np.radians(5) and -np.pi / 4 <= float(got_yaw) < np.pi / 4), float(size == want)]
 
 
-def _balanced_faces(rng):
-    # white-balanced block faces of the lab's colours, shaded 0.75-1.15 with noise, on a grey board: the student's
-    # own tuned ranges through their segmentation must agree with the reference's labels on 90 % of the pixels
-    from armlab.blocks import LAB_RGB
+def _segment_scenes(rng):
+    # held-out simulator frames of other seeds (scenes with stacks and distractors, the arm over the board in some)
+    from armlab.sim.detection_eval import SCENES
 
-    cases = []
-    for _ in range(2):
-        rows = []
-        for colour in LAB_RGB.values():
-            shade = rng.uniform(0.75, 1.15, (1, 40, 1))
-            rows.append(np.clip(np.array(colour, float) * shade + rng.normal(0, 4, (1, 40, 3)), 0, 255))
-        grey = rng.uniform(100, 170, (1, 40, 1)) + rng.normal(0, 3, (1, 40, 3))
-        rows.append(np.clip(grey, 0, 255))
-        cases.append([[np.concatenate(rows).astype(np.uint8).tolist()]])
-    return cases
+    return [[[str(SCENES[int(k)]), int(seed), bool(arm)]] for k, seed, arm in
+            zip(rng.integers(0, len(SCENES), 3), rng.integers(5000, 9000, 3), (False, True, False))]
 
 
-def _call_segment_tuned(function, rgb):
-    """segment_colours with the student's own tuned_hsv_ranges()."""
-    return function(np.asarray(rgb, np.uint8), function.__globals__["tuned_hsv_ranges"]())
+def _call_segment_frame(function, scene, seed, arm_over_board):
+    """The student's segment_colours with their own tuned_hsv_ranges() on a held-out white-balanced frame: [at least
+    95 % of the visible faces right, under 0.5 % of the board labelled] (1.0 / 0.0)."""
+    from armlab.sim.detection_eval import balanced_frame, score_segmentation, sim_case
+
+    case = sim_case(str(scene), int(seed), arm_over_board=bool(arm_over_board))
+    rgb, board = balanced_frame(case)
+    score = score_segmentation(case, function(rgb, function.__globals__["tuned_hsv_ranges"]()), board)
+    return [float(score.face_accuracy >= 0.95), float(score.board_labelled < 0.005)]
 
 
 def _grab_scenes(rng):
@@ -390,8 +379,7 @@ SPECS: dict[str, HiddenSpec | tuple[HiddenSpec, ...]] = {
     "fk.fk_from_table": HiddenSpec("fk_from_table", _fk_tables, atol=1e-6),
     "fk.dh_link_transform": HiddenSpec("armlab.kinematics.dh_link_transform", _link_batches),
     "ik.planar_ik": HiddenSpec("planar_ik", _planar_targets, atol=1e-6),
-    "detect.centroid": HiddenSpec("centroid", _masks, atol=1e-6, prelude="definitions"),
-    "detect.wrap_yaw": HiddenSpec("wrap_yaw", _angles, atol=1e-9, prelude="definitions"),
+    "detect.face": HiddenSpec("face_geometry", _square_faces, atol=0, adapter="_call_face", prelude="definitions"),
     "calib.tag_homography": HiddenSpec("armlab.calibration.homography.dlt_homography", _homographies, atol=1e-7),
     "ik.candidates": HiddenSpec("armlab.kinematics.ik", _ik_all_solutions, atol=1e-6),
     "calib.tag_extrinsics": HiddenSpec("armlab.calibration.extrinsics.pose_from_corners", _tag_views, atol=1e-6,
@@ -400,10 +388,8 @@ SPECS: dict[str, HiddenSpec | tuple[HiddenSpec, ...]] = {
                                     adapter="_call_depth_plane"),
     "detect.classify": HiddenSpec("armlab.detection.color.ColorModel", _colour_models, atol=1e-9,
                                   adapter="_call_classify"),
-    "detect.segment": (HiddenSpec("segment_colours", _hsv_boxes, atol=0, adapter="_call_segment",
-                                  prelude="definitions"),
-                       HiddenSpec("segment_colours", _balanced_faces, atol=0, adapter="_call_segment_tuned",
-                                  prelude="definitions", agree=0.9)),
+    "detect.segment": HiddenSpec("segment_colours", _segment_scenes, atol=0, adapter="_call_segment_frame",
+                                 prelude="definitions"),
     "grab.move_path": HiddenSpec("armlab.tasks.move_path.move_path", _grab_scenes, atol=0,
                                  adapter="_call_move_path"),
     "teach.record": HiddenSpec("teach_program", _teach_sessions, atol=1e-9, adapter="_call_teach",
@@ -434,9 +420,9 @@ FORBIDDEN: dict[str, tuple[str, ...]] = {
                      "scipy.optimize.least_squares", "scipy.optimize.fsolve", "scipy.optimize.minimize"),
     "ik.candidates": ("kinematics._numerical_candidates", "kinematics.ik_numerical", "IKinSpace", "IKinBody",
                       "scipy.optimize.least_squares", "scipy.optimize.fsolve", "scipy.optimize.minimize"),
-    "detect.centroid": ("scipy.ndimage.center_of_mass",),
-    "detect.wrap_yaw": ("transforms.wrap_quarter",),
-    "detect.segment": ("ColorModel", "segment_by_colour_model"),
+    "detect.face": ("scipy.ndimage.center_of_mass", "transforms.wrap_quarter", "wrap_quarter", "detect_objects",
+                    "detect_blocks"),
+    "detect.segment": ("ColorModel", "segment_by_colour_model", "default_color_model", "hsv_table_classify"),
     "detect.classify": ("ColorModel._nearest_mean",),
     "grab.move_path": ("planning.plan_pick", "planning.plan_place", "planning.plan_pick_place", "choose_grasp",
                        "kit_move_path", "grasp_height", "place_tool_height", "default_grasp_depth", "tasks.pick",

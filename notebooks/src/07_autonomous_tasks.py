@@ -77,7 +77,7 @@ def draw_side(ax, objects, title):
             ax.add_patch(plt.Rectangle((o.position[0] - e / 2, o.bottom_z), e, e,
                                        fc=np.array(LAB_RGB[o.color]) / 255, ec="k", lw=0.5))
             ax.text(o.position[0], o.bottom_z + e / 2, o.color[0].upper(), ha="center", va="center", fontsize=8,
-                    color="k" if o.color in ("yellow", "orange", "green") else "w")
+                    color="k" if o.color == "yellow" else "w")
     ax.axhline(0, color="0.3", lw=1)
     ax.set(xlim=(-280, 280), ylim=(-5, 130), aspect="equal", xlabel="x (mm)", ylabel="z (mm)", title=title)
 
