@@ -5,6 +5,7 @@ OUT.bag` records the lab's RealSense camera for replay with make_station("real",
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 
 
@@ -20,7 +21,9 @@ def main(argv: list[str] | None = None) -> int:
                            "or named in $ARMLAB_EVENT_MODULES)")
     demo.add_argument("--level", type=int, default=None, help="the event's level (default: its highest)")
     demo.add_argument("--no-html", action="store_true", help="skip the meshcat replay page")
-    sub.add_parser("exercises", help="list the exercises: id, points, notebook, where to write them")
+    listing = sub.add_parser("exercises", help="list the exercises: id, points, kind, notebook, where to write them")
+    listing.add_argument("--json", action="store_true",
+                         help="as JSON: id, title, points, notebook, kind, where, functions, hidden, solution_lines")
     colors = sub.add_parser("colors", help="the block colour model (data/color_model.json)")
     colors_fit = colors.add_subparsers(dest="colors_command", required=True).add_parser(
         "fit", help="refit the colour model from labelled frames (real or simulated)")
@@ -47,9 +50,9 @@ def main(argv: list[str] | None = None) -> int:
     if rest:
         parser.error(f"unrecognized arguments: {' '.join(rest)}")
     if args.command == "exercises":
-        from armlab.exercises import exercises_table
+        from armlab.exercises import exercises_json, exercises_table
 
-        print(exercises_table())
+        print(json.dumps(exercises_json(), indent=1) if args.json else exercises_table())
         return 0
     if args.command == "colors":
         return _fit_colors(args.frames, args.out)

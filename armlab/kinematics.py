@@ -20,7 +20,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from armlab.exercises.fallback import is_blank_stub, reference_fallback
+from armlab.exercises import registry as course
+from armlab.exercises.fallback import reference_fallback
+from armlab.exercises.registry import ExerciseNotWritten
 from armlab.robot import DH_TOOL_ROTATION, RobotModel, rx200
 from armlab.transforms import exp_se3, homogeneous, log_so3, rot_x, rot_y, rot_z
 
@@ -105,7 +107,7 @@ def _dh_by_elementary_motions(theta, d, a, alpha) -> np.ndarray:
             @ homogeneous(None, np.stack([a, zero, zero], -1)) @ homogeneous(rot_x(alpha)))
 
 
-@reference_fallback("fk.dh_link_transform", _dh_by_elementary_motions, "DH link transforms are products of the "
+@reference_fallback(course.DH_LINK, _dh_by_elementary_motions, "DH link transforms are products of the "
                                                                        "four elementary motions' matrices")
 def dh_link_transform(theta, d, a, alpha) -> np.ndarray:
     """Standard DH link transform(s) (..., 4, 4) = Rz(theta) Tz(d) Tx(a) Rx(alpha); lengths in mm, angles in rad.
@@ -402,7 +404,7 @@ def _ik_geometry(robot: RobotModel) -> tuple[float, ...]:
     return cached[1]
 
 
-@reference_fallback("ik.candidates", _numerical_candidates, "inverse kinematics is solved numerically on the PoX "
+@reference_fallback(course.IK_BRANCHES, _numerical_candidates, "inverse kinematics is solved numerically on the PoX "
                                                             "model (slower)")
 def _ik_candidates(P: np.ndarray, pitch: np.ndarray, roll: np.ndarray, robot: RobotModel) -> _Candidates:
     """Every IK branch for targets P (N, 3) with pitch (N,) and roll (N,), vectorised over targets and branches
@@ -469,8 +471,8 @@ def _ik_one(position, pitch, roll, current, robot: RobotModel) -> np.ndarray | N
     for flipped, delta_sign, elbow_down in _BRANCH_SIGNS:
         try:
             q1, q2, q3, q4, ok, _ = _branch_joints(heading, r, z, pitch, flipped, delta_sign, geometry, _SCALAR_MATH)
-        except NotImplementedError as e:
-            if is_blank_stub(e, "ik.candidates"):
+        except ExerciseNotWritten as e:
+            if e.exercise_id == course.IK_BRANCHES.id:
                 return None
             raise
         if not ok:

@@ -129,7 +129,14 @@ def test_a_stub_keeps_the_markers_and_names_the_exercise_and_the_function():
 def test_the_exercise_list_command():
     run = subprocess.run([sys.executable, "-m", "armlab", "exercises"], capture_output=True, text=True, cwd=REPO)
     assert run.returncode == 0 and run.stdout.strip() == exercises_table()
-    assert "fk.dh_transform" in run.stdout and run.stdout.strip().endswith("20 exercises, 100 points")
+    assert run.stdout.strip().endswith(f"{len(EXERCISES)} exercises, {sum(e.points for e in EXERCISES)} points")
+    listed = json.loads(subprocess.run([sys.executable, "-m", "armlab", "exercises", "--json"], capture_output=True,
+                                       text=True, cwd=REPO, check=True).stdout)
+    assert [x["id"] for x in listed] == [e.id for e in EXERCISES]
+    for x in listed:
+        e = exercise(x["id"])
+        assert (x["title"], x["points"], x["notebook"], x["kind"]) == (e.title, e.points, e.notebook, e.kind)
+        assert x["solution_lines"] >= 1, f"{e.id}: no solution lines found in {e.where}"
 
 
 @pytest.fixture(scope="module")
@@ -151,7 +158,7 @@ def test_the_release_is_a_students_repository(release):
     assert "make bench" not in readme and (out / ".student-release").is_file()
     nb = json.loads((out / "notebooks/02_forward_kinematics.ipynb").read_text())
     assert all(c.get("outputs", []) == [] for c in nb["cells"])
-    assert "exercise fk.dh_transform (notebook 02): write dh_transform" in json.dumps(nb)
+    assert "raise ExerciseNotWritten('fk.dh_transform')" in json.dumps(nb)
     assert all(released(p.relative_to(out).as_posix()) or p.name == "README.md"
                for p in out.rglob("*") if p.is_file())
 
@@ -214,22 +221,24 @@ except NotImplementedError as e:
 
 def test_a_reference_path_stands_in_only_for_its_own_blank_stub(capsys):
     """The kit's function runs the student's code when written; the reference only for that exercise's blank stub."""
+    from armlab.exercises import ExerciseNotWritten, registry
     from armlab.exercises import exercise as registered
     from armlab.exercises.fallback import reference_fallback
 
     blank = registered("fk.dh_link_transform").message()
 
-    @reference_fallback("fk.dh_link_transform", lambda x, error=None: ("reference", x), "the reference is used")
+    @reference_fallback(registry.DH_LINK, lambda x, error=None: ("reference", x), "the reference is used")
     def kit(x, error=None):
         if error:
             raise error
         return ("student", x)
 
     assert kit(1) == ("student", 1)                                   # written: the reference never runs
-    assert kit(2, NotImplementedError(blank)) == ("reference", 2)
-    assert kit(3, NotImplementedError(blank)) == ("reference", 3)
+    assert kit(2, ExerciseNotWritten("fk.dh_link_transform")) == ("reference", 2)
+    assert kit(3, ExerciseNotWritten("fk.dh_link_transform")) == ("reference", 3)
     assert capsys.readouterr().err.count("the reference is used") <= 1  # one line, once per exercise
-    for other in (NotImplementedError(registered("ik.candidates").message()), NotImplementedError("todo"),
+    # another exercise's stub, a student's own NotImplementedError (even with the message's text), anything else
+    for other in (ExerciseNotWritten("ik.candidates"), NotImplementedError(blank), NotImplementedError("todo"),
                   ValueError(blank)):
         with pytest.raises(type(other)):                             # anything else propagates
             kit(4, other)
@@ -290,7 +299,8 @@ def test_in_the_release_a_test_of_a_blank_exercise_skips_until_it_is_written(rel
         assert "1 skipped" in blank.stdout and "needs exercise calib.depth_plane, still blank here" in blank.stdout
         source = out / "armlab/calibration/depth.py"
         text = source.read_text()
-        stub = f"raise NotImplementedError({exercise('calib.depth_plane').message()!r})"
+        stub = "raise ExerciseNotWritten('calib.depth_plane')"
+        assert stub in text
         source.write_text(text.replace(stub, "coef = np.zeros(3)"))          # a student's (poor) answer
         written = run()
         assert "1 passed" in written.stdout, written.stdout

@@ -146,7 +146,7 @@ def test_calling_the_kits_reference_function_fails_the_hidden_checks(graded):
 
 def test_the_release_lacks_the_hidden_checks(tmp_path):
     make_student_release(ROOT, tmp_path / "s")
-    assert (ROOT / "armlab/grading/hidden.py").is_file() and not (tmp_path / "s/armlab/grading/hidden.py").exists()
+    assert (ROOT / "armlab/grading/hidden/__init__.py").is_file() and not (tmp_path / "s/armlab/grading/hidden").exists()
     assert (tmp_path / "s/armlab/grading/harness.py").is_file()
     assert not list((tmp_path / "s/tests").glob("test_grading*.py"))
 

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from armlab.camera import Camera
+from armlab.exercises import registry as course
 from armlab.exercises.fallback import reference_fallback
 from armlab.images import check_depth
 from armlab.lab import lab_config
@@ -101,7 +102,7 @@ def _robust_plane(depth_mm, camera: Camera, step: int = 4, inlier_mm: float = 6.
                            int(inliers.sum()))
 
 
-@reference_fallback("calib.depth_plane", _robust_plane, "the depth's bias plane comes from one robust fit "
+@reference_fallback(course.DEPTH_PLANE, _robust_plane, "the depth's bias plane comes from one robust fit "
                                                          "(scipy least squares, Cauchy loss)")
 def fit_depth_correction(depth_mm, camera: Camera, step: int = 4, inlier_mm: float = 6.0,
                          iterations: int = 6, exclude=None) -> DepthCorrection:

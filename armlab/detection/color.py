@@ -19,6 +19,7 @@ import numpy as np
 
 from armlab._paths import data_path
 from armlab.blocks import COLORS, LAB_RGB
+from armlab.exercises import registry as course
 from armlab.exercises.fallback import reference_fallback
 from armlab.files import read_json, write_json_atomic
 
@@ -98,7 +99,7 @@ class ColorModel:
         margin = ranked[:, 1] - ranked[:, 0] if len(self.names) > 1 else np.full(len(d), np.inf)
         return [self.names[i] for i in d.argmin(axis=1)], margin
 
-    @reference_fallback("detect.classify", _nearest_mean, "colours are the nearest class mean, with one spread "
+    @reference_fallback(course.CLASSIFY, _nearest_mean, "colours are the nearest class mean, with one spread "
                                                           "for every class")
     def classify(self, rgb_means) -> tuple[list[str], np.ndarray]:
         """Nearest class name per mean colour (N, 3), and the margin (N,): second-best minus best distance.
