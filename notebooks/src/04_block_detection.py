@@ -390,3 +390,14 @@ print(f"OK: {m['blocks']} blocks in {len(cases)} frames: recall {m['recall']:.1%
 # prove it square). The yaw of a small face (about 22 px across) is near the image's limit: a side of 22 px that
 # turns by 2 deg moves less than a pixel end to end, so the worst small faces are off by about 2 deg.
 # `benchmarks/perception.py` scores a larger set.
+
+# %% [markdown]
+# ## Your table for this notebook
+#
+# What `python -m armlab check` lists for this notebook: each exercise, its points, its kind, how it is graded and
+# whether you have written it (from the saved files: save the notebook first). The grader decides the score.
+
+# %%
+from armlab.exercises.rubric import rubric
+
+rubric("04_block_detection")

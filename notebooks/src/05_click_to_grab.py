@@ -317,3 +317,14 @@ assert grab_event.ok and drop_event.ok, f"the browser-style clicks failed: {grab
 assert red_err.max() < 3.0 and panel.next_action == "grab", f"the red block landed {red_err.max():.1f} mm off"
 print(f"OK: click to grab/drop: the blocks landed {green_err.max():.1f} and {red_err.max():.1f} mm from the clicked "
       f"spots; the refused click moved nothing")
+
+# %% [markdown]
+# ## Your table for this notebook
+#
+# What `python -m armlab check` lists for this notebook: each exercise, its points, its kind, how it is graded and
+# whether you have written it (from the saved files: save the notebook first). The grader decides the score.
+
+# %%
+from armlab.exercises.rubric import rubric
+
+rubric("05_click_to_grab")

@@ -8,9 +8,18 @@
 # 1. teach the swap (on the simulator your "hand" is `arm.move_by_hand`),
 # 2. save it as a JSON file and load it back (with validation),
 # 3. replay it and plot the joint angles against time (the lab report's figure 10),
-# 4. check with the simulator's ground truth that the blocks really swapped.
+# 4. check with the simulator's ground truth that the blocks really swapped,
+# 5. do the same swap with your `move_path` of notebook 05 (the report's `move_path`), and compare,
+# 6. replay the program faster, within every joint's limits.
 #
-# Units: radians, seconds, millimetres; world (board) frame.
+# | exercise | points | kind | how it is graded |
+# |---|---|---|---|
+# | `teach.record` | 5 | code | hidden teaching sessions on the simulator (other poses, gripper states, seeds) |
+# | `teach.time_scaled` | 5 | code | hidden programs and speeds |
+# | `teach.replay_question` | 2 | written | by hand, from your answer under the swap figure |
+#
+# Section 5 also runs your `grab.move_path` (notebook 05; graded there). The cells called **Check** test your work;
+# the rest show the kit. Units: radians, seconds, millimetres; world (board) frame.
 
 # %%
 import numpy as np
@@ -23,6 +32,9 @@ from armlab import kinematics, make_station, planning, tasks
 from armlab._paths import data_path
 from armlab.exercises import references, require_written, with_reference
 from armlab.tasks import teach
+from armlab.detection import Block
+from armlab.tasks.move_path import drop_with, grab_with, kit_move_path, move_path
+from armlab.transforms import wrap_quarter
 
 get_ipython().run_line_magic("matplotlib", "inline")
 from armlab.viz.figures import readable
@@ -112,8 +124,10 @@ print("OK: save/load: the program round-trips (to 1e-6 rad) and a bad gripper va
 # where the hand held it (notebook 05). The whole replay is a `planning.Plan`, so we can plot it before running it.
 
 # %%
-fig, ax = plt.subplots(figsize=(8, 3.6))
+fig, ax = plt.subplots(figsize=(8.5, 3.6))
 teach.plot_teach(loaded, ax=ax)
+ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=9, frameon=False)   # beside the data, not on it
+fig.tight_layout()
 plan = loaded.to_plan()
 print(f"replay: {len(plan.steps)} steps, {plan.duration:.1f} s")
 
@@ -141,7 +155,56 @@ print(f"OK: swap: red is {np.abs(red.position - b).max():.1f} mm from B's spot, 
       f"{np.abs(blue.position - a).max():.1f} mm from A's; peak joint speed {100 * peak:.0f}% of its limit")
 
 # %% [markdown]
-# ## 5 · A time-scaled replay
+# ## 5 · The same swap with `move_path`
+#
+# The report did the swap by teaching; its click-to-grab used `move_path`, which plans each pick and place from a
+# point. Here the three moves of the swap run through **your** `move_path` of notebook 05 (while it is blank, the
+# kit's planners stand in and say so), on a fresh station: A → intermediate, B → A, intermediate → B, each block
+# picked at its top-face centre as the simulator knows it (no camera here, as in the taught swap).
+
+# %%
+path = with_reference(move_path, "grab.move_path", kit_move_path,
+                      "the kit's planning.plan_pick / plan_place plan the motion")
+path_station = make_station("sim", seed=0, scene="swap")
+path_red, path_blue = (next(o for o in path_station.world.blocks if o.color == c) for c in ("red", "blue"))
+spot_a, spot_b, middle = path_red.position.copy(), path_blue.position.copy(), np.array([250.0, 75.0, 19.0])
+t0 = path_station.world.time_s
+for block, to in ((path_red, middle), (path_blue, spot_a), (path_red, spot_b)):
+    top = block.position + [0, 0, block.edge / 2]
+    known = Block(block.color, block.size, top, float(wrap_quarter(block.yaw)), (0.0, 0.0), block.edge)
+    grab_with(path_station, known, path=path)
+    drop_with(path_station, to - [0, 0, block.edge / 2], path=path)
+path_time = path_station.world.time_s - t0
+print(f"swap by move_path: {path_time:.0f} s simulated; the taught replay: {plan.duration:.0f} s of plan")
+print(f"red now at {path_red.position.round(1)} mm, blue at {path_blue.position.round(1)} mm")
+
+# %%
+# CHECK grab.move_path
+require_written("grab.move_path")
+swap_err = max(np.abs(path_red.position - spot_b).max(), np.abs(path_blue.position - spot_a).max())
+assert swap_err < 3.0, f"after the move_path swap a block is {swap_err:.1f} mm from its spot"
+print("OK: your move_path swapped the blocks, each within 3 mm of its spot")
+
+# %% [markdown]
+# **Question `teach.replay_question` (2 points, written).** Look at the joint-angle figure of section 3 (the report's
+# Fig. 10 for this swap). Which joints move during a pick's descent and lift, and which only between the spots? The
+# taught program and the `move_path` swap do the same job: compare their times printed above, and say what each
+# needs from the lab (the camera, the calibration, your hands) and what happens to each when block B starts 20 mm
+# from where it was taught.
+
+# %% [markdown]
+# <!-- BEGIN ANSWER teach.replay_question -->
+# Descents and lifts move the shoulder, elbow and wrist angle together (a straight vertical line needs all three)
+# while the waist and the wrist rotation stay put; the waist (and the wrist rotation, to square the fingers) turn only
+# in the moves between spots. The taught replay needs no camera and no calibration, only a careful student's hands,
+# and repeats exactly what was taught: with B 20 mm away the fingers close beside it or on its edge and the swap fails.
+# The move_path swap needs a point per block (a calibrated camera's detection in the lab) and plans every motion from
+# it, so a block 20 mm away is still picked at its centre; its time differs from the replay's because it plans its own
+# hover heights and joint moves instead of the taught waypoints.
+# <!-- END ANSWER -->
+
+# %% [markdown]
+# ## 6 · A time-scaled replay
 #
 # A demonstration runs at the lab's pace; a competition wants the same program faster. Scaling time by a speed
 # factor $s$ divides each segment's moving time, but two floors stay: the driver's shortest move (0.4 s) and every
@@ -213,3 +276,14 @@ swap_err = max(np.abs(red_fast.position - b).max(), np.abs(blue_fast.position - 
 assert swap_err < 3.0, f"after the fast replay a block is {swap_err:.1f} mm from its spot"
 print(f"OK: time-scaled replay: 1.5x takes {mine[1.5].sum():.1f} s of moves instead of {mine[1.0].sum():.1f} s, "
       f"within every velocity limit; the blocks swapped within {swap_err:.1f} mm")
+
+# %% [markdown]
+# ## Your table for this notebook
+#
+# What `python -m armlab check` lists for this notebook: each exercise, its points, its kind, how it is graded and
+# whether you have written it (from the saved files: save the notebook first). The grader decides the score.
+
+# %%
+from armlab.exercises.rubric import rubric
+
+rubric("06_teach_and_repeat")

@@ -319,3 +319,14 @@ print(f"OK: to the sky: a stable tower of {tower} blocks ({sky.score.points:g} p
 # the spot where the arm reaches highest while still coming down near-vertically. The risk: a grip off the centre
 # tilts the block in the pads, and less clearance lets a few mm of sag or detection error knock the tower over.
 # <!-- END ANSWER -->
+
+# %% [markdown]
+# ## Your table for this notebook
+#
+# What `python -m armlab check` lists for this notebook: each exercise, its points, its kind, how it is graded and
+# whether you have written it (from the saved files: save the notebook first). The grader decides the score.
+
+# %%
+from armlab.exercises.rubric import rubric
+
+rubric("07_autonomous_tasks")
