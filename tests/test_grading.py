@@ -314,10 +314,12 @@ HIDDEN_WRONG = {   # per exercise: wrong answers its hidden checks must catch (a
         "release at the grasp height": _replaced("grab.move_path", "tool_z = target[2] + edge - depth",
                                                  "tool_z = target[2] - depth"),
     },
-    "teach.record": {"recorded before posing": [
-        "        for q, g in zip(poses, gripper):\n            recorder.record(g)\n            arm.move_by_hand(q)"]},
-    "teach.time_scaled": {"no velocity floor": _replaced(
-        "teach.time_scaled", "np.maximum(np.maximum(lab_pace, velocity_floor), 0.4)", "np.maximum(lab_pace, 0.4)")},
+    "teach.replay": {
+        "recorded before posing": _replaced("teach.replay", "arm.move_by_hand(q)\n            recorder.record(g)",
+                                            "recorder.record(g)\n            arm.move_by_hand(q)"),
+        "no velocity floor": _replaced("teach.replay", "np.maximum(np.maximum(lab_pace, velocity_floor), 0.4)",
+                                       "np.maximum(lab_pace, 0.4)"),
+    },
     "events.sort_stack": {
         "no unstacking": _replaced("events.sort_stack", "if standing_on_something:", "if False:"),
         "stack height not tracked": _replaced("events.sort_stack", "len(self.built[b.size]) * block_edge(b.size)",
@@ -384,7 +386,7 @@ def test_static_check_names_the_forbidden_call():
             for body in uses:
                 result = static_check(ex.id, [body])
                 assert not result.passed and name in result.message, (ex.id, body, result)
-    ref = static_check("teach.time_scaled", ["    from armlab.exercises import references\n"
+    ref = static_check("teach.replay", ["    from armlab.exercises import references\n"
                                              "    return references.scaled_durations_by_search(program, speed)"])
     assert not ref.passed and "armlab.exercises.references" in ref.message
     assert forbidden_uses("    fk = 1.0\n    return fk * 2", ("kinematics.fk",)) == []      # its own variable

@@ -126,10 +126,8 @@ MOVE_PATH = Exercise("grab.move_path", "the report's move_path: the grasp and re
 SAG_QUESTION = Exercise("grab.sag_question", "what the sag figure says about the report's flat offset", 2, _NB["05"],
                         _src("05"), ("the sag figure",), kind="written")
 # -- notebook 06: teach and repeat ------------------------------------------------------------------------------
-TEACH_RECORD = Exercise("teach.record", "the teaching loop: pose by hand, record a waypoint", 5, _NB["06"],
-                        _src("06"), ("teach_program",))
-TIME_SCALED = Exercise("teach.time_scaled", "a time-scaled replay: segment times within every limit", 5, _NB["06"],
-                       _src("06"), ("scaled_durations",))
+TEACH_REPLAY = Exercise("teach.replay", "teach by hand, then a time-scaled replay within every limit, as a plan", 10,
+                        _NB["06"], _src("06"), ("teach_program", "scaled_durations", "scaled_plan"))
 REPLAY_QUESTION = Exercise("teach.replay_question", "taught replay against move_path, from the joint-angle figure", 2,
                            _NB["06"], _src("06"), ("the joint-angle figure",), kind="written")
 # -- notebook 07: autonomous tasks ------------------------------------------------------------------------------
