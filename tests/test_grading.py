@@ -322,8 +322,7 @@ HIDDEN_WRONG = {   # per exercise: wrong answers its hidden checks must catch (a
     },
     "events.sort_stack": {
         "no unstacking": _replaced("events.sort_stack", "if standing_on_something:", "if False:"),
-        "stack height not tracked": _replaced("events.sort_stack", "len(self.built[b.size]) * block_edge(b.size)",
-                                              "0.0"),
+        "stack height not tracked": _replaced("events.sort_stack", "len(built[b.size]) * block_edge(b.size)", "0.0"),
     },
     "station.transition": {
         "no stop at the end of the work": _replaced("station.transition", "    if machine.stop_requested:\n",

@@ -146,20 +146,19 @@ class SortStackStrategy:
 
     def __init__(self, level):
         self.level = level
-        # BEGIN SOLUTION events.sort_stack
-        self.built = {"large": [], "small": []}      # colours put on each stack, bottom first (what I believe)
-        # END SOLUTION
+        self.notes = {}          # whatever your strategy remembers between moves
 
     def next_move(self, seen):
         # BEGIN SOLUTION events.sort_stack
+        built = self.notes.setdefault("built", {"large": [], "small": []})   # colours on each stack, bottom first
         cubes = [b for b in seen if b.is_block]
 
         def on_its_stack(b):
             return np.hypot(*(np.asarray(b.position[:2]) - STACK_XY[b.size])) < 20.0
 
-        for size in self.built:              # the camera wins: a stack is no higher than its detected top
+        for size in built:                   # the camera wins: a stack is no higher than its detected top
             top = max((b.position[2] for b in cubes if b.size == size and on_its_stack(b)), default=0.0)
-            del self.built[size][int(round(top / block_edge(size))):]
+            del built[size][int(round(top / block_edge(size))):]
         loose = [b for b in cubes if not on_its_stack(b)]
         free = [b for b in loose if not covered(b, seen)]
         if not free:
@@ -171,21 +170,22 @@ class SortStackStrategy:
             return Move(b, spot, 0.0, "unstack")
         b = min(free, key=lambda b: (COLORS.index(b.color), b.size != "large"))
         x, y = STACK_XY[b.size]
-        return Move(b, np.array([x, y, len(self.built[b.size]) * block_edge(b.size)]), 0.0, "stack")
+        return Move(b, np.array([x, y, len(built[b.size]) * block_edge(b.size)]), 0.0, "stack")
         # END SOLUTION
 
     def placed(self, move):
         # BEGIN SOLUTION events.sort_stack
         if move.why == "stack":
-            self.built[move.block.size].append(move.block.color)
+            self.notes.setdefault("built", {"large": [], "small": []})[move.block.size].append(move.block.color)
         # END SOLUTION
 
 
 def strategy_for(level):
     """Your strategy; while it is blank the kit's SortStack plays (it says so once)."""
-    mine = SortStackStrategy(level)
-    mine.next_move = with_reference(mine.next_move, "events.sort_stack", SortStack(level).next_move,
-                                    "the kit's sort 'n stack strategy plays")
+    mine, kit = SortStackStrategy(level), SortStack(level)
+    for name in ("next_move", "placed"):
+        setattr(mine, name, with_reference(getattr(mine, name), "events.sort_stack", getattr(kit, name),
+                                           "the kit's sort 'n stack strategy plays"))
     return mine
 
 
