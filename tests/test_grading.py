@@ -327,9 +327,7 @@ HIDDEN_WRONG = {   # per exercise: wrong answers its hidden checks must catch (a
     "station.transition": {
         "no stop at the end of the work": _replaced("station.transition", "    if machine.stop_requested:\n",
                                                     "    if False:\n"),
-        "errors always back to idle": _replaced("station.transition",
-                                                'machine.enter("estop" if machine.stop_requested else "idle")',
-                                                'machine.enter("idle")'),
+        "errors always back to idle": _replaced("station.transition", "if not machine.stop_requested:\n", "if True:\n"),
     },
 }
 # exercises whose function calls another's region go into a second batch, apart from the one they call

@@ -38,28 +38,29 @@ Transition = Callable[["TaskMachine", str, Callable[[], Any]], Any]
 def command_transition(machine: TaskMachine, state: str, action: Callable[[], Any]) -> Any:
     """The kit's transition of one command: from "idle" into `state`, run `action`, and back to "idle" with its
     result; refused (EmergencyStopped) in "estop" and (MachineBusy) in any other state, with nothing entered; an
-    emergency stop during or at the end of the action leaves the machine in "estop" and raises EmergencyStopped;
-    any other error returns to "idle" (or "estop" when a stop was requested) and propagates."""
-    if machine.state == "estop":
-        raise EmergencyStopped(f"{state} refused: the station is emergency-stopped; call reset() first")
+    emergency stop during or at the end of the action leaves the machine in "estop" (entered once) and raises
+    EmergencyStopped; any other error returns to "idle" (or stays in "estop" when a stop was requested) and
+    propagates."""
     if machine.state != "idle":
-        raise MachineBusy(f"{state} refused: the machine is in {machine.state!r}")
+        refused = EmergencyStopped if machine.state == "estop" else MachineBusy
+        raise refused(f"{state} refused: the machine is in {machine.state!r}"
+                      + ("; call reset() first" if refused is EmergencyStopped else ""))
     machine.enter(state)
+    ending = "estop"                         # unless the action ends, or fails, with no stop requested
     try:
         result = action()
+        if machine.stop_requested:           # stopped between the last command and the end of the action
+            raise EmergencyStopped(f"{state} was emergency-stopped")
+        ending = "idle"
+        return result
     except EmergencyStopped:
-        if machine.state != "estop":
-            machine.enter("estop")
         raise
     except BaseException:
-        machine.enter("estop" if machine.stop_requested else "idle")
+        ending = "estop" if machine.stop_requested else "idle"
         raise
-    if machine.stop_requested:          # stopped between the last command and the end of the action
-        if machine.state != "estop":
-            machine.enter("estop")
-        raise EmergencyStopped(f"{state} was emergency-stopped")
-    machine.enter("idle")
-    return result
+    finally:
+        if machine.state != ending:          # estop() has entered "estop" already when it came from the button
+            machine.enter(ending)
 
 
 class TaskMachine:

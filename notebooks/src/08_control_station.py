@@ -97,7 +97,10 @@ def run_command(machine, state, action):
             machine.enter("estop")
         raise
     except Exception:
-        machine.enter("estop" if machine.stop_requested else "idle")
+        if not machine.stop_requested:
+            machine.enter("idle")
+        elif machine.state != "estop":
+            machine.enter("estop")
         raise
     if machine.stop_requested:
         if machine.state != "estop":
