@@ -36,8 +36,11 @@ def move_path(q_start, target, yaw: float, edge: float, action: str,
     """The plan (planning.Plan) from joints q_start (5,) rad that, for action "grasp", picks up the cube of edge
     `edge` mm and yaw `yaw` rad whose top-face centre is `target` (3,) world mm, and for "release", puts the held
     cube's bottom-face centre at `target` with that yaw; the gripper ends `clearance` mm over what it leaves.
-    Notebook 05 sets the task. Raises ValueError for bad input (naming it) and kinematics.Unreachable (a ValueError)
-    saying why when the arm cannot do it."""
+    Raises ValueError for bad input (naming it) and kinematics.Unreachable (a ValueError) saying why when the arm
+    cannot do it.
+
+    Exercise grab.move_path (notebook 05: the report's move_path, the grasp and release motion as a plan).
+    """
     robot = robot or rx200()
     # BEGIN SOLUTION grab.move_path
     if action not in PATH_ACTIONS:
