@@ -58,12 +58,17 @@ def _call_scaled_durations(function, q, speed):
 
 
 def _plans(rng):
-    # programs with random gripper sequences and durations: the plan's moves and gripper steps
+    # programs with random gripper sequences, each segment given a moving time 5-100 % above the shortest its joints'
+    # velocity limits allow (trapezoids with ramps a third of the move) and at least the driver's 0.4 s
+    from armlab.robot import rx200
+
+    velocity = rx200().velocity
     cases = []
     for n in (3, 6, 9):
         q = rng.uniform(-1, 1, (n, 5)) * [1.5, 0.8, 0.8, 1.2, 1.5]
+        floor = np.maximum((np.abs(np.diff(q, axis=0)) / (2 / 3 * velocity)).max(axis=1), 0.4)
         gripper = [str(g) for g in rng.choice(["open", "closed"], n)]
-        cases.append([[q.tolist(), gripper, rng.uniform(0.4, 3.0, n - 1).tolist()]])
+        cases.append([[q.tolist(), gripper, (floor * rng.uniform(1.05, 2.0, n - 1)).tolist()]])
     return cases
 
 
