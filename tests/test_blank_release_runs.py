@@ -114,5 +114,4 @@ def test_the_reference_paths_say_so_in_one_line_each(blank_run):
                     for nb in notebooks.values()]
     assert all(len(n) == len(set(n)) for n in per_notebook), "a reference path announced itself twice"
     assert {"calib.tag_extrinsics", "calib.depth_plane", "ik.candidates", "fk.dh_link_transform", "fk.dh_table",
-            "detect.classify",
-            "grab.pixel_to_world", "teach.record", "events.strategy"} <= set(ids), sorted(set(ids))
+            "detect.classify", "grab.move_path", "teach.replay", "events.sort_stack"} <= set(ids), sorted(set(ids))

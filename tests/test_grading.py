@@ -273,27 +273,40 @@ HIDDEN_WRONG = {   # per exercise: wrong answers its hidden checks must catch (a
         "hard-coded": ["    q1 = q2 = q3 = q4 = heading * 0.0\n    ok, d2 = heading == heading, heading * 0.0 + 1.0"],
         "elbow sign swapped": _replaced("ik.candidates", "* delta_sign", "* -delta_sign"),
     },
-    "detect.centroid": {"u and v swapped": _replaced("detect.centroid", 'm["m10"] / m["m00"], m["m01"] / m["m00"]',
-                                                     'm["m01"] / m["m00"], m["m10"] / m["m00"]')},
-    "detect.wrap_yaw": {"hard-coded": ["    return 0.0"]},
     "detect.segment": {
         "red's wrap ignored": _replaced("detect.segment", "if h0 <= h1:", "if True:"),
         "ranges tuned too tight": _replaced("detect.segment", "120, 60)", "250, 250)"),
     },
+    "detect.face": {
+        "yaw not wrapped": _replaced("detect.face", "yaw = (np.radians(angle) + np.pi / 4) % (np.pi / 2) - np.pi / 4",
+                                     "yaw = np.radians(angle)"),
+        "size from pixels, not mm": _replaced("detect.face", "edge_mm = np.sqrt(m[\"m00\"]) * mm_per_px",
+                                              "edge_mm = np.sqrt(m[\"m00\"])"),
+    },
     "detect.classify": {"per-class spreads ignored": _replaced(
         "detect.classify", "d = self.distances(rgb_means)",
         "d = np.linalg.norm(color_features(rgb_means)[:, None, :] - self.means[None], axis=-1)")},
-    "grab.pixel_to_world": {"NaN depths not skipped": _replaced("grab.pixel_to_world", "np.nanmedian", "np.median")},
-    "grab.sag_line": {"hard-coded (the lab's rule)": ["    return 0.068, 3.0"]},
-    "teach.record": {"recorded before posing": [
-        "        for q, g in zip(poses, gripper):\n            recorder.record(g)\n            arm.move_by_hand(q)"]},
-    "teach.time_scaled": {"no velocity floor": _replaced(
-        "teach.time_scaled", "np.maximum(np.maximum(lab_pace, velocity_floor), 0.4)", "np.maximum(lab_pace, 0.4)")},
-    "events.sky_points": {"the ninth block at 30": _replaced("events.sky_points", "max(n - 8, 0)", "max(n - 9, 0)")},
-    "events.strategy": {
-        "lowest first": _replaced("events.strategy", "max(free, key=", "min(free, key="),
-        "covered blocks picked": _replaced("events.strategy", "free = [b for b in todo if not covered(b, seen)]",
-                                           "free = todo"),
+    "grab.move_path": {
+        "roll ignores the yaw": _replaced("grab.move_path",
+                                          "roll = planning.tilted_roll(heading, float(pitch), float(yaw))",
+                                          "roll = 0.0"),
+        "release at the grasp height": _replaced("grab.move_path", "tool_z = target[2] + edge - depth",
+                                                 "tool_z = target[2] - depth"),
+    },
+    "teach.replay": {
+        "recorded before posing": _replaced("teach.replay", "arm.move_by_hand(q)\n            recorder.record(g)",
+                                            "recorder.record(g)\n            arm.move_by_hand(q)"),
+        "no velocity floor": _replaced("teach.replay", "np.maximum(np.maximum(lab_pace, velocity_floor), 0.4)",
+                                       "np.maximum(lab_pace, 0.4)"),
+    },
+    "events.sort_stack": {
+        "no unstacking": _replaced("events.sort_stack", "if standing_on_something:", "if False:"),
+        "stack height not tracked": _replaced("events.sort_stack", "len(built[b.size]) * block_edge(b.size)", "0.0"),
+    },
+    "station.transition": {
+        "no stop at the end of the work": _replaced("station.transition", "    if machine.stop_requested:\n",
+                                                    "    if False:\n"),
+        "errors always back to idle": _replaced("station.transition", "if not machine.stop_requested:\n", "if True:\n"),
     },
 }
 # exercises whose function calls another's region go into a second batch, apart from the one they call
@@ -351,7 +364,7 @@ def test_static_check_names_the_forbidden_call():
             for body in uses:
                 result = static_check(ex.id, [body])
                 assert not result.passed and name in result.message, (ex.id, body, result)
-    ref = static_check("teach.time_scaled", ["    from armlab.exercises import references\n"
+    ref = static_check("teach.replay", ["    from armlab.exercises import references\n"
                                              "    return references.scaled_durations_by_search(program, speed)"])
     assert not ref.passed and "armlab.exercises.references" in ref.message
     assert forbidden_uses("    fk = 1.0\n    return fk * 2", ("kinematics.fk",)) == []      # its own variable

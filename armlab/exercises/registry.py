@@ -115,29 +115,32 @@ IK_BRANCHES = Exercise("ik.candidates", "the geometric IK from the triangle figu
 Q_BRANCHES = Exercise("ik.q_branches", "which branches the arm can use, from the branches figure", 3, _NB["03"],
                       _src("03"), ("the IK branches figure",), kind="written")
 # -- notebook 04: block detection -------------------------------------------------------------------------------
-CENTROID = Exercise("detect.centroid", "a face's centroid from its mask (image moments)", 3, _NB["04"], _src("04"),
-                    ("centroid",))
-WRAP_YAW = Exercise("detect.wrap_yaw", "a cube's yaw wrapped to [-pi/4, pi/4)", 2, _NB["04"], _src("04"),
-                    ("wrap_yaw",))
-SEGMENT = Exercise("detect.segment", "an HSV segmentation tuned on white-balanced frames", 7, _NB["04"], _src("04"),
-                   ("segment_colours", "tuned_hsv_ranges"))
+SEGMENT = Exercise("detect.segment", "the report's segmentation: blur, HSV boxes tuned on training frames, erosion "
+                   "and dilation", 8, _NB["04"], _src("04"), ("segment_colours", "tuned_hsv_ranges"), kind="open")
+FACE = Exercise("detect.face", "a face's centre (moments), yaw (from its outline) and size class from its mask", 6,
+                _NB["04"], _src("04"), ("face_geometry",))
 CLASSIFY = Exercise("detect.classify", "nearest colour class with per-class spreads", 5, _NB["04"],
                     "armlab/detection/color.py", ("ColorModel.classify",))
+CONFUSION_QUESTION = Exercise("detect.confusion_question", "why the report's HSV table misses rendered faces", 2,
+                              _NB["04"], _src("04"), ("the confusion matrices",), kind="written")
 # -- notebook 05: click to grab ---------------------------------------------------------------------------------
-GRAB_PIXEL_TO_WORLD = Exercise("grab.pixel_to_world", "a clicked pixel and its depth to a world point", 7, _NB["05"],
-                               _src("05"), ("pixel_to_world",))
-SAG_LINE = Exercise("grab.sag_line", "fit the lab's straight-line sag rule (least squares)", 2, _NB["05"],
-                    _src("05"), ("sag_line",))
+MOVE_PATH = Exercise("grab.move_path", "the report's move_path: the grasp and release motion as a plan", 10,
+                     _NB["05"], "armlab/tasks/move_path.py", ("move_path",), kind="open")
+SAG_QUESTION = Exercise("grab.sag_question", "what the sag figure says about the report's flat offset", 2, _NB["05"],
+                        _src("05"), ("the sag figure",), kind="written")
 # -- notebook 06: teach and repeat ------------------------------------------------------------------------------
-TEACH_RECORD = Exercise("teach.record", "the teaching loop: pose by hand, record a waypoint", 5, _NB["06"],
-                        _src("06"), ("teach_program",))
-TIME_SCALED = Exercise("teach.time_scaled", "a time-scaled replay: segment times within every limit", 5, _NB["06"],
-                       _src("06"), ("scaled_durations",))
+TEACH_REPLAY = Exercise("teach.replay", "teach by hand, then a time-scaled replay within every limit, as a plan", 10,
+                        _NB["06"], _src("06"), ("teach_program", "scaled_durations", "scaled_plan"))
+REPLAY_QUESTION = Exercise("teach.replay_question", "taught replay against move_path, from the joint-angle figure", 2,
+                           _NB["06"], _src("06"), ("the joint-angle figure",), kind="written")
 # -- notebook 07: autonomous tasks ------------------------------------------------------------------------------
-SKY_POINTS = Exercise("events.sky_points", "the 'to the sky' scoring rule", 2, _NB["07"], _src("07"),
-                      ("sky_points",))
-STRATEGY = Exercise("events.strategy", "a sort 'n stack level 1 strategy from what the robot sees", 7, _NB["07"],
-                    _src("07"), ("SortLevel1.next_move",))
+SORT_STACK = Exercise("events.sort_stack", "a sort 'n stack strategy for levels 2 and 3 from what the robot sees",
+                      12, _NB["07"], _src("07"), ("SortStackStrategy",), kind="open")
+TOWER_QUESTION = Exercise("events.tower_question", "the tower's points and what stops it", 2, _NB["07"], _src("07"),
+                          ("the tower figure",), kind="written")
+# -- notebook 08: the control station ---------------------------------------------------------------------------
+COMMAND_TRANSITION = Exercise("station.transition", "one transition of the station's state machine: a command from "
+                              "idle and back", 6, _NB["08"], _src("08"), ("run_command",))
 
 EXERCISES: tuple[Exercise, ...] = tuple(v for v in dict(globals()).values() if isinstance(v, Exercise))
 
