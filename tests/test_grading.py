@@ -389,11 +389,11 @@ def test_regrading_gives_the_same_scores(graded):
 
 
 def test_a_hard_coded_answer_fails_the_hidden_checks():
-    """sky_points as a lookup of the public check's values: the hidden checks' other tower heights fail it."""
+    """fk.euler as the public check's one singular case, hard-coded: the hidden checks' other poses fail it."""
     from armlab.grading.grade import Grader
 
-    lookup = ("    return {0: 0, 1: 30, 5: 150, 7: 210, 8: 240, 9: 290, 12: 440, 13: 490, 20: 840, 24: 1040}[n]")
-    checks = Grader(ROOT, Limits(timeout_s=240, cpu_s=60), ["events.sky_points"]).hidden_checks(
-        "events.sky_points", [lookup])
-    assert checks and not all(c.passed for c in checks)
-    assert any("KeyError" in c.message for c in checks if not c.passed)
+    lookup = "    return np.array([0.7, 0.0, 0.0])"
+    with Grader(ROOT, Limits(timeout_s=240, cpu_s=60), ["fk.euler"]) as grader:
+        checks = grader.hidden_checks("fk.euler", [lookup])
+    assert checks and not any(c.passed for c in checks)
+    assert all("differs from the expected value" in c.message for c in checks)
