@@ -127,3 +127,42 @@ def test_gradescope_setup_picks_a_python_the_pins_can_install_on(tmp_path, minor
         assert done.returncode == 1 and "Ubuntu 24.04" in done.stderr and "python3.11" in done.stderr
     else:
         assert done.returncode == 0 and done.stdout.strip() == str(tmp_path / "bin" / picked)
+
+
+def test_written_answers_reach_the_feedback_and_the_instructors_csv(tmp_path):
+    """A written answer (kind "written") is read from the student's markdown cell: feedback.md and results.json show
+    it (0 points there: graded by hand), grades.csv has an empty column for it headed with its points, answers.csv
+    holds the text; a blank answer says so. No notebook runs for it."""
+    import csv
+    import json
+
+    from armlab.exercises.registry import EXERCISES
+    from armlab.grading import grade_class
+
+    written = next(e for e in EXERCISES if e.kind == "written")
+    subs = tmp_path / "subs"
+    make_student_release(ROOT, subs / "ada")
+    make_student_release(ROOT, subs / "bob")
+    path = subs / "ada" / f"notebooks/{written.notebook}.ipynb"
+    nb = json.loads(path.read_text())
+    answer = "The error grows with the distance from the tags, because the homography's errors scale with it."
+    hits = 0
+    for cell in nb["cells"]:
+        text = "".join(cell["source"])
+        if cell["cell_type"] == "markdown" and f"BEGIN ANSWER {written.id}" in text:
+            head, rest = text.split("-->", 1)
+            cell["source"] = head + "-->\n" + answer + "\n<!-- END ANSWER -->" + rest.split("<!-- END ANSWER -->", 1)[1]
+            hits += 1
+    assert hits == 1, f"no answer cell for {written.id} in {path.name}"
+    path.write_text(json.dumps(nb, indent=1))
+    graded = grade_class(subs, tmp_path / "out", ROOT, exercises=[written.id])
+    assert graded["ada"][written.id].answer == answer and graded["bob"][written.id].answer is None
+    feedback = (tmp_path / "out/ada/feedback.md").read_text()
+    assert f"graded by hand, {written.points} points" in feedback and answer in feedback
+    results = json.loads((tmp_path / "out/ada/results.json").read_text())
+    assert results["score"] == 0 and answer in results["tests"][0]["output"] and results["tests"][0]["max_score"] == 0
+    rows = list(csv.DictReader((tmp_path / "out/grades.csv").open()))
+    assert rows[0][f"{written.id} (by hand, /{written.points})"] == ""
+    answers = {r["student"]: r[written.id] for r in csv.DictReader((tmp_path / "out/answers.csv").open())}
+    assert answers == {"ada": answer, "bob": ""}
+    assert "not written" in (tmp_path / "out/bob/feedback.md").read_text()
