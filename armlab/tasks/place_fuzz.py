@@ -26,6 +26,7 @@ REGION = "student fuzz"
 PLACE_REACH_MM = (100.0, 420.0)     # place spots: this far from the waist axis, any heading
 PICK_MIN_REACH_MM = 150.0           # picked blocks: at least this far from the waist axis
 _KEEP_OUT_MM = 60.0                 # a place spot's centre at least this far from every object's centre
+_IDLE_ROUNDS = 4                    # a station's trials end after this many looks in a row without a place tried
 
 
 def random_place_spot(rng: np.random.Generator, objects, edge: float, yaw: float) -> np.ndarray:
@@ -58,8 +59,10 @@ def _recover(station, ctx) -> None:
 
 def run_station(seed: int, places: int) -> list[Outcome]:
     """`places` pick-then-place trials on the seeded station (module notes), in rounds: look once, then pick and
-    place each detected block far enough out in turn (a student's loop over one detection), again after a refusal;
-    returns the place Outcomes in order (picks that do not end with the block held are skipped)."""
+    place each detected block far enough out in turn (a student's loop over one detection), and look again after a
+    failed pick or a refusal; fewer when _IDLE_ROUNDS looks in a row try no place (no block left far enough out, or
+    none that can be picked). Returns the place Outcomes in order (picks that do not end with the block held are
+    skipped)."""
     # the simulator: imported when the trials run
     from armlab import make_station
 
@@ -67,15 +70,15 @@ def run_station(seed: int, places: int) -> list[Outcome]:
     ctx = handling.context(station)
     rng = np.random.default_rng([seed, 24])
     out: list[Outcome] = []
-    for _ in range(places):                       # rounds; each places at least one block or gives up
+    idle = 0                                      # rounds in a row that tried no place
+    while len(out) < places and idle < _IDLE_ROUNDS:
         blocks = [b for b in handling.look(station).blocks
                   if b.is_block and np.hypot(*b.position[:2]) >= PICK_MIN_REACH_MM]
         before = len(out)
         for k in rng.permutation(len(blocks)):
             if len(out) >= places or not _trial(station, ctx, blocks[k], rng, out):
                 break
-        if len(out) >= places or len(out) == before:
-            break
+        idle = 0 if len(out) > before else idle + 1
     return out
 
 
