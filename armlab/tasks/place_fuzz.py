@@ -3,7 +3,9 @@
 layer; look, pick a detected block 150 mm or more from the waist axis (tasks.pick), and place it (tasks.place) at a
 random free spot anywhere around the arm (in front, beside, behind the waist axis; 100-420 mm out) with a random
 yaw; again with another block, a few times a station. Each place is one of board_grid.OUTCOMES: "done" (its error:
-the block's true bottom-face centre minus the target, world mm), "refused before" (nothing sent: the block is put
+the block's true bottom-face centre minus the target, world mm; its message notes a pick from a detection more than
+DETECTION_OFF_MM from the true block: the pads centre a block across the fingers, not along them, so such a block
+is carried off-centre and lands off by part of the detection's error), "refused before" (nothing sent: the block is put
 back where it was picked) or "refused mid-plan" (the guarded arm had sent commands: a pre-check bug). Spots the
 placement rule refuses (motion_safety.placement_problem) are not drawn: a student is told at once. Units: mm, rad.
 """
@@ -20,12 +22,13 @@ from armlab.station.contract import MotionRefused
 from . import handling
 from .board_grid import GridSpot, Outcome
 
-__all__ = ["REGION", "PLACE_REACH_MM", "PICK_MIN_REACH_MM", "random_place_spot", "run_station"]
+__all__ = ["REGION", "PLACE_REACH_MM", "PICK_MIN_REACH_MM", "DETECTION_OFF_MM", "random_place_spot", "run_station"]
 
 REGION = "student fuzz"
 PLACE_REACH_MM = (100.0, 420.0)     # place spots: this far from the waist axis, any heading
 PICK_MIN_REACH_MM = 150.0           # picked blocks: at least this far from the waist axis
 _KEEP_OUT_MM = 60.0                 # a place spot's centre at least this far from every object's centre
+DETECTION_OFF_MM = 5.0              # a done place's message notes a pick from a detection this far off its block
 _IDLE_ROUNDS = 4                    # a station's trials end after this many looks in a row without a place tried
 
 
@@ -85,6 +88,7 @@ def run_station(seed: int, places: int) -> list[Outcome]:
 def _trial(station, ctx, block, rng: np.random.Generator, out: list[Outcome]) -> bool:
     """Pick `block` and place it at a random free spot, appending the place's Outcome to `out`; False when the round
     must look again (a pick that failed, a refusal)."""
+    seen_off = min(float(np.hypot(*(o.position[:2] - block.position[:2]))) for o in station.world.blocks)
     try:
         held = handling.pick(station, block)
     except (MotionRefused, Unreachable):
@@ -109,5 +113,6 @@ def _trial(station, ctx, block, rng: np.random.Generator, out: list[Outcome]) ->
         _recover(station, ctx)
         return False
     bottom = truth.position - [0.0, 0.0, truth.edge / 2]
-    out.append(Outcome(GridSpot(REGION, float(spot[0]), float(spot[1])), "place", "done", bottom - spot))
+    note = f"picked from a detection {seen_off:.1f} mm off its block" if seen_off > DETECTION_OFF_MM else ""
+    out.append(Outcome(GridSpot(REGION, float(spot[0]), float(spot[1])), "place", "done", bottom - spot, note))
     return True
