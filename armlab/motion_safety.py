@@ -303,7 +303,11 @@ def placement_problem(position, edge_mm: float = 0.0, yaw: float = 0.0, lab: Lab
     at position (x, y, z) world mm, in words (module notes: off the board, on the robot's base plate, out of reach;
     reach=False: the board and the plate only, for a point that is not a placement yet); None when the spot is
     allowed. ValueError for malformed input."""
-    p = np.asarray(position, dtype=float)
+    try:
+        p = np.asarray(position, dtype=float)
+        edge_mm, yaw = float(edge_mm), float(yaw)
+    except (TypeError, ValueError):
+        p = np.full(0, np.nan)
     if p.shape != (3,) or not np.all(np.isfinite(p)):
         raise ValueError(f"a placement position must be 3 finite numbers (x, y, z world mm), got {position!r}")
     if not (np.isfinite(edge_mm) and edge_mm >= 0 and np.isfinite(yaw)):

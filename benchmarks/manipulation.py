@@ -24,6 +24,12 @@ there in a seeded scene) and placed at once; per region and action: done, refuse
 not grasped, and the errors (places: the block's true bottom-face centre minus the target, world mm; picks: the
 grasped block's true centre in the tool frame minus the planned one, tool-frame mm).
     .venv/bin/python benchmarks/manipulation.py grid [n_random]  # default 8 random spots (about 3-6 minutes)
+Student fuzz (issue 24, armlab.tasks.place_fuzz): seeded random scenes; look, pick a detected block 150 mm or more
+out, place it at a random free spot anywhere around the arm (100-420 mm out) with a random yaw, block after block;
+per sector (in front: heading within 60 deg of +y; beside; behind the waist axis: y < 0) and reach (near: under
+250 mm; far): done within 3 mm, done 3 mm or more off, refused before moving, refused mid-plan (a pre-check bug).
+tests/test_place_fuzz.py runs 200 of them.
+    .venv/bin/python benchmarks/manipulation.py fuzz [stations] [places]   # default 10 stations x 50 places
 """
 
 from __future__ import annotations
@@ -319,8 +325,38 @@ def main(n_stations: int = 13) -> None:
                         "sag z"], table))
 
 
+def _sector(x: float, y: float) -> str:
+    heading = np.degrees(abs(np.arctan2(-x, y)))
+    side = "in front" if heading <= 60 else ("behind" if y < 0 else "beside")
+    return f"{side}, {'near' if np.hypot(x, y) < 250 else 'far'}"
+
+
+def main_fuzz(n_stations: int = 10, places: int = 50) -> None:
+    from armlab.tasks.place_fuzz import run_station
+
+    kinds = ("done < 3 mm", "done >= 3 mm", "refused before", "refused mid-plan")
+    counts: dict[str, dict[str, int]] = {}
+    examples = []
+    for seed in range(1000, 1000 + n_stations):
+        for o in run_station(seed, places):
+            kind = o.outcome
+            if kind == "done":
+                kind = "done < 3 mm" if np.abs(o.error).max() < 3.0 else "done >= 3 mm"
+            row = counts.setdefault(_sector(o.spot.x, o.spot.y), dict.fromkeys(kinds, 0))
+            row[kind] += 1
+            if kind != "done < 3 mm":
+                examples.append(f"  seed {seed}, {o.spot}: {kind}: {o.message or np.round(o.error, 2)}")
+    rows = [[name, *row.values()] for name, row in sorted(counts.items())]
+    rows.append(["all", *(sum(r[k] for r in counts.values()) for k in kinds)])
+    print(f"Student fuzz: {n_stations} seeded stations, up to {places} places each (armlab.tasks.place_fuzz)")
+    print(format_table(["sector", *kinds], rows, floatfmt="{:d}"))
+    print("\n".join(examples[:20]))
+
+
 if __name__ == "__main__":
-    if len(sys.argv) > 1 and sys.argv[1] == "regions":
+    if len(sys.argv) > 1 and sys.argv[1] == "fuzz":
+        main_fuzz(*(int(v) for v in sys.argv[2:4]))
+    elif len(sys.argv) > 1 and sys.argv[1] == "regions":
         main_regions(int(sys.argv[2]) if len(sys.argv) > 2 else 6)
     elif len(sys.argv) > 1 and sys.argv[1] == "grid":
         main_grid(int(sys.argv[2]) if len(sys.argv) > 2 else 8)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 
@@ -77,3 +79,38 @@ def test_the_path_is_sampled_finely_enough_to_catch_a_dip():
     assert s[0] == 0 and s[-1] == 1 and np.max(np.diff(s)) * np.abs(qb - qa).max() <= motion_safety.PATH_STEP_RAD
     assert "wrist joint would go down to z = -45.9 mm" in motion_safety.board_intrusion(qa, qb, REAL_CLEARANCE)
     assert motion_safety.board_intrusion(qb, qb, REAL_CLEARANCE) is None
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# The placement rule
+# ---------------------------------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("spot, edge, yaw, reason", [
+    ((0.0, 20.0, 10.0), 38.0, 0.0, r"\(0, 20\) mm is on the robot's base plate \(the plate and a 10 mm margin: "
+                                   r"\|x\| <= 65, \|y\| <= 70 mm\)"),
+    ((0.0, 85.0, 0.0), 38.0, 0.0, "too close to the robot's base plate for a 38 mm block"),
+    ((0.0, 85.0, 0.0), 25.0, 0.0, None),                          # a small block fits there
+    ((0.0, 93.0, 0.0), 38.0, np.pi / 4, "too close to the robot's base plate"),   # turned: its corner reaches in
+    ((0.0, 93.0, 0.0), 38.0, 0.0, None),
+    ((495.0, 300.0, 0.0), 25.0, 0.0, "too close to the board's edge for a 25 mm block"),
+    ((520.0, 300.0, 0.0), 0.0, 0.0, r"\(520, 300\) mm is off the board"),
+    ((-420.0, 420.0, 0.0), 25.0, 0.0, "out of the arm's reach: 599 mm from the shoulder joint"),
+    ((-350.0, -120.0, 0.0), 38.0, 0.3, None),
+])
+def test_the_placement_rule_names_the_problem(spot, edge, yaw, reason):
+    problem = motion_safety.placement_problem(spot, edge, yaw)
+    if reason is None:
+        assert problem is None
+        motion_safety.check_placement(spot, edge, yaw)
+    else:
+        assert problem is not None and re.search(reason, problem), problem
+        with pytest.raises(MotionRefused, match=r"motion refused \(placement\): .*" + reason):
+            motion_safety.check_placement(spot, edge, yaw)
+
+
+def test_the_placement_rule_refuses_malformed_input():
+    for bad in ([0.0, 1.0], [np.nan, 200.0, 0.0], "here"):
+        with pytest.raises(ValueError, match="placement position"):
+            motion_safety.placement_problem(bad)
+    with pytest.raises(ValueError, match="edge >= 0"):
+        motion_safety.placement_problem([0.0, 200.0, 0.0], -1.0)

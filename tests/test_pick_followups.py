@@ -52,8 +52,10 @@ def test_a_block_that_cannot_be_placed_is_put_back_where_it_was_picked(picked):
     with pytest.raises(ValueError, match="put_back needs a block"):
         tasks.put_back(st)
     assert tasks.pick(st, block)
+    with pytest.raises(MotionRefused, match=r"refused before moving: \(0, 700\) mm is off the board"):
+        tasks.place(st, (0.0, 700.0, 0.0))                            # the placement rule: nothing moves
     with pytest.raises(Unreachable):
-        tasks.place(st, (0.0, 700.0, 0.0))                            # out of reach: nothing moves
+        tasks.place(st, (0.0, -100.0, 0.0))                           # allowed, but the arm cannot get there
     ctx = tasks.context(st)
     # a put-back that would carry the block into something is refused before moving, still holding it
     saved = ctx.known

@@ -5,7 +5,7 @@ import pytest
 
 from armlab import kinematics, make_station, tasks
 from armlab.profile import velocity_violations
-from armlab.station import EmergencyStopped
+from armlab.station import EmergencyStopped, MotionRefused
 from armlab.tasks.sag import SagModel, calibration_poses, fit_sag
 
 # Four blocks: aligned and yawed, both sizes, spread over reach and heading (world mm, yaw rad).
@@ -181,7 +181,7 @@ def test_pick_refuses_while_holding_and_place_refuses_when_empty():
     q = st.arm.joint_positions()
     with pytest.raises(ValueError, match="already holds"):
         tasks.pick(st, obs.blocks[1])
-    with pytest.raises(kinematics.Unreachable):
+    with pytest.raises(MotionRefused, match="out of the arm's reach"):        # the placement rule
         tasks.place(st, [450.0, 400.0, 0.0])
     assert np.allclose(st.arm.joint_positions(), q, atol=0.005)   # nothing moved
 

@@ -213,6 +213,8 @@ class SimArm:
         return [o for o, _ in self._held]
 
     def _on_time(self, t: float) -> None:
+        if self._estopped:              # marked by a stop still waiting for the lock: halt at this step already
+            self._motion = None
         m = self._motion
         if m is not None:
             s = trapezoid_fraction(t - m.t0, m.moving_time, m.accel_time)

@@ -27,7 +27,7 @@ from armlab import kinematics, motion_safety, planning
 from armlab.gripper_geometry import GRIPPER, GripperGeometry
 from armlab.planning import Obstacle
 from armlab.station.contract import MotionRefused
-from armlab.transforms import homogeneous
+from armlab.transforms import homogeneous, wrap_quarter
 
 from .guard import GuardedArm
 
@@ -69,12 +69,19 @@ def known_boxes(known, exclude_xy=None, exclude_radius: float = 0.0) -> list[Kno
 
 def held_pose_at_grasp(q_grasp, top, yaw: float, edge: float) -> np.ndarray:
     """T_tool_block (4, 4) mm of a cube of `edge` mm whose top-face centre is `top` (3,) world mm with yaw rad, held by
-    the tool at the planned joints q_grasp (5,) rad."""
+    the tool at the planned joints q_grasp (5,) rad, as the closing pads leave it: they push it to the middle of the
+    gap (its centre on the tool's z-x plane, y = 0 in the tool frame) and turn it until a face lies flat on a pad
+    (its yaw the closing direction's heading, modulo 90 deg: a detection's yaw error is gone once it is held). Its
+    height and its place along the approach are the detection's: the pads do not move it that way."""
     T_tool = kinematics.fk(np.asarray(q_grasp, float))
-    c, s = np.cos(yaw), np.sin(yaw)
+    R_tool, t_tool = T_tool[:3, :3], T_tool[:3, 3]
+    centre = R_tool.T @ (np.asarray(top, float) - [0.0, 0.0, edge / 2] - t_tool)    # tool frame
+    centre[1] = 0.0
+    closing = R_tool[:, 1]
+    squared = float(yaw) + float(wrap_quarter(np.arctan2(closing[1], closing[0]) - float(yaw)))
+    c, s = np.cos(squared), np.sin(squared)
     R = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
-    T_block = homogeneous(R, np.asarray(top, float) - [0.0, 0.0, edge / 2])
-    return np.linalg.inv(T_tool) @ T_block
+    return homogeneous(R_tool.T @ R, centre)
 
 
 def plan_segments(plan: planning.Plan, arm: GuardedArm, opening_mm: float, held: Sequence[motion_safety.HeldBlock],
