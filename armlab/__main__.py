@@ -8,7 +8,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from armlab.command_line import (
+from armlab._command_line import (
     MAX_SEED,
     CommandError,
     OneLineParser,
