@@ -9,7 +9,7 @@ import json
 import sys
 from pathlib import Path
 
-from armlab.command_line import (
+from armlab._command_line import (
     MAX_SEED,
     CommandError,
     OneLineParser,

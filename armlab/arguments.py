@@ -16,9 +16,10 @@ from collections.abc import Sequence
 
 import numpy as np
 
-__all__ = ["finite_array", "finite_float", "int_in_range", "instance_of", "plain"]
+__all__ = ["finite_array", "finite_float", "int_in_range", "instance_of", "plain", "MAX_SEED"]
 
 Shape = tuple[int | None, ...]
+MAX_SEED = 2**63 - 1          # the kit's seeds: numpy's generators take any non-negative integer; 64 bits is plenty
 
 
 def plain(value) -> str:

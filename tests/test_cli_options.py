@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from armlab.command_line import output_folder
+from armlab._command_line import output_folder
 
 CASES = [
     ("demo", "--seed", "-1"), ("demo", "--seed", "abc"), ("demo", "--seed", "1.5"), ("demo", "--seed", "9" * 30),

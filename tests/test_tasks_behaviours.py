@@ -173,11 +173,12 @@ def test_teach_file_round_trip(tmp_path):
 
 @pytest.mark.parametrize("edit, message", [
     (lambda d: d.update(format="other"), "not an armlab teach file"),
-    (lambda d: d["waypoints"][2].update(q=[0.0, 0.1, 0.2]), "waypoint 2: 'q' must be 5 numbers"),
-    (lambda d: d["waypoints"][1].update(gripper="half"), "waypoint 1: gripper state"),
+    (lambda d: d["waypoints"][2].update(q=[0.0, 0.1, 0.2]), r"waypoints\[2\]\.q: has 3 values, expected 5"),
+    (lambda d: d["waypoints"][1].update(gripper="half"),
+     r"waypoints\[1\]\.gripper: must be one of \('open', 'closed'\), got 'half'"),
     (lambda d: d["waypoints"][3].update(q=[0.0, 3.0, 0.0, 0.0, 0.0]), "waypoint 3: shoulder"),
     (lambda d: d.update(waypoints=d["waypoints"][:1]), "at least 2 waypoints"),
-    (lambda d: d["waypoints"][0].pop("gripper"), "waypoint 0 must be an object"),
+    (lambda d: d["waypoints"][0].pop("gripper"), r"waypoints\[0\]\.gripper: missing"),
 ])
 def test_bad_teach_files_are_refused(tmp_path, edit, message):
     path = teach.save_teach(_swap_program(), tmp_path / "swap.json")

@@ -210,7 +210,8 @@ def detect_objects(rgb, depth_mm, camera: Camera, arm_q=None, color_model: Color
     s4 = 4 * settings.step                      # the board's pixels, sampled as board_white_balance samples them
     with np.errstate(invalid="ignore"):
         board = valid[::4, ::4] & (np.abs(height[::4, ::4]) < 4.0)
-    problem = board_problem(rgb[::s4, ::s4], board)
+    rows, cols = rgb[::s4], np.arange(0, rgb.shape[1], s4)
+    problem = board_problem(rows[:, cols], rows[:, np.minimum(cols + 1, rgb.shape[1] - 1)], board)
     if problem is not None:
         warnings.warn(f"detect: no blocks reported: {problem}", FrameWarning, stacklevel=2)
         return []

@@ -13,8 +13,8 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
+from armlab._command_line import OneLineParser, int_at_least, positive_seconds
 from armlab.arguments import finite_float, int_in_range
-from armlab.command_line import OneLineParser, int_at_least, positive_seconds
 from armlab.hardware import HardwareUnavailable
 from armlab.hardware.realsense import configure_streams, import_realsense
 

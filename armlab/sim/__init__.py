@@ -13,8 +13,7 @@ import os
 
 import numpy as np
 
-from armlab.arguments import plain
-from armlab.command_line import MAX_SEED
+from armlab.arguments import MAX_SEED, plain
 from armlab.sim.arm import ArmRealism, SimArm
 from armlab.sim.gripper import GripperGeometry
 from armlab.sim.scenes import PRESETS, SceneError, load_scene, save_scene, scene_objects

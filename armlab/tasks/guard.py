@@ -26,6 +26,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from armlab.arguments import finite_array
 from armlab.station.contract import EmergencyStopped, MotionRefused
 
 from .sag import SagModel
@@ -72,9 +73,7 @@ class GuardedArm:
                 blocking: bool = True) -> None:
         """Move so that the physical joints reach q (5,) rad (see the module notes)."""
         self._check("motion")
-        q = np.asarray(q, dtype=float)
-        if q.shape != (5,) or not np.all(np.isfinite(q)):
-            raise ValueError(f"move_to takes 5 finite joint angles (rad), got {q!r}")
+        q = finite_array(q, "q", (5,), "move_to takes 5 finite joint angles in rad")
         q_read = np.asarray(self.arm.joint_positions(), dtype=float)
         starts = [q_read]
         if self._last_cmd is not None and np.abs(q_read - self._last_cmd).max() <= _AT_COMMAND_RAD:

@@ -9,10 +9,11 @@ import math
 import os
 from pathlib import Path
 
+from armlab.arguments import MAX_SEED
+
 __all__ = ["MAX_SEED", "CommandError", "OneLineParser", "int_at_least", "positive_seconds", "output_folder",
            "output_file", "input_folder"]
 
-MAX_SEED = 2**63 - 1          # numpy's generators take any non-negative integer; a 64-bit one is plenty
 
 
 class CommandError(Exception):
