@@ -218,39 +218,48 @@ class JupyterLab:
         self.leftovers = [p for p in self.started if _alive(p)]
 
 
+def wait_for_kernel_info(client, dead, timeout_s: float, name: str = "the kernel") -> None:
+    """Wait until `client` (channels started without the heartbeat) gets a kernel_info reply: however long the kernel
+    takes to start on a loaded machine. Every 5 s without a reply, dead() (the kernel's owner: its server or its
+    process) says whether the kernel died; RuntimeError naming why, or after timeout_s."""
+    import time
+
+    deadline = time.monotonic() + timeout_s
+    while True:
+        msg_id = client.kernel_info()
+        try:
+            reply = client.get_shell_msg(timeout=5.0)
+        except Exception:                 # queue.Empty: no reply yet; a slow kernel, or a dead one (asked below)
+            reply = None
+        if reply is not None and reply["parent_header"].get("msg_id") == msg_id:
+            return
+        why = dead()
+        if why:
+            raise RuntimeError(f"{name} died before replying to kernel_info: {why}")
+        if time.monotonic() > deadline:
+            raise RuntimeError(f"{name} is alive but sent no kernel_info reply in {timeout_s:g} s")
+
+
 class Kernel:
     """A second client of a kernel that JupyterLab runs (its connection file in the server's runtime folder): the
     test's side channel to the simulator's ground truth. evaluate(expr) returns the JSON value of expr.
 
     Whether the kernel is alive is asked of its server (the kernel's process), not of zmq heartbeats: jupyter_client's
-    heartbeat gives a kernel 1 s to answer a ping, and on a loaded 2-core machine a kernel that is busy importing
-    misses that, so wait_for_ready() used to raise "Kernel died before replying to kernel_info" for a live kernel
-    (issue 26). Without the heartbeat channel the client waits for the kernel_info reply itself; a kernel that really
-    died is reported by the server's /api/kernels (execution_state "dead") or its process being gone."""
+    heartbeat gives a kernel 1 s to answer a ping, and the server lists a kernel as soon as it has launched its
+    process: a client that connects then, to a kernel still starting (2-3 s here, far longer on a loaded machine),
+    gets no answer within 1 s and wait_for_ready() raised "Kernel died before replying to kernel_info" for a live
+    kernel (issue 26; tests/test_browser_harness.py). Without the heartbeat channel the client waits for the
+    kernel_info reply itself; a kernel that really died is reported by the server's /api/kernels (execution_state
+    "dead") or its process being gone."""
 
     def __init__(self, lab: JupyterLab, kernel_id: str, timeout_s: float = 300.0):
-        import time
-
         from jupyter_client import BlockingKernelClient
 
         self.lab, self.kernel_id = lab, kernel_id
         self.client = BlockingKernelClient(connection_file=str(lab.runtime_dir / f"kernel-{kernel_id}.json"))
         self.client.load_connection_file()
         self.client.start_channels(hb=False)
-        deadline = time.monotonic() + timeout_s
-        while True:
-            msg_id = self.client.kernel_info()
-            try:
-                reply = self.client.get_shell_msg(timeout=5.0)
-            except Exception:             # queue.Empty: no reply yet; a slow kernel, or a dead one (asked below)
-                reply = None
-            if reply is not None and reply["parent_header"].get("msg_id") == msg_id:
-                break
-            why = self.dead()
-            if why:
-                raise RuntimeError(f"kernel {kernel_id} died before replying to kernel_info: {why}")
-            if time.monotonic() > deadline:
-                raise RuntimeError(f"kernel {kernel_id} is alive but sent no kernel_info reply in {timeout_s:g} s")
+        wait_for_kernel_info(self.client, self.dead, timeout_s, f"kernel {kernel_id}")
 
     def dead(self) -> str:
         """Why the server says the kernel is dead, or '' while it lives."""

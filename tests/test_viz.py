@@ -660,3 +660,29 @@ def test_the_view_code_loads_meshcats_bundle_as_a_module():
     assert "MeshCat" in source and "handle_command_bytearray" in source and source.rstrip().endswith(
         "export default { render };")
     assert "no 3D scene from the kernel after" in source and "WebGL is not available" in source
+
+
+def test_joint_sliders_with_a_machine_go_through_it(viewer):
+    from armlab import make_station, tasks
+
+    station = make_station("sim", seed=0, scene="empty")
+    machine = tasks.TaskMachine(station)
+    tasks.context(station)            # the station's context (calibration, sag) is made on first use: not mid-move
+    box = viewer.joint_sliders(machine=machine)
+    start = len(machine.history)
+    box.sliders[0].value = 0.3
+    assert box.note.value == "" and machine.history[start:] == ["execute", "idle"]     # a move of the machine
+    np.testing.assert_allclose(station.arm.joint_positions()[0], 0.3, atol=0.01)
+    machine.estop()
+    box.sliders[0].value = -0.2                                       # refused: the e-stop wins
+    assert "not moved" in box.note.value and "emergency-stopped" in box.note.value
+    np.testing.assert_allclose(station.arm.joint_positions()[0], 0.3, atol=0.01)
+    assert box.sliders[0].value == pytest.approx(station.arm.joint_positions()[0], abs=0.01)   # back to the arm
+    machine.reset()
+    machine.teach_start("sliders test")                               # another command holds the machine
+    box.sliders[0].value = -0.2
+    assert "the machine is in 'teach'" in box.note.value
+    machine.estop()
+    machine.reset()
+    with pytest.raises(ValueError, match="give the machine alone"):
+        viewer.joint_sliders(arm=make_station("sim", seed=1, scene="empty").arm, machine=machine)

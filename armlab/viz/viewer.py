@@ -31,7 +31,7 @@ with warnings.catch_warnings():  # meshcat 0.3.2 imports zmq.eventloop.ioloop, d
     import meshcat.geometry as mg
     from meshcat.animation import Animation
 
-from armlab import kinematics
+from armlab import kinematics, planning
 from armlab.blocks import LAB_RGB, ObjectState
 from armlab.camera import Camera
 from armlab.files import write_text_atomic
@@ -398,21 +398,29 @@ class Viewer:
         for object_id in missing:
             node[str(object_id)].set_property("visible", object_id in per_frame[-1])
 
-    def joint_sliders(self, arm=None):
+    def joint_sliders(self, arm=None, machine=None):
         """ipywidgets sliders, one per joint (rad, within the joint limits), that start from the viewer's pose and
         follow it (every later show() or animate() moves them too, without moving anything back).
 
         Without an arm they move the drawn arm (and a "gripper mm" slider opens the drawn fingers). With an arm
         (e.g. station.arm) the viewer first shows the arm's reading, each released slider moves the ARM there
         (arm.move_to; a refused move, e.g. into the board, is reported under the sliders and they return to the
-        arm's pose) and the viewer then shows where the arm is; the gripper is an open/close toggle. Blocking
-        moves run in the kernel: for an emergency stop during motions, use the station panel
-        (armlab.ui.station_panel). After close() the sliders are disabled with a note. Returns a VBox
-        (attributes sliders, gripper, note); display it in a live notebook."""
+        arm's pose) and the viewer then shows where the arm is; the gripper is an open/close toggle. With a machine
+        (an armlab.tasks.TaskMachine) the arm is machine.station.arm and each move goes through the machine: refused
+        (said under the sliders) unless it is idle, so never during another command or after an emergency stop,
+        and stopped by machine.estop() (make the station's task context first, tasks.context(station): its first use
+        calibrates and moves the arm). Blocking moves run in the kernel: for an emergency stop during motions, use
+        the station panel (armlab.ui.station_panel), whose sliders always go through its machine. After close()
+        the sliders are disabled with a note. Returns a VBox (attributes sliders, gripper, note); display it in a
+        live notebook."""
         import ipywidgets as widgets
 
         robot = rx200()
         lo, hi = np.asarray(robot.lower, float), np.asarray(robot.upper, float)
+        if machine is not None:
+            if arm is not None and arm is not machine.station.arm:
+                raise ValueError("joint_sliders: give the machine alone (its station's arm is the one moved)")
+            arm = machine.station.arm
         if arm is not None:
             self.show(np.clip(np.asarray(arm.joint_positions(), float), lo, hi),
                       getattr(arm, "gripper_opening_mm", None))
@@ -437,8 +445,15 @@ class Viewer:
                 viewer.show(q, gripper.value)
                 return
             try:
+                if machine is not None and machine.state != "idle":
+                    raise RuntimeError(f"the machine is in {machine.state!r}" + (
+                        " (emergency-stopped: reset it first)" if machine.state == "estop" else ""))
                 if _change is not None and _change["owner"] is gripper:
                     arm.close_gripper() if gripper.value == "closed" else arm.open_gripper()
+                elif machine is not None:
+                    here = np.clip(np.asarray(arm.joint_positions(), float), lo, hi)
+                    machine.execute(planning.Plan((planning.MoveStep(planning.joint_move(here, q, robot=robot),
+                                                                     "sliders"),)))
                 else:
                     arm.move_to(q)
                 note.value = ""
