@@ -9,7 +9,7 @@ NBVAL   := --nbval --nbval-sanitize-with tests/nbval_sanitize.cfg --nbval-cell-t
 # (one kernel), stay together in one process (pytest-xdist's loadfile).
 PAR     := -n auto --maxprocesses 4 --dist loadfile
 
-.PHONY: demo test lint unit notebooks lab bench browser camera student autograder docs clean
+.PHONY: demo test lint unit notebooks lab bench browser camera sandbox student autograder docs clean
 
 $(STAMP): requirements.txt pyproject.toml
 	test -x $(PY) || python3 -m venv .venv
@@ -24,7 +24,7 @@ demo: $(STAMP)
 
 ## make test: lint + unit tests + every notebook under nbval, natively and under other CPUs' numerics
 ## (installs headless Chromium for the browser checks)
-test: $(STAMP) browser camera lint
+test: $(STAMP) browser camera sandbox lint
 ifeq ($(RELEASE),)
 	$(PY) -m pytest -q $(PAR) tests notebooks $(NBVAL)
 	bash tools/nbval-numerics $(PY) $(PAR) $(NBVAL)
@@ -35,7 +35,7 @@ endif
 lint: $(STAMP)
 	$(PY) -m ruff check armlab tests notebooks $(wildcard benchmarks tools/build-notebook tools/student-release tools/api-docs)
 
-unit: $(STAMP) camera
+unit: $(STAMP) camera sandbox
 	MPLBACKEND=Agg $(PY) -m pytest -q $(PAR) tests
 
 notebooks: $(STAMP)
@@ -47,6 +47,10 @@ browser:
 
 camera: $(STAMP)
 	bash tools/ensure-realsense $(PY)
+
+## the grader's sandbox (bubblewrap, prlimit, setpriv)
+sandbox:
+	bash tools/ensure-sandbox
 
 ## make lab: JupyterLab on notebooks/
 lab: $(STAMP)

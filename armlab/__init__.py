@@ -11,9 +11,9 @@ __all__ = ["make_station", "station_panel"]
 
 
 def station_panel(station: Station, viewer=None, **options):
-    """The lab's control station in JupyterLab for a station (armlab.tasks.station_panel: live camera, mouse-over
+    """The lab's control station in JupyterLab for a station (armlab.ui.station_panel: live camera, mouse-over
     world coordinates, click-to-grab/drop, teach/repeat, emergency stop, joint sliders, the inline 3D view)."""
-    from armlab.tasks.station_panel import station_panel as make
+    from armlab.ui.station_panel import station_panel as make
 
     return make(station, viewer=viewer, **options)
 __version__ = "0.1.0"

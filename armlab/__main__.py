@@ -5,22 +5,46 @@ OUT.bag` records the lab's RealSense camera for replay with make_station("real",
 from __future__ import annotations
 
 import argparse
+import json
 import sys
+from pathlib import Path
+
+from armlab.command_line import (
+    MAX_SEED,
+    CommandError,
+    OneLineParser,
+    input_folder,
+    int_at_least,
+    output_file,
+    output_folder,
+)
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="armlab", description=__doc__)
+    """The command line; returns the exit code. A bad option or path prints one line on stderr and returns 2."""
+    parser = OneLineParser(prog="armlab", description=__doc__)
+    try:
+        return _run(parser, argv)
+    except CommandError as e:
+        print(f"armlab {e.command}: error: {e}", file=sys.stderr)
+        return 2
+
+
+def _run(parser: argparse.ArgumentParser, argv: list[str] | None) -> int:
     sub = parser.add_subparsers(dest="command", required=True)
     demo = sub.add_parser("demo", help="run the end-to-end demo headless on the simulator")
     demo.add_argument("--out", default="out", help="folder for the demo's images and replay (default: out/)")
-    demo.add_argument("--seed", type=int, default=0)
+    demo.add_argument("--seed", type=int_at_least(0, MAX_SEED), default=0,
+                      help="the scene's and the camera noise's seed (a whole number, 0 or more)")
     demo.add_argument("--event", default="sort_stack",
                       help="the competition event to run: sort_stack (default), line_up, sky, or any other registered "
                            "event (armlab.tasks.events.registry: a module defining EVENT, in the kit's events package "
                            "or named in $ARMLAB_EVENT_MODULES)")
-    demo.add_argument("--level", type=int, default=None, help="the event's level (default: its highest)")
+    demo.add_argument("--level", type=int_at_least(0), default=None, help="the event's level (default: its highest)")
     demo.add_argument("--no-html", action="store_true", help="skip the meshcat replay page")
-    sub.add_parser("exercises", help="list the exercises: id, points, notebook, where to write them")
+    listing = sub.add_parser("exercises", help="list the exercises: id, points, kind, notebook, where to write them")
+    listing.add_argument("--json", action="store_true",
+                         help="as JSON: id, title, points, notebook, kind, where, functions, hidden, solution_lines")
     colors = sub.add_parser("colors", help="the block colour model (data/color_model.json)")
     colors_fit = colors.add_subparsers(dest="colors_command", required=True).add_parser(
         "fit", help="refit the colour model from labelled frames (real or simulated)")
@@ -30,13 +54,9 @@ def main(argv: list[str] | None = None) -> int:
     colors_fit.add_argument("--out", default=None,
                             help="where to write the model (default: color_model.json in $ARMLAB_DATA when set, "
                                  "else the package's data folder)")
-    grade = sub.add_parser("grade", help="grade a folder of submissions (one folder per student) into OUT")
-    grade.add_argument("submissions")
-    grade.add_argument("--out", required=True, help="folder for grades.csv and <student>/results.json, feedback.md")
-    grade.add_argument("--jobs", type=int, default=1, help="submissions graded in parallel (default: 1)")
-    grade.add_argument("--timeout", type=float, default=300.0, help="wall-clock seconds per notebook run")
-    grade.add_argument("--reference", default=".", help="the instructor's checkout (default: .)")
-    sub.add_parser("check", help="run the public checks of each exercise in this checkout (students)")
+    from armlab.grading.cli import add_parsers as add_grading_parsers
+
+    add_grading_parsers(sub)
     sub.add_parser("record", add_help=False,
                    help="record the RealSense camera to a .bag (replay: make_station('real', arm=False, playback=...))")
     args, rest = parser.parse_known_args(argv)
@@ -47,12 +67,17 @@ def main(argv: list[str] | None = None) -> int:
     if rest:
         parser.error(f"unrecognized arguments: {' '.join(rest)}")
     if args.command == "exercises":
-        from armlab.exercises import exercises_table
+        from armlab.exercises import exercises_json, exercises_table
 
-        print(exercises_table())
+        print(json.dumps(exercises_json(), indent=1) if args.json else exercises_table())
         return 0
     if args.command == "colors":
-        return _fit_colors(args.frames, args.out)
+        try:
+            frames = None if args.frames is None else input_folder(args.frames, "--frames")
+            out = None if args.out is None else output_file(args.out, "--out")
+        except ValueError as e:
+            raise CommandError("colors fit", str(e)) from None
+        return _fit_colors(frames, out)
     if args.command in ("grade", "check"):
         from armlab.grading.cli import main as grading_main
 
@@ -68,15 +93,17 @@ def main(argv: list[str] | None = None) -> int:
         level = max(spec.levels) if args.level is None else args.level
         if level not in spec.levels:
             parser.error(f"{args.event} has levels {spec.levels}, got --level {level}")
-        return run_demo(out_dir=args.out, seed=args.seed, event=args.event, level=level, html=not args.no_html)
+        try:
+            out = output_folder(args.out)
+        except ValueError as e:
+            raise CommandError("demo", str(e)) from None
+        return run_demo(out_dir=str(out), seed=args.seed, event=args.event, level=level, html=not args.no_html)
     return 2
 
 
-def _fit_colors(frames_folder: str | None, out: str | None) -> int:
+def _fit_colors(frames_folder: Path | None, out: Path | None) -> int:
     """`armlab colors fit`: fit ColorModel on labelled faces and write it atomically; 2 and nothing written on
     bad input."""
-    from pathlib import Path
-
     from armlab._paths import data_write_path
     from armlab.detection.color import COLOR_MODEL_FILE, ColorModel
 
@@ -94,10 +121,12 @@ def _fit_colors(frames_folder: str | None, out: str | None) -> int:
             model, n = fit_color_model()
             note = f"fitted on {n} simulated block faces, seeds {TRAIN_SEEDS.start}-{TRAIN_SEEDS.stop - 1}"
     except ValueError as e:
-        print(f"armlab colors fit: error: {e}", file=sys.stderr)
-        return 2
-    path = Path(out) if out is not None else data_write_path(COLOR_MODEL_FILE)
-    model.save(path, note=note)
+        raise CommandError("colors fit", str(e)) from None
+    path = out if out is not None else data_write_path(COLOR_MODEL_FILE)
+    try:
+        model.save(path, note=note)
+    except OSError as e:
+        raise CommandError("colors fit", f"cannot write {path} ({e.strerror or e})") from None
     print(f"wrote {path} from {n} faces ({', '.join(model.names)})")
     return 0
 

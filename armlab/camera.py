@@ -10,9 +10,13 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from armlab.arguments import finite_array, int_in_range, plain
 from armlab.transforms import homogeneous, invert_transform
 
-__all__ = ["Camera", "look_at", "distort_normalized", "check_intrinsics"]
+__all__ = ["Camera", "look_at", "distort_normalized", "check_intrinsics", "MAX_IMAGE_SIDE_PX", "MAX_DISTANCE_MM"]
+
+MAX_IMAGE_SIDE_PX = 100_000       # no camera makes images wider or taller (px)
+MAX_DISTANCE_MM = 1e7             # no camera is placed 10 km from the board (mm)
 
 # OpenCV 4 names undistortPoints with stop criteria undistortPointsIter; OpenCV 5 folds it into undistortPoints
 # (same arguments by keyword).
@@ -21,10 +25,8 @@ _UNDISTORT_POINTS = getattr(cv2, "undistortPointsIter", None) or cv2.undistortPo
 
 def check_intrinsics(K, dist) -> tuple[np.ndarray, np.ndarray]:
     """Validate a 3x3 camera matrix (positive focal lengths, last row 0 0 1) and 4, 5 or 8 distortion terms."""
-    K = np.asarray(K, dtype=float)
-    dist = np.asarray(dist, dtype=float).ravel()
-    if K.shape != (3, 3) or not np.all(np.isfinite(K)):
-        raise ValueError(f"camera matrix K must be a finite 3x3 array, got shape {K.shape}")
+    K = finite_array(K, "camera matrix K", (3, 3), "a 3x3 matrix in px")
+    dist = finite_array(dist, "distortion dist", what="Brown-Conrady k1, k2, p1, p2[, k3...]").ravel()
     if K[0, 0] <= 0 or K[1, 1] <= 0 or not np.allclose(K[2], [0, 0, 1]) or K[1, 0] != 0:
         raise ValueError("camera matrix K must be [[fx, s, cx], [0, fy, cy], [0, 0, 1]] with fx, fy > 0")
     if dist.size not in (4, 5, 8) or not np.all(np.isfinite(dist)):
@@ -80,18 +82,16 @@ class Camera:
 
     def __init__(self, K, dist, T_cam_world, width: int = 1280, height: int = 720):
         self.K, self.dist = check_intrinsics(K, dist)
-        T = np.asarray(T_cam_world, dtype=float)
-        if T.shape != (4, 4) or not np.all(np.isfinite(T)):
-            raise ValueError(f"T_cam_world must be a finite 4x4 array, got shape {T.shape}")
+        T = finite_array(T_cam_world, "T_cam_world", (4, 4), "world mm -> camera mm")
         R = T[:3, :3]
         rigid = np.allclose(R @ R.T, np.eye(3), atol=1e-6) and np.linalg.det(R) > 0
-        if not rigid or not np.allclose(T[3], [0, 0, 0, 1]):
-            raise ValueError("T_cam_world must be a rigid transform (orthonormal rotation, last row 0 0 0 1)")
-        if int(width) <= 0 or int(height) <= 0:
-            raise ValueError(f"image size must be positive, got {width}x{height}")
+        if not rigid or not np.allclose(T[3], [0, 0, 0, 1]) or np.abs(T[:3, 3]).max() > MAX_DISTANCE_MM:
+            raise ValueError(f"T_cam_world must be a rigid transform (orthonormal rotation, last row 0 0 0 1, "
+                             f"translation within {MAX_DISTANCE_MM:.0e} mm)")
         self.T_cam_world = T
         self.T_world_cam = invert_transform(T)
-        self.width, self.height = int(width), int(height)
+        self.width = _image_side(width, "width")
+        self.height = _image_side(height, "height")
 
     def __repr__(self) -> str:
         fx, fy, cx, cy = self.K[0, 0], self.K[1, 1], self.K[0, 2], self.K[1, 2]
@@ -152,15 +152,21 @@ class Camera:
     def pixel_to_camera(self, uv, depth_mm) -> np.ndarray:
         """Camera-frame points (N, 3) mm seen at pixels uv (N, 2) with depth Z (N,) mm."""
         xy = self.normalized_rays(uv)
-        depth = np.asarray(depth_mm, dtype=float).reshape(-1)
+        depth = finite_array(depth_mm, "depth_mm", [(), (None,)], "camera-frame Z in mm, NaN = no return",
+                             allow_nan=True).reshape(-1)
         if depth.shape[0] != xy.shape[0]:
             raise ValueError(f"depth_mm must hold one value per pixel: {depth.shape[0]} values, {xy.shape[0]} pixels")
+        if (depth < 0).any():
+            raise ValueError(f"depth_mm must not be negative (camera-frame Z in mm: a negative depth is behind the "
+                             f"camera), got {plain(depth[depth < 0][0])} mm")
+        depth = np.where(depth == 0, np.nan, depth)     # a zero depth is a sensor's "no return"
         return np.column_stack([xy * depth[:, None], depth])
 
     def pixel_to_world(self, uv, depth_mm) -> np.ndarray:
         """World points (N, 3) mm seen at pixels uv (N, 2) with depth (camera-frame Z) depth_mm (N,) mm.
 
-        A NaN depth (no return) gives a NaN point.
+        A NaN or zero depth (no return: what a RealSense reports) gives a NaN point; a negative depth is refused
+        (ValueError).
         """
         return self.camera_to_world(self.pixel_to_camera(uv, depth_mm))
 
@@ -187,9 +193,13 @@ class Camera:
 
 
 def _points(a, dim: int, name: str) -> np.ndarray:
-    P = np.asarray(a, dtype=float)
-    if P.ndim == 1 and P.shape[0] == dim:
-        P = P[None]
-    if P.ndim != 2 or P.shape[1] != dim:
-        raise ValueError(f"{name} must have shape (N, {dim}), got {np.shape(a)}")
-    return P
+    """Points (N, dim) from (dim,) or (N, dim) numbers; NaN rows allowed (missing points), infinity refused."""
+    P = finite_array(a, name, [(dim,), (None, dim)], allow_nan=True)
+    return P[None] if P.ndim == 1 else P
+
+
+def _image_side(value, name: str) -> int:
+    """An image width or height in px: a positive integer (an integral float such as 1280.0 is taken)."""
+    if isinstance(value, (float, np.floating)) and float(value).is_integer() and abs(value) < 2**31:
+        value = int(value)
+    return int_in_range(value, name, 1, MAX_IMAGE_SIDE_PX, "image size in px")

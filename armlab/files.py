@@ -14,7 +14,11 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
-__all__ = ["atomic_path", "write_bytes_atomic", "write_text_atomic", "write_json_atomic", "read_json"]
+from armlab.schemas import validate
+
+__all__ = ["atomic_path", "write_bytes_atomic", "write_text_atomic", "write_json_atomic", "read_json", "MAX_JSON_BYTES"]
+
+MAX_JSON_BYTES = 64 * 2**20     # the kit's JSON files are kilobytes; a larger one is not one of them
 
 
 @contextmanager
@@ -57,15 +61,29 @@ def write_json_atomic(path, data, indent: int = 1, make_parents: bool = False) -
     return write_text_atomic(path, json.dumps(data, indent=indent, allow_nan=False) + "\n", make_parents)
 
 
-def read_json(path, kind: str, error: type[Exception] = ValueError):
-    """Parse the JSON file at `path`; a missing, unreadable or corrupt file raises `error` with a message naming the
-    file and `kind` (e.g. "scene": "<path>: scene file not found"). Validating the content is the caller's job."""
+def read_json(path, kind: str, error: type[Exception] = ValueError, schema: dict | None = None):
+    """Parse the JSON file at `path` and, given a `schema` (armlab.schemas), validate it; a missing, unreadable,
+    oversized, corrupt or invalid file raises `error` with a message naming the file and `kind` (e.g. "<path>: scene
+    file not found") or the field at fault ("<path>: board.grid_mm: must be greater than 0, got 0.0"). Never a raw
+    OSError (a symlink loop, no permission), RecursionError (deep nesting) or OverflowError."""
     path = Path(path)
     try:
-        return json.loads(path.read_bytes().decode("utf-8"))
+        if path.stat().st_size > MAX_JSON_BYTES:
+            raise error(f"{path}: {path.stat().st_size} bytes is too large for a {kind} file "
+                        f"(at most {MAX_JSON_BYTES} bytes)")
+        raw = json.loads(path.read_bytes().decode("utf-8"))
     except FileNotFoundError:
         raise error(f"{path}: {kind} file not found") from None
     except IsADirectoryError:
         raise error(f"{path}: is a folder, not a {kind} file") from None
     except (json.JSONDecodeError, UnicodeDecodeError) as e:
         raise error(f"{path}: not valid JSON, a corrupt {kind} file? ({e})") from None
+    except RecursionError:
+        raise error(f"{path}: nested too deeply to be a {kind} file") from None
+    except ValueError as e:      # e.g. an integer of more digits than Python converts
+        raise error(f"{path}: not a readable {kind} file ({e})") from None
+    except OSError as e:         # a symlink loop, no permission, a name too long, an I/O error
+        raise error(f"{path}: cannot read the {kind} file ({e.strerror or e})") from None
+    if schema is not None:
+        validate(raw, schema, path, error)
+    return raw

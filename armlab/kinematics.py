@@ -20,7 +20,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from armlab.exercises.fallback import is_blank_stub, reference_fallback
+from armlab.arguments import finite_array, finite_float, int_in_range
+from armlab.exercises import registry as course
+from armlab.exercises.fallback import reference_fallback
+from armlab.exercises.registry import ExerciseNotWritten
 from armlab.robot import DH_TOOL_ROTATION, RobotModel, rx200
 from armlab.transforms import exp_se3, homogeneous, log_so3, rot_x, rot_y, rot_z
 
@@ -36,6 +39,8 @@ __all__ = [
     "jacobian",
     "tool_orientation",
     "ik",
+    "ik_branches",
+    "BRANCHES",
     "ik_batch",
     "IKResult",
     "IKBatchResult",
@@ -60,12 +65,7 @@ def check_joints(q, robot: RobotModel | None = None, check_limits: bool = True) 
     Raises ValueError naming the problem (shape, NaN, or which joint of which row is out of its limits).
     """
     robot = robot or rx200()
-    q = np.asarray(q, dtype=float)
-    if q.ndim not in (1, 2) or q.shape[-1] != 5:
-        raise ValueError(f"joint angles must have shape (5,) or (N, 5) (waist, shoulder, elbow, wrist_angle, "
-                         f"wrist_rotate in rad), got shape {q.shape}")
-    if not np.isfinite(q).all():
-        raise ValueError("joint angles contain NaN or infinity")
+    q = finite_array(q, "joint angles", [(5,), (None, 5)], _JOINTS_WHAT, plural=True)
     if check_limits:
         ok = robot.within_limits(q)
         if not ok.all():
@@ -76,20 +76,15 @@ def check_joints(q, robot: RobotModel | None = None, check_limits: bool = True) 
     return q
 
 
+_JOINTS_WHAT = "waist, shoulder, elbow, wrist_angle, wrist_rotate in rad"
+
+
 def _check_position(position, name: str = "position") -> np.ndarray:
-    p = np.asarray(position, dtype=float)
-    if p.ndim not in (1, 2) or p.shape[-1] != 3:
-        raise ValueError(f"{name} must have shape (3,) or (N, 3) (x, y, z in world mm), got shape {p.shape}")
-    if not np.isfinite(p).all():
-        raise ValueError(f"{name} contains NaN or infinity")
-    return p
+    return finite_array(position, name, [(3,), (None, 3)], "x, y, z in world mm")
 
 
 def _check_angle(value, name: str) -> np.ndarray:
-    a = np.asarray(value, dtype=float)
-    if not np.isfinite(a).all():
-        raise ValueError(f"{name} contains NaN or infinity")
-    return a
+    return finite_array(value, name, what="rad")
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -105,7 +100,7 @@ def _dh_by_elementary_motions(theta, d, a, alpha) -> np.ndarray:
             @ homogeneous(None, np.stack([a, zero, zero], -1)) @ homogeneous(rot_x(alpha)))
 
 
-@reference_fallback("fk.dh_link_transform", _dh_by_elementary_motions, "DH link transforms are products of the "
+@reference_fallback(course.DH_LINK, _dh_by_elementary_motions, "DH link transforms are products of the "
                                                                        "four elementary motions' matrices")
 def dh_link_transform(theta, d, a, alpha) -> np.ndarray:
     """Standard DH link transform(s) (..., 4, 4) = Rz(theta) Tz(d) Tx(a) Rx(alpha); lengths in mm, angles in rad.
@@ -388,21 +383,25 @@ def _branch_joints(heading, r, z, pitch, flipped, delta_sign, geometry, xp=np):
     return q1, q2, q3, q4, ok, d2
 
 
-_GEOMETRY: dict[int, tuple[RobotModel, tuple[float, ...]]] = {}   # id(robot) -> (robot, its geometry)
+_GEOMETRY: dict[bytes, tuple[float, ...]] = {}   # DH table's bytes -> its geometry (no model kept: the planner
+_GEOMETRY_ENTRIES = 16                            # makes a model with inner limits per grasp; they must be freed)
 
 
 def _ik_geometry(robot: RobotModel) -> tuple[float, ...]:
     """(shoulder height, upper arm, forearm, wrist-to-tool) mm and the DH offsets o1, o2, o3 rad, as Python floats
-    (computed once per robot model: its arrays are read-only)."""
-    cached = _GEOMETRY.get(id(robot))
-    if cached is None or cached[0] is not robot:
-        dh = robot.dh
+    (computed once per DH table: it is all they depend on)."""
+    dh = np.asarray(robot.dh, dtype=float)
+    key = dh.tobytes()
+    geometry = _GEOMETRY.get(key)
+    if geometry is None:
         geometry = (*(float(v) for v in _planar_geometry(robot)), float(dh[0, 0]), float(dh[1, 0]), float(dh[2, 0]))
-        cached = _GEOMETRY[id(robot)] = (robot, geometry)
-    return cached[1]
+        if len(_GEOMETRY) >= _GEOMETRY_ENTRIES:
+            _GEOMETRY.clear()
+        _GEOMETRY[key] = geometry
+    return geometry
 
 
-@reference_fallback("ik.candidates", _numerical_candidates, "inverse kinematics is solved numerically on the PoX "
+@reference_fallback(course.IK_BRANCHES, _numerical_candidates, "inverse kinematics is solved numerically on the PoX "
                                                             "model (slower)")
 def _ik_candidates(P: np.ndarray, pitch: np.ndarray, roll: np.ndarray, robot: RobotModel) -> _Candidates:
     """Every IK branch for targets P (N, 3) with pitch (N,) and roll (N,), vectorised over targets and branches
@@ -455,7 +454,7 @@ def _ik_one(position, pitch, roll, current, robot: RobotModel) -> np.ndarray | N
         x, y, z = _floats(position, 3)
         pitch, roll = _real(pitch), _real(roll)
         cur = None if current is None else _floats(current, 5)
-    except TypeError:
+    except (TypeError, OverflowError):       # not plain floats: the general path validates and names the argument
         return None
     if not (math.isfinite(x + y + z + pitch + roll) and (cur is None or math.isfinite(sum(cur)))):
         return None
@@ -469,8 +468,8 @@ def _ik_one(position, pitch, roll, current, robot: RobotModel) -> np.ndarray | N
     for flipped, delta_sign, elbow_down in _BRANCH_SIGNS:
         try:
             q1, q2, q3, q4, ok, _ = _branch_joints(heading, r, z, pitch, flipped, delta_sign, geometry, _SCALAR_MATH)
-        except NotImplementedError as e:
-            if is_blank_stub(e, "ik.candidates"):
+        except ExerciseNotWritten as e:
+            if e.exercise_id == course.IK_BRANCHES.id:
                 return None
             raise
         if not ok:
@@ -556,6 +555,20 @@ def ik(position, pitch, roll: float = 0.0, current=None, robot: RobotModel | Non
     return fast if fast is not None else _ik_general(position, pitch, roll, current, robot)
 
 
+BRANCHES = tuple(", ".join(b) for b in _BRANCHES)    # "facing, elbow up", ..., "flipped, elbow down"
+
+
+def ik_branches(position, pitch, roll: float = 0.0, robot: RobotModel | None = None) -> np.ndarray:
+    """Every closed-form branch for one target (4, 5) rad, in the order of BRANCHES (waist facing the target or
+    flipped, x elbow up or down), joint limits NOT applied: NaN rows where the wrist centre is out of reach. The
+    same solutions ik() ranks and filters; position (3,) world mm, pitch and roll rad as in ik()."""
+    robot = robot or rx200()
+    P, pitch_a, roll_a, _, single = _prepare(position, pitch, roll, None, robot)
+    if not single:
+        raise ValueError("ik_branches takes one position (3,)")
+    return _ik_candidates(P, pitch_a, roll_a, robot).q[0]
+
+
 def _ik_general(position, pitch, roll, current, robot: RobotModel) -> np.ndarray:
     """ik() through the batch machinery (_prepare, _ik_candidates, _rank) for one target."""
     P, pitch_a, roll_a, cur, single = _prepare(position, pitch, roll, current, robot)
@@ -626,11 +639,12 @@ def steepest_pitch(position, roll: float = 0.0, max_pitch: float = np.pi / 2, mi
     P = _check_position(position)
     if P.ndim != 1:
         raise ValueError("steepest_pitch takes one position (3,)")
-    _check_angle([roll, min_pitch, max_pitch], "roll, min_pitch and max_pitch")
+    roll, min_pitch, max_pitch = (finite_float(v, n, what="rad") for v, n in
+                                  ((roll, "roll"), (min_pitch, "min_pitch"), (max_pitch, "max_pitch")))
     if not min_pitch <= max_pitch:
         raise ValueError(f"min_pitch ({min_pitch} rad) must not exceed max_pitch ({max_pitch} rad)")
-    if not (step > 0 and tol > 0):
-        raise ValueError(f"step ({step} rad) and tol ({tol} rad) must be positive")
+    step = finite_float(step, "step", positive=True, maximum=np.pi, what="rad")
+    tol = finite_float(tol, "tol", positive=True, what="rad")
     grid = np.linspace(max_pitch, min_pitch, max(2, int(np.ceil((max_pitch - min_pitch) / step)) + 1))
     ok = ik_batch(np.repeat(P[None], grid.size, 0), grid, roll, robot=robot).success
     if not ok.any():
@@ -677,7 +691,12 @@ def ik_numerical(position, pitch, roll: float = 0.0, q0=None, damping: float = 0
     P = _check_position(position)
     if P.ndim != 1:
         raise ValueError("ik_numerical takes one position (3,)")
-    pitch, roll = float(_check_angle(pitch, "pitch")), float(_check_angle(roll, "roll"))
+    pitch, roll = finite_float(pitch, "pitch", what="rad"), finite_float(roll, "roll", what="rad")
+    damping = finite_float(damping, "damping", positive=True, what="of the damped least squares step")
+    tol_mm = finite_float(tol_mm, "tol_mm", positive=True, what="mm")
+    max_iterations = int_in_range(max_iterations, "max_iterations", 1, 1_000_000)
+    orientation_scale_mm = finite_float(orientation_scale_mm, "orientation_scale_mm", positive=True, what="mm")
+    max_step = finite_float(max_step, "max_step", positive=True, what="rad per iteration")
     x, y, _ = P
     heading = np.arctan2(y, x) if np.hypot(x, y) > 1e-9 else robot.dh[0, 0]
     R_target = tool_orientation(heading, pitch, roll)

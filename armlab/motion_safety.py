@@ -24,6 +24,12 @@ path (the block a held block rests on when the lift starts). Whoever knows where
 the simulator (armlab.sim.arm, its true objects) and the task layer's pre-check (armlab.tasks.precheck, its
 detections, with a smaller allowance that covers detection error).
 
+Where a held block may be put down (placement_problem, check_placement: the one placement rule, used by
+tasks.place, the clicks, the events through tasks.place, and planning.plan_place): its footprint (a square of its
+edge, turned by its yaw; a point for a click) must lie on the board, clear of the robot's base plate and
+PLACE_BASE_MARGIN_MM around it (data/lab.json's robot_base), and the spot within the arm's reach (the straight arm's
+length from the shoulder joint).
+
 Units: rad, s, mm; heights are world z (the board surface is z = 0).
 """
 
@@ -34,8 +40,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from armlab.arguments import finite_float
 from armlab.gripper_geometry import GripperGeometry
 from armlab.kinematics import check_joints, joint_positions, link_frames
+from armlab.lab import LabConfig, lab_config
 from armlab.profile import ACCEL_FRACTION, default_moving_time, velocity_violations
 from armlab.robot import RobotModel, rx200
 from armlab.station.contract import MotionRefused
@@ -43,7 +51,8 @@ from armlab.station.contract import MotionRefused
 __all__ = ["BOARD_CONTACT_TOL_MM", "REAL_LINK_MARGIN_MM", "PATH_STEP_RAD", "MAX_MOVING_TIME_S", "LINK_POINTS",
            "PAD_NAMES", "HELD_CONTACT_TOL_MM", "HELD_PATH_STEP_RAD", "BoardClearance", "SIM_CLEARANCE",
            "REAL_CLEARANCE", "HeldBlock", "Segment", "refusal", "check_target", "check_timing", "path_fractions",
-           "held_path_fractions", "held_intrusion", "board_intrusion", "check_move", "check_plan"]
+           "held_path_fractions", "held_intrusion", "board_intrusion", "check_move", "check_plan",
+           "PLACE_BASE_MARGIN_MM", "arm_reach_mm", "placement_problem", "check_placement"]
 
 BOARD_CONTACT_TOL_MM = 1.0          # a pad or a held block may press this far into the board: not a collision
 REAL_LINK_MARGIN_MM = 10.0          # the real arm's links stay this far above the board (unmodelled sag)
@@ -54,6 +63,7 @@ HELD_PATH_STEP_RAD = 0.01           # the held-object check's path step (coarser
 # In time-based profile mode the servos' Profile_Velocity register holds the moving time in ms, at most 32737
 # (ROBOTIS e-manual, X-series control table); the driver passes a larger value on and the servo ignores it.
 MAX_MOVING_TIME_S = 32.737
+PLACE_BASE_MARGIN_MM = 10.0         # nothing is put down within this of the robot's base plate
 LINK_POINTS: tuple[str, ...] = ("shoulder joint", "elbow joint", "wrist joint", "wrist_rotate joint", "tool point")
 PAD_NAMES: tuple[str, ...] = ("left finger pad", "right finger pad")
 _CUBE_CORNERS = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], dtype=float) / 2
@@ -129,14 +139,16 @@ def check_timing(q_from, q_to, moving_time: float | None = None, accel_time: flo
     """The (moving_time, accel_time) s to send for a move q_from -> q_to (5,) rad (defaults filled in), or
     MotionRefused for an impossible time profile or a joint faster than its velocity limit (the joint named)."""
     robot = robot or rx200()
-    T = default_moving_time(q_from, q_to, robot, ACCEL_FRACTION) if moving_time is None else float(moving_time)
-    if not np.isfinite(T) or T <= 0:
-        raise refusal("time profile", f"moving_time must be a positive number of seconds, got {T}")
+    try:
+        T = (default_moving_time(q_from, q_to, robot, ACCEL_FRACTION) if moving_time is None
+             else finite_float(moving_time, "moving_time", positive=True, what="s"))
+        Ta = T * ACCEL_FRACTION if accel_time is None else finite_float(accel_time, "accel_time", what="s")
+    except (TypeError, ValueError) as e:
+        raise refusal("time profile", str(e)) from None
     if T > MAX_MOVING_TIME_S:
         raise refusal("time profile", f"moving_time {T:g} s is longer than the servos' time profile allows "
                                       f"({MAX_MOVING_TIME_S} s): split the move")
-    Ta = T * ACCEL_FRACTION if accel_time is None else float(accel_time)
-    if not np.isfinite(Ta) or not 0 <= Ta <= T / 2 + 1e-12:
+    if not 0 <= Ta <= T / 2 + 1e-12:
         raise refusal("time profile", f"accel_time {Ta} s must lie in [0, moving_time / 2] = [0, {T / 2:g}] s")
     too_fast = velocity_violations(q_from, q_to, T, robot)
     if too_fast:
@@ -255,3 +267,76 @@ def check_plan(q_start, segments: Sequence[Segment], robot: RobotModel | None = 
             raise MotionRefused(f"plan refused at {what} of {len(segments)}: {e}") from None
         q = np.asarray(seg.q, dtype=float)
     return times
+
+
+def arm_reach_mm(robot: RobotModel | None = None) -> float:
+    """The arm's reach (mm): shoulder joint to tool point with the arm straight (the sum of its link lengths)."""
+    robot = robot or rx200()
+    P = joint_positions(np.asarray(robot.home, float), robot)[2:]     # shoulder, elbow, wrist, wrist_rotate, tool
+    return float(np.sum(np.linalg.norm(np.diff(P, axis=0), axis=1)))
+
+
+def _footprint(xy: np.ndarray, edge_mm: float, yaw: float) -> np.ndarray:
+    """Corners (4, 2) world mm of a square of edge_mm centred at xy turned by yaw (all at xy for edge 0)."""
+    c, s = np.cos(yaw), np.sin(yaw)
+    half = np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]], float) * edge_mm / 2
+    return xy + half @ np.array([[c, s], [-s, c]])
+
+
+def _overlaps_box(corners: np.ndarray, half: tuple[float, float]) -> bool:
+    """True when the convex quadrilateral `corners` (4, 2) overlaps the axis-aligned box |x| <= half[0], |y| <=
+    half[1] (separating axes: the box's two and the quadrilateral's edge normals)."""
+    box = np.array([[-half[0], -half[1]], [half[0], -half[1]], [half[0], half[1]], [-half[0], half[1]]])
+    edges = np.diff(np.vstack([corners, corners[:1]]), axis=0)
+    axes = [np.array([1.0, 0.0]), np.array([0.0, 1.0])] + [np.array([-e[1], e[0]]) for e in edges
+                                                          if np.hypot(*e) > 1e-12]
+    for a in axes:
+        p, q = corners @ a, box @ a
+        if p.max() < q.min() or q.max() < p.min():
+            return False
+    return True
+
+
+def placement_problem(position, edge_mm: float = 0.0, yaw: float = 0.0, lab: LabConfig | None = None,
+                      robot: RobotModel | None = None, reach: bool = True) -> str | None:
+    """Why a block of edge_mm (0: a point, e.g. a click) turned by yaw rad cannot be put with its bottom-face centre
+    at position (x, y, z) world mm, in words (module notes: off the board, on the robot's base plate, out of reach;
+    reach=False: the board and the plate only, for a point that is not a placement yet); None when the spot is
+    allowed. ValueError for malformed input."""
+    p = np.asarray(position, dtype=float)
+    if p.shape != (3,) or not np.all(np.isfinite(p)):
+        raise ValueError(f"a placement position must be 3 finite numbers (x, y, z world mm), got {position!r}")
+    if not (np.isfinite(edge_mm) and edge_mm >= 0 and np.isfinite(yaw)):
+        raise ValueError(f"a placement needs a finite edge >= 0 mm and a finite yaw (rad), got {edge_mm!r}, {yaw!r}")
+    lab = lab or lab_config()
+    corners = _footprint(p[:2], float(edge_mm), float(yaw))
+    where = f"({p[0]:.0f}, {p[1]:.0f}) mm"
+    if not np.all(lab.on_board(corners)):
+        what = "is off the board" if not lab.on_board(p[:2]) else \
+            f"is too close to the board's edge for a {edge_mm:g} mm block"
+        return (f"{where} {what} (x in [{lab.board_x[0]:g}, {lab.board_x[1]:g}], y in "
+                f"[{lab.board_y[0]:g}, {lab.board_y[1]:g}] mm)")
+    hx, hy = (h + PLACE_BASE_MARGIN_MM for h in lab.robot_base_half_mm)
+    if _overlaps_box(corners, (hx, hy)):
+        what = "is on the robot's base plate" if lab.on_robot_base(p[:2], PLACE_BASE_MARGIN_MM) else \
+            f"is too close to the robot's base plate for a {edge_mm:g} mm block"
+        return (f"{where} {what} (the plate and a {PLACE_BASE_MARGIN_MM:g} mm margin: |x| <= {hx:g}, "
+                f"|y| <= {hy:g} mm)")
+    if not reach:
+        return None
+    robot = robot or rx200()
+    shoulder = joint_positions(np.asarray(robot.home, float), robot)[2]
+    nearest = np.array([p[0], p[1], np.clip(shoulder[2], p[2], p[2] + edge_mm)])    # of the block's height span
+    reach, far = arm_reach_mm(robot), float(np.linalg.norm(nearest - shoulder))
+    if far > reach:
+        return (f"{where} is out of the arm's reach: {far:.0f} mm from the shoulder joint, the straight arm "
+                f"reaches {reach:.0f} mm")
+    return None
+
+
+def check_placement(position, edge_mm: float = 0.0, yaw: float = 0.0, lab: LabConfig | None = None,
+                    robot: RobotModel | None = None) -> None:
+    """MotionRefused (category 'placement') saying why when placement_problem finds one; None when allowed."""
+    problem = placement_problem(position, edge_mm, yaw, lab, robot)
+    if problem:
+        raise refusal("placement", problem)

@@ -97,16 +97,20 @@ def _alive(pid: int) -> bool:
 
 class JupyterLab:
     """A JupyterLab server on 127.0.0.1 (a free port, a random token, a fresh runtime/settings/workspace folder
-    under `home`) serving `root`. Use as a context manager: on exit its kernels are shut down, the server is
-    terminated (killed after a timeout) and every process it started is checked gone (killed if not)."""
+    under `home`) serving `root` under `base_url` (a JupyterHub's /user/NAME/). Use as a context manager: on exit
+    its kernels are shut down, the server is terminated (killed after a timeout) and every process it started is
+    checked gone (killed if not)."""
 
-    def __init__(self, root, home, python: str, timeout_s: float = 120.0):
+    def __init__(self, root, home, python: str, timeout_s: float = 120.0, base_url: str = "/"):
         import os
         import secrets
 
+        if not (base_url.startswith("/") and base_url.endswith("/")):
+            raise ValueError(f"base_url must start and end with '/', got {base_url!r}")
         self.root, self.home = Path(root), Path(home)
         self.port, self.token = free_port(), secrets.token_hex(16)
-        self.url = f"http://127.0.0.1:{self.port}"
+        self.base_url = base_url
+        self.url = f"http://127.0.0.1:{self.port}{base_url.rstrip('/')}"
         self.timeout_s = timeout_s
         self.runtime_dir = self.home / "runtime"
         settings = self.home / "settings"
@@ -115,13 +119,18 @@ class JupyterLab:
             d.mkdir(parents=True, exist_ok=True)
         (settings / "@jupyterlab" / "apputils-extension" / "notification.jupyterlab-settings").write_text(
             '{"fetchNews": "false", "checkForUpdates": false}')
+        # every cell in the page (JupyterLab 4 otherwise leaves out cells scrolled far away: a test reads them all)
+        (settings / "@jupyterlab" / "notebook-extension").mkdir(parents=True, exist_ok=True)
+        (settings / "@jupyterlab" / "notebook-extension" / "tracker.jupyterlab-settings").write_text(
+            '{"windowingMode": "none"}')
         self.env = dict(os.environ, JUPYTER_RUNTIME_DIR=str(self.runtime_dir), JUPYTER_CONFIG_DIR=str(self.home /
                         "config"), JUPYTER_DATA_DIR=str(self.home / "data"), JUPYTERLAB_SETTINGS_DIR=str(settings),
                         JUPYTERLAB_WORKSPACES_DIR=str(self.home / "workspaces"))
         self.env.pop("MPLBACKEND", None)
         self.cmd = [python, "-m", "jupyter", "lab", "--no-browser", "--ip=127.0.0.1", f"--port={self.port}",
                     "--port-retries=0", f"--ServerApp.root_dir={self.root}", f"--IdentityProvider.token={self.token}",
-                    "--allow-root", "--LabApp.expose_app_in_browser=True", "--ServerApp.shutdown_no_activity_timeout=0"]
+                    "--allow-root", "--LabApp.expose_app_in_browser=True", "--ServerApp.shutdown_no_activity_timeout=0",
+                    f"--ServerApp.base_url={base_url}"]
         self.proc = None
         self.log = self.home / "jupyterlab.log"
         self.started: set[int] = set()
@@ -211,15 +220,49 @@ class JupyterLab:
 
 class Kernel:
     """A second client of a kernel that JupyterLab runs (its connection file in the server's runtime folder): the
-    test's side channel to the simulator's ground truth. evaluate(expr) returns the JSON value of expr."""
+    test's side channel to the simulator's ground truth. evaluate(expr) returns the JSON value of expr.
 
-    def __init__(self, lab: JupyterLab, kernel_id: str):
+    Whether the kernel is alive is asked of its server (the kernel's process), not of zmq heartbeats: jupyter_client's
+    heartbeat gives a kernel 1 s to answer a ping, and on a loaded 2-core machine a kernel that is busy importing
+    misses that, so wait_for_ready() used to raise "Kernel died before replying to kernel_info" for a live kernel
+    (issue 26). Without the heartbeat channel the client waits for the kernel_info reply itself; a kernel that really
+    died is reported by the server's /api/kernels (execution_state "dead") or its process being gone."""
+
+    def __init__(self, lab: JupyterLab, kernel_id: str, timeout_s: float = 300.0):
+        import time
+
         from jupyter_client import BlockingKernelClient
 
+        self.lab, self.kernel_id = lab, kernel_id
         self.client = BlockingKernelClient(connection_file=str(lab.runtime_dir / f"kernel-{kernel_id}.json"))
         self.client.load_connection_file()
-        self.client.start_channels()
-        self.client.wait_for_ready(timeout=60)
+        self.client.start_channels(hb=False)
+        deadline = time.monotonic() + timeout_s
+        while True:
+            msg_id = self.client.kernel_info()
+            try:
+                reply = self.client.get_shell_msg(timeout=5.0)
+            except Exception:             # queue.Empty: no reply yet; a slow kernel, or a dead one (asked below)
+                reply = None
+            if reply is not None and reply["parent_header"].get("msg_id") == msg_id:
+                break
+            why = self.dead()
+            if why:
+                raise RuntimeError(f"kernel {kernel_id} died before replying to kernel_info: {why}")
+            if time.monotonic() > deadline:
+                raise RuntimeError(f"kernel {kernel_id} is alive but sent no kernel_info reply in {timeout_s:g} s")
+
+    def dead(self) -> str:
+        """Why the server says the kernel is dead, or '' while it lives."""
+        import urllib.error
+
+        try:
+            state = self.lab.api(f"/api/kernels/{self.kernel_id}").get("execution_state")
+        except urllib.error.HTTPError as e:
+            return f"the server no longer knows it (HTTP {e.code})" if e.code == 404 else ""
+        except OSError:
+            return ""                     # the server is slow to answer: not a verdict on the kernel
+        return "the server reports it dead" if state == "dead" else ""
 
     def run(self, code: str, timeout_s: float = 120.0) -> dict:
         reply = self.client.execute_interactive(code, timeout=timeout_s, store_history=False,
@@ -242,3 +285,140 @@ class Kernel:
 
     def close(self) -> None:
         self.client.stop_channels()
+
+
+# -- one port: the browser of a student on a hub -------------------------------------------------------------------
+def _splice(a, b) -> None:
+    """Copy bytes both ways between sockets a and b until either side closes (two daemon threads)."""
+    import socket
+    import threading
+
+    def pump(src, dst):
+        try:
+            while True:
+                data = src.recv(65536)
+                if not data:
+                    break
+                dst.sendall(data)
+        except OSError:
+            pass
+        finally:
+            for s, how in ((dst, socket.SHUT_WR), (src, socket.SHUT_RD)):
+                try:
+                    s.shutdown(how)
+                except OSError:
+                    pass
+
+    for src, dst in ((a, b), (b, a)):
+        threading.Thread(target=pump, args=(src, dst), daemon=True).start()
+
+
+def _serve(listener, connect) -> None:
+    """Accept on listener forever; splice each connection with a new connect()."""
+    import threading
+
+    def loop():
+        while True:
+            try:
+                conn, _ = listener.accept()
+            except OSError:
+                return
+            try:
+                other = connect()
+            except OSError:
+                conn.close()
+                continue
+            _splice(conn, other)
+
+    threading.Thread(target=loop, daemon=True).start()
+
+
+def relay_inside(port: int, gate: str) -> None:
+    """Run inside the namespace: TCP 127.0.0.1:port -> the unix socket `gate` (outside's end). Prints 'ready'."""
+    import socket
+    import time
+
+    listener = socket.socket()
+    listener.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+    listener.bind(("127.0.0.1", port))
+    listener.listen(64)
+
+    def connect():
+        s = socket.socket(socket.AF_UNIX)
+        s.connect(gate)
+        return s
+
+    _serve(listener, connect)
+    print("ready", flush=True)
+    while True:
+        time.sleep(3600)
+
+
+class OnePort:
+    """A network namespace (`unshare -n`, root only) whose one way out is TCP 127.0.0.1:port, forwarded to the same
+    port of this machine through a unix socket (which crosses namespaces by path). Whatever runs inside (Chromium,
+    through `executable(...)`) reaches JupyterLab's port and nothing else: no meshcat port, no other service.
+    why_not() says why it cannot be made here (not root, no unshare/nsenter)."""
+
+    def __init__(self, port: int, workdir):
+        self.port, self.workdir = int(port), Path(workdir)
+        self.gate = str(self.workdir / "gate.sock")
+        self.inner = None
+        self.listener = None
+
+    @staticmethod
+    def why_not() -> str | None:
+        import os
+
+        if os.geteuid() != 0:
+            return "a network namespace needs root (unshare -n)"
+        for tool in ("unshare", "nsenter", "ip"):
+            if shutil.which(tool) is None:
+                return f"{tool} is missing (util-linux / iproute2)"
+        return None
+
+    def __enter__(self) -> OnePort:
+        import socket
+        import sys
+
+        self.workdir.mkdir(parents=True, exist_ok=True)
+        self.listener = socket.socket(socket.AF_UNIX)
+        self.listener.bind(self.gate)
+        self.listener.listen(64)
+        _serve(self.listener, lambda: socket.create_connection(("127.0.0.1", self.port)))
+        code = (f"import sys; sys.path.insert(0, {str(Path(__file__).parent)!r}); import browser; "
+                f"browser.relay_inside({self.port}, {self.gate!r})")
+        self.inner = subprocess.Popen(["unshare", "-n", "sh", "-c", 'ip link set lo up && exec "$0" -c "$1"',
+                                       sys.executable, code], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                      stdin=subprocess.DEVNULL, text=True)
+        line = self.inner.stdout.readline()
+        if line.strip() != "ready":
+            self.__exit__()
+            raise RuntimeError(f"the one-port namespace did not start: {line!r} {self.inner.stderr.read()[-2000:]}")
+        return self
+
+    def executable(self, browser_path: str) -> Path:
+        """A script that runs `browser_path` with its arguments inside the namespace (for Playwright's
+        executable_path: the pipes it talks through are inherited)."""
+        script = self.workdir / "chromium-one-port"
+        script.write_text(f'#!/bin/sh\nexec nsenter --net=/proc/{self.inner.pid}/ns/net -- {browser_path} "$@"\n')
+        script.chmod(0o755)
+        return script
+
+    def reaches(self, port: int, timeout_s: float = 5.0) -> bool:
+        """True when a TCP connection to 127.0.0.1:port succeeds from inside the namespace."""
+        import sys
+
+        probe = (f"import socket; socket.create_connection(('127.0.0.1', {int(port)}), timeout={timeout_s})")
+        run = subprocess.run(["nsenter", f"--net=/proc/{self.inner.pid}/ns/net", "--", sys.executable, "-c", probe],
+                             capture_output=True, timeout=timeout_s + 30)
+        return run.returncode == 0
+
+    def __exit__(self, *exc) -> None:
+        if self.inner is not None and self.inner.poll() is None:
+            self.inner.kill()
+            self.inner.wait(timeout=20)
+        for stream in (self.inner.stdout, self.inner.stderr) if self.inner is not None else ():
+            stream.close()
+        if self.listener is not None:
+            self.listener.close()

@@ -491,12 +491,14 @@ def test_missing_corrupt_or_wrong_files_are_named(tmp_path, calibration):
         "corrupt.json": ('{"format": "armlab-calibration/1", "K": [[1, 0', "not valid JSON"),
         "wrong.json": (json.dumps({"format": "something-else"}), "not an armlab calibration"),
         "list.json": (json.dumps([1, 2, 3]), "not an armlab calibration"),
-        "missing.json": (json.dumps({k: v for k, v in good.items() if k != "T_cam_world"}), "missing field"),
-        "nan.json": (json.dumps({**good, "K": [[float("nan"), 0, 640], [0, 900, 360], [0, 0, 1]]}), "invalid value"),
-        "shape.json": (json.dumps({**good, "dist": [0.1, 0.2]}), "invalid value"),
-        "rigid.json": (json.dumps({**good, "T_cam_world": (2 * np.eye(4)).tolist()}), "invalid value"),
-        "dc.json": (json.dumps({**good, "depth_correction": {"a": float("inf")}}), "not finite"),
-        "dctype.json": (json.dumps({**good, "depth_correction": [1, 2]}), "invalid value"),
+        "missing.json": (json.dumps({k: v for k, v in good.items() if k != "T_cam_world"}), "T_cam_world: missing"),
+        "nan.json": (json.dumps({**good, "K": [[float("nan"), 0, 640], [0, 900, 360], [0, 0, 1]]}),
+                     r"K\[0\]\[0\]: must be a finite number, got NaN"),
+        "shape.json": (json.dumps({**good, "dist": [0.1, 0.2]}), "dist: has 2 values"),
+        "rigid.json": (json.dumps({**good, "T_cam_world": (2 * np.eye(4)).tolist()}), "T_cam_world: .*rigid"),
+        "dc.json": (json.dumps({**good, "depth_correction": {"a": float("inf")}}),
+                    r"depth_correction\.a: must be a finite number, got Infinity"),
+        "dctype.json": (json.dumps({**good, "depth_correction": [1, 2]}), "depth_correction: must be of type object"),
     }
     for name, (text, match) in cases.items():
         (tmp_path / name).write_text(text)
@@ -508,7 +510,11 @@ def test_missing_corrupt_or_wrong_files_are_named(tmp_path, calibration):
 def test_a_failed_save_leaves_the_old_file_intact(tmp_path, calibration, station):
     path = cal.save_calibration(calibration, tmp_path / "calibration.json")
     before = path.read_bytes()
-    broken = cal.Calibration(station.camera.truth, cal.DepthCorrection(float("nan"), 0.0, 0.0))
+    with pytest.raises(ValueError, match=r"DepthCorrection\.a contains NaN"):
+        cal.DepthCorrection(float("nan"), 0.0, 0.0)
+    correction = cal.DepthCorrection()
+    object.__setattr__(correction, "a", float("nan"))        # corrupted after construction: the write still refuses
+    broken = cal.Calibration(station.camera.truth, correction)
     with pytest.raises(ValueError):
         cal.save_calibration(broken, path)
     assert path.read_bytes() == before

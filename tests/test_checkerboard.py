@@ -170,5 +170,5 @@ def test_missing_or_corrupt_sets_are_named(tmp_path):
     with pytest.raises(ValueError, match=r"checkerboard\.json: not valid JSON, a corrupt checkerboard metadata file"):
         cal.load_checkerboard_set(folder)
     (folder / "checkerboard.json").write_text(meta.replace('"square_mm"', '"square"'))
-    with pytest.raises(ValueError, match="malformed checkerboard metadata"):
+    with pytest.raises(ValueError, match=r"checkerboard\.json: square_mm: missing"):
         cal.load_checkerboard_set(folder)

@@ -1,4 +1,4 @@
-"""The click-to-grab panel (armlab.tasks.click_widget): click events as ipyevents sends them -> camera pixels ->
+"""The click-to-grab panel (armlab.ui.click_widget): click events as ipyevents sends them -> camera pixels ->
 grab on the first click, drop on the second, refusals that move nothing. Runs on the simulator with its ground
 truth as the known answer."""
 
@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from armlab import make_station, tasks
-from armlab.tasks.click_widget import ClickToGrab, encode_view, event_pixel, scaled_size
+from armlab.ui import click_widget
+from armlab.ui.click_widget import ClickToGrab, encode_view, event_pixel, scaled_size
 
 FRAME, IMAGE = (1280, 720), (640, 360)
 
@@ -202,10 +203,10 @@ def test_a_panel_opened_after_a_pick_starts_from_a_fresh_look_and_says_what_is_h
     station = make_station("sim", seed=0, scene=SCENE3)
     green = next(b for b in tasks.look(station).blocks if b.color == "green")
     assert tasks.pick(station, green)                       # picked outside the panel: the last look is stale
-    assert not tasks.click_widget.view_is_current(station)
+    assert not click_widget.view_is_current(station)
     panel = ClickToGrab(station)
     box = panel.widget()
-    assert tasks.click_widget.view_is_current(station)      # widget() looked again
+    assert click_widget.view_is_current(station)      # widget() looked again
     assert [b.color for b in tasks.context(station).last.blocks] == ["red"]   # the green block is in the gripper
     assert "holding the green large block: the next click drops it where you click" in box.children[0].value
     assert panel.next_action == "drop"
@@ -220,7 +221,7 @@ def test_a_click_on_a_stale_picture_is_refused_after_a_new_look():
     before = [o.position.copy() for o in station.world.blocks]
     result = panel.click(red.pixel)
     assert not result.ok and "out of date" in result.message and "nothing moved" in result.message
-    assert tasks.context(station).last is not obs and tasks.click_widget.view_is_current(station)
+    assert tasks.context(station).last is not obs and click_widget.view_is_current(station)
     for o, p in zip(station.world.blocks, before, strict=True):
         np.testing.assert_array_equal(o.position, p)        # only the arm moved (out of view)
     again = panel.click(red.pixel)                          # a click on the new picture acts

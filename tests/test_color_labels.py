@@ -80,7 +80,7 @@ def test_a_label_no_face_holds_is_an_error_and_writes_nothing(labelled_folder, t
     assert not out.exists()
     labels["frames"][0]["blocks"][-1] = {"pixel": [5, 5], "color": "purple"}
     (bad / "labels.json").write_text(json.dumps(labels))
-    with pytest.raises(ValueError, match="colour 'purple' is not one of"):
+    with pytest.raises(ValueError, match=r"frames\[0\]\.blocks\[\d+\]\.color: must be one of \('red', .*got 'purple'"):
         load_labelled_frames(bad)
     with pytest.raises(ValueError, match="colour labels file not found"):
         load_labelled_frames(tmp_path)

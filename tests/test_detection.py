@@ -443,10 +443,12 @@ def test_colour_model_file_round_trip_and_validation(tmp_path):
     assert again.names == model.names and np.allclose(again.means, model.means)
     assert not list(tmp_path.glob("*.tmp"))
     raw = json.loads(path.read_text())
-    for broken, match in [("{", "corrupt"), (json.dumps({**raw, "stds": [[0, 0, 0]] * 6}), "positive"),
-                          (json.dumps({**raw, "names": ["red"] * 6}), "distinct"),
-                          (json.dumps({**raw, "means": [[1, 2]] * 6}), r"\(6, 3\)"),
-                          (json.dumps({"names": raw["names"]}), "corrupt")]:
+    for broken, match in [("{", "corrupt"), (json.dumps({**raw, "stds": [[0, 0, 0]] * 6}),
+                                             r"stds\[\d\]\[\d\]: must be greater than 0"),
+                          (json.dumps({**raw, "names": ["red"] * 6}), "names: .*non-unique"),
+                          (json.dumps({**raw, "means": [[1, 2]] * 6}), r"means\[\d\]: has 2 values, expected 3"),
+                          (json.dumps({**raw, "means": raw["means"][:5]}), r"means: must hold one row per name \(6\)"),
+                          (json.dumps({"names": raw["names"]}), "means: missing")]:
         path.write_text(broken)
         with pytest.raises(ValueError, match=match):
             ColorModel.load(path)

@@ -50,11 +50,12 @@ def test_record_writes_the_live_streams_to_a_bag(fake_rs, tmp_path, capsys):
     assert [c[0] for c in fake_rs[4:]] == ["start"] + ["wait_for_frames"] * 4 + ["stop"]
 
 
-def test_record_refuses_to_overwrite_and_other_names(fake_rs, tmp_path):
+def test_record_refuses_to_overwrite_and_other_names(fake_rs, tmp_path, capsys):
     out = tmp_path / "old.bag"
     out.write_bytes(b"x")
-    with pytest.raises(FileExistsError, match="--overwrite"):
-        record.main([str(out), "--seconds", "1"])
+    assert record.main([str(out), "--seconds", "1"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("armlab record: error: ") and "--overwrite" in err and err.count("\n") == 1, err
     with pytest.raises(ValueError, match=".bag"):
         record.record(tmp_path / "x.mp4")
     assert fake_rs == []

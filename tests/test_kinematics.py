@@ -360,7 +360,7 @@ def test_ik_numerical_converges_from_nearby_seeds():
     (lambda: k.ik([0, 300, 30], 1.0, current=[0, 0]), "joint angles must have shape"),
     (lambda: k.ik_batch([[0, 300, 30]] * 3, [1.0, 1.1]), r"pitch must be a scalar or hold one value per target \(3\)"),
     (lambda: k.steepest_pitch(np.array([0, 300, 30.0]), max_pitch=0.1, min_pitch=0.5), "must not exceed max_pitch"),
-    (lambda: k.steepest_pitch(np.array([0, 300, 30.0]), step=0.0), "must be positive"),
+    (lambda: k.steepest_pitch(np.array([0, 300, 30.0]), step=0.0), "step must be a positive number"),
     (lambda: k.ik_numerical([0, 300, 30], np.nan), "pitch contains NaN"),
     (lambda: k.ik_numerical([0, 300, 30], 1.0, q0=[0, 0, 3.0, 0, 0]), "elbow = 3.000000 rad"),
 ])

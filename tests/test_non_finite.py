@@ -55,7 +55,7 @@ def test_a_teach_file_with_a_non_finite_angle_does_not_load(tmp_path, literal, v
     text = json.dumps(data)                                  # Python's json writes NaN / Infinity literals
     assert literal in text
     path.write_text(text)
-    with pytest.raises(TeachFileError, match=r"p\.json: waypoint 1: .*finite"):
+    with pytest.raises(TeachFileError, match=rf"p\.json: waypoints\[1\]\.q\[{joint}\]: .*finite"):
         teach.load_teach(path)
 
 

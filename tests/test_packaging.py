@@ -118,7 +118,9 @@ def test_every_imported_package_has_a_declared_version_range():
         assert "<" in spec and ">=" in spec, f"{spec!r}: give a compatible range (>= tested, < next major)"
     imported_as = {"numpy": "numpy", "cv2": "opencv-python-headless", "pupil_apriltags": "pupil-apriltags",
                    "meshcat": "meshcat", "zmq": "pyzmq", "matplotlib": "matplotlib", "ipywidgets": "ipywidgets",
-                   "ipyevents": "ipyevents", "IPython": "ipython", "scipy": "scipy", "platformdirs": "platformdirs"}
+                   "ipyevents": "ipyevents", "IPython": "ipython", "scipy": "scipy", "jsonschema": "jsonschema",
+                   "platformdirs": "platformdirs",
+                   "anywidget": "anywidget", "traitlets": "traitlets", "umsgpack": "u-msgpack-python"}
     third_party = set()
     for path in (REPO / "armlab").rglob("*.py"):
         if "hardware" in path.parts:            # vendor modules, imported lazily (HardwareUnavailable if missing)

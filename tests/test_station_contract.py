@@ -1,17 +1,25 @@
 """One suite, two backends: the simulated station and the real one on the fake vendor modules (tests/test_hardware.py's
 fakes of interbotix_xs_modules and pyrealsense2) must keep the same contract (armlab.station.contract): state names,
 torque, an emergency stop that wins, limits refused with the joint named, the board refused, frames' shapes and
-dtypes, move and grip semantics, and the capabilities each declares."""
+dtypes, move and grip semantics, and the capabilities each declares; and the motion contract
+(armlab.station.contract.Arm): a stop from another thread always wins (200 trials a backend, none lost), a stopped
+blocking move raises, a move asked for during a non-blocking one waits for it, Ctrl+C holds the arm and closing parks
+it, a closed station refuses."""
 
 from __future__ import annotations
 
+import os
+import signal
+import threading
+import time
 import warnings
 
 import numpy as np
 import pytest
 from test_hardware import vendors  # noqa: F401  (the fake vendor modules, a fixture)
 
-from armlab import kinematics, make_station
+from armlab import kinematics, make_station, tasks
+from armlab.hardware import interbotix
 from armlab.station import (
     BACKENDS,
     STATION_MODULES_ENV,
@@ -23,6 +31,7 @@ from armlab.station import (
     MotionRefused,
     RGBDCamera,
     Station,
+    StationClosed,
     backend_names,
     register_backend,
 )
@@ -30,7 +39,10 @@ from armlab.station import registry as station_registry
 from armlab.tasks import GuardedArm
 
 Q_READY = np.array([0.0, -0.5, 0.3, 1.2, 0.0])   # tool well above the board, reachable from sleep
+Q_OTHER = np.array([0.6, -0.3, 0.1, 1.3, 0.4])   # another such pose
 ATOL = 0.01                                     # rad: the simulator's encoder noise and quantisation
+RACE_TRIALS = 200
+WALL_CLOCK_REAL_ARM = interbotix.RealArm         # before the vendors fixture puts it on a simulated clock
 
 
 @pytest.fixture(params=["sim", "real"])
@@ -38,10 +50,38 @@ def station(request):
     if request.param == "sim":
         st = make_station("sim", seed=0, scene="empty")
     else:
-        request.getfixturevalue("vendors")
+        vendors = request.getfixturevalue("vendors")
         st = make_station("real")
+        st._test_vendors = vendors
     with st:
         yield st
+
+
+@pytest.fixture(params=["sim", "real"])
+def paced_station(request, monkeypatch):
+    """A station whose moves take wall-clock time: the simulator in real-time pacing, the real arm (fake driver)
+    waiting for its moves on the wall clock."""
+    if request.param == "sim":
+        st = make_station("sim", seed=0, scene="empty", real_time=True)
+    else:
+        vendors = request.getfixturevalue("vendors")
+        monkeypatch.setattr(interbotix, "RealArm", WALL_CLOCK_REAL_ARM)
+        st = make_station("real", warmup_frames=0)
+        st._test_vendors = vendors
+    with st:
+        yield st
+
+
+def physical_joints(station) -> np.ndarray:
+    """Where the arm physically is (5,) rad: the simulator's true joints, the fake driver's joint state."""
+    if station.world is not None:
+        return station.arm.q_true
+    return np.array(station._test_vendors.world.q, float)
+
+
+def clock_s(station) -> float:
+    """The time the backend's moves run on (s): the simulator's clock, the real arm's fake clock."""
+    return station.world.time_s if station.world is not None else station._test_vendors.clock.t
 
 
 def test_the_station_offers_the_contract_types(station):
@@ -215,3 +255,169 @@ def test_a_labs_own_backend_is_one_module_named_in_the_environment(tmp_path, mon
     finally:
         BACKENDS.pop("rig", None)
         station_registry._imported_modules.discard("lab_rig")
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# The motion contract
+# ---------------------------------------------------------------------------------------------------------------
+
+def stop_race(arm, physical, trials: int, seed: int = 0) -> tuple[int, dict[str, int]]:
+    """A thread loops move_to between two poses; after a random 0-20 ms the test thread calls emergency_stop().
+    Returns (trials in which the arm moved after emergency_stop() returned, how each looping thread ended)."""
+    rng = np.random.default_rng(seed)
+    lost, ended = 0, {}
+    for _ in range(trials):
+        arm.reset()
+        errors = []
+        mover = threading.Thread(target=_capture, args=(errors, _loop_moves, arm))
+        mover.start()
+        time.sleep(rng.uniform(0.0, 0.02))
+        arm.emergency_stop()
+        q_stop = physical()
+        mover.join(timeout=60)
+        assert not mover.is_alive(), "the looping move_to did not end after the stop"
+        lost += int(np.abs(physical() - q_stop).max() > 1e-12)
+        name = type(errors[0]).__name__ if errors else "nothing"
+        ended[name] = ended.get(name, 0) + 1
+    arm.reset()
+    return lost, ended
+
+
+def _loop_moves(arm) -> None:
+    while True:
+        arm.move_to(Q_READY)
+        arm.move_to(Q_OTHER)
+
+
+def test_a_stop_always_wins_the_race_with_a_looped_move(station):
+    lost, ended = stop_race(station.arm, lambda: physical_joints(station), RACE_TRIALS)
+    assert lost == 0, f"the arm moved after emergency_stop() returned in {lost} of {RACE_TRIALS} trials"
+    assert ended == {"EmergencyStopped": RACE_TRIALS}, ended
+
+
+def test_a_stopped_blocking_move_raises_and_the_arm_holds(paced_station):
+    arm = paced_station.arm
+    arm.move_to(Q_READY, moving_time=2.0)
+
+    def stop_once_moving():
+        while not arm.is_moving():
+            time.sleep(0.005)
+        time.sleep(0.2)
+        arm.emergency_stop()
+
+    stopper = threading.Thread(target=stop_once_moving)
+    stopper.start()
+    try:
+        with pytest.raises(EmergencyStopped, match="during the move"):
+            arm.move_to(Q_OTHER, moving_time=3.0)
+    finally:
+        stopper.join(timeout=10)
+    q = physical_joints(paced_station)
+    assert not arm.is_moving() and arm.emergency_stopped
+    time.sleep(0.3)
+    np.testing.assert_allclose(physical_joints(paced_station), q, atol=1e-12)
+    arm.reset()
+
+
+def test_a_move_asked_for_during_a_non_blocking_one_waits_for_it(station):
+    arm = station.arm
+    arm.move_to(Q_READY)
+    t0 = clock_s(station)
+    arm.move_to(Q_OTHER, moving_time=2.0, blocking=False)
+    arm.move_to(Q_READY, moving_time=1.5, blocking=False)       # waits for the first to end, then starts
+    assert clock_s(station) - t0 >= 2.0 - 1e-9 and arm.is_moving()
+    arm.wait()
+    assert not arm.is_moving() and clock_s(station) - t0 >= 3.5 - 1e-9
+    np.testing.assert_allclose(arm.joint_positions(), Q_READY, atol=ATOL)
+
+
+def test_ctrl_c_during_a_move_holds_the_arm_and_closing_parks_it(paced_station):
+    arm = paced_station.arm
+    arm.move_to(Q_READY, moving_time=2.0)
+    timer = threading.Timer(0.3, os.kill, (os.getpid(), signal.SIGINT))    # Ctrl+C (a Jupyter interrupt)
+    timer.start()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            arm.move_to(Q_OTHER, moving_time=3.0)
+            time.sleep(5.0)                           # only reached when the interrupt came after the move
+    finally:
+        timer.join()
+    q = physical_joints(paced_station)
+    assert not arm.is_moving() and not arm.emergency_stopped       # a hold, not an emergency stop
+    time.sleep(0.5)
+    np.testing.assert_allclose(physical_joints(paced_station), q, atol=1e-12)   # still where it was held
+    if paced_station.world is not None:
+        assert np.abs(q - Q_OTHER).max() > 0.05                     # stopped part-way
+    else:                                   # the fake driver jumps to a goal: the hold is sent after it
+        names = [c[0] for c in paced_station._test_vendors.log]
+        last = {n: len(names) - 1 - names[::-1].index(n) for n in ("set_joint_positions", "robot_write_commands")}
+        assert last["robot_write_commands"] > last["set_joint_positions"], names[-6:]
+    paced_station.close()
+    np.testing.assert_allclose(physical_joints(paced_station), arm.robot.sleep, atol=ATOL)   # parked
+
+
+def test_a_closed_station_refuses_every_command(station):
+    arm = station.arm
+    arm.move_to(Q_READY)
+    station.close()
+    np.testing.assert_allclose(arm.joint_positions(), arm.robot.sleep, atol=ATOL)           # parked first
+    for command in (lambda: arm.move_to(Q_READY), arm.home, arm.sleep, arm.open_gripper, arm.close_gripper,
+                    lambda: arm.set_torque(False), arm.reset):
+        with pytest.raises(StationClosed, match="closed"):
+            command()
+    if station.world is not None:
+        with pytest.raises(StationClosed, match="closed"):
+            station.camera.capture()
+    station.close()                                                # idempotent
+
+
+def test_closing_while_emergency_stopped_holds_where_it_is(station):
+    arm = station.arm
+    arm.move_to(Q_READY)
+    arm.emergency_stop()
+    with pytest.warns(RuntimeWarning, match="emergency-stopped"):
+        station.close()
+    np.testing.assert_allclose(arm.joint_positions(), Q_READY, atol=ATOL)
+    with pytest.raises(StationClosed):
+        arm.move_to(Q_OTHER)
+
+
+MACHINE_TRIALS = 30          # benchmarks/manipulation.py's stop race runs 200
+
+
+def machine_stop_race(station, trials: int, seed: int = 0) -> tuple[int, float]:
+    """TaskMachine.estop() from a timer thread 0-0.5 s into a pick and place (simulated station, simulated time).
+    Returns (trials in which the arm moved after estop() returned, the largest such motion in rad)."""
+    machine = tasks.TaskMachine(station)
+    ctx = tasks.context(station)
+    rng = np.random.default_rng(seed)
+    lost, worst = 0, 0.0
+    for _ in range(trials):
+        block = machine.detect()[0]
+        runner = threading.Thread(target=_capture, args=([], machine.execute, [(block, (0.0, 300.0, 0.0))]))
+        runner.start()
+        time.sleep(rng.uniform(0.0, 0.5))
+        machine.estop()
+        q_stop = station.arm.q_true
+        runner.join(timeout=120)
+        assert not runner.is_alive()
+        moved = float(np.abs(station.arm.q_true - q_stop).max())
+        lost, worst = lost + int(moved > 1e-12), max(worst, moved)
+        machine.reset()
+        if station.arm.holding or ctx.held is not None:          # stopped holding it: put the block down here
+            station.arm.open_gripper()
+            ctx.held = ctx.held_in_tool = ctx.picked_down = None
+    return lost, worst
+
+
+def _capture(errors: list, f, *args) -> None:
+    try:
+        f(*args)
+    except Exception as e:                            # noqa: BLE001 (the caller looks at them)
+        errors.append(e)
+
+
+def test_the_state_machines_estop_wins_during_a_pick():
+    station = make_station("sim", seed=1)
+    lost, worst = machine_stop_race(station, MACHINE_TRIALS)
+    assert lost == 0, f"the arm moved up to {worst:.3f} rad after estop() returned in {lost} of {MACHINE_TRIALS}"

@@ -5,8 +5,8 @@ import json
 import numpy as np
 import pytest
 
-from armlab import make_station, tasks
-from armlab.station import EmergencyStopped
+from armlab import make_station, planning, tasks
+from armlab.station import EmergencyStopped, MotionRefused
 from armlab.tasks import teach
 
 SCENE = {"objects": [
@@ -209,3 +209,27 @@ def test_saved_swap_program_swaps_the_blocks_in_the_swap_scene():
     assert np.abs(red.position - b).max() < 3.0 and np.abs(blue.position - a).max() < 3.0
     for plan_step_moves in (s for s in program.to_plan().steps if hasattr(s, "trajectory")):
         assert np.all(plan_step_moves.trajectory.peak_speed() <= st.arm.robot.velocity + 1e-9)
+
+
+def _reason(message: str) -> str:
+    """A refusal's reason with the spot's coordinates masked (a click reads the spot back through the camera)."""
+    tail = message[message.index("mm is ") + len("mm is "):] if "mm is " in message else message
+    return tail.replace(" (nothing was sent to the arm)", "")
+
+
+@pytest.mark.parametrize("spot", [(0.0, 20.0, 10.0), (0.0, 75.0, 0.0)])
+def test_a_place_on_the_robots_base_plate_is_refused_before_moving_as_a_click_drop_is(station, spot):
+    red = _truth(station, "red")
+    assert tasks.click_grab(station, _pixel(station, red.position + [0, 0, red.edge / 2]))
+    guarded = tasks.context(station).arm
+    sent, q = len(guarded.sent), station.arm.q_true
+    with pytest.raises(MotionRefused, match="refused before moving: .* mm is (on|too close to) the robot's base "
+                                           "plate") as placed:
+        tasks.place(station, spot)
+    with pytest.raises(MotionRefused, match="placement"):      # the planner applies the same rule
+        planning.plan_place(guarded.joint_positions(), spot, red.edge)
+    with pytest.raises(tasks.ClickRefused, match="robot's base plate") as clicked:
+        tasks.click_drop(station, _pixel(station, spot))
+    assert _reason(str(placed.value)) == _reason(str(clicked.value))
+    assert len(guarded.sent) == sent and np.allclose(station.arm.q_true, q) and station.arm.holding == [red]
+    assert tasks.place(station, (0.0, 300.0, 0.0))               # the rule leaves a good spot alone

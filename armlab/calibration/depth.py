@@ -12,12 +12,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from armlab.arguments import finite_float, instance_of, int_in_range
 from armlab.camera import Camera
+from armlab.exercises import registry as course
 from armlab.exercises.fallback import reference_fallback
-from armlab.images import check_depth
+from armlab.images import check_depth, check_mask
 from armlab.lab import lab_config
 
 __all__ = ["DepthCorrection", "fit_depth_correction", "board_depth", "board_samples"]
+
+MAX_STEP_PX = 64    # the sparsest sampling of the board's depth that still leaves enough pixels (px)
 
 
 @dataclass(frozen=True)
@@ -29,6 +33,13 @@ class DepthCorrection:
     c: float = 0.0
     residual_mm: float = 0.0
     inliers: int = 0
+
+    def __post_init__(self):
+        for name in ("a", "b", "c", "residual_mm"):
+            finite_float(getattr(self, name), f"DepthCorrection.{name}", what="mm or mm/px")
+        if self.residual_mm < 0:
+            raise ValueError(f"DepthCorrection.residual_mm must not be negative, got {self.residual_mm}")
+        int_in_range(self.inliers, "DepthCorrection.inliers", 0)
 
     def bias(self, shape: tuple[int, int]) -> np.ndarray:
         """The bias image (H, W) mm."""
@@ -50,6 +61,8 @@ class DepthCorrection:
 def board_depth(camera: Camera, step: int = 1) -> tuple[np.ndarray, np.ndarray]:
     """Analytic depth (camera-frame Z, mm) of the plane z = 0 at pixels on a grid of `step` px, and which of them
     fall on the board: returns (depth (H', W'), on_board (H', W'))."""
+    instance_of(camera, "camera", Camera)
+    step = int_in_range(step, "step", 1, MAX_STEP_PX, "px between samples")
     v, u = np.mgrid[0:camera.height:step, 0:camera.width:step]
     uv = np.column_stack([u.ravel(), v.ravel()]).astype(float)
     world = camera.pixel_to_plane(uv, 0.0)
@@ -64,9 +77,11 @@ def board_samples(depth_mm, camera: Camera, step: int = 4, exclude=None) -> tupl
     guess of the inliers (usable and within 30 mm of the median measured - expected: objects on the board read
     nearer). exclude: optional (H, W) bool mask of pixels to ignore. Raises ValueError when fewer than 50 pixels
     are left, or the depth image is not (H, W) float of the camera's size."""
+    instance_of(camera, "camera", Camera)
+    step = int_in_range(step, "step", 1, MAX_STEP_PX, "px between samples")
     depth = check_depth(depth_mm, camera.image_shape)
-    if exclude is not None and np.shape(exclude) != camera.image_shape:
-        raise ValueError(f"exclude must be a (H, W) = {camera.image_shape} mask, got shape {np.shape(exclude)}")
+    if exclude is not None:
+        exclude = check_mask(exclude, camera.image_shape, "exclude")
     expected, on_board = board_depth(camera, step)
     measured = depth[::step, ::step]
     v, u = np.mgrid[0:camera.height:step, 0:camera.width:step]
@@ -88,6 +103,7 @@ def _robust_plane(depth_mm, camera: Camera, step: int = 4, inlier_mm: float = 6.
     pull it), instead of refitting and rejecting."""
     from scipy.optimize import least_squares
 
+    inlier_mm = finite_float(inlier_mm, "inlier_mm", positive=True, what="mm")
     u, v, measured, expected, usable, keep = board_samples(depth_mm, camera, step, exclude)
     A = np.column_stack([u[usable], v[usable], np.ones(int(usable.sum()))]).astype(float)
     r = (measured - expected)[usable]
@@ -101,7 +117,7 @@ def _robust_plane(depth_mm, camera: Camera, step: int = 4, inlier_mm: float = 6.
                            int(inliers.sum()))
 
 
-@reference_fallback("calib.depth_plane", _robust_plane, "the depth's bias plane comes from one robust fit "
+@reference_fallback(course.DEPTH_PLANE, _robust_plane, "the depth's bias plane comes from one robust fit "
                                                          "(scipy least squares, Cauchy loss)")
 def fit_depth_correction(depth_mm, camera: Camera, step: int = 4, inlier_mm: float = 6.0,
                          iterations: int = 6, exclude=None) -> DepthCorrection:
@@ -118,6 +134,8 @@ def fit_depth_correction(depth_mm, camera: Camera, step: int = 4, inlier_mm: flo
 
     Exercise calib.depth_plane (notebook 01: fit the depth camera's planar bias).
     """
+    inlier_mm = finite_float(inlier_mm, "inlier_mm", positive=True, what="mm")
+    iterations = int_in_range(iterations, "iterations", 1, 1000)
     u, v, measured, expected, usable, keep = board_samples(depth_mm, camera, step, exclude)
     residual = measured - expected
     A_all = np.column_stack([u.ravel(), v.ravel(), np.ones(u.size)]).astype(float)

@@ -12,6 +12,7 @@ import numpy as np
 
 from armlab.calibration.tags import TagDetection, detect_tags
 from armlab.camera import check_intrinsics, look_at
+from armlab.exercises import registry as course
 from armlab.exercises.fallback import reference_fallback
 from armlab.images import check_rgb
 from armlab.lab import TagLayout, lab_config
@@ -32,14 +33,16 @@ class ExtrinsicsResult:
     detections: list[TagDetection]
 
 
-def _opencv_pose(world_mm, pixels, K, dist) -> np.ndarray:
+def _opencv_pose(world_mm, pixels, K, dist, refine: bool = True) -> np.ndarray:
     """The reference path while calib.tag_extrinsics is blank: OpenCV's solvePnP (IPPE for one tag's four corners,
-    SQPNP otherwise), then the same Levenberg-Marquardt refinement."""
+    SQPNP otherwise), then (refine) the same Levenberg-Marquardt refinement."""
     world, pixels = np.asarray(world_mm, np.float64), np.asarray(pixels, np.float64)
     ok, rvec, tvec = cv2.solvePnP(world, pixels, K, dist,
                                   flags=cv2.SOLVEPNP_IPPE if len(world) == 4 else cv2.SOLVEPNP_SQPNP)
     if not ok:
         raise ValueError("solvePnP failed on the detected tag corners")
+    if not refine:
+        return homogeneous(cv2.Rodrigues(rvec)[0], tvec.ravel())
     rvec, tvec = cv2.solvePnPRefineLM(world, pixels, K, dist, rvec, tvec)
     return homogeneous(cv2.Rodrigues(rvec)[0], tvec.ravel())
 
@@ -51,16 +54,15 @@ def _refined(world, pixels, K, dist, R, t) -> np.ndarray:
     return homogeneous(cv2.Rodrigues(rvec)[0], tvec.ravel())
 
 
-@reference_fallback("calib.tag_extrinsics", _opencv_pose, "the camera pose comes from cv2.solvePnP")
-def pose_from_corners(world_mm, pixels, K, dist) -> np.ndarray:
+@reference_fallback(course.TAG_EXTRINSICS, _opencv_pose, "the camera pose comes from cv2.solvePnP")
+def pose_from_corners(world_mm, pixels, K, dist, refine: bool = True) -> np.ndarray:
     """T_cam_world (4, 4) that maps the board points world_mm (N, 3) mm (N >= 4, all on the board: z = 0) onto their
     image corners pixels (N, 2) px through K (3, 3) and dist.
 
-    Zhang's planar pose: with the pixels undistorted to normalised image points (x, y) = K^-1 (u, v, 1), a board
-    point (X, Y, 0) maps by the homography H = lambda [r1 r2 t] (r1, r2: R's first two columns). So the pose comes
-    from dlt_homography(board XY, normalised points): scale H so r1 and r2 have unit length, take the sign that
-    puts the board in front of the camera (t_z > 0), r3 = r1 x r2, and the nearest rotation to [r1 r2 r3] (SVD).
-    Levenberg-Marquardt on the reprojection error then refines it. Raises ValueError for points off the board.
+    A planar pose: the board is a plane, so its points and their undistorted, normalised image points are related
+    by a homography (dlt_homography), from which the rotation and translation follow (notebook 01 derives how).
+    With refine (the default), Levenberg-Marquardt on the reprojection error (with the lens distortion) then
+    polishes it; refine=False returns the planar pose itself. Raises ValueError for points off the board.
 
     Exercise calib.tag_extrinsics (notebook 01: the camera's pose from the AprilTag corners).
     """
@@ -83,6 +85,8 @@ def pose_from_corners(world_mm, pixels, K, dist) -> np.ndarray:
     U, _, Vt = np.linalg.svd(np.column_stack([r1, r2, np.cross(r1, r2)]))
     R = U @ np.diag([1.0, 1.0, np.linalg.det(U @ Vt)]) @ Vt
     # END SOLUTION
+    if not refine:
+        return homogeneous(R, np.asarray(t, dtype=float).ravel())
     return _refined(world, pixels, K, dist, R, t)
 
 

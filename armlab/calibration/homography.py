@@ -11,6 +11,7 @@ import numpy as np
 
 from armlab.calibration.tags import TagDetection
 from armlab.camera import Camera
+from armlab.exercises import registry as course
 from armlab.exercises.fallback import reference_fallback
 from armlab.images import check_rgb
 from armlab.lab import TagLayout, lab_config
@@ -93,17 +94,15 @@ def _normalising_similarity(points: np.ndarray) -> np.ndarray:
     return np.array([[s, 0, -s * centre[0]], [0, s, -s * centre[1]], [0, 0, 1.0]])
 
 
-@reference_fallback("calib.tag_homography", _opencv_homography, "homographies come from cv2.findHomography")
+@reference_fallback(course.TAG_HOMOGRAPHY, _opencv_homography, "homographies come from cv2.findHomography")
 def dlt_homography(src, dst) -> np.ndarray:
     """The 3x3 homography H (H[2, 2] = 1) taking the points src (N, 2) to dst (N, 2), N >= 4, any units (pixels,
     mm): the normalised direct linear transform (Hartley & Zisserman, alg. 4.2). Exact for four points in general
     position; the algebraic least-squares fit for more. Raises ValueError for too few, mismatched or degenerate
     points.
 
-    Each pair (x, y) -> (u, v) gives two rows of A h = 0 (h: H's entries, row by row):
-    [-x, -y, -1, 0, 0, 0, u x, u y, u] and [0, 0, 0, -x, -y, -1, v x, v y, v]; h is A's right singular vector of
-    the smallest singular value. Normalising both point sets first (T_src, T_dst) and undoing it after
-    (H = T_dst^-1 H_n T_src) keeps the system well conditioned for pixel coordinates in the hundreds.
+    Both point sets are normalised first (T_src, T_dst: _normalising_similarity) so that the linear system is well
+    conditioned for coordinates in the hundreds; notebook 01 derives the system and how to undo the normalisation.
 
     Exercise calib.tag_homography (notebook 01: the homography by the direct linear transform).
     """

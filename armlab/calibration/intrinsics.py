@@ -11,13 +11,15 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
+from armlab.arguments import finite_float, int_in_range, plain
 from armlab.images import check_gray_or_rgb
 from armlab.repeatable import opencv_single_thread
 
 __all__ = ["IntrinsicsResult", "calibrate_intrinsics", "find_checkerboard", "checkerboard_points",
-           "compare_intrinsics"]
+           "compare_intrinsics", "DUPLICATE_VIEW_PX"]
 
 _SUBPIX_CRITERIA = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 50, 1e-4)
+DUPLICATE_VIEW_PX = 3.0      # two views whose corners agree to this RMS (px) show the board in one pose
 
 
 @dataclass(frozen=True)
@@ -47,15 +49,13 @@ def _check_pattern(pattern_size, square_mm) -> tuple[tuple[int, int], float]:
     """Validate (inner-corner columns, rows) and the square edge (mm)."""
     try:
         cols, rows = (int(n) for n in pattern_size)
-        ok = (cols, rows) == tuple(pattern_size)
-    except (TypeError, ValueError):
+        ok = (cols, rows) == tuple(pattern_size) and 2 <= cols <= 1000 and 2 <= rows <= 1000
+    except (TypeError, ValueError, OverflowError):
         ok = False
-    if not ok or cols < 2 or rows < 2:
-        raise ValueError(f"pattern_size must be two whole numbers of INNER corners (columns, rows), each >= 2, "
-                         f"got {pattern_size!r}")
-    if not np.isfinite(square_mm) or square_mm <= 0:
-        raise ValueError(f"square_mm must be a positive number of mm, got {square_mm!r}")
-    return (cols, rows), float(square_mm)
+    if not ok:
+        raise ValueError(f"pattern_size must be two whole numbers of INNER corners (columns, rows), each from 2 to "
+                         f"1000, got {plain(pattern_size)}")
+    return (cols, rows), finite_float(square_mm, "square_mm", positive=True, what="mm")
 
 
 def checkerboard_points(pattern_size: tuple[int, int], square_mm: float) -> np.ndarray:
@@ -90,16 +90,20 @@ def calibrate_intrinsics(images, pattern_size: tuple[int, int] = (9, 6), square_
             simulated L515 lens has k3 = 0.2, and fixing it leaves ~10 px of model error in the image corners.
         min_views: fewest views in which the board must be found (at least 3).
 
-    Raises ValueError for bad images, mixed sizes, or too few views with a board.
+    Near-duplicate views (the board in one pose twice, corners within DUPLICATE_VIEW_PX RMS) are rejected (see
+    rejected_views): they add no information, and copies of one view make the fit absurd.
+    Raises ValueError for bad images, mixed sizes, or too few distinct views with a board.
     """
     pattern_size, square_mm = _check_pattern(pattern_size, square_mm)
     if isinstance(images, np.ndarray) and (images.ndim == 2 or (images.ndim == 3 and images.shape[2] == 3)):
         raise ValueError(f"images must be a list of images, got one array of shape {images.shape}")
-    images = list(images)
+    try:
+        images = list(images)
+    except TypeError:
+        raise TypeError(f"images must be a list of checkerboard images, got {type(images).__name__}") from None
     if len(images) == 0:
         raise ValueError("calibrate_intrinsics needs a list of checkerboard images, got none")
-    if int(min_views) < 3:
-        raise ValueError(f"min_views must be at least 3 (Zhang's method needs 3 views of a plane), got {min_views}")
+    min_views = int_in_range(min_views, "min_views", 3, 10_000, "Zhang's method needs 3 views of a plane")
     object_points = checkerboard_points(pattern_size, square_mm)
     size = None
     obj, img, used, rejected = [], [], [], {}
@@ -116,9 +120,18 @@ def calibrate_intrinsics(images, pattern_size: tuple[int, int] = (9, 6), square_
         obj.append(object_points)
         img.append(corners.astype(np.float32))
         used.append(i)
+    found = len(used)
+    for k, earlier in _near_duplicates(img).items():
+        rejected[used[k]] = (f"a near-duplicate of images[{used[earlier]}] (corners within {DUPLICATE_VIEW_PX} px "
+                             f"RMS): it adds no new pose")
+    keep = [k for k in range(found) if used[k] not in rejected]
+    obj, img, used = [obj[k] for k in keep], [img[k] for k in keep], [used[k] for k in keep]
     if len(used) < min_views:
-        raise ValueError(f"the checkerboard was found in {len(used)} of {len(images)} images; at least {min_views} "
-                         f"are needed (check pattern_size={tuple(pattern_size)} counts INNER corners)")
+        twins = (f", {found - len(used)} of them near-duplicates of another view, which leaves {len(used)} distinct"
+                 if found > len(used) else "")
+        raise ValueError(f"the checkerboard was found in {found} of {len(images)} images{twins}; at least "
+                         f"{min_views} views of the board in different poses are needed (check "
+                         f"pattern_size={tuple(pattern_size)} counts INNER corners)")
     flags = cv2.CALIB_FIX_K3 if fix_k3 else 0
     with opencv_single_thread():          # the threaded solver's sums are not repeatable (armlab.repeatable)
         rms, K, dist, rvecs, tvecs = cv2.calibrateCamera(obj, img, size, None, None, flags=flags)
@@ -129,6 +142,25 @@ def calibrate_intrinsics(images, pattern_size: tuple[int, int] = (9, 6), square_
     return IntrinsicsResult(K=K, dist=dist.ravel()[:5], rms=float(rms), per_view_rms=np.array(per_view),
                             used_views=used, rejected_views=rejected, image_size=tuple(size),
                             rvecs=[r.ravel() for r in rvecs], tvecs=[t.ravel() for t in tvecs])
+
+
+def _near_duplicates(corners: list[np.ndarray]) -> dict[int, int]:
+    """{view: the earlier view it nearly repeats} for views whose corners (N, 2) px lie within DUPLICATE_VIEW_PX
+    RMS of an earlier kept view's, in the same or the reversed corner order (OpenCV may number a turned board from
+    the other end). Copies of one view make Zhang's method fit noise: five copies gave fx 955 / fy 1022 px where
+    the truth is 893."""
+    if len(corners) < 2:
+        return {}
+    c = np.stack([np.asarray(x, float) for x in corners])                   # (V, N, 2)
+    same = np.sqrt(((c[:, None] - c[None]) ** 2).sum(-1).mean(-1))           # (V, V) RMS px
+    turned = np.sqrt(((c[:, None] - c[None, :, ::-1]) ** 2).sum(-1).mean(-1))
+    close = np.minimum(same, turned) < DUPLICATE_VIEW_PX
+    out: dict[int, int] = {}
+    for j in range(1, len(c)):
+        earlier = [i for i in np.flatnonzero(close[j, :j]) if i not in out]
+        if earlier:
+            out[j] = int(earlier[0])
+    return out
 
 
 def compare_intrinsics(K_a, K_b) -> dict[str, float]:

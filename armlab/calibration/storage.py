@@ -7,12 +7,14 @@ from pathlib import Path
 
 import numpy as np
 
+from armlab.arguments import finite_array
 from armlab.calibration.depth import DepthCorrection
-from armlab.camera import Camera
+from armlab.camera import MAX_DISTANCE_MM, MAX_IMAGE_SIDE_PX, Camera, check_intrinsics
 from armlab.files import read_json, write_json_atomic
 from armlab.images import check_depth, sample_depth
+from armlab.schemas import camera_matrix, comment, field_error, integer, matrix, number, strict_object, validate, vector
 
-__all__ = ["Calibration", "save_calibration", "load_calibration", "CalibrationFileError"]
+__all__ = ["Calibration", "save_calibration", "load_calibration", "CalibrationFileError", "SCHEMA"]
 
 _FORMAT = "armlab-calibration/1"
 
@@ -40,7 +42,7 @@ class Calibration:
         bias-corrected, read as the median of the valid pixels within `radius` px, and back-projected through the
         camera. NaN rows where the depth has no return."""
         depth = self.depth_correction.apply(check_depth(depth_mm, self.camera.image_shape))
-        uv = np.asarray(uv, float).reshape(-1, 2)
+        uv = finite_array(uv, "uv", [(2,), (None, 2)], "pixels (u, v)", allow_nan=True).reshape(-1, 2)
         return self.camera.pixel_to_world(uv, sample_depth(depth, uv, radius))
 
     def to_dict(self) -> dict:
@@ -53,23 +55,38 @@ class Calibration:
 
     @staticmethod
     def from_dict(raw: dict, source: str = "calibration") -> Calibration:
+        """A Calibration from its dict (to_dict's format), validated against SCHEMA and the camera model's rules;
+        CalibrationFileError names `source` and the field at fault."""
         if not isinstance(raw, dict) or raw.get("format") != _FORMAT:
             raise CalibrationFileError(f"{source}: not an armlab calibration (format must be {_FORMAT!r})")
+        validate(raw, SCHEMA, source, CalibrationFileError)
         try:
-            camera = Camera(np.array(raw["K"], float), np.array(raw["dist"], float),
-                            np.array(raw["T_cam_world"], float), int(raw["width"]), int(raw["height"]))
-            dc = raw.get("depth_correction", {})
-            if not isinstance(dc, dict):
-                raise TypeError(f"depth_correction must be an object, got {type(dc).__name__}")
-            correction = DepthCorrection(float(dc.get("a", 0)), float(dc.get("b", 0)), float(dc.get("c", 0)),
-                                         float(dc.get("residual_mm", 0)), int(dc.get("inliers", 0)))
-        except KeyError as e:
-            raise CalibrationFileError(f"{source}: missing field {e}") from None
-        except (TypeError, ValueError) as e:
-            raise CalibrationFileError(f"{source}: invalid value ({e})") from None
-        if not all(np.isfinite([correction.a, correction.b, correction.c])):
-            raise CalibrationFileError(f"{source}: depth correction is not finite")
+            K, dist = check_intrinsics(raw["K"], raw["dist"])
+        except ValueError as e:
+            raise field_error(source, "K" if str(e).startswith("camera matrix") else "dist", str(e),
+                              CalibrationFileError) from None
+        try:
+            camera = Camera(K, dist, raw["T_cam_world"], int(raw["width"]), int(raw["height"]))
+        except ValueError as e:
+            raise field_error(source, "T_cam_world", str(e), CalibrationFileError) from None
+        dc = raw.get("depth_correction", {})
+        correction = DepthCorrection(float(dc.get("a", 0)), float(dc.get("b", 0)), float(dc.get("c", 0)),
+                                     float(dc.get("residual_mm", 0)), int(dc.get("inliers", 0)))
         return Calibration(camera, correction, str(raw.get("notes", "")))
+
+
+_COEFFICIENT = number(minimum=-1e6, maximum=1e6)
+SCHEMA = strict_object({
+    "format": {"const": _FORMAT},
+    "width": integer(1, MAX_IMAGE_SIDE_PX), "height": integer(1, MAX_IMAGE_SIDE_PX),
+    "K": camera_matrix(),
+    "dist": vector(number(minimum=-1e4, maximum=1e4), (4, 5, 8)),
+    "T_cam_world": matrix(4, 4, number(minimum=-MAX_DISTANCE_MM, maximum=MAX_DISTANCE_MM)),
+    "depth_correction": strict_object({"a": _COEFFICIENT, "b": _COEFFICIENT, "c": _COEFFICIENT,
+                                       "residual_mm": number(minimum=0.0, maximum=1e6),
+                                       "inliers": integer(0, 10**9)}),
+    "notes": comment()}, required=("format", "width", "height", "K", "dist", "T_cam_world"))
+"""The declared schema of a calibration file (armlab.schemas): fields, types, finite numbers and ranges."""
 
 
 def save_calibration(calibration: Calibration, path) -> Path:

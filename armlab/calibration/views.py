@@ -23,8 +23,10 @@ import cv2
 import numpy as np
 
 from armlab.calibration.intrinsics import _check_pattern
+from armlab.camera import MAX_IMAGE_SIDE_PX
 from armlab.files import read_json, write_bytes_atomic, write_json_atomic
 from armlab.images import check_gray_or_rgb, to_gray
+from armlab.schemas import file_name, integer, number, strict_object, vector
 
 __all__ = ["save_checkerboard_set", "load_checkerboard_set", "METADATA_FILE", "JPEG_QUALITY"]
 
@@ -67,6 +69,14 @@ def save_checkerboard_set(images, folder, pattern_size: tuple[int, int] = (9, 6)
     return out
 
 
+SCHEMA = strict_object({
+    "pattern_size": vector(integer(2, 1000), 2), "square_mm": number(exclusive_minimum=0.0, maximum=1e4),
+    "image_size": vector(integer(1, MAX_IMAGE_SIDE_PX), 2), "images": vector(file_name(), min_items=1,
+                                                                             max_items=10_000)},
+    required=("pattern_size", "square_mm", "image_size", "images"), additional=True)
+"""The declared schema of a checkerboard set's checkerboard.json (armlab.schemas); other keys are the set's notes."""
+
+
 def load_checkerboard_set(folder) -> tuple[list[np.ndarray], dict]:
     """The views (grayscale (H, W) uint8 each) of a saved set and its metadata (checkerboard.json, with
     pattern_size, square_mm, image_size, images). Raises ValueError naming the file when the folder, the metadata or
@@ -75,13 +85,10 @@ def load_checkerboard_set(folder) -> tuple[list[np.ndarray], dict]:
     meta_path = folder / METADATA_FILE
     if not folder.is_dir():
         raise ValueError(f"{folder}: no checkerboard set here (folder not found)")
-    meta = read_json(meta_path, "checkerboard metadata")
-    try:
-        names = [str(n) for n in meta["images"]]
-        pattern_size, square_mm = _check_pattern(tuple(meta["pattern_size"]), float(meta["square_mm"]))
-        width, height = (int(n) for n in meta["image_size"])
-    except (KeyError, TypeError, ValueError) as e:
-        raise ValueError(f"{meta_path}: malformed checkerboard metadata ({e})") from None
+    meta = read_json(meta_path, "checkerboard metadata", schema=SCHEMA)
+    names = [str(n) for n in meta["images"]]
+    pattern_size, square_mm = _check_pattern(tuple(meta["pattern_size"]), float(meta["square_mm"]))
+    width, height = (int(n) for n in meta["image_size"])
     images = []
     for name in names:
         img = cv2.imread(str(folder / name), cv2.IMREAD_GRAYSCALE)

@@ -19,8 +19,10 @@ import numpy as np
 
 from armlab._paths import data_path
 from armlab.blocks import COLORS, LAB_RGB
+from armlab.exercises import registry as course
 from armlab.exercises.fallback import reference_fallback
 from armlab.files import read_json, write_json_atomic
+from armlab.schemas import comment, field_error, number, strict_object, vector
 
 __all__ = ["ColorModel", "color_features", "white_balance_gains", "default_color_model", "COLOR_MODEL_FILE",
            "LAB_HSV_TABLE", "hsv_table_classify"]
@@ -98,7 +100,7 @@ class ColorModel:
         margin = ranked[:, 1] - ranked[:, 0] if len(self.names) > 1 else np.full(len(d), np.inf)
         return [self.names[i] for i in d.argmin(axis=1)], margin
 
-    @reference_fallback("detect.classify", _nearest_mean, "colours are the nearest class mean, with one spread "
+    @reference_fallback(course.CLASSIFY, _nearest_mean, "colours are the nearest class mean, with one spread "
                                                           "for every class")
     def classify(self, rgb_means) -> tuple[list[str], np.ndarray]:
         """Nearest class name per mean colour (N, 3), and the margin (N,): second-best minus best distance.
@@ -123,21 +125,22 @@ class ColorModel:
     def load(path) -> ColorModel:
         """Read a model saved by save(); raises ValueError naming the file and problem."""
         path = Path(path)
-        raw = read_json(path, "colour model")
-        try:
-            model = ColorModel(tuple(raw["names"]), np.array(raw["means"], float), np.array(raw["stds"], float))
-        except (KeyError, TypeError, ValueError) as e:
-            raise ValueError(f"{path}: corrupt colour model ({e})") from None
-        k = len(model.names)
-        if k < 2 or len(set(model.names)) != k or not set(model.names) <= set(COLORS):
-            raise ValueError(f"{path}: colour model names must be two or more distinct colours of {COLORS}, "
-                             f"got {list(model.names)}")
-        if model.means.shape != (k, 3) or model.stds.shape != (k, 3):
-            raise ValueError(f"{path}: colour model arrays must be ({k}, 3)")
-        if not (np.all(np.isfinite(model.means)) and np.all(np.isfinite(model.stds)) and np.all(model.stds > 0)):
-            raise ValueError(f"{path}: colour model means must be finite and spreads finite and positive")
-        return model
+        raw = read_json(path, "colour model", schema=SCHEMA)
+        k = len(raw["names"])
+        for key in ("means", "stds"):
+            if len(raw[key]) != k:
+                raise field_error(path, key, f"must hold one row per name ({k}), got {len(raw[key])}")
+        return ColorModel(tuple(raw["names"]), np.array(raw["means"], float), np.array(raw["stds"], float))
 
+
+SCHEMA = strict_object({
+    "format": {"const": "armlab-color-model/1"}, "note": comment(),
+    "names": vector({"enum": list(COLORS)}, min_items=2, max_items=len(COLORS)) | {"uniqueItems": True},
+    "means": vector(vector(number(minimum=-1e6, maximum=1e6), 3), min_items=2, max_items=len(COLORS)),
+    "stds": vector(vector(number(exclusive_minimum=0.0, maximum=1e6), 3), min_items=2, max_items=len(COLORS))},
+    required=("names", "means", "stds"))
+"""The declared schema of color_model.json (armlab.schemas): two or more distinct colours, a mean (3,) and a
+positive spread (3,) each."""
 
 _DEFAULT: dict[tuple, ColorModel] = {}
 

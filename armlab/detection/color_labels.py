@@ -26,6 +26,7 @@ import numpy as np
 
 from armlab.blocks import COLORS
 from armlab.files import read_json
+from armlab.schemas import file_name, number, strict_object, vector
 
 __all__ = ["LABELS_FILE", "LABELS_FORMAT", "LabelledFrame", "load_labelled_frames", "labelled_colours"]
 
@@ -44,6 +45,17 @@ class LabelledFrame:
     depth: np.ndarray
     arm_q: np.ndarray | None
     labels: tuple[tuple[tuple[float, float], str], ...]
+
+
+SCHEMA = strict_object({
+    "format": {"const": LABELS_FORMAT}, "calibration": file_name(),
+    "frames": vector(strict_object({
+        "rgb": file_name(), "depth": file_name(), "arm_q": {"anyOf": [{"type": "null"}, vector(number(-100, 100), 5)]},
+        "blocks": vector(strict_object({"pixel": vector(number(-1e5, 1e5), 2), "color": {"enum": list(COLORS)}},
+                                       required=("pixel", "color")), max_items=1000)},
+        required=("rgb", "depth", "blocks")), min_items=1, max_items=100_000)},
+    required=("format", "calibration", "frames"))
+"""The declared schema of labels.json (armlab.schemas): file names inside the folder, pixels, colours."""
 
 
 def _field(raw: dict, key: str, where: str):
@@ -77,7 +89,7 @@ def load_labelled_frames(folder) -> tuple[list[LabelledFrame], object]:
     from armlab.calibration import load_calibration
 
     folder = Path(folder)
-    raw = read_json(folder / LABELS_FILE, "colour labels")
+    raw = read_json(folder / LABELS_FILE, "colour labels", schema=SCHEMA)
     where = str(folder / LABELS_FILE)
     if not isinstance(raw, dict) or raw.get("format") != LABELS_FORMAT:
         raise ValueError(f"{where}: not armlab colour labels (format must be {LABELS_FORMAT!r})")

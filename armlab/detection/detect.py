@@ -10,9 +10,12 @@ Positions: world mm of the top-face centre; yaw in [-pi/4, pi/4) rad about world
 
 from __future__ import annotations
 
+import warnings
+
 import cv2
 import numpy as np
 
+from armlab.arguments import finite_array, instance_of
 from armlab.camera import Camera
 from armlab.detection.color import ColorModel, default_color_model
 from armlab.detection.colour_region import (
@@ -26,6 +29,7 @@ from armlab.detection.colour_region import (
 from armlab.detection.edges import CUBE_SIZE_SLACK, MeasuredFace, fit_square, refine_yaws
 from armlab.detection.heightmap import height_from_depth, pixels_to_plane, reduced_coefficients, world_coefficients
 from armlab.detection.masks import arm_mask
+from armlab.detection.plausibility import NotRGBError, bgr_problem, board_problem
 from armlab.detection.segment import Face, segment_faces
 from armlab.detection.stacks import stack_heights, stack_levels
 from armlab.detection.types import Block, DetectionSettings
@@ -33,7 +37,12 @@ from armlab.images import check_depth, check_rgb
 from armlab.lab import lab_config
 from armlab.transforms import wrap_quarter
 
-__all__ = ["Block", "detect_blocks", "detect_objects", "DetectionSettings", "stack_levels"]
+__all__ = ["Block", "detect_blocks", "detect_objects", "DetectionSettings", "stack_levels", "FrameWarning",
+           "NotRGBError"]
+
+
+class FrameWarning(UserWarning):
+    """A frame detection cannot read (no board in the colour image): no blocks are reported, and this says why."""
 
 def _measure_all(faces: list[Face], f: FrameData, settings: DetectionSettings) -> list[MeasuredFace]:
     """Every face's outline (its pixels by colour, refine_by_colour), intersected with the horizontal plane at the
@@ -169,14 +178,21 @@ def detect_objects(rgb, depth_mm, camera: Camera, arm_q=None, color_model: Color
         camera: the calibrated camera (intrinsics, distortion and T_cam_world).
         arm_q: the arm's joint angles (5,) rad, to mask the arm out (None: no arm masking).
         color_model: colour classes (default: data/color_model.json if present, else the lab's reference colours).
-    Returns [] when the depth image holds no return at all. Raises ValueError for images of the wrong type or size.
+    Returns [] when the depth image holds no return at all, and [] with a FrameWarning when the colour image does
+    not show the board where the depth does (all black, all white, noise: detection.plausibility). Raises
+    ValueError for images of the wrong type or size, and NotRGBError (a ValueError) when the cubes' colours say the
+    image is BGR.
     """
     rgb = check_rgb(rgb)
     depth = check_depth(depth_mm, rgb.shape[:2])
+    instance_of(camera, "camera", Camera, "the calibrated camera: calibration.camera")
     if rgb.shape[:2] != camera.image_shape:
         raise ValueError(f"image is {rgb.shape[1]}x{rgb.shape[0]} but the camera is {camera.width}x{camera.height}")
-    settings = settings or DetectionSettings()
-    color_model = color_model or default_color_model()
+    if arm_q is not None:
+        arm_q = finite_array(arm_q, "arm_q", (5,), "the arm's joint angles in rad")
+    settings = DetectionSettings() if settings is None else instance_of(settings, "settings", DetectionSettings)
+    color_model = default_color_model() if color_model is None else instance_of(color_model, "color_model",
+                                                                                 ColorModel)
     arm_small = None if arm_q is None else arm_mask(camera, arm_q, step=settings.step)
     f = FrameData(rgb, depth, camera, arm_small, settings.step)
     height = height_from_depth(depth, camera, settings.step)
@@ -191,6 +207,13 @@ def detect_objects(rgb, depth_mm, camera: Camera, arm_q=None, color_model: Color
             box &= arm_coloured(rgb[r0 * s:(r1 + 1) * s:s, c0 * s:(c1 + 1) * s:s])
         valid &= ~arm_small
     valid = _on_board(height, valid, f, settings)
+    s4 = 4 * settings.step                      # the board's pixels, sampled as board_white_balance samples them
+    with np.errstate(invalid="ignore"):
+        board = valid[::4, ::4] & (np.abs(height[::4, ::4]) < 4.0)
+    problem = board_problem(rgb[::s4, ::s4], board)
+    if problem is not None:
+        warnings.warn(f"detect: no blocks reported: {problem}", FrameWarning, stacklevel=2)
+        return []
     gains = board_white_balance(rgb, height, valid, settings.step)
     faces = segment_faces(height, valid, settings.min_height,
                           min_face_pixels=max(8, settings.min_face_pixels // settings.step ** 2),
@@ -205,6 +228,10 @@ def detect_objects(rgb, depth_mm, camera: Camera, arm_q=None, color_model: Color
         m.theta = float(theta)
         m.cube_sized = _cube_sized(m.sides, settings)
     found = _describe(measured, f, settings, color_model, gains)
+    swapped = bgr_problem(np.array([b.mean_rgb * gains for b in found if b.is_block]).reshape(-1, 3),
+                          color_model.distances)
+    if swapped is not None:
+        raise NotRGBError(f"rgb: {swapped}")
     found.sort(key=lambda b: float(np.hypot(*b.position[:2])))
     return found
 

@@ -15,39 +15,55 @@ from armlab.camera import Camera
 
 __all__ = ["world_coefficients", "world_from_depth", "height_from_depth", "pixels_to_plane", "reduced_coefficients"]
 
-_CACHE: dict[int, tuple[Camera, np.ndarray]] = {}
-_REDUCED: dict[tuple[int, int], tuple[Camera, np.ndarray]] = {}
+_CACHE_ENTRIES = 2     # cameras whose coefficients are kept (about 14 MB each at 1280 x 720, with a reduced copy)
+_CACHE: dict[bytes, np.ndarray] = {}
+_REDUCED: dict[tuple[bytes, int], np.ndarray] = {}
+
+
+def _camera_key(camera: Camera) -> bytes:
+    """What the coefficients depend on, by value: image size, intrinsics, distortion and the camera's rotation. A
+    camera calibrated again to the same values (a notebook cell or a demo run again) finds its coefficients; the
+    cache holds no camera, so a station's camera is freed with it."""
+    size = np.array([camera.width, camera.height], float)
+    return b"".join(np.ascontiguousarray(a, dtype=float).tobytes()
+                    for a in (size, camera.K, camera.dist, camera.T_world_cam[:3, :3]))
+
+
+def _remember(cache: dict, key, value: np.ndarray) -> np.ndarray:
+    """Keep value under key, dropping the least recently used entries beyond _CACHE_ENTRIES."""
+    cache.pop(key, None)
+    cache[key] = value
+    while len(cache) > _CACHE_ENTRIES:
+        del cache[next(iter(cache))]
+    return value
 
 
 def world_coefficients(camera: Camera) -> np.ndarray:
-    """(3, H, W) float32 coefficients k with world_xyz = depth * k + T_world_cam translation (cached per camera)."""
-    key = id(camera)
+    """(3, H, W) float32 coefficients k with world_xyz = depth * k + T_world_cam translation (cached per camera
+    value, the _CACHE_ENTRIES last used)."""
+    key = _camera_key(camera)
     hit = _CACHE.get(key)
-    if hit is not None and hit[0] is camera:
-        return hit[1]
+    if hit is not None:
+        return _remember(_CACHE, key, hit)
     v, u = np.mgrid[0:camera.height, 0:camera.width]
     xy = camera.normalized_rays(np.column_stack([u.ravel(), v.ravel()]).astype(float))
     rays_cam = np.column_stack([xy, np.ones(len(xy))])
     k = (rays_cam @ camera.T_world_cam[:3, :3].T).T.reshape(3, camera.height, camera.width).astype(np.float32)
-    if len(_CACHE) > 8:
-        _CACHE.clear()
-    _CACHE[key] = (camera, k)
-    return k
+    k.setflags(write=False)
+    return _remember(_CACHE, key, k)
 
 
 def reduced_coefficients(camera: Camera, step: int) -> np.ndarray:
     """world_coefficients of every `step`-th pixel in both directions, (3, H // step, W // step) float32, as one
-    contiguous array (cached per camera and step): a strided view of the full array costs four times as much to
-    multiply."""
-    key = (id(camera), int(step))
+    contiguous array (cached per camera value and step): a strided view of the full array costs four times as much
+    to multiply."""
+    key = (_camera_key(camera), int(step))
     hit = _REDUCED.get(key)
-    if hit is not None and hit[0] is camera:
-        return hit[1]
+    if hit is not None:
+        return _remember(_REDUCED, key, hit)
     k = np.ascontiguousarray(world_coefficients(camera)[:, ::step, ::step])
-    if len(_REDUCED) > 8:
-        _REDUCED.clear()
-    _REDUCED[key] = (camera, k)
-    return k
+    k.setflags(write=False)
+    return _remember(_REDUCED, key, k)
 
 
 def world_from_depth(depth_mm: np.ndarray, camera: Camera) -> np.ndarray:

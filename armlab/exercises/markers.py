@@ -1,7 +1,10 @@
 """Exercise regions in source text: `# BEGIN SOLUTION <id>` ... `# END SOLUTION` lines (same indentation, never
 nested, never empty), `<id>` a registered exercise (armlab.exercises.registry). A stub replaces a region's body by
-one line raising NotImplementedError with the exercise's message (its id, the notebook that teaches it, what to
-write), so the surrounding code still imports and runs up to the point of use.
+two lines raising ExerciseNotWritten(<id>) (its message: the id, the notebook that teaches it, what to write), so the
+surrounding code still imports and runs up to the point of use.
+
+Written answers: a markdown cell holding `<!-- BEGIN ANSWER <id> -->` ... `<!-- END ANSWER -->`; the release
+replaces the answer by one prompt line (answer_prompt).
 """
 
 from __future__ import annotations
@@ -11,7 +14,8 @@ from dataclasses import dataclass
 
 from .registry import exercise
 
-__all__ = ["Region", "ExerciseMarkerError", "find_regions", "stub_regions", "stub_line", "is_blank"]
+__all__ = ["Region", "ExerciseMarkerError", "find_regions", "stub_regions", "stub_lines", "is_blank", "find_answers",
+           "blank_answers", "answer_prompt", "is_blank_answer"]
 
 _BEGIN = re.compile(r"^(?P<indent>[ \t]*)# BEGIN SOLUTION(?:[ \t]+(?P<id>\S+))?[ \t]*$")
 _END = re.compile(r"^(?P<indent>[ \t]*)# END SOLUTION[ \t]*$")
@@ -65,29 +69,81 @@ def find_regions(text: str, where: str = "<text>") -> list[Region]:
     return regions
 
 
-def stub_line(exercise_id: str) -> str:
-    """The one line (without indentation) a blank region of the exercise holds in the student release."""
-    return f"raise NotImplementedError({exercise(exercise_id).message()!r})"
+def stub_lines(exercise_id: str) -> list[str]:
+    """The lines (without indentation) a blank region of the exercise holds in the student release."""
+    exercise(exercise_id)                                   # KeyError for an unregistered id
+    return ["from armlab.exercises import ExerciseNotWritten", f"raise ExerciseNotWritten({exercise_id!r})"]
 
 
 def is_blank(text: str, exercise_id: str, where: str = "<text>") -> bool:
     """True when every region of exercise `exercise_id` in a source text still holds only its stub (or the text has
     no region of it): the student has not written it yet."""
-    stub = stub_line(exercise_id)
+    stub = stub_lines(exercise_id)
     lines = text.splitlines()
     bodies = [[line.strip() for line in lines[r.begin + 1:r.end] if line.strip()]
               for r in find_regions(text, where) if r.exercise_id == exercise_id]
-    return all(body == [stub] for body in bodies)
+    return all(body == stub for body in bodies)
 
 
 def stub_regions(text: str, where: str = "<text>") -> str:
-    """The text with every region's body replaced by one line raising NotImplementedError(<the exercise's message>);
-    the markers stay, so the student writes between them."""
+    """The text with every region's body replaced by the stub raising ExerciseNotWritten(<id>); the markers stay, so
+    the student writes between them."""
     lines = text.splitlines()
     out, last = [], 0
     for region in find_regions(text, where):
         out += lines[last:region.begin + 1]
-        out.append(region.indent + stub_line(region.exercise_id))
+        out += [region.indent + line for line in stub_lines(region.exercise_id)]
         last = region.end
     out += lines[last:]
     return "\n".join(out) + ("\n" if text.endswith("\n") else "")
+
+
+# each marker alone on its line (in a notebook source's markdown, after "# "): marker text quoted in prose is not one
+_ANSWER = re.compile(r"^(?:# )?<!--[ \t]*BEGIN ANSWER[ \t]+(?P<id>\S+)[ \t]*-->[ \t]*$(?P<body>.*?)"
+                     r"^(?:# )?<!--[ \t]*END ANSWER[ \t]*-->[ \t]*$", re.S | re.M)
+_ANSWER_OPEN = re.compile(r"^(?:# )?<!--[ \t]*(BEGIN|END) ANSWER\b.*-->[ \t]*$", re.M)
+
+
+def answer_prompt(exercise_id: str) -> str:
+    """The line a blank written answer holds in the student release."""
+    e = exercise(exercise_id)
+    return f"*Your answer here (exercise {e.id}, {e.points} points, graded by hand).*"
+
+
+def _answers(text: str, where: str) -> list[re.Match]:
+    found = list(_ANSWER.finditer(text))
+    if len(_ANSWER_OPEN.findall(text)) != 2 * len(found):
+        raise ExerciseMarkerError(f"{where}: answer markers that do not pair up (write '<!-- BEGIN ANSWER <id> -->' "
+                                  f"... '<!-- END ANSWER -->')")
+    for m in found:
+        try:
+            if exercise(m["id"]).kind != "written":
+                raise ExerciseMarkerError(f"{where}: BEGIN ANSWER {m['id']}: not a written exercise")
+        except KeyError as e:
+            raise ExerciseMarkerError(f"{where}: {e.args[0]}") from None
+    return found
+
+
+def find_answers(texts, where: str = "<notebook>") -> dict[str, str]:
+    """The written answers in markdown texts (a notebook's markdown cells): {exercise id: the answer, stripped}.
+    ExerciseMarkerError for markers that do not pair up, an unregistered or non-written id, or an id answered
+    twice."""
+    out: dict[str, str] = {}
+    for text in texts:
+        for m in _answers(text, where):
+            if m["id"] in out:
+                raise ExerciseMarkerError(f"{where}: two answers to {m['id']}")
+            out[m["id"]] = m["body"].strip()
+    return out
+
+
+def is_blank_answer(exercise_id: str, answer: str) -> bool:
+    """True when a written answer (as find_answers gives it) is empty or still the release's prompt."""
+    return answer.strip() in ("", answer_prompt(exercise_id))
+
+
+def blank_answers(text: str, where: str = "<markdown>") -> str:
+    """A markdown text with every written answer replaced by its prompt line (the markers stay)."""
+    _answers(text, where)
+    return _ANSWER.sub(lambda m: f"<!-- BEGIN ANSWER {m['id']} -->\n\n{answer_prompt(m['id'])}\n\n<!-- END ANSWER -->",
+                       text)

@@ -1,8 +1,8 @@
 """The student release: a copy of the instructor's repository (its tracked files) that a student can run, edit and
 submit.
 
-- Every exercise region (armlab.exercises.markers) becomes a stub raising NotImplementedError with the exercise's
-  message; notebooks lose their outputs and execution counts.
+- Every exercise region (armlab.exercises.markers) becomes a stub raising ExerciseNotWritten for its exercise, every
+  written answer its prompt line; notebooks lose their outputs and execution counts.
 - Only student-facing files go in (RELEASE_EXCLUDES: no instructor README, benchmarks, CI, release tool, notebook
   sources, instructor-only tests); the student README (STUDENT_README) becomes README.md, and the marker file
   .student-release tells the Makefile which tests a release runs.
@@ -19,7 +19,7 @@ import shutil
 import subprocess
 from pathlib import Path
 
-from .markers import find_regions, stub_regions
+from .markers import blank_answers, find_answers, find_regions, stub_regions
 
 __all__ = ["RELEASE_EXCLUDES", "STUDENT_README", "RELEASE_MARKER", "student_notebook", "make_student_release",
            "released"]
@@ -40,6 +40,7 @@ RELEASE_EXCLUDES = (
     "tests/test_repeatable.py",    # teaches by hand (the teach.record exercise) to test the simulator's rounding
     "tests/test_notebook_outputs.py",   # checks the instructor's executed notebooks (the release's have no outputs)
     "armlab/grading/hidden.py",    # the grader's hidden checks (fresh inputs per exercise)
+    "armlab/grading/hidden/*",     # (one module per exercise)
     "tools/autograder/*",          # the Gradescope bundle's scripts (make autograder)
     "tests/test_grading*.py",      # the grader's tests (they hold wrong answers and the tricks)
 )
@@ -51,9 +52,15 @@ def released(name: str) -> bool:
 
 
 def student_notebook(nb: dict, where: str) -> dict:
-    """A notebook (nbformat 4 JSON) with its exercise regions stubbed and every output and count cleared."""
+    """A notebook (nbformat 4 JSON) with its exercise regions stubbed, its written answers blanked and every output
+    and count cleared."""
     nb = json.loads(json.dumps(nb))
     for cell in nb["cells"]:
+        if cell["cell_type"] == "markdown":
+            text = "".join(cell["source"])
+            if find_answers([text], where):
+                cell["source"] = blank_answers(text, where).splitlines(keepends=True)
+            continue
         if cell["cell_type"] != "code":
             continue
         text = "".join(cell["source"])
@@ -80,7 +87,8 @@ def make_student_release(repo: Path | str, out: Path | str) -> list[str]:
         if name.endswith(".ipynb"):
             nb = json.loads(src.read_text())
             dst.write_text(json.dumps(student_notebook(nb, name), indent=1, ensure_ascii=False) + "\n")
-            changed = any(find_regions("".join(c["source"]), name) for c in nb["cells"] if c["cell_type"] == "code")
+            changed = any(find_regions("".join(c["source"]), name) for c in nb["cells"] if c["cell_type"] == "code") \
+                or bool(find_answers(["".join(c["source"]) for c in nb["cells"] if c["cell_type"] == "markdown"], name))
         elif name.endswith(".py") or name.startswith("tools/"):
             text = src.read_text()
             new_text = stub_regions(text, name)

@@ -21,7 +21,7 @@ from .splice import tracked_files
 
 __all__ = ["SCRIPTS", "build_bundle", "limits_from_env", "exercises_from_env", "run"]
 
-SCRIPTS = ("tools/autograder/setup.sh", "tools/autograder/run_autograder")
+SCRIPTS = ("tools/autograder/setup.sh", "tools/autograder/run_autograder", "tools/autograder/pick-python")
 
 
 def build_bundle(reference: Path | str, out: Path | str) -> Path:
@@ -64,15 +64,23 @@ def limits_from_env() -> Limits:
 
 
 def run(root: Path | str) -> Path:
-    """Grade ROOT/submission against ROOT/source and write ROOT/results/results.json; returns its path."""
-    from .grade import grade_submission
+    """Grade ROOT/submission against ROOT/source and write ROOT/results/results.json; returns its path. The
+    instructor's files and the results folder are made owner-only first, so that student code run as an
+    unprivileged user (Gradescope's containers allow no namespaces: see armlab.grading.sandbox) reads neither."""
+    from .grade import Grader
     from .report import atomic_write, results_json
+    from .sandbox import lock_down
+    from .submission import read_submission
 
     root = Path(root)
     for part in ("source", "submission"):
         if not (root / part).is_dir():
             raise NotADirectoryError(f"{root / part}: no such folder (is {root} laid out as Gradescope's /autograder?)")
-    results = grade_submission(root / "submission", root / "source", limits_from_env(), exercises_from_env())
+    (root / "results").mkdir(exist_ok=True)
+    lock_down(root / "source", root / "results")
+    with Grader(root / "source", limits_from_env(), exercises_from_env()) as grader:
+        results = grader.grade(read_submission(root / "submission", grader.reference))
+        grader.verify_sources()
     path = root / "results" / "results.json"
     atomic_write(path, results_json(results))
     return path
@@ -88,7 +96,7 @@ def main(argv: list[str]) -> int:
             print(f"wrote {build_bundle(Path.cwd(), argv[1])}")
         else:
             print(f"wrote {run(argv[1])}")
-    except (OSError, ValueError, LookupError) as e:
+    except (OSError, ValueError, LookupError, RuntimeError) as e:
         print(f"armlab autograder: {e}", file=sys.stderr)
         return 1
     return 0

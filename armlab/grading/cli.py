@@ -1,32 +1,94 @@
-"""`python -m armlab grade` and `python -m armlab check`, called from armlab.__main__ with the parsed arguments."""
+"""`python -m armlab grade` (instructors) and `python -m armlab check` (students): their options (add_parsers, called
+by armlab.__main__) and what they do (main). Every bad option or path is one line on stderr and a non-zero exit."""
 
 from __future__ import annotations
 
 import argparse
+import sys
+import time
 from pathlib import Path
+
+from armlab.command_line import int_at_least, positive_seconds
 
 from .run import Limits
 
-__all__ = ["main"]
+__all__ = ["add_parsers", "main"]
+
+
+def _version() -> str:
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return f"armlab {version('armlab')}"
+    except PackageNotFoundError:
+        return "armlab (not installed)"
+
+
+def add_parsers(sub) -> None:
+    """The `grade` and `check` subcommands."""
+    grade = sub.add_parser("grade", help="grade a folder of submissions (one folder per student) into OUT")
+    grade.add_argument("submissions")
+    grade.add_argument("--out", required=True, help="folder for grades.csv and <student>/results.json, feedback.md")
+    grade.add_argument("--jobs", type=int_at_least(1, 512), default=1,
+                       help="submissions graded in parallel (default: 1)")
+    grade.add_argument("--timeout", type=positive_seconds, default=300.0,
+                       help="wall-clock seconds per notebook run (default: 300)")
+    grade.add_argument("--reference", default=".", help="the instructor's checkout (default: .)")
+    grade.add_argument("--unsafe-no-sandbox", action="store_true",
+                       help="grade without a sandbox where none can run (student code then sees all you see)")
+    grade.add_argument("--version", action="version", version=_version())
+    check = sub.add_parser("check", help="run the public checks of each exercise in this checkout (students)")
+    check.add_argument("--timeout", type=positive_seconds, default=300.0,
+                       help="wall-clock seconds per notebook run (default: 300)")
+    check.add_argument("--unsafe-no-sandbox", action="store_true",
+                       help="run without a sandbox where none can run")
+
+
+def _limits(timeout: float) -> Limits:
+    return Limits(timeout_s=timeout, cpu_s=int(timeout) + 10)
+
+
+def _check(args: argparse.Namespace) -> int:
+    from .check import missing_tools, self_check
+    from .report import self_check_report
+    from .sandbox import SandboxUnavailable
+
+    missing = missing_tools()
+    if missing:
+        print(f"armlab check: cannot run: {', '.join(missing)} not installed in this Python "
+              f"({sys.executable}); run `make lab` or `pip install {' '.join(missing)}`", file=sys.stderr)
+        return 2
+    try:
+        checked = self_check(Path.cwd(), _limits(args.timeout), unsafe=args.unsafe_no_sandbox)
+    except (SandboxUnavailable, OSError, ValueError) as e:
+        print(f"armlab check: cannot run: {e}", file=sys.stderr)
+        return 2
+    print(self_check_report(checked.results, checked.blocked))
+    return 0 if checked.ok else 1
 
 
 def main(args: argparse.Namespace) -> int:
-    from .report import table
-
     if args.command == "check":
-        from .check import self_check
+        return _check(args)
+    from .grade import GraderChanged, grade_class
+    from .sandbox import SandboxUnavailable
 
-        print(table(self_check(Path.cwd())))
-        return 0
-    from .grade import grade_class
+    started = time.monotonic()
+    done = [0]
 
-    if args.timeout <= 0:
-        raise SystemExit(f"armlab grade: --timeout must be positive, got {args.timeout:g}")
-    limits = Limits(timeout_s=args.timeout, cpu_s=int(args.timeout) + 10)
+    def progress(student: str, results: dict) -> None:
+        done[0] += 1
+        score = sum(r.score for r in results.values())
+        total = sum(r.max_score for r in results.values())
+        print(f"[{done[0]}] {student}: {score:g} / {total} ({time.monotonic() - started:.0f} s)", file=sys.stderr,
+              flush=True)
+
     try:
-        graded = grade_class(args.submissions, args.out, args.reference, jobs=args.jobs, limits=limits)
-    except (NotADirectoryError, ValueError) as e:
-        raise SystemExit(f"armlab grade: {e}") from None
+        graded = grade_class(args.submissions, args.out, args.reference, jobs=args.jobs, limits=_limits(args.timeout),
+                             unsafe=args.unsafe_no_sandbox, progress=progress)
+    except (NotADirectoryError, ValueError, SandboxUnavailable, GraderChanged, RuntimeError) as e:
+        print(f"armlab grade: {e}", file=sys.stderr)
+        return 2
     for student, results in graded.items():
         print(f"{student}: {sum(r.score for r in results.values()):g} / {sum(r.max_score for r in results.values())}")
     print(f"wrote {Path(args.out) / 'grades.csv'}")

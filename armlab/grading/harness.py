@@ -1,22 +1,35 @@
-"""Child side of the hidden checks: `python -m armlab.grading.harness REQUEST.json OUT.json`, run by the grader in a
-bounded subprocess of a grading work tree. A request is one job or a list of jobs (several exercises' hidden checks
-in one subprocess); each job finds the exercise's function -- in a notebook, by running the code cells in an IPython
-shell up to the cell that defines it (prelude "cells"), or only their imports, definitions and literal constants
-(prelude "definitions": no simulator run); in the package, by importing it -- calls it (through the spec's adapter,
-armlab.grading.hidden.<adapter>, when the exercise is a method or needs built objects) on each case's arguments and
-writes the results as JSON (numbers and nested lists, NaN allowed; never pickle). It decides nothing: the grader's
-own process compares the results with the values of the reference."""
+"""Child side of the hidden checks: `python -m armlab_grader.harness`, run by the grader in the sandbox with the
+grading work tree (run.py). Standard input holds the run's key (one line) and the request: {"out": path, "jobs":
+[...]}; it is read whole and closed before any student code runs, and nothing of the request is left on disk or in
+sys.argv.
+
+Each job finds the exercise's function -- in a notebook, by running the code cells in an IPython shell up to the
+cell that defines it (prelude "cells"), or only their imports, definitions and literal constants (prelude
+"definitions": no simulator run); in the package, by importing it -- and calls it (through the spec's adapter,
+armlab_grader.hidden.<adapter>, when the exercise is a method or needs built objects) on each case's arguments.
+While the student's function runs, a profile hook (sys.setprofile, and threading.setprofile for threads it starts)
+watches for calls of the job's forbidden functions made from the student's own code, whatever name they were
+reached by (getattr with a built-up string, an alias, functools.partial); an audit hook notes a region that
+switches the watch off. The results (numbers and nested lists, NaN allowed; never pickle) and the forbidden calls
+seen are written signed with the run's key. It decides nothing: the grader's process compares the results with the
+values of the reference.
+"""
 
 from __future__ import annotations
 
 import ast
 import importlib
+import inspect
 import json
 import re
 import sys
+import threading
+import types
 from pathlib import Path
 
 import numpy as np
+
+from .child_common import close_stdin, read_key, read_rest, write_signed
 
 
 def _definitions(source: str) -> str:
@@ -75,6 +88,109 @@ def _package_object(dotted: str):
     raise LookupError(f"no module in {dotted!r}")
 
 
+def resolve(name: str):
+    """The object a forbidden name (armlab.grading.hidden.FORBIDDEN: dotted, perhaps without its package) refers
+    to, or None: the name as given, under armlab, or an attribute of a loaded armlab module or of a library module
+    the kit uses."""
+    parts = name.split(".")
+    for dotted in (name, f"armlab.{name}"):
+        try:
+            return _package_object(dotted)
+        except (LookupError, AttributeError, ImportError, ValueError):
+            pass
+    for module_name in sorted(sys.modules):
+        if module_name == "armlab" or module_name.startswith(("armlab.", "modern_robotics", "scipy.")):
+            obj = sys.modules[module_name]
+            try:
+                for attribute in parts:
+                    obj = getattr(obj, attribute)
+                return obj
+            except AttributeError:
+                continue
+    return None
+
+
+class CallWatch:
+    """The forbidden functions of a job, by code object (Python) or identity (C), and the calls of them made
+    directly from student code while `watching`."""
+
+    def __init__(self, names: list[str]) -> None:
+        self.codes: dict[types.CodeType, str] = {}
+        self.builtins: dict[int, str] = {}
+        for name in names:
+            for target in self._targets(resolve(name)):
+                if isinstance(target, types.CodeType):
+                    self.codes.setdefault(target, name)
+                else:
+                    self.builtins.setdefault(id(target), name)
+        self.seen: list[str] = []
+        self.regions: list[tuple[str, int, int]] = []     # (file, first line, last line) of package regions
+        self.active = False
+
+    @staticmethod
+    def _targets(obj) -> list:
+        if obj is None:
+            return []
+        if isinstance(obj, types.ModuleType):
+            return [t for v in vars(obj).values() if getattr(v, "__module__", None) == obj.__name__
+                    for t in CallWatch._targets(v) if not isinstance(v, types.ModuleType)]
+        if isinstance(obj, type):
+            out = []
+            for v in vars(obj).values():
+                v = v.__func__ if isinstance(v, (staticmethod, classmethod)) else v
+                if isinstance(v, types.FunctionType):
+                    out.append(v.__code__)
+            return out
+        func = getattr(obj, "__func__", obj)
+        if isinstance(func, types.FunctionType):
+            return [func.__code__]
+        if callable(func):
+            return [func]
+        return []
+
+    def add_region(self, function) -> None:
+        """Count calls made from `function`'s own lines (a package exercise) as the student's."""
+        func = getattr(function, "__func__", function)
+        try:
+            lines, start = inspect.getsourcelines(func)
+            self.regions.append((inspect.getsourcefile(func) or "", start, start + len(lines)))
+        except (OSError, TypeError):
+            pass
+
+    def _students(self, frame) -> bool:
+        if frame is None:
+            return False
+        filename = frame.f_code.co_filename
+        if filename.startswith("<ipython-input"):
+            return True
+        return any(filename == f and a <= frame.f_lineno <= b for f, a, b in self.regions)
+
+    def profile(self, frame, event, arg) -> None:
+        if event == "call":
+            name = self.codes.get(frame.f_code)
+            if name and self._students(frame.f_back):
+                self.seen.append(name)
+        elif event == "c_call":
+            name = self.builtins.get(id(arg))
+            if name and self._students(frame):
+                self.seen.append(name)
+
+    def audit(self, event: str, args: tuple) -> None:
+        if self.active and event in ("sys.setprofile", "sys.settrace"):
+            self.seen.append(f"{event} (it switches off the grader's watch of forbidden calls)")
+
+    def __enter__(self):
+        sys.setprofile(self.profile)
+        threading.setprofile(self.profile)
+        self.active = True
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.active = False
+        sys.setprofile(None)
+        threading.setprofile(None)
+
+
 def _plain(value):
     """A JSON-able copy of a result: arrays and tuples become (nested) lists of floats."""
     if isinstance(value, (tuple, list)):
@@ -82,40 +198,48 @@ def _plain(value):
     return np.asarray(value, dtype=float).tolist()
 
 
-def run_job(job: dict) -> list[dict]:
-    """The results of one job's calls (an error per call, or for every call when the function cannot be found). A
-    plain function gets its list arguments as arrays; an adapter gets the JSON arguments as they are."""
+def run_job(job: dict, watch: CallWatch) -> dict:
+    """{"results": per call its value or error (an error for every call when the function cannot be found),
+    "forbidden": the forbidden calls `watch` saw}. A plain function gets its list arguments as arrays; an adapter
+    gets the JSON arguments as they are."""
     try:
         if job.get("notebook"):
             function = _notebook_function(Path(job["notebook"]), job["function"], job.get("prelude", "cells"))
         else:
             function = _package_object(job["function"])
-        adapter = getattr(importlib.import_module("armlab.grading.hidden"), job["adapter"]) if job.get("adapter") \
+            for member in ([function] if not isinstance(function, type) else list(vars(function).values())):
+                watch.add_region(member)
+        adapter = getattr(importlib.import_module("armlab_grader.hidden"), job["adapter"]) if job.get("adapter") \
             else None
     except Exception as e:                                       # the student's cells, reported for every call
-        return [{"error": f"{type(e).__name__}: {e}"[:300]} for _ in job["cases"]]
+        return {"results": [{"error": f"{type(e).__name__}: {e}"[:300]} for _ in job["cases"]], "forbidden": []}
     results = []
     for args in job["cases"]:
         try:
-            if adapter is None:
-                value = function(*[np.asarray(a) if isinstance(a, list) else a for a in args])
-            else:
-                value = adapter(function, *args)
+            with watch:
+                if adapter is None:
+                    value = function(*[np.asarray(a) if isinstance(a, list) else a for a in args])
+                else:
+                    value = adapter(function, *args)
             results.append({"value": _plain(value)})
         except Exception as e:                                   # the student's error, reported per case
             results.append({"error": f"{type(e).__name__}: {e}"[:300]})
-    return results
+    return {"results": results, "forbidden": sorted(set(watch.seen))}
 
 
-def main(request_path: str, out_path: str) -> int:
-    request = json.loads(Path(request_path).read_text())
-    if isinstance(request, list):
-        results = [run_job(job) for job in request]
-    else:
-        results = run_job(request)
-    Path(out_path).write_text(json.dumps(results))
+def main() -> int:
+    key = read_key()
+    request = json.loads(read_rest())
+    close_stdin()
+    sys.argv = [""]
+    # every job's forbidden functions found before any student code runs (so that none can be swapped first)
+    watches = [CallWatch(job.get("forbidden", [])) for job in request["jobs"]]
+    for watch in watches:
+        sys.addaudithook(watch.audit)
+    out = [run_job(job, watch) for job, watch in zip(request["jobs"], watches, strict=True)]
+    write_signed(request["out"], out, key)
     return 0
 
 
 if __name__ == "__main__":
-    sys.exit(main(*sys.argv[1:]))
+    sys.exit(main())

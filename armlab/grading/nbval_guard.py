@@ -1,20 +1,40 @@
-"""A pytest plugin the grader loads into its nbval runs (`-p armlab.grading.nbval_guard`, see run.py): a kernel that
-dies (os._exit, a signal, the CPU limit) fails the running cell at once instead of leaving nbval waiting for the
-cell timeout, and each stream output message is cut to OUTPUT_LIMIT characters (a cell printing hundreds of MB
-keeps the run, its report and the grader's memory small; the cell fails its output comparison anyway).
+"""The pytest plugin of the grader's nbval runs (`-p armlab_grader.nbval_guard`, see run.py), running inside the
+sandbox in pytest's own process, never in the kernel that runs student code:
 
-It reaches nbval through pytest's plugin manager (the `nbval` plugin, nbval.plugin, and its RunningKernel), so
-nothing here imports nbval: without nbval loaded it does nothing."""
+- With --armlab-results PATH it reads the run's key from standard input before any kernel starts, makes itself
+  undumpable (the kernel's processes cannot read its memory or files through /proc), records every cell's outcome
+  and writes them to PATH signed with the key (run.py checks the signature).
+- After each cell that passed it sends the kernel a probe (a silent cell printing a fresh nonce): the kernel's guard
+  (kernel_startup.py) fails the probe when the cell, or one before it, changed the checks' machinery, and a probe
+  whose nonce does not come back means its code never ran as written. Either way the cell fails.
+- A kernel that dies (os._exit, a signal, the CPU limit) fails the running cell at once instead of leaving nbval
+  waiting for the cell timeout, and each stream output message is cut to OUTPUT_LIMIT characters.
+
+It reaches nbval through pytest's plugin manager (the `nbval` plugin and its RunningKernel), so nothing here imports
+nbval: without nbval loaded it does nothing but record.
+"""
 
 from __future__ import annotations
 
+import re
+import secrets
+import sys
 import time
 from queue import Empty
 
-__all__ = ["OUTPUT_LIMIT", "POLL_S", "pytest_configure"]
+import pytest
+
+from .child_common import close_stdin, first_line, hide_memory, read_key, write_signed
+
+__all__ = ["OUTPUT_LIMIT", "POLL_S", "pytest_addoption", "pytest_configure"]
 
 OUTPUT_LIMIT = 100_000          # characters of one stream message kept
 POLL_S = 1.0                    # how often (s) a wait for the kernel checks that it is alive
+PROBE_TIMEOUT_S = 120.0
+_CELL = re.compile(r"::Cell (\d+)$")
+_state: dict = {}
+# The key is read when pytest imports this plugin (-p, before its capture makes standard input /dev/null).
+_KEY = read_key() if any(a.startswith("--armlab-results") for a in sys.argv) else None
 
 
 def _truncated(msg: dict) -> dict:
@@ -45,8 +65,78 @@ def _guard(get_message):
     return guarded_get_message
 
 
+def pytest_addoption(parser) -> None:
+    parser.addoption("--armlab-results", default=None, help="write the cells' outcomes here, signed (grader only)")
+
+
 def pytest_configure(config) -> None:
-    """Wrap nbval's RunningKernel.get_message (once) when nbval is loaded."""
+    """Wrap nbval's RunningKernel.get_message (once) when nbval is loaded; take the run's key."""
     kernel = getattr(config.pluginmanager.get_plugin("nbval"), "RunningKernel", None)
     if kernel is not None and not getattr(kernel.get_message, "guarded", False):
         kernel.get_message = _guard(kernel.get_message)
+    path = config.getoption("armlab_results")
+    if path:
+        if _KEY is None:
+            raise pytest.UsageError("--armlab-results: the run's key was not on standard input")
+        _state.update(key=_KEY, path=path, cells={})
+        close_stdin()
+        hide_memory()
+
+
+def _probe(kernel) -> str:
+    """'' when the kernel runs a fresh probe cell as written and its guard finds nothing changed; else why not."""
+    nonce = secrets.token_hex(16)
+    msg_id = kernel.kc.execute(f"print({nonce!r})", silent=True, store_history=False, allow_stdin=False)
+    deadline = time.monotonic() + PROBE_TIMEOUT_S
+    status, error, seen = None, "", ""
+    while status is None:
+        msg = kernel.get_message(stream="shell", timeout=max(0.1, deadline - time.monotonic()))
+        if msg["parent_header"].get("msg_id") == msg_id:
+            status = msg["content"].get("status")
+            error = f"{msg['content'].get('ename', '')}: {msg['content'].get('evalue', '')}"
+    while True:
+        try:
+            msg = kernel.get_message(stream="iopub", timeout=max(0.1, deadline - time.monotonic()))
+        except Empty:
+            break
+        if msg["parent_header"].get("msg_id") != msg_id:
+            continue
+        if msg["msg_type"] == "stream":
+            seen += msg["content"].get("text", "")
+        if msg["msg_type"] == "status" and msg["content"].get("execution_state") == "idle":
+            break
+    if status != "ok":
+        return error.strip(": ") or "the grader's probe failed"
+    if nonce not in seen:
+        return "the grader's probe did not run as written: a cell changed how the kernel runs code"
+    return ""
+
+
+@pytest.hookimpl(wrapper=True)
+def pytest_runtest_call(item):
+    result = yield
+    kernel = getattr(getattr(item, "parent", None), "kernel", None)
+    if _state and kernel is not None and _CELL.search(item.nodeid):
+        why = _probe(kernel)
+        if why:
+            raise AssertionError(f"GraderIntegrityError: {why}")
+    return result
+
+
+def pytest_runtest_logreport(report) -> None:
+    found = _CELL.search(report.nodeid)
+    if not _state or not found:
+        return
+    cell = int(found[1])
+    if report.when == "call" or (report.when == "setup" and not report.passed):
+        if report.passed:
+            _state["cells"][cell] = (True, "")
+        elif report.skipped:
+            _state["cells"][cell] = (False, "skipped")
+        else:
+            _state["cells"][cell] = (False, first_line(report.longreprtext))
+
+
+def pytest_sessionfinish(session, exitstatus) -> None:
+    if _state:
+        write_signed(_state["path"], {"cells": _state["cells"]}, _state["key"])

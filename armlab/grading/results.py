@@ -16,10 +16,19 @@ class CheckResult:
 
 @dataclass
 class ExerciseResult:
-    """One exercise's grade: score out of max_score, its checks, and why it scored 0 without checks (reason)."""
+    """One exercise's grade: score out of max_score, its checks, and why it scored 0 without checks (reason). A
+    written answer (answer not None) is graded by hand: its score stays 0 here and it counts in no automatic total."""
 
     exercise_id: str
     score: float
     max_score: int
     checks: list[CheckResult] = field(default_factory=list)
     reason: str = ""
+    answer: str | None = None
+
+    @property
+    def by_hand(self) -> bool:
+        """A written answer, graded by the instructor (or one not given: blank)."""
+        from armlab.exercises.registry import exercise
+
+        return exercise(self.exercise_id).kind == "written"

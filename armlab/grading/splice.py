@@ -16,11 +16,15 @@ from armlab.exercises.registry import exercise
 from .submission import exercise_file
 
 __all__ = ["RegionRejected", "tracked_files", "check_body", "splice_text", "write_regions", "build_worktree",
-           "splice_into"]
+           "splice_into", "GRADER_ONLY"]
 
-# nbval's comment markers, the kit's check tags and exercise markers: a student body may hold none of them.
-_FORBIDDEN = re.compile(r"^\s*#\s*(NBVAL_\w*|CHECK\b|BEGIN SOLUTION|END SOLUTION|PYTEST_VALIDATE_IGNORE_OUTPUT)",
+# nbval's comment markers, the kit's check tags and exercise markers: a student body may hold none of them. A line
+# is a marker the way nbval reads one (nbval.plugin.find_comment_markers: the stripped line starts with '#', and
+# lstrip('#').strip() is the marker), so any number of '#' counts.
+_FORBIDDEN = re.compile(r"^\s*#+\s*(NBVAL_\w*|CHECK\b|BEGIN SOLUTION|END SOLUTION|PYTEST_VALIDATE_IGNORE_OUTPUT)",
                         re.MULTILINE)
+# the grader's own files: never copied into a work tree that student code sees
+GRADER_ONLY = ("armlab/grading/hidden.py", "armlab/grading/hidden/")
 
 
 class RegionRejected(ValueError):
@@ -91,7 +95,7 @@ def build_worktree(reference: Path, dest: Path, exercise_id: str | None = None,
         check_body(body, exercise_id or "?")
     for name in tracked_files(reference):
         src = reference / name
-        if not src.is_file():
+        if not src.is_file() or src.is_symlink() or name.startswith(GRADER_ONLY):
             continue
         target = dest / name
         target.parent.mkdir(parents=True, exist_ok=True)

@@ -73,7 +73,7 @@ from armlab.hardware.ros_session import DRIVER_TIMEOUT_S, RosApi, get_bot
 from armlab.hardware.safety import DEFAULT_BOARD_MARGIN_MM, check_move, pad_opening_mm
 from armlab.profile import MIN_MOVING_TIME_S
 from armlab.robot import RobotModel, rx200
-from armlab.station.contract import EmergencyStopped, MotionRefused
+from armlab.station.contract import EmergencyStopped, MotionRefused, StationClosed
 
 __all__ = ["HELD_THRESHOLD_MM", "HOLD_TIME_S", "import_interbotix", "RealArm", "connect_arm", "park"]
 
@@ -218,9 +218,12 @@ class RealArm:
         return self._torque_on
 
     # --- motion --------------------------------------------------------------------------------------------------
-    def _require_motion_allowed(self) -> None:
+    def _require_open(self) -> None:
         if self.closed:
-            raise RuntimeError("the station is closed: open a new one with make_station('real')")
+            raise StationClosed("the station is closed: open a new one with make_station('real')")
+
+    def _require_motion_allowed(self) -> None:
+        self._require_open()
         if self._estopped:
             raise EmergencyStopped("the arm is emergency-stopped (holding position): call reset() before moving it")
         if not self._torque_on:
@@ -278,7 +281,8 @@ class RealArm:
 
     # --- gripper -------------------------------------------------------------------------------------------------
     def open_gripper(self) -> None:
-        """Open the gripper (releasing anything held); refused while emergency-stopped."""
+        """Open the gripper (releasing anything held); refused while emergency-stopped or closed."""
+        self._require_open()
         if self._estopped:
             raise EmergencyStopped("the arm is emergency-stopped: call reset() before using the gripper")
         self._bot.gripper.release(float(self.grasp_delay_s))
@@ -288,6 +292,7 @@ class RealArm:
 
         Raises RuntimeError when the fingers are still (nearly) fully open afterwards: the gripper did not close.
         """
+        self._require_open()
         if self._estopped:
             raise EmergencyStopped("the arm is emergency-stopped: call reset() before using the gripper")
         self._bot.gripper.grasp(float(self.grasp_delay_s))
@@ -331,6 +336,7 @@ class RealArm:
 
         Torque off warns: the arm falls onto the board unless someone holds it.
         """
+        self._require_open()
         core = self._bot.core
         with self._lock:
             if enabled:
@@ -377,6 +383,7 @@ class RealArm:
 
     def reset(self) -> None:
         """Leave the emergency stop: the arm stays where it is, torque on, the driver's command re-synchronised."""
+        self._require_open()
         with self._lock:
             if self._torque_on:
                 self._bot.arm.capture_joint_positions()

@@ -8,11 +8,14 @@ roughly 60-80 MB per second uncompressed; keep recordings to a few seconds of th
 
 from __future__ import annotations
 
-import argparse
+import sys
 import time
 from collections.abc import Callable
 from pathlib import Path
 
+from armlab.arguments import finite_float, int_in_range
+from armlab.command_line import OneLineParser, int_at_least, positive_seconds
+from armlab.hardware import HardwareUnavailable
 from armlab.hardware.realsense import configure_streams, import_realsense
 
 __all__ = ["record", "main"]
@@ -28,9 +31,10 @@ def record(out: str | Path, seconds: float = 5.0, serial: str | None = None, war
         raise ValueError(f"the recording must be a .bag file, got {out.name!r}")
     if out.exists() and not overwrite:
         raise FileExistsError(f"{out} exists: choose another name or pass --overwrite")
-    if not seconds > 0:
-        raise ValueError(f"seconds must be positive, got {seconds}")
-    out.parent.mkdir(parents=True, exist_ok=True)
+    seconds = finite_float(seconds, "seconds", positive=True, what="s")
+    warmup_frames = int_in_range(warmup_frames, "warmup_frames", 0, 100_000)
+    if not out.parent.is_dir():
+        raise FileNotFoundError(f"cannot record to {out}: folder {out.parent} does not exist")
     rs = import_realsense()
     pipeline, config = rs.pipeline(), rs.config()
     configure_streams(rs, config, serial)
@@ -51,14 +55,19 @@ def record(out: str | Path, seconds: float = 5.0, serial: str | None = None, war
 
 def main(argv: list[str] | None = None) -> int:
     """Command line entry: `python -m armlab record OUT.bag [--seconds S] [--serial N] [--overwrite]`."""
-    parser = argparse.ArgumentParser(prog="armlab record", description=__doc__.split("\n\n")[0])
+    parser = OneLineParser(prog="armlab record", description=__doc__.split("\n\n")[0])
     parser.add_argument("out", help="the recording to write (.bag)")
-    parser.add_argument("--seconds", type=float, default=5.0, help="how long to record (default 5 s)")
+    parser.add_argument("--seconds", type=positive_seconds, default=5.0, help="how long to record (default 5 s)")
     parser.add_argument("--serial", default=None, help="the camera's serial number when several are connected")
-    parser.add_argument("--warmup-frames", type=int, default=30, help="frames before the timed part (default 30)")
+    parser.add_argument("--warmup-frames", type=int_at_least(0, 100_000), default=30,
+                        help="frames before the timed part (default 30)")
     parser.add_argument("--overwrite", action="store_true", help="replace an existing file")
     args = parser.parse_args(argv)
-    frames = record(args.out, args.seconds, args.serial, args.warmup_frames, args.overwrite)
+    try:
+        frames = record(args.out, args.seconds, args.serial, args.warmup_frames, args.overwrite)
+    except (ValueError, OSError, HardwareUnavailable) as e:     # HardwareUnavailable: no pyrealsense2 or camera
+        print(f"armlab record: error: {e}", file=sys.stderr)
+        return 2
     print(f"recorded {frames} framesets ({args.seconds:g} s) to {args.out}; replay with "
           f"make_station('real', arm=False, playback={str(args.out)!r})")
     return 0

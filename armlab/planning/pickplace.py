@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from armlab import kinematics
+from armlab import kinematics, motion_safety
 from armlab.gripper_geometry import GRIPPER
 from armlab.kinematics import Unreachable
 from armlab.robot import RobotModel, rx200
@@ -238,6 +238,8 @@ def plan_place(q_start, position, edge: float, yaw: float = 0.0, obstacles=(),
                clearance: float = DEFAULT_CLEARANCE_MM, grasp_depth: float | None = None, scaling: str = "trapezoid",
                robot: RobotModel | None = None, held_in_tool=None) -> Plan:
     """Plan to put the held block's bottom-face centre at `position` (3,) world mm with yaw rad, from q_start (5,).
+    A spot the placement rule refuses (motion_safety.check_placement: off the board, on the robot's base plate, out
+    of reach) raises MotionRefused before anything is planned.
 
     Steps: transit to the hover point (the held block lifted `clearance` over everything near the path), descend
     (Cartesian) until the tool point is at place_tool_height, open, lift. obstacles: everything on the board except the
@@ -255,6 +257,7 @@ def plan_place(q_start, position, edge: float, yaw: float = 0.0, obstacles=(),
     robot = robot or rx200()
     position = check_point(position, "place position")
     depth = _check_edge_depth(edge, grasp_depth)
+    motion_safety.check_placement(position, edge, yaw, robot=robot)
     if held_in_tool is not None:
         return _aimed_place(q_start, position, edge, depth, yaw, obstacles, clearance, scaling, robot,
                             _check_pose(held_in_tool, "held_in_tool"))

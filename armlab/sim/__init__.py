@@ -13,6 +13,8 @@ import os
 
 import numpy as np
 
+from armlab.arguments import plain
+from armlab.command_line import MAX_SEED
 from armlab.sim.arm import ArmRealism, SimArm
 from armlab.sim.gripper import GripperGeometry
 from armlab.sim.scenes import PRESETS, SceneError, load_scene, save_scene, scene_objects
@@ -41,10 +43,14 @@ def make_sim_station(seed: int = 0, scene: str | os.PathLike | dict = "random",
         gripper: finger pad geometry (default GripperGeometry()).
         camera_realism: the camera's realism when it should differ from the arm's: "realistic", "ideal" or a
             CameraRealism (armlab.sim.realism: e.g. CameraRealism.realistic(0), the camera of data/checkerboard).
-    The arm starts at the sleep pose with the gripper open, as the real lab's arm does.
+    The arm starts at the sleep pose with the gripper open, as the real lab's arm does. Closing the station
+    (close(), the end of its `with` block) parks the arm in its sleep pose as the real station does; every later
+    command raises StationClosed.
     """
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
-        raise ValueError(f"seed must be an integer, got {seed!r}")
+        raise ValueError(f"seed must be an integer, got {plain(seed)}")
+    if not 0 <= seed <= MAX_SEED:
+        raise ValueError(f"seed must be an integer from 0 to {MAX_SEED}, got {plain(seed)}")
     scene_seed, arm_seed, camera_seed = (int(s.generate_state(1)[0]) for s in np.random.SeedSequence(seed).spawn(3))
     world = World(scene_objects(scene, scene_seed, **scene_options), real_time=real_time)
     arm = SimArm(world, realism=realism, gripper=gripper, seed=arm_seed, real_time=real_time)
@@ -56,7 +62,17 @@ def make_sim_station(seed: int = 0, scene: str | os.PathLike | dict = "random",
     return Station(kind="sim", arm=arm, camera=camera, world=world,
                    capabilities=Capabilities(camera_intrinsics=lambda: _camera_intrinsics(camera),
                                              sag_reference=lambda: _sag_reference(arm),
-                                             pose_by_hand=arm.move_by_hand, pacing=_pacing(world, arm)))
+                                             pose_by_hand=arm.move_by_hand, pacing=_pacing(world, arm)),
+                   _closer=lambda: _close(arm, camera))
+
+
+def _close(arm: SimArm, camera) -> None:
+    """What closing a simulated station does, as on the real one: the arm parks (SimArm.close), then the camera
+    stops; afterwards both refuse every command (StationClosed). The world's ground truth stays readable."""
+    try:
+        arm.close()
+    finally:
+        camera.closed = True
 
 
 def _camera_intrinsics(camera) -> tuple[np.ndarray, np.ndarray]:

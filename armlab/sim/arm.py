@@ -2,6 +2,12 @@
 collisions, collisions of a held block with the other objects, gravity sag, backlash, encoder noise, torque-off
 teaching, the gripper and an emergency stop.
 
+The motion contract is the real arm's (armlab.station.contract.Arm): every change of the arm's state runs under the
+world's lock (World.lock), and a move re-checks the stop under it just before it starts, so a stop from another
+thread always wins; a blocking move ended by a stop raises EmergencyStopped; a move asked for during a non-blocking
+one waits for it; Ctrl+C while the arm waits for a move (or for the gripper) holds it where it is, then the
+KeyboardInterrupt propagates; after close() every command raises StationClosed.
+
 Units: rad, s, mm; world (board) frame. Three joint vectors are kept apart:
 - the motor positions (what the servos are commanded to and hold),
 - `q_true`: the physical joint angles = motors + homing offsets + backlash + gravity deflection (what the camera
@@ -12,6 +18,7 @@ Units: rad, s, mm; world (board) frame. Three joint vectors are kept apart:
 from __future__ import annotations
 
 import time
+import warnings
 from dataclasses import dataclass, fields, replace
 
 import numpy as np
@@ -24,7 +31,7 @@ from armlab.robot import RobotModel, rx200
 from armlab.sim.geometry import convex_penetration, prism_features
 from armlab.sim.gripper import GripperGeometry, close_on, push_with_pads
 from armlab.sim.world import World, describe_object
-from armlab.station.contract import EmergencyStopped, MotionRefused
+from armlab.station.contract import EmergencyStopped, MotionRefused, StationClosed
 from armlab.transforms import homogeneous, invert_transform, rot_z, rpy_from_matrix
 
 __all__ = ["ArmRealism", "SimArm", "gravity_deflection"]
@@ -155,6 +162,7 @@ class SimArm:
         self._motion: _Motion | None = None
         self._torque = True
         self._estopped = False
+        self.closed = False
         self._held: list[tuple[object, np.ndarray]] = []    # (object, its pose in the tool frame)
         self.gripper_opening_mm = self.gripper_geometry.max_opening_mm
         self._q_true = self._physical(self._motor)
@@ -253,7 +261,12 @@ class SimArm:
         return self._estopped
 
     # -- checks ---------------------------------------------------------------------------------------------
+    def _check_open(self, what: str) -> None:
+        if self.closed:
+            raise StationClosed(f"{what} refused: the station is closed; open a new one with make_station('sim')")
+
     def _check_ready(self, what: str) -> None:
+        self._check_open(what)
         if self._estopped:
             raise EmergencyStopped(f"{what} refused: the arm is emergency-stopped; call reset() first")
 
@@ -319,34 +332,65 @@ class SimArm:
         with accel_time s ramps (default ACCEL_FRACTION x moving_time). Raises MotionRefused before anything moves
         when the move breaks armlab.motion_safety's rules (joint limits, time profile, velocity limits, a link, pad
         or held block below the board: the real arm's rules, with the simulator's floors) or would drive a held
-        block into another object (deeper than HELD_CONTACT_TOL_MM and than it already is)."""
+        block into another object (deeper than HELD_CONTACT_TOL_MM and than it already is).
+
+        A move asked for while a non-blocking one runs waits for it to end first (as the real arm does). The checks
+        and the start run under the world's lock and the stop is re-checked there, so a stop from another thread
+        either refuses the move (EmergencyStopped) or halts it; a blocking move that a stop ends raises
+        EmergencyStopped."""
         self._check_ready("motion")
-        if not self._torque:
-            raise MotionRefused("motion refused: torque is off (the arm is being moved by hand); "
-                                "call set_torque(True) first")
-        self.world.sync()
-        start = self._motor.copy()
-        T, Ta = motion_safety.check_move(start, q, moving_time, accel_time, self.robot, motion_safety.SIM_CLEARANCE,
-                                         self.gripper_geometry, self.gripper_opening_mm, self._held_parts(),
-                                         self._physical)
-        q = np.asarray(q, dtype=float)
-        hit = self._held_collision(start, q, self._physical)
-        if hit:
-            raise motion_safety.refusal("collision of the held block", hit)
-        self._motion = _Motion(self.world.time_s, start, q, T, Ta)
+        self.wait()
+        with self.world.lock:
+            self._check_ready("motion")
+            if not self._torque:
+                raise MotionRefused("motion refused: torque is off (the arm is being moved by hand); "
+                                    "call set_torque(True) first")
+            self.world.sync()
+            start = self._motor.copy()
+            T, Ta = motion_safety.check_move(start, q, moving_time, accel_time, self.robot,
+                                             motion_safety.SIM_CLEARANCE, self.gripper_geometry,
+                                             self.gripper_opening_mm, self._held_parts(), self._physical)
+            q = np.asarray(q, dtype=float)
+            hit = self._held_collision(start, q, self._physical)
+            if hit:
+                raise motion_safety.refusal("collision of the held block", hit)
+            self._check_ready("motion")           # the stop is marked before its lock: it wins here too
+            self._motion = _Motion(self.world.time_s, start, q, T, Ta)
         if blocking:
             self.wait()
+            if self._estopped:
+                raise EmergencyStopped("the arm was emergency-stopped during the move (it holds where it stopped)")
+
+    def _step_motion(self) -> float | None:
+        """One step of the clock towards the end of the current move, under the world's lock: None when no move
+        runs, else the wall-clock seconds to sleep before the next step (0 in simulated time)."""
+        with self.world.lock:
+            self.world.sync()
+            m = self._motion
+            if m is None:
+                return None
+            remaining = max(m.t0 + m.moving_time - self.world.time_s, 0.0)
+            if self.real_time:
+                return min(remaining, self.world.max_step_s)
+            self.world.advance(min(remaining, self.world.max_step_s))   # a step at a time: a stop can come between
+            return 0.0
 
     def wait(self) -> None:
-        """Let simulated time run until the current move ends (in real-time mode, the wall clock too)."""
-        self.world.sync()
-        while self._motion is not None:
-            remaining = self._motion.t0 + self._motion.moving_time - self.world.time_s
-            if self.real_time:
-                time.sleep(min(max(remaining, 0.0), 0.02))
-                self.world.sync()
-            else:
-                self.world.advance(max(remaining, 0.0))
+        """Let simulated time run until the current move ends (in real-time mode, the wall clock too). Ctrl+C
+        (KeyboardInterrupt) while waiting holds the arm where it is (hold()), then propagates."""
+        try:
+            while (pause := self._step_motion()) is not None:
+                if pause:
+                    time.sleep(pause)
+        except KeyboardInterrupt:
+            self.hold()
+            raise
+
+    def hold(self) -> None:
+        """Stop the current move and hold where the arm is now (not an emergency stop: moves stay allowed)."""
+        with self.world.lock:
+            self.world.sync()
+            self._motion = None
 
     def home(self, moving_time: float | None = None) -> None:
         """Move to the home pose (all zeros), blocking."""
@@ -357,55 +401,68 @@ class SimArm:
         self.move_to(self.robot.sleep, moving_time)
 
     def _pass_gripper_time(self) -> None:
-        if self.real_time:
-            time.sleep(self.gripper_time_s)
-            self.world.sync()
-        else:
+        if not self.real_time:
             self.world.advance(self.gripper_time_s)
+            return
+        try:
+            time.sleep(self.gripper_time_s)
+        except KeyboardInterrupt:
+            self.hold()
+            raise
+        self.world.sync()
 
     # -- gripper --------------------------------------------------------------------------------------------
     def open_gripper(self) -> None:
         """Open the pads fully; a held block drops onto whatever is below it (or tips off it)."""
         self._check_ready("opening the gripper")
-        held = sorted(self.holding, key=lambda o: o.position[2])
-        self._held = []
-        self.world.held.difference_update(o.id for o in held)
-        self.gripper_opening_mm = self.gripper_geometry.max_opening_mm
-        for o in held:
-            self.world.settle(o)
-        self._refresh()
+        self.wait()
+        with self.world.lock:
+            self._check_ready("opening the gripper")
+            held = sorted(self.holding, key=lambda o: o.position[2])
+            self._held = []
+            self.world.held.difference_update(o.id for o in held)
+            self.gripper_opening_mm = self.gripper_geometry.max_opening_mm
+            for o in held:
+                self.world.settle(o)
+            self._refresh()
         self._pass_gripper_time()
 
     def close_gripper(self) -> bool:
         """Close the pads; True when a block is held (by the grasp rule of armlab.sim.gripper)."""
         self._check_ready("closing the gripper")
-        if self._held:
-            return True
-        T = kinematics.fk_pox(self._q_true, self.robot, check_limits=False)
-        outcome = close_on(self.world, T, self.gripper_geometry, self.gripper_opening_mm)
-        self.gripper_opening_mm = outcome.opening_mm
-        self.last_grasp = outcome.reason
-        if outcome.held is not None:
-            group = [outcome.held, *self.world.stack_above(outcome.held)]
-            T_tool_world = invert_transform(T)
-            self._held = [(o, T_tool_world @ homogeneous(rot_z(o.yaw), o.position)) for o in group]
-            self.world.held.update(o.id for o in group)
-        self._refresh()
+        self.wait()
+        with self.world.lock:
+            self._check_ready("closing the gripper")
+            if self._held:
+                return True
+            T = kinematics.fk_pox(self._q_true, self.robot, check_limits=False)
+            outcome = close_on(self.world, T, self.gripper_geometry, self.gripper_opening_mm)
+            self.gripper_opening_mm = outcome.opening_mm
+            self.last_grasp = outcome.reason
+            if outcome.held is not None:
+                group = [outcome.held, *self.world.stack_above(outcome.held)]
+                T_tool_world = invert_transform(T)
+                self._held = [(o, T_tool_world @ homogeneous(rot_z(o.yaw), o.position)) for o in group]
+                self.world.held.update(o.id for o in group)
+            self._refresh()
         self._pass_gripper_time()
         return outcome.held is not None
 
     # -- teaching and safety --------------------------------------------------------------------------------
     def set_torque(self, enabled: bool) -> None:
         """Torque on (the motors hold the present position) or off (the arm can be posed by hand, move_by_hand)."""
-        self.world.sync()
-        self._motion = None
-        self._torque = bool(enabled)
-        self._refresh()
+        self._check_open("setting the torque")
+        with self.world.lock:
+            self.world.sync()
+            self._motion = None
+            self._torque = bool(enabled)
+            self._refresh()
 
     def move_by_hand(self, q) -> None:
         """With torque off, pose the arm by hand at physical joint angles q (5,) rad (a student's hand: no sag, no
         backlash); the encoders then read it back. Refused (MotionRefused) with torque on, past a joint's hard stop,
         through the board, or pushing a held block into another object."""
+        self._check_open("moving the arm by hand")
         if self._torque:
             raise MotionRefused("the motors hold the arm: call set_torque(False) before moving it by hand")
         q = kinematics.check_joints(q, self.robot, check_limits=False).astype(float)
@@ -418,18 +475,45 @@ class SimArm:
         hit = self._held_collision(self._q_true, q, lambda Q: Q)
         if hit:
             raise MotionRefused(f"the hand cannot push the held block through another object: {hit}")
-        self._motor = q - self._offsets
-        self._refresh()
+        with self.world.lock:
+            self._motor = q - self._offsets
+            self._refresh()
 
     def emergency_stop(self) -> None:
-        """Halt at once where the arm is now; every further motion raises EmergencyStopped until reset()."""
-        self.world.sync()
-        self._motion = None
+        """Halt at once where the arm is now; every further motion raises EmergencyStopped until reset(). Safe from
+        any thread: the stop is marked before the world's lock is taken, so a move being started either sees it
+        and starts nothing, or has started and is halted here (module notes)."""
         self._estopped = True
+        with self.world.lock:
+            self.world.sync()
+            self._motion = None
 
     def reset(self) -> None:
         """Re-initialise after an emergency stop (the arm stays where it stopped, torque on)."""
-        self._estopped = False
-        self._motion = None
-        self._torque = True
-        self._refresh()
+        self._check_open("reset")
+        with self.world.lock:
+            self._estopped = False
+            self._motion = None
+            self._torque = True
+            self._refresh()
+
+    def close(self) -> None:
+        """Park and end the arm (what closing its station does): to its sleep pose unless emergency-stopped (then it
+        holds where it is and a RuntimeWarning says so), torque on first if it was off; afterwards every command
+        raises StationClosed. Idempotent. A refused sleep move still closes the arm and raises RuntimeError."""
+        if self.closed:
+            return
+        try:
+            if self._estopped:
+                warnings.warn("the simulated arm is emergency-stopped: it was not moved to its sleep pose and holds "
+                              "its position", RuntimeWarning, stacklevel=2)
+                return
+            if not self._torque:
+                self.set_torque(True)
+            self.hold()
+            try:
+                self.sleep()
+            except MotionRefused as e:
+                raise RuntimeError(f"the arm could not go to its sleep pose ({e})") from e
+        finally:
+            self.closed = True

@@ -15,7 +15,7 @@ from armlab.camera import Camera, look_at
 from armlab.lab import LabConfig, lab_config
 from armlab.sim.realism import CameraRealism, resolve_realism
 from armlab.sim.render import render
-from armlab.station.contract import Frame
+from armlab.station.contract import Frame, StationClosed
 from armlab.transforms import invert_transform, rotvec_to_matrix
 
 __all__ = ["SimCamera", "CameraRealism", "true_camera"]
@@ -65,6 +65,7 @@ class SimCamera:
         self.width, self.height = lab.image_size
         self.truth = true_camera(self.realism, lab)
         self.frame_count = 0
+        self.closed = False          # set when its station is closed: capture() then raises StationClosed
 
     def __repr__(self) -> str:
         return f"SimCamera({self.width}x{self.height}, seed={self.seed}, truth={self.truth!r})"
@@ -75,6 +76,8 @@ class SimCamera:
 
     def capture(self) -> Frame:
         """Render the current scene: Frame(rgb (720, 1280, 3) uint8, depth (720, 1280) float32 mm, timestamp s)."""
+        if self.closed:
+            raise StationClosed("capture refused: the station is closed; open a new one with make_station('sim')")
         rng = self.frame_rng(self.frame_count)
         self.frame_count += 1
         arm = self.arm

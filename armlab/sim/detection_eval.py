@@ -23,7 +23,8 @@ from armlab.camera import Camera
 from armlab.transforms import wrap_quarter
 
 __all__ = ["TruthFace", "FrameScore", "DetectionScore", "truth_faces", "score_frame", "yaw_error", "sim_case", "Case",
-           "SCENES", "case_specs", "labelled_faces", "fit_color_model", "TRAIN_SEEDS"]
+           "SCENES", "case_specs", "labelled_faces", "fit_color_model", "TRAIN_SEEDS", "balanced_frame",
+           "SegmentationScore", "score_segmentation"]
 
 # The scenes of the evaluation sets: singles, stacks 2-3 high, the events' levels 2-3 (stacks and distractors).
 SCENES = ("random", "stacks", "sort_stack_3", "line_up_3", "sky", "line_up_2", "sort_stack_2")
@@ -245,3 +246,47 @@ def fit_color_model(seeds=TRAIN_SEEDS):
     specs = [(SCENES[k % len(SCENES)], seed, k % 3 == 1) for k, seed in enumerate(seeds)]
     colours, labels = labelled_faces([sim_case(*s) for s in specs])
     return ColorModel.fit(colours, labels), len(labels)
+
+
+def balanced_frame(case: Case) -> tuple[np.ndarray, np.ndarray]:
+    """The case's RGB image white-balanced on its board pixels (height within 3 mm of the board, from the corrected
+    depth), uint8 (H, W, 3), and those board pixels (H, W) bool."""
+    from armlab.detection import height_from_depth
+    from armlab.detection.color import white_balance_gains
+
+    h = height_from_depth(corrected_depth(case), case.camera)
+    board = np.isfinite(h) & (np.abs(h) < 3.0)
+    gains = white_balance_gains(case.rgb[board].mean(axis=0))
+    return np.clip(case.rgb * gains, 0, 255).astype(np.uint8), board
+
+
+@dataclass(frozen=True)
+class SegmentationScore:
+    """A label image (index into armlab.blocks.COLORS, -1 none) against a case's truth: per visible block face
+    (at least half visible) the majority label of the 7 x 7 pixels at its centre and its true index; the fraction
+    of board pixels given a colour."""
+
+    pairs: list[tuple[int, int]]
+    board_labelled: float
+
+    @property
+    def face_accuracy(self) -> float:
+        return float(np.mean([p == t for p, t in self.pairs])) if self.pairs else 1.0
+
+
+def score_segmentation(case: Case, labels: np.ndarray, board: np.ndarray) -> SegmentationScore:
+    """Score a label image (H, W) int of the case (see SegmentationScore); ValueError naming the problem when it is
+    not an integer image of the frame's shape."""
+    from armlab.blocks import COLORS
+
+    labels = np.asarray(labels)
+    if labels.shape != case.rgb.shape[:2] or labels.dtype.kind not in "iu":
+        raise ValueError(f"a label image must be integers of shape {case.rgb.shape[:2]}, got {labels.dtype} "
+                         f"{labels.shape}")
+    pairs = []
+    for t in case.truth:
+        if t.is_block and t.visible >= 0.5:
+            u, v = np.round(case.camera.project(t.centre[None])[0]).astype(int)
+            values, counts = np.unique(labels[v - 3:v + 4, u - 3:u + 4], return_counts=True)
+            pairs.append((int(values[counts.argmax()]), COLORS.index(t.obj.color)))
+    return SegmentationScore(pairs, float(np.mean(labels[board] >= 0)))

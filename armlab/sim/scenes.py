@@ -26,6 +26,7 @@ import numpy as np
 from armlab.blocks import COLORS, SHAPES, SIZES, ObjectState, block_edge
 from armlab.files import read_json, write_json_atomic
 from armlab.lab import lab_config
+from armlab.schemas import integer, number, strict_object, validate, vector
 from armlab.sim.geometry import polygons_overlap
 from armlab.sim.world import World
 
@@ -291,6 +292,20 @@ def _number(value, where: str) -> float:
     return float(value)
 
 
+_SCENE_MM = number(minimum=-1e5, maximum=1e5)
+SCHEMA = strict_object({
+    "format": {"type": "string"}, "version": {"type": "integer"},
+    "objects": vector(strict_object({"id": integer(-2**31, 2**31 - 1), "color": {"type": "string"},
+                                     "size": {"type": "string"}, "shape": {"type": "string"},
+                                     "edge_mm": number(exclusive_minimum=0.0, maximum=1e4),
+                                     "position_mm": vector(_SCENE_MM, (2, 3)), "yaw_rad": number(-1e6, 1e6)},
+                                    required=("color", "size", "position_mm"), allow_comments=False),
+                      max_items=10_000)},
+    required=("objects",))
+"""The declared schema of a scene file (armlab.schemas): types, finite numbers and ranges of each object; the
+names (colour, size, shape) and the physics (objects_from_dict, World.problems) are checked after it."""
+
+
 def objects_from_dict(data, source: str = "scene") -> list[ObjectState]:
     """Validate a scene dict (format of this module) and build its objects; SceneError names source and object."""
     if not isinstance(data, dict):
@@ -298,6 +313,7 @@ def objects_from_dict(data, source: str = "scene") -> list[ObjectState]:
     if data.get("format", _FORMAT) != _FORMAT or data.get("version", 1) != 1:
         raise SceneError(f"{source}: format {data.get('format')!r} version {data.get('version')!r} is not "
                          f"{_FORMAT!r} version 1")
+    validate(data, SCHEMA, source, SceneError)
     extra = set(data) - {"format", "version", "objects", "_comment"}
     if extra:
         raise SceneError(f"{source}: unknown keys {sorted(extra)}")

@@ -13,6 +13,7 @@ clock.
 
 from __future__ import annotations
 
+import threading
 import time
 from collections.abc import Callable, Iterable
 
@@ -42,6 +43,10 @@ class World:
         objects: every object (ground truth, world mm / rad); blocks: the cubes only.
         time_s: simulated time (s).
         held: ids of objects held by the gripper (they are exempt from the statics).
+        lock: the one re-entrant lock of the simulation: the clock's steps and everything the simulated arm changes
+            (a check and the motion it starts, a stop) run under it, so a stop from another thread (a GUI's, a
+            timer's) comes either before a move starts or after, never in between. One lock, not one per part: the
+            clock calls the arm under it and the arm steps the clock under it, so two locks would deadlock.
     """
 
     #: longest simulated step (s) the clock takes at once, so listeners see motion in small increments
@@ -54,6 +59,7 @@ class World:
         self.held: set[int] = set()
         self._listeners: list[Callable[[float], None]] = []
         self._wall = time.monotonic()
+        self.lock = threading.RLock()
         for o in objects:
             self.add(o, settle=False)
 
@@ -96,18 +102,20 @@ class World:
         dt = float(dt)
         if not np.isfinite(dt) or dt < 0:
             raise ValueError(f"World.advance: dt must be a finite number of seconds >= 0, got {dt}")
-        end = self.time_s + dt
-        while self.time_s < end - 1e-12:
-            self.time_s = min(end, self.time_s + self.max_step_s)
-            for callback in self._listeners:
-                callback(self.time_s)
-        self.time_s = end
-        self._wall = time.monotonic()
+        with self.lock:
+            end = self.time_s + dt
+            while self.time_s < end - 1e-12:
+                self.time_s = min(end, self.time_s + self.max_step_s)
+                for callback in self._listeners:
+                    callback(self.time_s)
+            self.time_s = end
+            self._wall = time.monotonic()
 
     def sync(self) -> None:
         """In real-time mode, advance the clock by the wall-clock time since the last step; else do nothing."""
         if self.real_time:
-            self.advance(max(0.0, time.monotonic() - self._wall))
+            with self.lock:
+                self.advance(max(0.0, time.monotonic() - self._wall))
 
     # -- geometry queries -----------------------------------------------------------------------------------
     @staticmethod

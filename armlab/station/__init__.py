@@ -16,9 +16,10 @@ from armlab.station.contract import (
     RGBDCamera,
     SagReference,
     Station,
+    StationClosed,
 )
 from armlab.station.registry import BACKENDS, STATION_MODULES_ENV, backend_names, make_station, register_backend
 
 __all__ = ["Frame", "Arm", "RGBDCamera", "GroundTruth", "Station", "Capabilities", "Pacing", "SagReference",
-           "make_station", "MotionRefused", "EmergencyStopped", "BACKENDS", "backend_names", "register_backend",
-           "STATION_MODULES_ENV"]
+           "make_station", "MotionRefused", "EmergencyStopped", "StationClosed", "BACKENDS", "backend_names",
+           "register_backend", "STATION_MODULES_ENV"]

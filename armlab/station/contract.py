@@ -19,7 +19,7 @@ import numpy as np
 from armlab.robot import RobotModel
 
 __all__ = ["Frame", "Arm", "RGBDCamera", "GroundTruth", "Capabilities", "Pacing", "SagReference", "Station",
-           "MotionRefused", "EmergencyStopped"]
+           "MotionRefused", "EmergencyStopped", "StationClosed"]
 
 
 class MotionRefused(ValueError):
@@ -27,7 +27,13 @@ class MotionRefused(ValueError):
 
 
 class EmergencyStopped(RuntimeError):
-    """The arm is emergency-stopped: it refuses motion until `reset()` re-initialises it."""
+    """The arm is emergency-stopped: it refuses motion until `reset()` re-initialises it. Also raised by a blocking
+    move that a stop ended part-way (the arm holds where it stopped)."""
+
+
+class StationClosed(RuntimeError):
+    """The station was closed (Station.close(), the end of its `with` block): its arm and camera refuse every
+    further command; open a new station."""
 
 
 @dataclass(frozen=True)
@@ -41,7 +47,18 @@ class Frame:
 
 @runtime_checkable
 class Arm(Protocol):
-    """What every arm backend offers (simulated or Interbotix RX200). State names are the same on every backend."""
+    """What every arm backend offers (simulated or Interbotix RX200). State names are the same on every backend.
+
+    The motion contract (tests/test_station_contract.py holds both backends to it):
+    - a stop always wins: emergency_stop() marks the arm stopped before it takes the arm's lock, and a move re-checks
+      the mark under that lock just before it starts, so a stop from another thread either prevents the move or
+      halts it; nothing moves after emergency_stop() returns;
+    - a blocking move that a stop ends part-way raises EmergencyStopped;
+    - a move asked for while a non-blocking one runs waits for it to end, then starts (both backends wait);
+    - Ctrl+C (KeyboardInterrupt) while a move runs holds the arm where it is (not an emergency stop) and the
+      interrupt propagates; closing the station then parks the arm in its sleep pose (unless emergency-stopped);
+    - after the station is closed every command raises StationClosed.
+    """
 
     robot: RobotModel
 

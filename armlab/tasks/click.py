@@ -2,7 +2,8 @@
 
 The current frame is the last look at the board (tasks.look: arm out of view; tasks.context(station).last.frame is
 what a GUI shows; both functions look again after acting). The pixel goes to the world through the calibrated camera
-and the corrected depth (perception.surface_point: the median depth around the pixel, Camera.pixel_to_world).
+and the corrected depth (perception.pointed_point: the median depth of the surface around the pixel, the rule
+the control station's readout shows too; Camera.pixel_to_world).
 click_grab picks the detected block under the click (the nearest detected top-face centre, within one block edge);
 click_drop puts the held block's bottom face on the surface under the click (the board, or the top of a block or
 stack). Everything is checked and planned before anything moves: a click off the board, on the robot, on bare board
@@ -14,9 +15,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from armlab import motion_safety
+from armlab.arguments import finite_array, finite_float, plain
 from armlab.blocks import block_edge
 from armlab.kinematics import Unreachable
-from armlab.lab import lab_config
 from armlab.station.contract import Station
 
 from . import perception
@@ -31,21 +33,25 @@ class ClickRefused(ValueError):
 
 def click_world(station: Station, uv, frame=None) -> np.ndarray:
     """World point (3,) mm of the surface at pixel uv of `frame` (default: a new capture), depth corrected; raises
-    ClickRefused off the board or on the robot's base."""
+    ClickRefused where the placement rule refuses the point itself (motion_safety.placement_problem: off the board,
+    on the robot's base plate)."""
+    uv = _pixel(uv)
     ctx = context(station)
     frame = frame or station.camera.capture()
     depth = ctx.calibration.depth_correction.apply(frame.depth)
     try:
-        p = perception.surface_point(ctx.calibration, depth, uv)
+        p = perception.pointed_point(ctx.calibration, depth, uv)
     except ValueError as e:
-        raise ClickRefused(f"click at {tuple(np.round(np.asarray(uv, float), 1))}: {e}") from None
-    cfg = lab_config()
-    if not cfg.on_board(p[:2]):
-        raise ClickRefused(f"click at ({p[0]:.0f}, {p[1]:.0f}) mm is off the board (x in {cfg.board_x}, "
-                           f"y in {cfg.board_y} mm)")
-    if cfg.on_robot_base(p[:2], margin_mm=10.0):
-        raise ClickRefused(f"click at ({p[0]:.0f}, {p[1]:.0f}) mm is on the robot's base")
+        raise ClickRefused(f"click at {plain(tuple(np.round(uv, 1)))}: {e}") from None
+    problem = motion_safety.placement_problem(p, reach=False)      # reach: the pick's or the drop's to judge
+    if problem:
+        raise ClickRefused(f"click at {problem}")
     return p
+
+
+def _pixel(uv) -> np.ndarray:
+    """A clicked pixel (2,) (u, v) px, or the kit's ValueError / TypeError naming uv."""
+    return finite_array(uv, "uv", (2,), "the clicked pixel (u, v) of the current frame")
 
 
 def current_view(station: Station):
@@ -57,6 +63,7 @@ def current_view(station: Station):
 def click_grab(station: Station, uv) -> bool:
     """Pick the block under pixel uv = (u, v) of the current frame; True when it is held (see tasks.pick). The view
     is refreshed (tasks.look) after the pick."""
+    uv = _pixel(uv)
     ctx = context(station)
     if ctx.held is not None:
         raise ClickRefused(f"the gripper already holds the {ctx.held.color} block: drop it first")
@@ -81,6 +88,7 @@ def click_grab(station: Station, uv) -> bool:
 def click_drop(station: Station, uv, yaw: float = 0.0) -> bool:
     """Put the held block on the surface under pixel uv = (u, v) of the current frame (see tasks.place); a click
     where the held block itself stood puts it on what it stood on. The view is refreshed after the drop."""
+    uv, yaw = _pixel(uv), finite_float(yaw, "yaw", what="rad")
     ctx = context(station)
     if ctx.held is None:
         raise ClickRefused("the gripper holds no block: grab one first")
@@ -88,6 +96,9 @@ def click_drop(station: Station, uv, yaw: float = 0.0) -> bool:
     held = ctx.held
     if np.hypot(*(p[:2] - held.position[:2])) < held.edge_mm / 2 and p[2] > held.position[2] - held.edge_mm / 2:
         p[2] = held.position[2] - block_edge(held.size)      # the frame still shows the block the arm now holds
+    problem = motion_safety.placement_problem(p, block_edge(held.size), yaw)      # the rule tasks.place applies
+    if problem:
+        raise ClickRefused(f"cannot drop at ({p[0]:.0f}, {p[1]:.0f}, {p[2]:.0f}) mm: {problem}")
     try:
         done = place(station, p, yaw)
     except Unreachable as e:

@@ -27,10 +27,13 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from armlab import motion_safety, planning
-from armlab.blocks import block_edge
+from armlab.arguments import finite_array, finite_float, instance_of, plain
+from armlab.blocks import SIZES, block_edge
 from armlab.calibration import Calibration
 from armlab.gripper_geometry import GRIPPER
 from armlab.planning import Obstacle
+from armlab.station import Station
+from armlab.station.contract import MotionRefused
 
 from . import perception, precheck
 from .guard import GuardedArm
@@ -84,6 +87,7 @@ def context(station, intrinsics="checkerboard") -> TaskContext:
     the same arm over an empty board, measured with the ground truth); otherwise it stays zero until set."""
     ctx = getattr(station, "_tasks_context", None)
     if ctx is None:
+        instance_of(station, "station", Station, "what make_station('sim') or make_station('real') returns")
         arm = GuardedArm(station.arm)
         if station.capabilities.sag_reference is not None:
             reference = station.capabilities.sag_reference()
@@ -105,6 +109,18 @@ def look(station) -> perception.Observation:
     return obs
 
 
+def check_block(block, name: str = "block") -> None:
+    """TypeError / ValueError naming `name` unless it is a block to pick: a detection.Block (or any object with
+    .position (3,) world mm, .yaw rad, .size and .color)."""
+    if not all(hasattr(block, a) for a in ("position", "yaw", "size", "color")):
+        raise TypeError(f"{name} must be a detected block (detection.Block, from tasks.look or detect_blocks, with "
+                        f".position, .yaw, .size and .color), got {type(block).__name__}")
+    finite_array(block.position, f"{name}.position", (3,), "world mm of the top-face centre")
+    finite_float(block.yaw, f"{name}.yaw", what="rad")
+    if block.size not in SIZES:
+        raise ValueError(f"{name}.size must be one of {SIZES}, got {plain(block.size)}")
+
+
 def _same(a, b) -> bool:
     pa, pb = np.asarray(a.position if not isinstance(a, Obstacle) else (a.x, a.y, a.top), float), \
         np.asarray(b.position if not isinstance(b, Obstacle) else (b.x, b.y, b.top), float)
@@ -119,6 +135,7 @@ def pick(station, block, obstacles=None) -> bool:
     block, kinematics.Unreachable (a ValueError) when the block cannot be reached and MotionRefused when the whole
     plan fails the pre-check (nothing moves then), and lets the arm's EmergencyStopped through.
     """
+    check_block(block)
     ctx = context(station)
     if ctx.held is not None:
         raise ValueError(f"the gripper already holds the {ctx.held.color} block: place it first")
@@ -179,13 +196,18 @@ def place(station, position, yaw: float = 0.0, obstacles=None,
     """Put the held block's bottom-face centre at `position` (3,) world mm with yaw (rad); True when the plan ran
     through (the gripper opened there). clearance: how far (mm) the held block's bottom passes above the obstacles'
     tops in transit, and the empty tool point ends above the placed block (planning.plan_place). Raises ValueError
-    when nothing is held or for bad input, Unreachable when the spot cannot be reached and MotionRefused when the
-    whole plan fails the pre-check, e.g. the held block would go into a known block (nothing moves then)."""
+    when nothing is held or for bad input, MotionRefused when the placement rule refuses the spot (off the board, on
+    the robot's base plate, out of reach: motion_safety.placement_problem, the rule the clicks use), Unreachable when
+    the arm cannot get there and MotionRefused when the whole plan fails the pre-check, e.g. the held block would go
+    into a known block (nothing moves then)."""
+    p = finite_array(position, "position", (3,), "x, y, z of the block's bottom-face centre in world mm")
+    yaw = finite_float(yaw, "yaw", what="rad")
+    clearance = finite_float(clearance, "clearance", minimum=0.0, what="mm")
     ctx = context(station)
     edge = ctx.held_edge
-    p = np.asarray(position, dtype=float)
-    if p.shape != (3,) or not np.all(np.isfinite(p)):
-        raise ValueError(f"place position must be 3 finite numbers (x, y, z in world mm), got {position!r}")
+    problem = motion_safety.placement_problem(p, edge, float(yaw))
+    if problem:
+        raise MotionRefused(f"placing at ({p[0]:.1f}, {p[1]:.1f}, {p[2]:.1f}) mm refused before moving: {problem}")
     obs = ctx.known if obstacles is None else list(obstacles)
     plan = planning.plan_place(ctx.arm.joint_positions(), p + [0.0, 0.0, RELEASE_GAP_MM], edge, float(yaw),
                                obstacles=obs, clearance=clearance, held_in_tool=ctx.held_in_tool)

@@ -22,7 +22,7 @@ from armlab.station.contract import EmergencyStopped, Station
 
 from . import click, handling, perception, teach
 
-__all__ = ["STATES", "TaskMachine", "MachineBusy"]
+__all__ = ["STATES", "TaskMachine", "MachineBusy", "Transition", "command_transition"]
 
 STATES: tuple[str, ...] = ("idle", "estop", "calibrate", "detect", "execute", "teach", "repeat", "click-grab",
                            "click-drop")
@@ -32,21 +32,64 @@ class MachineBusy(RuntimeError):
     """A command arrived while another one (or teaching) is under way."""
 
 
-class TaskMachine:
-    """The lab's state machine over a station (sim or real)."""
+Transition = Callable[["TaskMachine", str, Callable[[], Any]], Any]
 
-    def __init__(self, station: Station):
+
+def command_transition(machine: TaskMachine, state: str, action: Callable[[], Any]) -> Any:
+    """The kit's transition of one command: from "idle" into `state`, run `action`, and back to "idle" with its
+    result; refused (EmergencyStopped) in "estop" and (MachineBusy) in any other state, with nothing entered; an
+    emergency stop during or at the end of the action leaves the machine in "estop" (entered once) and raises
+    EmergencyStopped; any other error returns to "idle" (or stays in "estop" when a stop was requested) and
+    propagates."""
+    if machine.state != "idle":
+        refused = EmergencyStopped if machine.state == "estop" else MachineBusy
+        raise refused(f"{state} refused: the machine is in {machine.state!r}"
+                      + ("; call reset() first" if refused is EmergencyStopped else ""))
+    machine.enter(state)
+    ending = "estop"                         # unless the action ends, or fails, with no stop requested
+    try:
+        result = action()
+        if machine.stop_requested:           # stopped between the last command and the end of the action
+            raise EmergencyStopped(f"{state} was emergency-stopped")
+        ending = "idle"
+        return result
+    except EmergencyStopped:
+        raise
+    except BaseException:
+        ending = "estop" if machine.stop_requested else "idle"
+        raise
+    finally:
+        if machine.state != ending:          # estop() has entered "estop" already when it came from the button
+            machine.enter(ending)
+
+
+class TaskMachine:
+    """The lab's state machine over a station (sim or real). `transition` runs each command through the states
+    (module notes); replace it on an instance with your own function of the same signature."""
+
+    def __init__(self, station: Station, transition: Transition = command_transition):
         self.station = station
         self.state = "idle"
         self.history: list[str] = ["idle"]
         self.program: teach.TeachProgram | None = None
+        self.transition = transition
         self._stop = False
         self._recorder: teach.Recorder | None = None
 
     # -- states ---------------------------------------------------------------------------------------------
-    def _enter(self, state: str) -> None:
+    def enter(self, state: str) -> None:
+        """Enter `state` (one of STATES) and add it to the history."""
+        if state not in STATES:
+            raise ValueError(f"unknown state {state!r}: the machine's states are {', '.join(STATES)}")
         self.state = state
         self.history.append(state)
+
+    _enter = enter
+
+    @property
+    def stop_requested(self) -> bool:
+        """True from estop() until reset()."""
+        return self._stop
 
     def _context(self) -> handling.TaskContext:
         ctx = handling.context(self.station)
@@ -54,26 +97,7 @@ class TaskMachine:
         return ctx
 
     def _run(self, state: str, action: Callable[[], Any]) -> Any:
-        if self.state == "estop":
-            raise EmergencyStopped(f"{state} refused: the station is emergency-stopped; call reset() first")
-        if self.state != "idle":
-            raise MachineBusy(f"{state} refused: the machine is in {self.state!r}")
-        self._enter(state)
-        try:
-            result = action()
-        except EmergencyStopped:
-            if self.state != "estop":
-                self._enter("estop")
-            raise
-        except BaseException:
-            self._enter("estop" if self._stop else "idle")
-            raise
-        if self._stop:          # stopped between the last command and the end of the action
-            if self.state != "estop":
-                self._enter("estop")
-            raise EmergencyStopped(f"{state} was emergency-stopped")
-        self._enter("idle")
-        return result
+        return self.transition(self, state, action)
 
     # -- safety ---------------------------------------------------------------------------------------------
     def estop(self) -> None:

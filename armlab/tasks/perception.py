@@ -26,8 +26,8 @@ from armlab.camera import Camera
 from armlab.kinematics import Unreachable
 from armlab.station.contract import Frame, Station
 
-__all__ = ["Observation", "calibrate_camera", "clear_view", "observe", "surface_point", "checkerboard_intrinsics",
-           "station_intrinsics", "CLEAR_VIEW_MIN_CLEARANCE_MM", "REAL_CHECKERBOARD_FOLDER"]
+__all__ = ["Observation", "calibrate_camera", "clear_view", "observe", "surface_point", "pointed_point",
+           "checkerboard_intrinsics", "station_intrinsics", "CLEAR_VIEW_MIN_CLEARANCE_MM", "REAL_CHECKERBOARD_FOLDER"]
 
 CLEAR_VIEW_MIN_CLEARANCE_MM = 25.0   # tool point above what it passes on the way out of view: the finger tips
                                      # (GRIPPER.fingertip_mm = 8 mm beyond the tool point) keep 17 mm
@@ -150,10 +150,13 @@ def observe(station: Station, calib: Calibration, arm=None, obstacles=(), clear:
     return Observation(frame, depth, detect(frame.rgb, depth, calib.camera, arm_q=q, settings=settings), q)
 
 
-def surface_point(calib: Calibration, depth: np.ndarray, uv, radius: int = 3) -> np.ndarray:
+def surface_point(calib: Calibration, depth: np.ndarray, uv, radius: int = 3,
+                  band_mm: float | None = None) -> np.ndarray:
     """World point (3,) mm of the surface seen at pixel uv = (u, v) of a corrected depth image (H, W) mm: the median
-    depth of the (2 radius + 1)^2 window around it. Raises ValueError when the pixel is outside the image or the
-    window has no depth."""
+    depth of the (2 radius + 1)^2 window around it. With band_mm, only the returns of the window within band_mm of
+    the centre's surface (the median of its 7 x 7 core) count: a wide window then averages the sensor's noise without
+    mixing in a block's side or the board beside a block top. Raises ValueError when the pixel is outside the image
+    or the window has no depth."""
     uv = np.asarray(uv, dtype=float)
     if uv.shape != (2,) or not np.all(np.isfinite(uv)):
         raise ValueError(f"a pixel is (u, v): two finite numbers, got {uv!r}")
@@ -161,7 +164,26 @@ def surface_point(calib: Calibration, depth: np.ndarray, uv, radius: int = 3) ->
     u, v = int(round(uv[0])), int(round(uv[1]))
     if not (0 <= u < w and 0 <= v < h):
         raise ValueError(f"pixel ({uv[0]:.1f}, {uv[1]:.1f}) is outside the {w}x{h} image")
+    core = depth[max(0, v - 3):v + 4, max(0, u - 3):u + 4] if band_mm is not None else None
     window = depth[max(0, v - radius):v + radius + 1, max(0, u - radius):u + radius + 1]
-    if not np.isfinite(window).any():
+    if not np.isfinite(window if core is None else core).any():
         raise ValueError(f"no depth around pixel ({u}, {v}): the camera saw no surface there")
-    return calib.camera.pixel_to_world(uv[None], np.array([np.nanmedian(window)]))[0]
+    if core is None:
+        z = float(np.nanmedian(window))
+    else:
+        centre = float(np.nanmedian(core))
+        same = window[np.abs(window - centre) < band_mm]          # NaN compares False: left out
+        z = float(np.median(same)) if same.size else centre
+    return calib.camera.pixel_to_world(uv[None], np.array([z]))[0]
+
+
+POINTER_RADIUS_PX = 8       # what a click acts on and what the pointer's readout shows: a 17 x 17 px window (19 mm
+POINTER_BAND_MM = 8.0       # at 1 m) of the returns within 8 mm of the centre's surface (a block is 25 mm or more)
+
+
+def pointed_point(calib: Calibration, depth: np.ndarray, uv) -> np.ndarray:
+    """The one rule for the world point (3,) mm under a pointer at pixel uv: what a click acts on (tasks.click_world)
+    and what the control station's mouse-over readout shows. surface_point over a POINTER_RADIUS_PX window, keeping
+    the returns within POINTER_BAND_MM of the centre's surface: the sensor's noise (about 4 mm a pixel) averages
+    out over a few hundred pixels."""
+    return surface_point(calib, depth, uv, radius=POINTER_RADIUS_PX, band_mm=POINTER_BAND_MM)

@@ -18,8 +18,9 @@ on a ruler/grid point (x, y from the printed 50 mm grid, z from a height gauge),
 and height; 1 mm reading errors still give a fit good to about 1 mm (see notebook 05 and benchmarks/manipulation.py).
 
 Compensation: to put the PHYSICAL joints at q (what IK asked for), command q_cmd with q_cmd + dq(q_cmd) = q, solved by
-fixed-point iteration (the deflection changes little with q: 3 iterations reach 1e-6 rad). The lab's baseline instead
-raises every target by z += 0.068 r + 3 mm (LAB_BASELINE), which ignores height and pose.
+fixed-point iteration (the deflection changes little with q: 3 iterations reach 1e-6 rad). The kit's own straight-line
+baseline instead raises every target by z += 0.068 r + 3 mm (LAB_BASELINE, a rule of this kit: the lab report raised
+every target by a flat 16 mm), which ignores height and pose.
 Units: mm, rad; world (board) frame.
 """
 
@@ -34,7 +35,7 @@ from armlab.robot import RobotModel, rx200
 
 __all__ = ["SagModel", "fit_sag", "calibration_poses", "hover_pose", "LAB_BASELINE", "HOVER_MAX_REACH_MM"]
 
-LAB_BASELINE = (0.068, 3.0)     # the lab's rule: z += 0.068 r + 3 mm (r: horizontal reach of the target, mm)
+LAB_BASELINE = (0.068, 3.0)     # the kit's line z += 0.068 r + 3 mm (r: reach of the target, mm); not the report's
 _N_PARAMS = 9                   # a1..a3, b1..b2, offsets of waist, shoulder, elbow, wrist_angle
 _SHOULDER, _ELBOW, _WRIST, _TOOL = 2, 3, 4, 6   # rows of kinematics.joint_positions
 HOVER_MAX_REACH_MM = 290.0      # calibration poses within this reach are approached from 60 mm above (hover_pose);

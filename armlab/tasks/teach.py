@@ -23,6 +23,7 @@ from armlab import kinematics, planning
 from armlab.blocks import block_edge
 from armlab.files import read_json, write_json_atomic
 from armlab.robot import JOINT_NAMES, RobotModel, rx200
+from armlab.schemas import comment, number, strict_object, validate, vector
 
 __all__ = ["GRIPPER_STATES", "TeachProgram", "TeachFileError", "Recorder", "save_teach", "load_teach", "repeat",
            "plot_teach", "swap_waypoints"]
@@ -114,6 +115,16 @@ def save_teach(program: TeachProgram, path) -> Path:
     return write_json_atomic(path, data)
 
 
+SCHEMA = strict_object({
+    "format": {"const": _FORMAT}, "name": comment(), "joint_names": {"const": list(JOINT_NAMES)},
+    "waypoints": vector(strict_object({"q": vector(number(minimum=-100.0, maximum=100.0), 5),
+                                       "gripper": {"enum": list(GRIPPER_STATES)}}, required=("q", "gripper"),
+                                      allow_comments=False), max_items=100_000)},
+    required=("format", "waypoints"))
+"""The declared schema of a teach file (armlab.schemas): waypoints of 5 finite joint angles (rad) and a gripper
+state each; the joint limits are the program's own check (TeachProgram)."""
+
+
 def load_teach(path) -> TeachProgram:
     """Read and validate a teach file; TeachFileError names the file and what is wrong (format, shapes, joint
     limits, gripper values)."""
@@ -121,21 +132,9 @@ def load_teach(path) -> TeachProgram:
     raw = read_json(path, "teach", TeachFileError)
     if not isinstance(raw, dict) or raw.get("format") != _FORMAT:
         raise TeachFileError(f"{path}: not an armlab teach file (format must be {_FORMAT!r})")
-    if raw.get("joint_names", list(JOINT_NAMES)) != list(JOINT_NAMES):
-        raise TeachFileError(f"{path}: joint_names {raw.get('joint_names')} are not {list(JOINT_NAMES)}")
-    wps = raw.get("waypoints")
-    if not isinstance(wps, list):
-        raise TeachFileError(f"{path}: 'waypoints' must be a list")
-    q, grip = [], []
-    for i, w in enumerate(wps):
-        if not isinstance(w, dict) or set(w) != {"q", "gripper"}:
-            raise TeachFileError(f"{path}: waypoint {i} must be an object with exactly 'q' and 'gripper'")
-        qi = w["q"]
-        if (not isinstance(qi, list) or len(qi) != 5
-                or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in qi)):
-            raise TeachFileError(f"{path}: waypoint {i}: 'q' must be 5 numbers (rad), got {qi!r}")
-        q.append(qi)
-        grip.append(w["gripper"])
+    validate(raw, SCHEMA, path, TeachFileError)
+    wps = raw["waypoints"]
+    q, grip = [w["q"] for w in wps], [w["gripper"] for w in wps]
     try:
         return TeachProgram(np.array(q, dtype=float).reshape(-1, 5), tuple(grip), str(raw.get("name", "")))
     except ValueError as e:

@@ -3,7 +3,7 @@
     from armlab.viz import Viewer
     with Viewer() as viewer:           # starts (and later stops) its own meshcat server, or joins $ARMLAB_MESHCAT_ZMQ
         print(viewer.url)              # open it in a browser, or in a notebook:
-        viewer.widget()                # the live scene inline (an iframe of the server); `viewer` alone shows it too
+        viewer.widget()                # the live scene inline, over the kernel's connection; `viewer` alone too
         viewer.show(q, gripper_opening_mm=30)
         viewer.joint_sliders(arm=station.arm)   # sliders from the viewer's pose that move the arm
         viewer.save_html("scene.html")

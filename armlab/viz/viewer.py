@@ -1,23 +1,21 @@
 """The meshcat viewer: the RX200 drawn from primitives, the board, frames, objects, the camera and point clouds.
 
 Every public method takes world (board-frame) millimetres and radians. Inside meshcat the kit's scene hangs under one
-node scaled by 1/1000, so meshcat sees metres (its camera, grid and lights assume metres). Sizes that three.js does
-not scale with the node -- a point cloud's point size -- are given to meshcat in metres.
+node scaled by 1/1000, so meshcat sees metres (its camera, grid and lights assume metres). Sizes that three.js does not
+scale with the node -- a point cloud's point size -- are given to meshcat in metres.
 
-In a notebook: `viewer.widget()` (or `viewer` as a cell's last line) shows the live scene inline (an iframe of the
-running meshcat server); `viewer.joint_sliders(arm=station.arm)` gives sliders that start from the viewer's pose,
-follow every later show()/animate(), and (with an arm) move the arm within its joint limits. close() tells what is
-still open that the viewer is gone: inline views say so, sliders are disabled with a note, and a browser tab on the
-server gets a grey background and a "viewer closed" sign before the server stops. Every method is thread-safe (one
-lock around the server connection), so a control panel may redraw from a worker thread.
+In a notebook: `viewer.widget()` (or `viewer` as a cell's last line) shows the live scene inline (meshcat's viewer in an
+anywidget, fed over the kernel's connection: armlab.viz.widget); `viewer.joint_sliders(arm=station.arm)` gives sliders
+that start from the viewer's pose, follow every later show()/animate(), and (with an arm) move the arm within its joint
+limits. close() tells what is still open that the viewer is gone: inline views say so, sliders are disabled with a note,
+and a browser tab on the server gets a grey background and a "viewer closed" sign before the server stops. Every method
+is thread-safe (one lock around the server connection), so a control panel may redraw from a worker thread.
 """
 
 from __future__ import annotations
 
 import contextlib
 import functools
-import html
-import io
 import os
 import threading
 import warnings
@@ -41,6 +39,7 @@ from armlab.lab import LabConfig, lab_config
 from armlab.robot import rx200
 from armlab.transforms import homogeneous
 from armlab.viz import geometry as geo
+from armlab.viz.scene import MirroredWindow
 from armlab.viz.server import ZMQ_ENV, ServerProcess, probe, start_server
 
 __all__ = ["Viewer", "ROOT", "DEFAULT_EYE_MM", "CLOSED_TEXT"]
@@ -74,11 +73,15 @@ def _stop(server: ServerProcess | None) -> None:
 
 
 def _serialized(method):
-    """Run a Viewer method under the viewer's lock: one zmq REQ socket must not be used by two threads at once."""
+    """Run a Viewer method under the viewer's lock (one zmq REQ socket must not be used by two threads at once),
+    its drawing commands handed to the inline views as one message."""
     @functools.wraps(method)
     def locked(self, *args, **kwargs):
         with self._lock:
-            return method(self, *args, **kwargs)
+            if self._vis is None:
+                return method(self, *args, **kwargs)
+            with self._window.batch():
+                return method(self, *args, **kwargs)
     return locked
 
 
@@ -127,12 +130,15 @@ class Viewer:
             url = self._server.zmq_url
         self._finalizer = weakref.finalize(self, _stop, self._server)
         try:
-            probe(url)
-            with contextlib.redirect_stdout(io.StringIO()):  # meshcat prints its URL; we let the caller decide
-                self._vis = meshcat.Visualizer(zmq_url=url)
-            self._vis.window.zmq_socket.setsockopt(zmq.RCVTIMEO, _TIMEOUT_MS)
-            self._vis.window.zmq_socket.setsockopt(zmq.SNDTIMEO, _TIMEOUT_MS)
-            self.zmq_url, self.url = url, self._vis.url()
+            web_url = probe(url)
+            socket = zmq.Context.instance().socket(zmq.REQ)
+            socket.setsockopt(zmq.LINGER, 0)
+            socket.setsockopt(zmq.RCVTIMEO, _TIMEOUT_MS)
+            socket.setsockopt(zmq.SNDTIMEO, _TIMEOUT_MS)
+            socket.connect(url)
+            self._window = MirroredWindow(socket, web_url)   # the server's tab and the inline views (widget())
+            self._vis = meshcat.Visualizer(window=self._window)
+            self.zmq_url, self.url = url, web_url
             self._lab = lab or lab_config()
             self._objects: dict[int, tuple] = {}
             self._root = self._vis[ROOT]
@@ -145,11 +151,12 @@ class Viewer:
             self._vis["/Axes"].set_property("visible", False)
             self._set_sky(self._vis, _SKY)            # an earlier viewer's close() greyed it
             self.look_from(DEFAULT_EYE_MM)
-            self._draw_board()
-            self._draw_arm(frames)
-            self.q = np.array(rx200().home, dtype=float)
-            self.gripper_opening_mm = float(gripper_opening_mm)
-            self.show(self.q if q is None else q, gripper_opening_mm=gripper_opening_mm)
+            with self._window.batch():
+                self._draw_board()
+                self._draw_arm(frames)
+                self.q = np.array(rx200().home, dtype=float)
+                self.gripper_opening_mm = float(gripper_opening_mm)
+                self.show(self.q if q is None else q, gripper_opening_mm=gripper_opening_mm)
         except BaseException:
             self.close()
             raise
@@ -208,12 +215,9 @@ class Viewer:
         sign.set_transform(homogeneous(None, [0.0, 0.15, 0.35]) @ np.diag([0.9, 0.9, 0.9, 1.0]))
 
     def _tell_widgets_closed(self) -> None:
-        note = ("the 3D viewer is closed (viewer.close() stopped it): run the notebook's viewer cells again for a "
-                "live one")
         for pane in self._panes:
             with contextlib.suppress(Exception):
-                pane.value = (f'<div style="padding:1em;border:1px solid #999;background:#eee;color:#333">'
-                              f'{html.escape(note)}</div>')
+                pane.detach()
         for box in self._slider_sets:
             with contextlib.suppress(Exception):
                 for child in box.children:
@@ -236,26 +240,17 @@ class Viewer:
         display(self.widget())
 
     # -- inline in a notebook -----------------------------------------------------------------------------------
-    def iframe_html(self, height_px: int = 420) -> str:
-        """An HTML iframe of the live scene (the server's page; the browser must reach 127.0.0.1 of the kernel)."""
+    def widget(self, height_px: int = 420):
+        """The live 3D view for a notebook or a panel: an anywidget (armlab.viz.widget.SceneView) that runs meshcat's
+        own three.js viewer in the page and gets the scene over the kernel's comm channel, so it works wherever the
+        notebook does (JupyterLab, Notebook 7, VS Code, a JupyterHub or Binder: only the Jupyter port is needed).
+        Its text form (what a notebook that was not run shows, and what nbval compares) is one fixed line. close()
+        leaves the last picture with a note saying the viewer is closed."""
+        from armlab.viz.widget import SceneView
+
         if self._vis is None:
             raise RuntimeError("this Viewer is closed")
-        if not 100 <= int(height_px) <= 4000:
-            raise ValueError(f"height_px must lie in [100, 4000] px, got {height_px}")
-        return (f'<iframe class="armlab-viewer" src="{html.escape(self.url)}" title="armlab 3D viewer" '
-                f'style="width:100%;height:{int(height_px)}px;border:1px solid #ccc"></iframe>')
-
-    def widget(self, height_px: int = 420):
-        """The live 3D view as an ipywidgets.HTML (an iframe of the running meshcat server), for a notebook or a
-        panel. Its text form (what a notebook that was not run shows, and what nbval compares) is one fixed line.
-        close() replaces the view with a note saying the viewer is closed."""
-        import ipywidgets as widgets
-
-        class ViewerPane(widgets.HTML):
-            def __repr__(self) -> str:     # short and deterministic: no URL, no port, no widget id
-                return "ViewerPane(live 3D view of the station; run the cell to see it)"
-
-        pane = ViewerPane(value=self.iframe_html(height_px), layout=widgets.Layout(width="100%"))
+        pane = SceneView(self._window, height_px)
         self._panes.append(pane)
         return pane
 
@@ -412,7 +407,7 @@ class Viewer:
         (arm.move_to; a refused move, e.g. into the board, is reported under the sliders and they return to the
         arm's pose) and the viewer then shows where the arm is; the gripper is an open/close toggle. Blocking
         moves run in the kernel: for an emergency stop during motions, use the station panel
-        (armlab.tasks.station_panel). After close() the sliders are disabled with a note. Returns a VBox
+        (armlab.ui.station_panel). After close() the sliders are disabled with a note. Returns a VBox
         (attributes sliders, gripper, note); display it in a live notebook."""
         import ipywidgets as widgets
 

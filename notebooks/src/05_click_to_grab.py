@@ -2,17 +2,26 @@
 # # 05 · Click to grab: from a pixel to the world to the joints
 #
 # You click a block in the camera image; the arm picks it up. Behind that click:
-# 1. **pixel → camera → world**: the calibrated camera and the depth image turn $(u, v)$ into a world point,
-# 2. **world → joints**: inverse kinematics with a top-down gripper, the wrist turned square to the block,
-# 3. **joints → where the arm really goes**: the arm *sags* under gravity (5–15 mm at long reach), so we fit a model
-#    of the sag from measured tool positions and command the arm so that it ends where we want it.
-#
-# We then repeat the lab report's Table II/III experiment (six clicked locations; the report's arm missed by
-# 7.5 / 9.2 / 2.5 mm in x / y / z) and look at a classic failure: grasping a turned block with the wrist unturned.
+# 1. **pixel → world**: the calibrated camera and the depth image turn $(u, v)$ into a world point (you wrote this in
+#    notebook 01; here the kit's `tasks.surface_point` does it);
+# 2. **the motion sequence**: where the gripper goes, in what order, at what pitch and wrist roll, so that it grasps
+#    the block without touching anything else — the lab report's `move_path`, which **you write** here;
+# 3. **where the arm really goes**: the arm *sags* under gravity, and the kit compensates for it.
 #
 # Units: millimetres and radians; world (board) frame: origin on the board below the waist axis, +y away from the
-# robot, +z up. Everything runs on the realistic simulator (`make_station("sim")`); `make_station("real")` runs the
-# same code on the lab's arm.
+# robot, +z up. Everything runs on the simulator (`make_station("sim")`); `make_station("real")` runs the same code on
+# the lab's arm.
+#
+# | exercise | points | kind | how it is graded |
+# |---|---|---|---|
+# | `grab.move_path` (in `armlab/tasks/move_path.py`) | 10 | open task | outcome on the simulator (below) |
+# | `grab.sag_question` | 2 | written | by hand, from your answer under the sag figure |
+#
+# `grab.move_path` is graded by outcome: at hidden clicks (other blocks, positions, yaws and sizes) each block must end
+# in the gripper and, dropped at a hidden spot, rest within 3 mm of it, every plan passing the kit's safety check.
+#
+# The cells called **Check** test your work (the grader runs the same kind of check at hidden inputs); cells marked
+# **Demonstration** show the kit and test nothing of yours.
 
 # %%
 import numpy as np
@@ -20,8 +29,9 @@ import matplotlib.pyplot as plt
 from IPython import get_ipython
 
 from armlab import kinematics, make_station, planning, tasks
+from armlab.exercises import with_reference
 from armlab.tasks.experiments import LAB_TABLE_III_ERROR_MM, format_table, reach_experiment
-from armlab.exercises import references, require_written, with_reference
+from armlab.tasks.move_path import drop_with, grab_with, kit_move_path, move_path
 from armlab.tasks.sag import LAB_BASELINE, calibration_poses, hover_pose
 
 get_ipython().run_line_magic("matplotlib", "inline")
@@ -29,11 +39,12 @@ from armlab.viz.figures import readable
 
 readable()                                             # figure size and fonts readable at 100 % zoom
 np.set_printoptions(precision=1, suppress=True)
-station = make_station("sim", seed=0, scene={"objects": [
+SCENE = {"objects": [
     {"color": "red", "size": "large", "position_mm": [-150.0, 200.0], "yaw_rad": 0.0},
     {"color": "blue", "size": "small", "position_mm": [200.0, 150.0], "yaw_rad": 0.3},
     {"color": "green", "size": "large", "position_mm": [60.0, 300.0], "yaw_rad": -0.5},
-]})
+]}
+station = make_station("sim", seed=0, scene=SCENE)
 ctx = tasks.context(station)          # calibrates the camera (checkerboard, tags, depth plane) and fits the sag model
 obs = tasks.look(station)             # arm out of view, capture, detect
 print(ctx.calibration.notes)
@@ -42,83 +53,105 @@ for b in obs.blocks:
           f"pixel ({b.pixel[0]:.0f}, {b.pixel[1]:.0f})")
 
 # %% [markdown]
-# ## 1 · Pixel → world
+# ## 1 · Pixel → world (notebook 01's work, reused)
 #
-# A pixel $(u, v)$ with depth $Z$ (mm, along the camera's optical axis) is the camera-frame point
-# $$P_c = Z\,K^{-1}\begin{pmatrix}u\\ v\\ 1\end{pmatrix}$$
-# (after undistorting the pixel), and the world point is $P_w = T_{cam\leftarrow world}^{-1} P_c$. The depth comes
-# from the depth image, corrected for the camera's planar bias, and is taken as the median of a small window so that
-# one noisy pixel does not spoil the click. **Exercise:** write it (the undistortion is done for you by
-# `camera.normalized_rays`, which returns $(x, y)$ with $K^{-1}(u, v, 1) \approx (x, y, 1)$).
+# A click at pixel $(u, v)$ becomes a world point through the depth under it and the calibrated camera: exactly the
+# back-projection you wrote and were graded on in notebook 01. Here the kit's `tasks.surface_point` does it (the
+# median depth of a small window, corrected for the depth camera's planar bias). **Demonstration.**
 
 # %%
-def pixel_to_world(uv, depth_image, camera, radius=3):
-    """World point (3,) mm under pixel uv of a corrected depth image (H, W) mm."""
-    # BEGIN SOLUTION grab.pixel_to_world
-    u, v = int(round(uv[0])), int(round(uv[1]))
-    Z = np.nanmedian(depth_image[v - radius:v + radius + 1, u - radius:u + radius + 1])
-    xy = camera.normalized_rays(np.array([uv], float))[0]
-    P_c = Z * np.array([xy[0], xy[1], 1.0])
-    return camera.camera_to_world(P_c[None])[0]
-    # END SOLUTION
-
-
 red = next(b for b in obs.blocks if b.color == "red")
-# your pixel_to_world; while it is blank the kit's tasks.surface_point stands in (it says so once)
-clicked = with_reference(pixel_to_world, "grab.pixel_to_world",
-                         lambda uv, depth, camera, radius=3: tasks.surface_point(ctx.calibration, depth, uv, radius),
-                         "clicked points come from tasks.surface_point")
-p = clicked(red.pixel, obs.depth, ctx.calibration.camera)
+p = tasks.surface_point(ctx.calibration, obs.depth, red.pixel)
 truth = next(o for o in station.world.blocks if o.color == "red")
 print("clicked the red block at pixel", np.round(red.pixel, 1), "-> world", p, "mm; true top-face centre",
       truth.position + [0, 0, truth.edge / 2])
 
-# %%
-# CHECK grab.pixel_to_world
-mine = pixel_to_world(red.pixel, obs.depth, ctx.calibration.camera)
-err = np.abs(mine - (truth.position + [0, 0, truth.edge / 2]))
-assert np.allclose(mine, tasks.surface_point(ctx.calibration, obs.depth, red.pixel), atol=1e-6), \
-    "your point differs from tasks.surface_point: median depth of the window, Z (x, y, 1), then camera_to_world"
-assert err.max() < 3.0, f"the clicked point is {err.max():.1f} mm from the true block top"
-print(f"OK: pixel_to_world matches tasks.surface_point, {err.max():.1f} mm from the true block top")
-
 # %% [markdown]
-# ## 2 · World → joints
+# ## 2 · The motion sequence: `move_path`
 #
-# The gripper comes straight down (pitch $\pi/2$) to the block's centre. Seen from above, its fingers close along a
-# horizontal direction that turns with the wrist: they close across two opposite faces of a block of yaw $\psi$ when
-# the wrist roll is $\text{roll} = h - \psi \pmod{\pi/2}$, $h$ = the arm's heading $\operatorname{atan2}(y, x)$
-# (`planning.face_roll`). IK gives every joint solution; the first is elbow-up with the least motion.
+# The lab report's `move_path` lifted the gripper to 275 mm, came down to 150 mm, then to "half the height of the
+# block", and closed or opened the gripper. Fixed heights like these are safe only on an empty board and waste
+# time; you will plan the same sequence from the block itself. Write `move_path(q_start, target, yaw, edge, action,
+# clearance)` in `armlab/tasks/move_path.py`: it returns a `planning.Plan` (a tuple of `planning.MoveStep` and
+# `planning.GripperStep`) that the kit checks whole and runs (`grab_with` / `drop_with`).
+#
+# What the plan must respect (derive each number from these; none is given):
+# - **The grasp height.** The fingers' pads are 16 mm tall and centred on the tool point, so the finger tips reach
+#   `GRIPPER.fingertip_mm` beyond it (`armlab.gripper_geometry`). Grip a cube as the report did, through its middle,
+#   unless the tips would then come within `TIP_MARGIN_MM` of what the cube stands on (the real arm sags 5–15 mm
+#   at long reach): then grip it higher. For "release", `target` is where the held cube's *bottom* face goes.
+# - **Clearance.** Arrive above the target, come **straight down** (a `planning.cartesian_line`), act, and go
+#   **straight back up**, so that the lowest part of the gripper — or of the cube it holds — passes `clearance` mm
+#   above what it leaves. The joint move to that hover point (`planning.joint_move`) starts from `q_start`. Open the
+#   gripper before coming down to grasp.
+# - **Pitch.** Top-down (pitch $\pi/2$) keeps the pads square and the descent vertical, but the RX200 cannot point
+#   straight down far from its base (notebook 03's reach map). Take the steepest pitch at which the whole straight
+#   descent can be made (`cartesian_line` raises `kinematics.Unreachable` where it cannot), trying pitches in small
+#   steps.
+# - **Roll.** The pads must close across two opposite faces of the cube. Notebook 03 gave the tool's orientation
+#   $R_z(h)\,R_y(\text{pitch})\,R_x(\text{roll})$ at heading $h = \operatorname{atan2}(y, x)$; the cube's face
+#   normals point at its yaw plus multiples of $\pi/2$. `planning.tilted_roll(heading, pitch, yaw)` gives the roll
+#   that lines the pads up at any pitch — check on paper why a quarter turn of the wrist changes nothing.
+#
+# Section 5 below shows what goes wrong when the roll ignores the yaw.
 
 # %%
-heading = np.arctan2(p[1], p[0])
-roll = planning.face_roll(heading, red.yaw)
-grasp_point = p - [0, 0, planning.default_grasp_depth(38.0)]
-q = kinematics.ik(grasp_point, np.pi / 2, roll)[0]
-print("grasp point", grasp_point, "mm -> joints", np.degrees(q), "deg")
-print("FK of those joints puts the tool at", kinematics.fk(q)[:3, 3], "mm")
-
-# %%
-# CHECK ik.candidates
-require_written("ik.candidates")
-assert np.allclose(kinematics.fk(q)[:3, 3], grasp_point, atol=1e-6), "FK(IK(p)) misses the grasp point"
-print("OK: world -> joints: FK(IK(p)) = p")
+# your move_path; while it is blank the kit's own planners stand in (it says so once)
+path = with_reference(move_path, "grab.move_path", kit_move_path,
+                      "the kit's planning.plan_pick / plan_place plan the motion")
+plan = path(ctx.arm.joint_positions(), red.position, float(red.yaw), 38.0, "grasp")
+print(plan.describe())
+sampled = planning.sample_plan(plan, 0.05)
+tool_z = kinematics.fk(sampled.q)[:, 2, 3]
+fig, ax = plt.subplots(figsize=(7.5, 3.0))
+ax.plot(sampled.t, tool_z, color="C0")
+ax.set_ylim(0, 200)                                    # the joint move comes down from the camera-clear pose above
+ax.axhline(red.position[2], color="C3", ls=":", lw=1)
+ax.text(sampled.t[0], red.position[2] + 4, "top of the red block", color="C3", fontsize=9)
+ax.set(xlabel="time in the plan (s)", ylabel="tool point z (mm)", title="your grasp plan for the red block")
+fig.tight_layout()
 
 # %% [markdown]
-# ## 3 · Where the arm really goes: sag, and how to take it out
+# ## Check: your `move_path` grabs and drops on the simulator
+#
+# A fresh station with the same three blocks: each is clicked (its detected top-face centre), grabbed with your plan
+# and dropped with your plan at a free spot. The simulator's ground truth decides: the block is in the gripper after
+# the grasp, and after the release it rests within 3 mm of the spot. Every plan passes the kit's safety check first
+# (a plan that would touch the board, another block or a joint limit raises `MotionRefused` and nothing moves).
+
+# %%
+# CHECK grab.move_path
+check_station = make_station("sim", seed=1, scene=SCENE)
+spots = {"red": [-250.0, 80.0, 0.0], "blue": [250.0, 60.0, 0.0], "green": [0.0, 220.0, 0.0]}
+landed = {}
+for block in tasks.look(check_station).blocks:
+    block_truth = next(o for o in check_station.world.blocks if o.color == block.color)
+    assert grab_with(check_station, block, path=move_path) and block_truth.id in check_station.world.held, \
+        f"your plan did not grasp the {block.color} block (the gripper closed on nothing)"
+    drop_with(check_station, np.array(spots[block.color]), 0.0, path=move_path)
+    assert not check_station.world.held, f"the {block.color} block is still held after your release plan"
+    bottom = block_truth.position - [0, 0, block_truth.edge / 2]
+    landed[block.color] = np.abs(bottom - spots[block.color]).max()
+    assert landed[block.color] < 3.0, f"the {block.color} block landed {landed[block.color]:.1f} mm from its spot"
+print("OK: move_path: your plans grabbed all 3 blocks and dropped each within 3 mm of its spot, every plan passing "
+      "the safety check")
+
+# %% [markdown]
+# ## 3 · Where the arm really goes: sag
 #
 # The servos hold the commanded angles, but links and gears bend under gravity: shoulder and elbow give by a
 # compliance times the gravity moment of what lies beyond them. With lumped masses at the elbow, wrist and tool, each
-# moment is *linear* in the horizontal distances from the joint to those points, so the joint errors are
-# $$\delta q_{shoulder} = \textstyle\sum_k a_k\, d(\text{shoulder}\to k),\qquad
-#   \delta q_{elbow} = \textstyle\sum_k b_k\, d(\text{elbow}\to k)$$
-# plus constant homing offsets, and the tool errs by $J(q)\,\delta q$ — linear in the unknowns. A student measures the
-# tool point at a few dozen poses (touch-off on the grid with a height gauge; here the simulator's ground truth plus
-# 1 mm reading noise) and solves one least-squares problem (`tasks.fit_sag`). To reach $q$, the arm is then commanded
-# $q_{cmd}$ with $q_{cmd} + \delta q(q_{cmd}) = q$.
+# moment is *linear* in the horizontal distances from the joint to those points, so the joint errors are linear in a
+# few unknown compliances, and so is the tool's error $J(q)\,\delta q$. Measuring the tool point at a few dozen
+# poses (on the real arm: touch-off on the grid with a height gauge; here the simulator's ground truth plus 1 mm
+# reading noise) gives one least-squares problem (`tasks.fit_sag`). **Demonstration** of the kit's model.
 #
-# The lab's rule was a straight line in the reach $r$: $z \mathrel{+}= 0.068\,r + 3$ mm. **Exercise:** fit such a
-# line (slope and offset) to the measured z errors, to compare.
+# What is compared: the **simulated** arm's sag, with three corrections —
+# - the **lab report**'s: every target raised by a flat 16 mm (Table II/III: "the Z_w coordinates were all offset by
+#   16mm"), measured on the **real** arm;
+# - a **straight line in the reach** $r$ fitted to these simulated measurements (least squares). The kit's default
+#   line $z \mathrel{+}= 0.068\,r + 3$ mm is **the kit's own rule**, not the report's;
+# - the kit's **joint compliance model**.
 
 # %%
 rng = np.random.default_rng(0)
@@ -132,55 +165,58 @@ for qc in poses:                       # the raw arm, no compensation
 measured = np.array(measured)
 commanded = kinematics.fk(poses)[:, :3, 3]
 reach = np.hypot(commanded[:, 0], commanded[:, 1])
-dz = measured[:, 2] - commanded[:, 2]
+sag = commanded[:, 2] - measured[:, 2]                      # mm the tool ends below its target
 model = tasks.fit_sag(poses, measured)
-
-
-
-def sag_line(reach, sag):
-    """Slope (mm per mm of reach) and offset (mm) of the least-squares line sag = slope * reach + offset."""
-    # BEGIN SOLUTION grab.sag_line
-    slope, offset = np.polyfit(reach, sag, 1)
-    return float(slope), float(offset)
-    # END SOLUTION
-
-
-# your sag_line; while it is blank scipy's linregress stands in (it says so once)
-slope, offset = with_reference(sag_line, "grab.sag_line", references.line_by_scipy,
-                               "the sag line comes from scipy.stats.linregress")(reach, -dz)
-print(f"measured sag: {-dz.min():.1f} mm at most; the lab's line z += {LAB_BASELINE[0]} r + {LAB_BASELINE[1]:.0f} mm, "
-      f"fitted line z += {slope:.4f} r + {offset:.1f} mm; joint model fit RMS {model.rms_mm:.2f} mm")
-predicted = model.tool_error(poses)[:, 2]
-fig, ax = plt.subplots(figsize=(7.5, 3.6))
-ax.plot(reach, -dz, "o", label="measured sag (tool z below target)")
-ax.plot(reach, -predicted, "x", label="joint compliance model")
-r_line = np.linspace(150, 450, 2)
-ax.plot(r_line, slope * r_line + offset, "--", label="fitted line")
-ax.plot(r_line, LAB_BASELINE[0] * r_line + LAB_BASELINE[1], ":", label="lab rule 0.068 r + 3")
-ax.set_xlabel("reach r (mm)")
-ax.set_ylabel("sag (mm)")
-ax.legend()
-_ = ax.set_title("sag against reach: two heights per reach, so a line cannot fit both", fontsize=9)
-
-# %%
-# CHECK grab.sag_line
-slope, offset = sag_line(reach, -dz)
-line_residual = slope * reach + offset + dz          # the line's sag minus the measured sag (mm)
-assert abs(line_residual.mean()) < 1e-9 and abs(np.mean(line_residual * (reach - reach.mean()))) < 1e-6, \
-    (f"the line is not the least-squares fit: its residual has mean {line_residual.mean():.3g} mm and covariance "
-     f"{np.mean(line_residual * (reach - reach.mean())):.3g} mm^2 with the reach (both should be 0)")
-line_rms = np.sqrt(np.mean(line_residual ** 2))
-model_rms = np.sqrt(np.mean((predicted - dz) ** 2))
-assert model_rms < 1.5, f"the joint model leaves {model_rms:.1f} mm of z error (expected < 1.5 mm)"
-assert model_rms < line_rms, "a straight line in r fits the sag better than the joint model: check your polyfit"
-print(f"OK: sag model: z residual {model_rms:.1f} mm (the best straight line in r: {line_rms:.1f} mm)")
+slope, offset = np.polyfit(reach, sag, 1)
+predicted = -model.tool_error(poses)[:, 2]
+rms = {"flat 16 mm (report)": np.sqrt(np.mean((sag - 16.0) ** 2)),
+       "kit's line 0.068 r + 3": np.sqrt(np.mean((sag - (LAB_BASELINE[0] * reach + LAB_BASELINE[1])) ** 2)),
+       "fitted line": np.sqrt(np.mean((sag - (slope * reach + offset)) ** 2)),
+       "joint model": np.sqrt(np.mean((sag - predicted) ** 2))}
+for name, value in rms.items():
+    print(f"{name:>24}: residual RMS {value:4.1f} mm")
+fig, ax = plt.subplots(figsize=(7.5, 3.8))
+ax.plot(reach, sag, "o", color="C0", ms=5, label="measured (simulated arm)")
+ax.plot(reach, predicted, "x", color="C2", label="joint model")
+r_line = np.linspace(100, 460, 2)
+ax.plot(r_line, slope * r_line + offset, "--", color="C1", label="fitted line")
+ax.axhline(16.0, color="C3", ls=":", label="report: flat 16 mm (real arm)")
+ax.set(xlabel="reach r (mm)", ylabel="sag: tool below target (mm)", ylim=(-2, 20),
+       title=f"fitted line leaves {rms['fitted line']:.1f} mm RMS, the joint model {rms['joint model']:.1f} mm")
+ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=9)
+fig.tight_layout()
 
 # %% [markdown]
-# ## 4 · The lab report's six locations (Tables II and III)
+# **Question `grab.sag_question` (2 points, written).** Read the figure. On this simulated arm, how far from its
+# target would the report's flat 16 mm offset leave the tool at 150 mm and at 450 mm of reach, and why could the same
+# flat offset still look good in the report's Table III (its six locations lie 150–270 mm from the base, on the real
+# arm)? The fitted line and the joint model leave almost the same residual here: what in the figure would have to look
+# different for the joint model to be clearly worth its nine parameters, and what would you measure on the real arm
+# to find out?
+
+# %% [markdown]
+# <!-- BEGIN ANSWER grab.sag_question -->
+# At 150 mm the simulated arm sags about 1 mm, so +16 mm leaves the tool about 15 mm too high; at 450 mm it sags about
+# 11 mm, so about 5 mm too high. The report's Table III "corrected Zw" shows it also corrected the z by hand per
+# location, and its targets all sat at one height and a narrow band of reach, where one offset is close to right for a
+# heavier real arm. The joint model pays off when the sag at one reach depends on the pose (high and low targets, a
+# held block): the measured points would then spread widely at each reach, beyond the 1 mm reading noise, and the
+# line could not follow them. On the real arm: touch off a dozen or more poses spread over reach and over the heights
+# the tasks use (board, block tops, stacks), and compare the residuals.
+# <!-- END ANSWER -->
+
+# %% [markdown]
+# ## 4 · The lab report's six locations (Tables II and III), on the simulated arm
 #
-# For each location the simulated student clicks the grid point in the image; the click becomes a world point; the
-# tool goes top-down to 37 mm above it (from above, like the lab); we measure where the tool really is. Once with the
-# raw arm, once through the station's guarded arm (`tasks.context(station).arm`, which applies the fitted model).
+# **Demonstration.** For each of the report's six locations the simulated student clicks the grid point in the image;
+# the click becomes a world point; the tool goes top-down to 37 mm above it; we measure where the tool really is.
+# Once with the raw arm, once through the station's guarded arm (`tasks.context(station).arm`, which applies the
+# fitted sag model).
+#
+# What is compared: the **simulated** arm (its sag and its camera are the simulator's, with the kit's calibration) with
+# the **real** arm of the lab report (Table III: 7.5 / 9.2 / 2.5 mm mean error in x / y / z, after the report's flat
+# 16 mm z offset and the "corrected Zw" of Table III). The report's numbers are printed for orientation only: they are
+# not like for like (a different arm, camera, calibration and measurement), so no verdict is drawn from them.
 
 # %%
 measure = lambda: station.arm.tool_pose_true()[:3, 3]  # noqa: E731
@@ -190,18 +226,16 @@ rows = [[f"{i + 1}", *r.desired, *c.actual, *LAB_TABLE_III_ERROR_MM[i], *r.error
         for i, (r, c) in enumerate(zip(raw, comp))]
 avg = lambda rr: np.mean([r.error for r in rr], axis=0)  # noqa: E731
 rows.append(["avg", "", "", "", "", "", "", *LAB_TABLE_III_ERROR_MM.mean(axis=0), *avg(raw), *avg(comp)])
-print(format_table(["loc", "want x", "y", "z", "got x", "y", "z", "lab |dx|", "|dy|", "|dz|", "raw |dx|", "|dy|",
-                    "|dz|", "comp |dx|", "|dy|", "|dz|"], rows))
-
-# %%
-assert np.all(avg(comp) < 3.0), f"mean error {avg(comp).round(1)} mm with sag compensation (expected < 3 mm)"
-assert np.all(avg(comp) < LAB_TABLE_III_ERROR_MM.mean(axis=0)), "no better than the lab report's arm"
-print(f"OK: six locations: mean error {avg(comp).round(1)} mm with sag compensation (lab report: 7.5 / 9.2 / 2.5 mm)")
+print(format_table(["loc", "want x", "y", "z", "got x", "y", "z", "report |dx|", "|dy|", "|dz|", "sim raw |dx|", "|dy|",
+                    "|dz|", "sim comp |dx|", "|dy|", "|dz|"], rows))
+print(f"simulated arm, sag compensated: mean error {avg(comp).round(1)} mm; raw: {avg(raw).round(1)} mm "
+      f"(the report's real arm, Table III: 7.5 / 9.2 / 2.5 mm, not like for like)")
 
 # %% [markdown]
 # ## 5 · The misaligned wrist
 #
-# The green block is turned by about $-29°$. Grasp it with the wrist unturned (as if its yaw were 0) and the fingers
+# **Demonstration** (the kit's own `tasks.pick`). The green block is turned by about $-29°$. Grasp it with the wrist
+# unturned (as if its yaw were 0) and the fingers
 # land on its corners: the parallel gripper either fails to hold it or shoves it around. Turning the wrist by the
 # block's detected yaw (section 2) closes the fingers flat on two faces.
 
@@ -219,6 +253,7 @@ held_turned = tasks.pick(station, green)
 print(f"roll from the yaw ({np.degrees(green.yaw):.1f} deg): held = {held_turned}")
 
 # %%
+# demonstration: the kit's pick, not your work
 assert held_turned, f"the turned wrist did not grasp the green block: {station.arm.last_grasp}"
 assert not held_unturned or abs(green_truth.yaw - yaw_before) > np.radians(5), "roll 0 grasped a turned block cleanly"
 print("OK: misaligned wrist: roll 0 fails or shoves the block; the roll from the block's yaw grasps it")
@@ -226,6 +261,7 @@ print("OK: misaligned wrist: roll 0 fails or shoves the block; the roll from the
 # %% [markdown]
 # ## 6 · Click to grab, click to drop
 #
+# **Demonstration** of the kit's click-to-grab panel (it plans with the kit's planners, not your `move_path`).
 # `tasks.click_grab(station, (u, v))` and `tasks.click_drop(station, (u, v))` do all of the above from a pixel of the
 # current frame (`tasks.context(station).last.frame`). Clicks off the board, on the robot, on bare board or out of
 # reach raise `tasks.ClickRefused` and nothing moves.
@@ -281,3 +317,14 @@ assert grab_event.ok and drop_event.ok, f"the browser-style clicks failed: {grab
 assert red_err.max() < 3.0 and panel.next_action == "grab", f"the red block landed {red_err.max():.1f} mm off"
 print(f"OK: click to grab/drop: the blocks landed {green_err.max():.1f} and {red_err.max():.1f} mm from the clicked "
       f"spots; the refused click moved nothing")
+
+# %% [markdown]
+# ## Your table for this notebook
+#
+# What `python -m armlab check` lists for this notebook: each exercise, its points, its kind, how it is graded and
+# whether you have written it (from the saved files: save the notebook first). The grader decides the score.
+
+# %%
+from armlab.exercises.rubric import rubric
+
+rubric("05_click_to_grab")

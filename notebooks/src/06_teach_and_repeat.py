@@ -8,9 +8,17 @@
 # 1. teach the swap (on the simulator your "hand" is `arm.move_by_hand`),
 # 2. save it as a JSON file and load it back (with validation),
 # 3. replay it and plot the joint angles against time (the lab report's figure 10),
-# 4. check with the simulator's ground truth that the blocks really swapped.
+# 4. check with the simulator's ground truth that the blocks really swapped,
+# 5. do the same swap with your `move_path` of notebook 05 (the report's `move_path`), and compare,
+# 6. replay the program faster, within every joint's limits.
 #
-# Units: radians, seconds, millimetres; world (board) frame.
+# | exercise | points | kind | how it is graded |
+# |---|---|---|---|
+# | `teach.replay` | 10 | code | hidden teaching sessions (other poses, gripper states, seeds), programs and speeds |
+# | `teach.replay_question` | 2 | written | by hand, from your answer under the swap figure |
+#
+# Section 5 also runs your `grab.move_path` (notebook 05; graded there). The cells called **Check** test your work;
+# the rest show the kit. Units: radians, seconds, millimetres; world (board) frame.
 
 # %%
 import numpy as np
@@ -23,6 +31,9 @@ from armlab import kinematics, make_station, planning, tasks
 from armlab._paths import data_path
 from armlab.exercises import references, require_written, with_reference
 from armlab.tasks import teach
+from armlab.detection import Block
+from armlab.tasks.move_path import drop_with, grab_with, kit_move_path, move_path
+from armlab.transforms import wrap_quarter
 
 get_ipython().run_line_magic("matplotlib", "inline")
 from armlab.viz.figures import readable
@@ -48,7 +59,7 @@ def teach_program(arm, poses, gripper, name="swap"):
     gripper state `gripper[i]`, and return the TeachProgram (the torque comes back on)."""
     recorder = teach.Recorder(arm, name=name)
     try:
-        # BEGIN SOLUTION teach.record
+        # BEGIN SOLUTION teach.replay
         for q, g in zip(poses, gripper):
             arm.move_by_hand(q)
             recorder.record(g)
@@ -60,20 +71,20 @@ def teach_program(arm, poses, gripper, name="swap"):
 
 
 def kit_recording(arm, poses, gripper, name="swap"):
-    """The reference while teach.record is blank: the kit's own recording of the swap (data/teach/swap.json)."""
+    """The reference while teach.replay is blank: the kit's own recording of the swap (data/teach/swap.json)."""
     return teach.load_teach(data_path("teach/swap.json"))
 
 
 poses, gripper = teach.swap_waypoints()
 # your teach_program; while it is blank the kit's recording of the swap stands in (it says so once)
-program = with_reference(teach_program, "teach.record", kit_recording,
+program = with_reference(teach_program, "teach.replay", kit_recording,
                          "the program is the kit's recording of the swap")(station.arm, poses, gripper)
 print(f"{len(program)} waypoints; gripper states: {' '.join(g[0] for g in program.gripper)} (o = open, c = closed)")
 print("first waypoint (rad):", program.q[0].round(3))
 
 # %%
-# CHECK teach.record
-require_written("teach.record")          # the program above must be yours, not the kit's recording
+# CHECK teach.replay
+require_written("teach.replay")          # the program above must be yours, not the kit's recording
 tool = kinematics.fk(program.q)[:, :3, 3]
 assert len(program) == 18, f"{len(program)} waypoints recorded, expected one per pose (18)"
 assert station.arm.torque_enabled, "the torque is still off after finish()"
@@ -112,8 +123,10 @@ print("OK: save/load: the program round-trips (to 1e-6 rad) and a bad gripper va
 # where the hand held it (notebook 05). The whole replay is a `planning.Plan`, so we can plot it before running it.
 
 # %%
-fig, ax = plt.subplots(figsize=(8, 3.6))
+fig, ax = plt.subplots(figsize=(8.5, 3.6))
 teach.plot_teach(loaded, ax=ax)
+ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=9, frameon=False)   # beside the data, not on it
+fig.tight_layout()
 plan = loaded.to_plan()
 print(f"replay: {len(plan.steps)} steps, {plan.duration:.1f} s")
 
@@ -129,8 +142,8 @@ print(f"red block now at {red.position} mm, blue block now at {blue.position} mm
 # ## 4 · Did they swap?
 
 # %%
-# CHECK teach.record
-require_written("teach.record")
+# CHECK teach.replay
+require_written("teach.replay")
 peak = max(float(np.max(s.trajectory.peak_speed() / station.arm.robot.velocity)) for s in plan.steps
            if hasattr(s, "trajectory"))
 assert result.grasps == (True, True, True), f"grasps {result.grasps}: a block was not held"
@@ -141,18 +154,68 @@ print(f"OK: swap: red is {np.abs(red.position - b).max():.1f} mm from B's spot, 
       f"{np.abs(blue.position - a).max():.1f} mm from A's; peak joint speed {100 * peak:.0f}% of its limit")
 
 # %% [markdown]
-# ## 5 · A time-scaled replay
+# ## 5 · The same swap with `move_path`
+#
+# The report did the swap by teaching; its click-to-grab used `move_path`, which plans each pick and place from a
+# point. Here the three moves of the swap run through **your** `move_path` of notebook 05 (while it is blank, the
+# kit's planners stand in and say so), on a fresh station: A → intermediate, B → A, intermediate → B, each block
+# picked at its top-face centre as the simulator knows it (no camera here, as in the taught swap).
+
+# %%
+path = with_reference(move_path, "grab.move_path", kit_move_path,
+                      "the kit's planning.plan_pick / plan_place plan the motion")
+path_station = make_station("sim", seed=0, scene="swap")
+path_red, path_blue = (next(o for o in path_station.world.blocks if o.color == c) for c in ("red", "blue"))
+spot_a, spot_b, middle = path_red.position.copy(), path_blue.position.copy(), np.array([250.0, 75.0, 19.0])
+t0 = path_station.world.time_s
+for block, to in ((path_red, middle), (path_blue, spot_a), (path_red, spot_b)):
+    top = block.position + [0, 0, block.edge / 2]
+    known = Block(block.color, block.size, top, float(wrap_quarter(block.yaw)), (0.0, 0.0), block.edge)
+    grab_with(path_station, known, path=path)
+    drop_with(path_station, to - [0, 0, block.edge / 2], path=path)
+path_time = path_station.world.time_s - t0
+print(f"swap by move_path: {path_time:.0f} s simulated; the taught replay: {plan.duration:.0f} s of plan")
+print(f"red now at {path_red.position.round(1)} mm, blue at {path_blue.position.round(1)} mm")
+
+# %%
+# CHECK grab.move_path
+require_written("grab.move_path")
+swap_err = max(np.abs(path_red.position - spot_b).max(), np.abs(path_blue.position - spot_a).max())
+assert swap_err < 3.0, f"after the move_path swap a block is {swap_err:.1f} mm from its spot"
+print("OK: your move_path swapped the blocks, each within 3 mm of its spot")
+
+# %% [markdown]
+# **Question `teach.replay_question` (2 points, written).** Look at the joint-angle figure of section 3 (the report's
+# Fig. 10 for this swap). Which joints move during a pick's descent and lift, and which only between the spots? The
+# taught program and the `move_path` swap do the same job: compare their times printed above, and say what each
+# needs from the lab (the camera, the calibration, your hands) and what happens to each when block B starts 20 mm
+# from where it was taught.
+
+# %% [markdown]
+# <!-- BEGIN ANSWER teach.replay_question -->
+# Descents and lifts move the shoulder, elbow and wrist angle together (a straight vertical line needs all three)
+# while the waist and the wrist rotation stay put; the waist (and the wrist rotation, to square the fingers) turn only
+# in the moves between spots. The taught replay needs no camera and no calibration, only a careful student's hands,
+# and repeats exactly what was taught: with B 20 mm away the fingers close beside it or on its edge and the swap fails.
+# The move_path swap needs a point per block (a calibrated camera's detection in the lab) and plans every motion from
+# it, so a block 20 mm away is still picked at its centre; its time differs from the replay's because it plans its own
+# hover heights and joint moves instead of the taught waypoints.
+# <!-- END ANSWER -->
+
+# %% [markdown]
+# ## 6 · A time-scaled replay
 #
 # A demonstration runs at the lab's pace; a competition wants the same program faster. Scaling time by a speed
 # factor $s$ divides each segment's moving time, but two floors stay: the driver's shortest move (0.4 s) and every
-# joint's velocity limit $v_j$. With ramps a third of the move, a trapezoid's peak speed is $|\Delta q_j| /
-# (\tfrac{2}{3} T)$, so for each segment between two waypoints
+# joint's velocity limit $v_j$ (`robot.velocity`). The lab's pace moves the largest joint change of a segment at
+# $\pi/4$ rad/s; the replay's moves are trapezoids whose ramps take a third of the move each: work out how fast a
+# joint of a segment of moving time $T$ peaks, and so how short $T$ may be for each joint.
 #
-# $$ T(s) = \max\left(0.4\ \text{s},\ \frac{\max_j |\Delta q_j|}{s\,\pi/4},\
-# \max_j \frac{|\Delta q_j|}{\tfrac{2}{3}\,v_j} \right). $$
-#
-# **Exercise:** write `scaled_durations(program, speed)`, the moving time of each segment. `scaled_plan` (given)
-# turns them into a plan; we replay the swap at 1.5× on a fresh station.
+# **Exercise (the rest of `teach.replay`):** write `scaled_durations(program, speed)`, the moving time of each
+# segment, and `scaled_plan(program, durations)`, the replay as a `planning.Plan`: a `planning.MoveStep` of a
+# `planning.joint_move` per segment (with its `duration`), and a `planning.GripperStep` wherever the recorded gripper
+# state changes (and one at the start, for the first waypoint's state). We replay the swap at 1.5× on a fresh
+# station.
 
 # %%
 robot = station.arm.robot           # joint velocity limits: robot.velocity (rad/s)
@@ -162,7 +225,7 @@ def scaled_durations(program, speed):
     """Moving time (s) of each segment between consecutive waypoints (len(program) - 1,) when replaying at `speed`
     times the lab's pace (the largest joint change at speed * pi/4 rad/s), at least 0.4 s, and never so short that a
     joint's trapezoid peak speed |dq| / (2/3 T) exceeds its velocity limit (robot.velocity, rad/s)."""
-    # BEGIN SOLUTION teach.time_scaled
+    # BEGIN SOLUTION teach.replay
     dq = np.abs(np.diff(program.q, axis=0))
     lab_pace = dq.max(axis=1) / (speed * np.pi / 4)
     velocity_floor = (dq / (2 / 3 * robot.velocity)).max(axis=1)
@@ -172,29 +235,36 @@ def scaled_durations(program, speed):
 
 def scaled_plan(program, durations):
     """The program as a Plan whose joint moves take `durations` (s), with its gripper actions (starts at waypoint 0)."""
-    steps = [planning.GripperStep("close" if program.gripper[0] == "closed" else "open", "at waypoint 0")]
+    # BEGIN SOLUTION teach.replay
+    def grip(state, where):
+        return planning.GripperStep("close" if state == "closed" else "open", where)
+
+    steps = [grip(program.gripper[0], "at waypoint 0")]
     for i, T in enumerate(durations, start=1):
         steps.append(planning.MoveStep(planning.joint_move(program.q[i - 1], program.q[i], duration=float(T)),
                                        f"to waypoint {i}"))
         if program.gripper[i] != program.gripper[i - 1]:
-            steps.append(planning.GripperStep("close" if program.gripper[i] == "closed" else "open",
-                                              f"at waypoint {i}"))
+            steps.append(grip(program.gripper[i], f"at waypoint {i}"))
     return planning.Plan(tuple(steps))
+    # END SOLUTION
 
 
 # your scaled_durations; while it is blank the kit's search stands in (it says so once)
-durations = with_reference(scaled_durations, "teach.time_scaled", references.scaled_durations_by_search,
+durations = with_reference(scaled_durations, "teach.replay", references.scaled_durations_by_search,
                            "segment times come from a search over the kit's trapezoid moves")
+replay_plan = with_reference(scaled_plan, "teach.replay", lambda program, durations: program.to_plan(),
+                             "the replay is the program at the lab's pace (TeachProgram.to_plan)")
 fast_station = make_station("sim", seed=0, scene="swap")
 fast_arm = tasks.context(fast_station).arm
 fast_arm.move_to(loaded.q[0])
-fast = scaled_plan(loaded, durations(loaded, 1.5))
+fast = replay_plan(loaded, durations(loaded, 1.5))
 fast_result = planning.execute(fast, fast_arm)
 red_fast, blue_fast = (next(o for o in fast_station.world.blocks if o.color == c) for c in ("red", "blue"))
 print(f"replay at 1.5x: {fast.duration:.1f} s instead of {plan.duration:.1f} s; grasps {fast_result.grasps}")
 
 # %%
-# CHECK teach.time_scaled
+# CHECK teach.replay
+require_written("teach.replay")
 lab_pace = [s.trajectory.duration for s in loaded.to_plan().steps if hasattr(s, "trajectory")]
 mine = {s: scaled_durations(loaded, s) for s in (0.5, 1.0, 1.5, 4.0)}
 assert np.allclose(mine[1.0], lab_pace, atol=1e-9), \
@@ -208,8 +278,26 @@ for s, times in mine.items():
 assert np.all(mine[0.5] >= mine[1.0] - 1e-12) and mine[0.5].sum() > 1.5 * mine[1.0].sum(), \
     "half speed should take (about) twice as long"
 assert mine[1.5].sum() < mine[1.0].sum(), "1.5x is not faster than the lab's pace"
+own = scaled_plan(loaded, mine[1.5])
+moves = [s for s in own.steps if isinstance(s, planning.MoveStep)]
+grips = [s.action for s in own.steps if isinstance(s, planning.GripperStep)]
+changes = 1 + sum(g0 != g1 for g0, g1 in zip(loaded.gripper[:-1], loaded.gripper[1:]))
+assert [m.duration for m in moves] == list(mine[1.5]), "the plan's moves do not take the durations given"
+assert len(grips) == changes and grips[0] == ("close" if loaded.gripper[0] == "closed" else "open"), \
+    f"{len(grips)} gripper steps for {changes} gripper states in a row (the first one included)"
 assert fast_result.grasps == (True, True, True), f"the fast replay's grasps {fast_result.grasps}"
 swap_err = max(np.abs(red_fast.position - b).max(), np.abs(blue_fast.position - a).max())
 assert swap_err < 3.0, f"after the fast replay a block is {swap_err:.1f} mm from its spot"
 print(f"OK: time-scaled replay: 1.5x takes {mine[1.5].sum():.1f} s of moves instead of {mine[1.0].sum():.1f} s, "
       f"within every velocity limit; the blocks swapped within {swap_err:.1f} mm")
+
+# %% [markdown]
+# ## Your table for this notebook
+#
+# What `python -m armlab check` lists for this notebook: each exercise, its points, its kind, how it is graded and
+# whether you have written it (from the saved files: save the notebook first). The grader decides the score.
+
+# %%
+from armlab.exercises.rubric import rubric
+
+rubric("06_teach_and_repeat")

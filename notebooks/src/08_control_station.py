@@ -1,29 +1,38 @@
 # %% [markdown]
-# # 08 · The control station
+# # 08 · The control station: a lab procedure
 #
-# In the lab you drive the arm from a **control station**: the live camera view, the world coordinates under the
-# mouse, buttons for calibrate, click-to-grab / click-to-drop, teach, record, repeat and the **emergency stop**, and
-# joint sliders. This notebook puts that station in JupyterLab, over everything the earlier notebooks built:
-# the calibrated camera (01), kinematics (02, 03), the detector (04), click-to-grab (05) and teach-and-repeat (06).
+# In the lab you drive the arm from a **control station**: the live camera view, the world point under the mouse,
+# buttons for calibrate, click-to-grab / click-to-drop, teach, record, repeat and the **emergency stop**, and joint
+# sliders, over everything the earlier notebooks built. Every button drives **one state machine**,
+# `armlab.tasks.TaskMachine` (states idle, estop, calibrate, detect, execute, teach, repeat, click-grab, click-drop).
+# This notebook is the procedure for a session: the checklist before the real arm moves, your transition of the
+# state machine (on the simulator), then the panel itself.
 #
-# **Run the cells** (Run ▸ Run All Cells). A committed notebook shows its widgets only as a line of text, such as
-# `StationPanel(...): run the cell`; the live panel and the 3D view appear when the kernel runs.
+# | exercise | points | kind | how it is graded |
+# |---|---|---|---|
+# | `station.transition` | 6 | code | hidden sequences of commands, errors, stops and nested commands |
 #
-# How it works:
-# - every button drives **one state machine**, `armlab.tasks.TaskMachine` (states idle, estop, calibrate, detect,
-#   execute, teach, repeat, click-grab, click-drop): a command runs from `idle` and returns there, and while one runs
-#   the others are refused;
-# - commands that move the arm run on a **worker thread**, so the notebook's kernel stays free to hear the
-#   **EMERGENCY STOP** button, which halts the arm at once, even halfway through a motion; nothing moves again until
-#   you press *reset*;
-# - after every command the picture is **fresh**: the camera looks again (arm out of view) after a grab, a drop or a
-#   detection, and takes a new frame after any other move. A click on a frame taken with the arm in view first looks
-#   again, so a click never acts on a picture of the past;
-# - the status line says what the gripper holds and what the **next click** does (grab the block under it, or drop
-#   the held block where you click).
+# The cell called **Check** tests your transition on the simulator; cells marked **Demonstration** show the kit's
+# panel and test nothing of yours. Units: millimetres and radians; world (board) frame.
 #
-# The same panel drives the real arm: only `make_station("sim")` becomes `make_station("real")`.
-# Units: millimetres and radians; world (board) frame.
+# ## 0 · Before the real arm moves: the checklist
+#
+# On the simulator nothing can break; on the lab's RX200 every item below is yours to do, in this order:
+# 1. **Space.** The board clear of everything but the blocks; nobody within the arm's reach (about 0.5 m from the
+#    waist axis); the power supply's switch and the emergency stop within your reach.
+# 2. **Start pose.** The arm resting in its sleep pose before power-on; the gripper empty.
+# 3. **Camera.** The RealSense on its mount, not knocked since the last calibration; *calibrate* (notebook 01) when
+#    it was moved or at the start of the day, and check the reprojection error it prints (under 1 px).
+# 4. **Stop first.** Press the panel's **EMERGENCY STOP** once with the arm idle and see the state turn to
+#    `estop`; *reset*. Do it again during a slow move (real-time on) before any task.
+# 5. **Teach.** Hold the arm with one hand *before* pressing *teach* (the torque goes off and the arm falls);
+#    *finish teaching* only with the arm supported.
+# 6. **First motion.** *home* at the driver's slow speed; watch the whole path; then one click-to-grab on a single
+#    block in the middle of the board.
+# 7. **End.** *sleep*, then `station.close()`; power off with the arm resting.
+#
+# The kit enforces what software can (joint limits, speeds, board and block clearance are checked before anything is
+# sent; a stop always wins); the checklist covers what it cannot see.
 
 # %%
 import time
@@ -32,7 +41,7 @@ import numpy as np
 from IPython import get_ipython
 
 from armlab import make_station, tasks
-from armlab.tasks.station_panel import station_panel
+from armlab.ui import station_panel
 from armlab.viz import Viewer
 
 get_ipython().run_line_magic("matplotlib", "inline")
@@ -47,25 +56,146 @@ panel = station_panel(station, viewer=viewer)   # calibrates the camera and fits
 print("state:", panel.machine.state, "| the panel's states:", ", ".join(tasks.STATES))
 
 # %% [markdown]
-# ## 1 · The panel
+# ## 1 · One transition of the state machine
 #
-# - **view**: the camera image (*camera*), its depth in colour (*depth*, near = bright), or the image with the last
-#   look's detections drawn (*detections*). *refresh view* takes a frame now; *live camera* refreshes it on a timer.
-# - **mouse over the image**: the world point under the pointer, through the calibrated camera and the depth image
-#   (the median depth of a 7 × 7 window, corrected for the camera's planar bias as in notebook 01).
-# - **click on the image**: grabs the block under the click (gripper empty) or drops the held block there.
-# - **calibrate**, **detect**, **home**, **sleep**; **teach** turns the torque off (hold the real arm first!) and on
-#   the simulator makes the sliders your hand; **record waypoint** stores the pose with the gripper state you pick;
-#   **finish teaching** turns the torque on; **repeat** replays the program.
-# - **joint sliders** start from the arm's pose and move the arm within the joint limits when you release them.
-# - **real-time (simulator)**: the simulated arm then moves at its real speed, so you can watch it in the 3D view
-#   (below the panel: drag to turn, scroll to zoom) and stop it with the red button.
+# Every command of the machine (calibrate, detect, execute, click-grab, click-drop, repeat) is the same transition:
+# from **idle** into the command's state, run the command's work, and back. What makes it a safety device is what
+# happens when things go wrong:
+# - a command may only start from `idle`: in `estop` it is refused with `EmergencyStopped` (nothing may move until a
+#   reset), and in any other state with `MachineBusy` (one command at a time — a button pressed twice, a command
+#   started from inside another); a refused command enters no state;
+# - the emergency stop can come from the arm itself (the work raises `EmergencyStopped`) or from the button
+#   (`machine.estop()`, which sets `machine.stop_requested` and may happen while the work runs, or just as it ends):
+#   either way the machine must end in `estop` — once, not twice in its history — and the caller must hear
+#   `EmergencyStopped`;
+# - any other error in the work returns the machine to where commands may start again, unless a stop was requested
+#   meanwhile, and the error goes on to the caller.
+#
+# `machine.enter(state)` enters a state (and adds it to `machine.history`); `machine.state` is the current one.
+#
+# **Exercise `station.transition`:** write `run_command(machine, state, action)`, returning what `action()` returns.
+# `TaskMachine(station, transition=run_command)` then runs every command through it.
+
+# %%
+from armlab.station.contract import EmergencyStopped
+from armlab.tasks import MachineBusy, TaskMachine
+
+
+def run_command(machine, state, action):
+    """Run `action()` as the command `state` of `machine` (a TaskMachine): the transition from "idle" into `state`
+    and back (see above); returns the action's result."""
+    # BEGIN SOLUTION station.transition
+    if machine.state == "estop":
+        raise EmergencyStopped(f"{state} refused: the station is emergency-stopped; reset first")
+    if machine.state != "idle":
+        raise MachineBusy(f"{state} refused: the machine is in {machine.state!r}")
+    machine.enter(state)
+    try:
+        result = action()
+    except EmergencyStopped:
+        if machine.state != "estop":
+            machine.enter("estop")
+        raise
+    except Exception:
+        if not machine.stop_requested:
+            machine.enter("idle")
+        elif machine.state != "estop":
+            machine.enter("estop")
+        raise
+    if machine.stop_requested:
+        if machine.state != "estop":
+            machine.enter("estop")
+        raise EmergencyStopped(f"{state} was emergency-stopped as it ended")
+    machine.enter("idle")
+    return result
+    # END SOLUTION
+
+
+# %% [markdown]
+# ## Check: your transition drives the station
+#
+# A second simulated station with the same blocks, its machine running every command through your `run_command`:
+# detect, grab the red block by a click, a stop pressed before the drop (refused), reset, the drop, a command whose
+# work fails, a command started from inside another, and a stop pressed while a command's work runs. The
+# simulator's ground truth and the machine's history must show each step.
+
+# %%
+# CHECK station.transition
+mine = make_station("sim", seed=0, scene={"objects": [
+    {"color": "red", "size": "large", "position_mm": [-150.0, 200.0], "yaw_rad": 0.0},
+    {"color": "blue", "size": "small", "position_mm": [200.0, 150.0], "yaw_rad": 0.3},
+]})
+machine = TaskMachine(mine, transition=run_command)
+seen = machine.detect()
+red = next(b for b in seen if b.color == "red")
+red_truth = next(o for o in mine.world.blocks if o.color == "red")
+assert machine.click_grab(red.pixel) and red_truth.id in mine.world.held, "the click did not grab the red block"
+assert machine.history == ["idle", "detect", "idle", "click-grab", "idle"], f"history {machine.history}"
+machine.estop()
+try:
+    machine.click_drop(mine.camera.truth.project(np.array([[-200.0, 80.0, 0.0]]))[0])
+    refused = False
+except EmergencyStopped:
+    refused = True
+assert refused and machine.state == "estop", f"a command ran while emergency-stopped (state {machine.state!r})"
+assert machine.history[-1] == "estop" and machine.history.count("estop") == 1, f"history {machine.history}"
+machine.reset()
+machine.click_drop(mine.camera.truth.project(np.array([[-200.0, 80.0, 0.0]]))[0])
+landed = np.abs(red_truth.position - [0, 0, red_truth.edge / 2] - [-200.0, 80.0, 0.0]).max()
+assert not mine.world.held and landed < 3.0, f"the red block landed {landed:.1f} mm from the clicked spot"
+assert machine.history[-2:] == ["click-drop", "idle"], f"history {machine.history}"
+
+
+def failing():
+    raise ValueError("the work failed")
+
+
+try:
+    run_command(machine, "execute", failing)
+    failed = False
+except ValueError:
+    failed = True
+assert failed and machine.state == "idle", f"a failing command left the machine in {machine.state!r}"
+try:
+    run_command(machine, "execute", lambda: run_command(machine, "detect", lambda: None))
+    nested = "ran"
+except MachineBusy:
+    nested = "busy"
+assert nested == "busy" and machine.state == "idle", f"a nested command {nested}, state {machine.state!r}"
+
+
+def stopped_meanwhile():
+    machine.estop()            # the button, pressed while the work runs (the simulated arm halts at once)
+    return "done"
+
+
+try:
+    run_command(machine, "execute", stopped_meanwhile)
+    heard = False
+except EmergencyStopped:
+    heard = True
+assert heard and machine.state == "estop" and machine.history[-2:] == ["execute", "estop"], \
+    f"a stop during the work: heard {heard}, history ends {machine.history[-3:]}"
+machine.reset()
+print(f"OK: your transition ran {machine.history.count('idle') - 1} commands on the simulator: the grab and the "
+      "drop landed, a stop refused the next command until reset, a failing and a nested command left the machine "
+      "idle, a stop during the work ended in estop")
+
+# %% [markdown]
+# ## 2 · The panel (demonstration)
+#
+# The view shows the camera image, its depth or the last detections; hovering shows the world point under the
+# pointer; a click grabs the block under it or drops the held one there. The buttons run the machine's commands
+# (calibrate, detect, home, sleep, teach / record waypoint / finish teaching, repeat) on a worker thread, so the
+# **EMERGENCY STOP** button is heard at once, even halfway through a motion; nothing moves again until *reset*. The
+# joint sliders move the arm within its limits; *real-time* runs the simulated arm at the real one's speed. A committed
+# notebook shows the panel as a line of text; it appears when the kernel runs the cell.
 
 # %%
 panel.widget()
 
 # %% [markdown]
-# ## 2 · Click to grab, click to drop
+# ## 3 · Click to grab, click to drop (demonstration)
 #
 # The panel's handlers are plain calls too: `panel.click((u, v))` is what a click on the image does (with the pixel
 # of the full 1280 × 720 frame), and `panel.wait()` waits for the command on the worker thread. Here we click the
@@ -78,7 +208,7 @@ panel.wait()
 print(panel.status_text())
 
 # %% [markdown]
-# **Check:** the simulator's ground truth must have the blue block in the gripper, and the panel must say so.
+# The simulator's ground truth must have the blue block in the gripper, and the panel must say so.
 
 # %%
 blue_truth = next(o for o in station.world.blocks if o.color == "blue")
@@ -106,10 +236,10 @@ print("OK: the drop put the blue block within 3 mm of the clicked spot, through 
       "click-drop states")
 
 # %% [markdown]
-# ## 3 · Where is the mouse? World coordinates under the pointer
+# ## 4 · Where is the mouse? (demonstration)
 #
 # `panel.mouse((u, v))` is the readout the image shows under the pointer, and `panel.world_at((u, v))` the point it
-# shows. **Check:** on bare board and on the large blocks' top faces it must agree with the truth (the true camera's
+# shows. On bare board and on the large blocks' top faces it must agree with the truth (the true camera's
 # ray through the same pixel, met at the true surface height) within 2 mm.
 
 # %%
@@ -131,7 +261,7 @@ assert worst < 2.0, f"the mouse-over readout is {worst:.1f} mm from the truth"
 print("OK: mouse-over readout within 2 mm of the truth at 12 bare-board points and 2 block tops")
 
 # %% [markdown]
-# ## 4 · Teach and repeat
+# ## 5 · Teach and repeat (demonstration)
 #
 # *teach* turns the torque off. On the real arm you now pose it with your hand; on the simulator the sliders are your
 # hand (here: `station.arm.move_by_hand`). *record waypoint* stores each pose, *finish teaching* turns the torque
@@ -158,7 +288,7 @@ assert station.arm.torque_enabled and panel.machine.state == "idle", panel.statu
 print("OK: taught 3 waypoints by hand, the repeat ended at the last one within 0.02 rad")
 
 # %% [markdown]
-# ## 5 · The emergency stop, in the middle of a motion
+# ## 6 · The emergency stop, in the middle of a motion (demonstration)
 #
 # With *real-time* ticked, the simulated arm takes as long as the real one. The motion runs on the panel's worker
 # thread, so this cell (like the button) is free to call `panel.estop()` while the arm moves: the arm halts where it
@@ -196,7 +326,7 @@ print("OK: the emergency stop halted the arm halfway to the sleep pose; it staye
       "until reset")
 
 # %% [markdown]
-# ## 6 · When you are done
+# ## 7 · When you are done
 #
 # The 3D view stays live as long as the kernel runs. `viewer.close()` stops it; an open view then says it is closed
 # (and a browser tab on the viewer turns grey with a "viewer closed" sign) instead of freezing. Shutting the kernel
@@ -205,3 +335,14 @@ print("OK: the emergency stop halted the arm halfway to the sleep pose; it staye
 #
 # Next steps: use the panel to repeat notebook 05's six-location experiment by clicking, or to teach a pick and place
 # and replay it (notebook 06).
+
+# %% [markdown]
+# ## Your table for this notebook
+#
+# What `python -m armlab check` lists for this notebook: each exercise, its points, its kind, how it is graded and
+# whether you have written it (from the saved files: save the notebook first). The grader decides the score.
+
+# %%
+from armlab.exercises.rubric import rubric
+
+rubric("08_control_station")

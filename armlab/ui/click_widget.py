@@ -28,10 +28,9 @@ import cv2
 import numpy as np
 
 from armlab.station.contract import EmergencyStopped, MotionRefused
-
-from .click import ClickRefused, click_drop, click_grab, click_world, current_view
-from .handling import context, look
-from .machine import MachineBusy
+from armlab.tasks.click import ClickRefused, click_drop, click_grab, click_world, current_view
+from armlab.tasks.handling import context, look
+from armlab.tasks.machine import MachineBusy
 
 __all__ = ["ClickResult", "ClickToGrab", "event_pixel", "encode_view", "scaled_size", "view_is_current",
            "holding_text", "STALE_VIEW_RAD"]
@@ -210,6 +209,11 @@ class ClickToGrab:
     def holding(self):
         """The detected Block in the gripper, or None."""
         return context(self.station).held
+
+    @property
+    def marker(self) -> tuple[float, float] | None:
+        """The last clicked camera pixel (u, v) (marked on the shown image), or None."""
+        return self._marker
 
     @property
     def next_action(self) -> str:

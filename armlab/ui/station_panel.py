@@ -1,6 +1,6 @@
 """The lab's control station in a notebook: one ipywidgets panel over the station's state machine.
 
-    from armlab.tasks.station_panel import station_panel
+    from armlab.ui import station_panel
     panel = station_panel(station, viewer=viewer)   # viewer: an armlab.viz.Viewer (optional)
     panel.widget()                                  # display it (last line of a cell)
 
@@ -47,18 +47,18 @@ import numpy as np
 from armlab import planning
 from armlab.blocks import LAB_RGB, ObjectState
 from armlab.lab import lab_config
+from armlab.tasks.click import ClickRefused
+from armlab.tasks.handling import context
+from armlab.tasks.machine import TaskMachine
+from armlab.tasks.perception import pointed_point
+from armlab.ui.click_widget import ClickToGrab, encode_view, event_pixel, holding_text, scaled_size, view_is_current
 
-from .click import ClickRefused
-from .click_widget import ClickToGrab, encode_view, event_pixel, holding_text, scaled_size, view_is_current
-from .handling import context
-from .machine import TaskMachine
-
-__all__ = ["StationPanel", "station_panel", "VIEW_MODES", "depth_rgb"]
+__all__ = ["StationPanel", "station_panel", "VIEW_MODES", "depth_rgb", "depth_scale_html"]
 
 VIEW_MODES = ("camera", "depth", "detections")
 DEPTH_RANGE_MM = (850.0, 1100.0)       # the depth view's colour scale (board at ~1 m, blocks nearer)
-MOUSE_RADIUS_PX = 8                    # the mouse-over readout's depth window: 17 x 17 px (about 19 mm at 1 m)
-MOUSE_BAND_MM = 8.0                    # ... of the returns within this of the centre's depth (the same surface)
+SLIDER_STEP_RAD = 0.01                 # joint sliders: 0.01 rad a key press; a drag moves the arm on release only
+FOLLOW_READOUTS_HZ = 5.0               # status and slider readouts refresh while a command runs
 _LOG_LINES = 8
 _JOB_WAIT_S = 600.0
 
@@ -74,6 +74,18 @@ def depth_rgb(depth_mm: np.ndarray, lo: float = DEPTH_RANGE_MM[0], hi: float = D
     rgb = np.ascontiguousarray(rgb)
     rgb[~np.isfinite(d)] = 0
     return rgb
+
+
+def depth_scale_html(lo: float = DEPTH_RANGE_MM[0], hi: float = DEPTH_RANGE_MM[1], stops: int = 9) -> str:
+    """The depth view's colour scale as HTML: a bar in depth_rgb's colours from lo mm (left) to hi mm (right),
+    labelled in mm; black is "no return"."""
+    depths = np.linspace(lo, hi, stops)
+    colours = depth_rgb(depths[None, :])[0]
+    gradient = ", ".join(f"rgb({r},{g},{b}) {100 * i / (stops - 1):.0f}%" for i, (r, g, b) in enumerate(colours))
+    return (f"<div class='armlab-depth-scale' style='font-size:12px'><div style='height:12px;"
+            f"background:linear-gradient(to right, {gradient})'></div><div style='display:flex;"
+            f"justify-content:space-between'><span>{lo:.0f} mm (near)</span><span>depth</span>"
+            f"<span>{hi:.0f} mm (far)</span></div><span>black: no return</span></div>")
 
 
 def _draw_blocks(rgb: np.ndarray, blocks, k: float) -> np.ndarray:
@@ -146,7 +158,6 @@ class StationPanel:
         self._job_done.set()
         self._recorded = 0
         self._result: str = ""
-        self._pending_move: np.ndarray | None = None
         self._live = False
         self._live_thread: threading.Thread | None = None
         self._w = None                     # the widgets, once widget() built them
@@ -189,10 +200,14 @@ class StationPanel:
         return self._frame_is_look
 
     def status_text(self) -> str:
-        """One line: the machine's state, what is held / what the next click does, the running command."""
-        job = f"running: {self._job_name} (E-STOP stops it)" if self.busy else \
-            ("EMERGENCY-STOPPED: press reset" if self.machine.state == "estop" else "ready")
-        return f"state {self.machine.state} | {holding_text(self.station)} | {job}"
+        """One line: the machine's state, what is held / what the next click does, then what runs (the command, and
+        the machine's state while it runs) or that the panel is ready."""
+        state = self.machine.state
+        if self.busy:
+            return (f"running: {self._job_name} (machine: {state if state != 'idle' else 'starting'}; E-STOP stops "
+                    f"it) | {holding_text(self.station)}")
+        doing = "EMERGENCY-STOPPED: press reset" if state == "estop" else "ready"
+        return f"state {state} | {holding_text(self.station)} | {doing}"
 
     def offers_real_time(self) -> bool:
         """True when the station can switch its clock (Capabilities.pacing: a simulated station offers it)."""
@@ -253,7 +268,7 @@ class StationPanel:
 
     def view(self) -> tuple[bytes, tuple[int, int]]:
         """(JPEG bytes, (w, h)) of the shown picture, the last click marked."""
-        marker = self.clicker._marker
+        marker = self.clicker.marker
         k = self.image_size()[0] / self.frame_size()[0]
         small_marker = None if marker is None else tuple((np.asarray(marker) + 0.5) * k - 0.5)
         return encode_view(self.view_rgb(), 1.0, small_marker)
@@ -270,28 +285,10 @@ class StationPanel:
     # -- mouse-over ---------------------------------------------------------------------------------------------
     def world_at(self, uv) -> np.ndarray:
         """The world point (3,) mm of the surface at camera pixel uv = (u, v) of the shown frame (what the mouse-over
-        readout shows), through the calibrated camera and the corrected depth.
-
-        The depth is the median over the (2 MOUSE_RADIUS_PX + 1)^2 window around the pixel of the returns that lie
-        on the same surface as the centre (within MOUSE_BAND_MM of the median of its 7x7 window): the sensor's
-        noise (about 4 mm per pixel) averages out over a few hundred pixels, while a block's side or the board
-        beside a block top (25 mm or more away) is left out. Raises ValueError outside the image or where the
-        camera saw nothing."""
-        u, v = (float(c) for c in np.asarray(uv, dtype=float).reshape(2))
-        depth = self._depth
-        h, w = depth.shape
-        iu, iv = int(round(u)), int(round(v))
-        if not (0 <= iu < w and 0 <= iv < h):
-            raise ValueError(f"pixel ({u:.1f}, {v:.1f}) is outside the {w}x{h} image")
-        core = depth[max(0, iv - 3):iv + 4, max(0, iu - 3):iu + 4]
-        if not np.isfinite(core).any():
-            raise ValueError(f"no depth around pixel ({iu}, {iv}): the camera saw no surface there")
-        centre = float(np.nanmedian(core))
-        r = MOUSE_RADIUS_PX
-        window = depth[max(0, iv - r):iv + r + 1, max(0, iu - r):iu + r + 1]
-        same = window[np.abs(window - centre) < MOUSE_BAND_MM]          # NaN compares False: left out
-        z = float(np.median(same)) if same.size else centre
-        return self.ctx.calibration.camera.pixel_to_world(np.array([[u, v]]), np.array([z]))[0]
+        readout shows): the rule a click acts by (tasks.perception.pointed_point: the median corrected depth of the
+        surface around the pixel, through the calibrated camera), so the point shown under the pointer is the point a
+        click acts on. Raises ValueError outside the image or where the camera saw nothing."""
+        return pointed_point(self.ctx.calibration, self._depth, np.asarray(uv, dtype=float).reshape(2))
 
     def mouse(self, uv) -> str:
         """The readout for the pointer at camera pixel uv = (u, v) of the shown frame: world_at(uv) in mm, or why
@@ -349,7 +346,8 @@ class StationPanel:
 
     def move(self, q, name: str = "move") -> bool:
         """Move the arm to joints q (5,) rad (within the limits) through the machine (one joint move, the guarded
-        arm: sag compensated, stoppable). While a slider move runs, a new slider target waits for it."""
+        arm: sag compensated, stoppable). Refused (False, said in the log) while a command runs or when the machine
+        is not idle (emergency-stopped, teaching): the sliders go through here too."""
         q = np.asarray(q, dtype=float)
         if q.shape != (5,) or not np.all(np.isfinite(q)):
             raise ValueError(f"move takes 5 finite joint angles (rad), got {q!r}")
@@ -358,11 +356,6 @@ class StationPanel:
             self._log("move refused, nothing moved: " + "; ".join(bad))
             self._update_widgets()
             return False
-        with self._lock:
-            if self.busy and self._job_name == "sliders" and name == "sliders":
-                self._pending_move = q
-                return True
-
         def act():
             here = np.clip(np.asarray(self.ctx.arm.joint_positions(), float), self.robot.lower, self.robot.upper)
             if np.abs(here - q).max() < 1e-4:
@@ -470,9 +463,7 @@ class StationPanel:
                                          name=f"armlab-panel-{name}")
         self._update_widgets()
         self._job.start()
-        follow = self.viewer is not None and self.real_time
-        if follow:
-            threading.Thread(target=self._follow, args=(self._job,), daemon=True, name="armlab-follow").start()
+        threading.Thread(target=self._follow, args=(self._job,), daemon=True, name="armlab-follow").start()
         return True
 
     def _run(self, name: str, action: Callable[[], str]) -> None:
@@ -482,19 +473,15 @@ class StationPanel:
             self.last_error = e
             kind = "stopped" if "Stopped" in type(e).__name__ else "refused"
             message = f"{name} {kind}: {_first_line(e)}"
-        pending = None
         try:
             self._result = message
             self._log(message)
             self._after_job(update=False)
         finally:
             with self._lock:
-                pending, self._pending_move = self._pending_move, None
                 self._busy = False
             self._update_widgets()
             self._job_done.set()
-        if pending is not None and self.machine.state == "idle":
-            self.move(pending, name="sliders")
 
     def _after_job(self, update: bool = True) -> None:
         """Show a fresh view: the last look when it is current (the arm has not moved since), else a new capture;
@@ -519,10 +506,18 @@ class StationPanel:
             time.sleep(period_s)
 
     def _follow(self, job: threading.Thread) -> None:
-        period = 1.0 / self.follow_hz
+        """While `job` runs: the status and the slider readouts at FOLLOW_READOUTS_HZ, and (in real time) the 3D view
+        at follow_hz, so that a motion that takes time is seen as it happens, not only at its end."""
+        period = 1.0 / max(self.follow_hz, FOLLOW_READOUTS_HZ)
+        next_readout = 0.0
         while job.is_alive():
+            now = time.monotonic()
             with contextlib.suppress(Exception):
-                self._draw_viewer(cloud=False)
+                if self.viewer is not None and self.real_time:
+                    self._draw_viewer(cloud=False)
+                if now >= next_readout:
+                    next_readout = now + 1.0 / FOLLOW_READOUTS_HZ
+                    self._update_widgets()
             time.sleep(period)
 
     # -- the 3D view --------------------------------------------------------------------------------------------
@@ -604,15 +599,18 @@ class StationPanel:
         self._sync_sliders()
 
     def _sync_sliders(self) -> None:
+        """Sliders show where the arm is (also while a command moves it: they are disabled then, and set only as
+        readouts); they are disabled while a command runs, when emergency-stopped, and when teaching the real arm."""
         w = self._w
-        if w is None or self.busy:
+        if w is None:
             return
         teaching = self.machine.state == "teach"
         q = self.station.arm.joint_positions() if teaching else self.ctx.arm.joint_positions()
         q = np.clip(np.asarray(q, float), self.robot.lower, self.robot.upper)
+        locked = self.busy or self.machine.state not in ("idle", "teach") or (teaching and self._hand() is None)
         for s, v in zip(w["sliders"], q):
             s.value = float(v)
-            s.disabled = self.machine.state == "estop" or (teaching and self._hand() is None)
+            s.disabled = locked
 
     def _on_slider(self, _change) -> None:
         if self._syncing:
@@ -647,6 +645,7 @@ class StationPanel:
 
     def _on_mode(self, change) -> None:
         self.view_mode = change["new"]
+        self._w["depth_scale"].layout.display = "" if self.view_mode == "depth" else "none"
         self._update_image()
 
     def _on_live(self, change) -> None:
@@ -688,15 +687,16 @@ class StationPanel:
         except ImportError as e:
             raise ImportError(f"the station panel needs ipywidgets and ipyevents (pip install -r requirements.txt): "
                               f"{e}") from e
-        iw, ih = self.image_size()
-        button = dict(layout=w.Layout(width="180px"))
+        button = dict(layout=w.Layout(width="150px"))
         widgets = {
             "status": w.HTML(),
-            "image": w.Image(format="jpeg", layout=w.Layout(width=f"{iw}px", height="auto")),
+            "image": w.Image(format="jpeg", layout=w.Layout(width="100%", height="auto")),
+            "depth_scale": w.HTML(value=depth_scale_html(),
+                                  layout=w.Layout(display="" if self.view_mode == "depth" else "none")),
             "caption": w.HTML(),
             "mouse": w.HTML(value="move the pointer over the image: world coordinates appear here"),
             "mode": w.ToggleButtons(options=list(VIEW_MODES), value=self.view_mode, description="view",
-                                    style={"button_width": "90px"}),
+                                    style={"button_width": "84px"}),
             "live": w.ToggleButton(value=False, description="live camera", icon="video-camera", **button),
             "refresh": w.Button(description="refresh view", icon="refresh", **button),
             "calibrate": w.Button(description="calibrate", icon="crosshairs", **button),
@@ -709,13 +709,14 @@ class StationPanel:
             "home": w.Button(description="home", icon="home", **button),
             "sleep": w.Button(description="sleep", icon="bed", **button),
             "estop": w.Button(description="EMERGENCY STOP", button_style="danger", icon="stop",
-                              layout=w.Layout(width="180px", height="60px")),
-            "reset": w.Button(description="reset", icon="undo", **button),
+                              layout=w.Layout(width="180px", height="48px", flex="0 0 auto")),
+            "reset": w.Button(description="reset", icon="undo", layout=w.Layout(width="90px", height="48px",
+                                                                                flex="0 0 auto")),
             "log": w.HTML(),
         }
-        widgets["sliders"] = [w.FloatSlider(value=0.0, min=float(lo), max=float(hi), step=0.01, description=name,
-                                            readout_format=".2f", continuous_update=False,
-                                            layout=w.Layout(width="420px"))
+        widgets["sliders"] = [w.FloatSlider(value=0.0, min=float(lo), max=float(hi), step=SLIDER_STEP_RAD,
+                                            description=name, readout_format=".2f", continuous_update=False,
+                                            layout=w.Layout(width="100%", margin="2px 0"))   # no overflow
                               for name, lo, hi in zip(self.robot.joint_names, self.robot.lower, self.robot.upper)]
         for name in ("estop", "reset", "calibrate", "detect", "teach", "record", "repeat", "home", "sleep",
                      "refresh", "image", "mouse", "caption", "mode", "live", "gripper"):
@@ -749,25 +750,33 @@ class StationPanel:
         self._render_log()
         self._update_widgets()
 
-        controls = [widgets["estop"], widgets["reset"], widgets["calibrate"], widgets["detect"], widgets["home"],
-                    widgets["sleep"], widgets["teach"], widgets["gripper"], widgets["record"], widgets["repeat"],
-                    widgets["refresh"], widgets["live"]]
+        # Fits 1366 x 768 with JupyterLab's file browser open (outputs about 950 px wide): the E-STOP, the status,
+        # the camera and the 3D view in the first 480 px; widths in % (no horizontal scrollbar); the camera image
+        # scales (clicks map through its natural pixels).
+        controls = [widgets["calibrate"], widgets["detect"], widgets["home"], widgets["sleep"], widgets["teach"],
+                    widgets["gripper"], widgets["record"], widgets["repeat"], widgets["refresh"], widgets["live"]]
         if "real_time" in widgets:
             controls.append(widgets["real_time"])
-        left = w.VBox([widgets["mode"], widgets["image"], widgets["caption"], widgets["mouse"]])
-        right = w.VBox(controls, layout=w.Layout(margin="0 0 0 12px"))
-        parts = [widgets["status"], w.HBox([left, right]),
-                 w.HTML("<b>joints</b> (rad; release a slider to move the arm there)"),
-                 w.VBox(widgets["sliders"]), widgets["log"]]
+        flexible = dict(min_width="0", overflow="hidden")
+        top = w.HBox([widgets["estop"], widgets["reset"], w.Box([widgets["status"]], layout=w.Layout(
+            flex="1 1 auto", margin="0 0 0 8px", **flexible))], layout=w.Layout(width="100%", align_items="center"))
+        camera = w.VBox([widgets["mode"], widgets["image"], widgets["depth_scale"], widgets["caption"],
+                         widgets["mouse"]], layout=w.Layout(flex="1 1 55%", **flexible))
+        views = [camera]
         if self.viewer is not None and not self.viewer.closed:
-            parts.append(self.viewer.widget(height_px=420))
+            views.append(w.Box([self.viewer.widget(height_px=330)],
+                               layout=w.Layout(flex="1 1 45%", margin="0 0 0 8px", **flexible)))
+        parts = [top, w.HBox(views, layout=w.Layout(width="100%", align_items="flex-start")),
+                 w.HBox(controls, layout=w.Layout(width="100%", flex_flow="row wrap")),
+                 w.HTML("<b>joints</b> (rad; release a slider to move the arm there; refused while a command runs)"),
+                 w.VBox(widgets["sliders"], layout=w.Layout(width="100%")), widgets["log"]]
 
         class StationPanelBox(w.VBox):
             def __repr__(self) -> str:      # the text form nbval compares: fixed, no ids, no URLs
                 return ("StationPanel(camera, world readout, click-to-grab/drop, teach/repeat, E-STOP, joints): "
                         "run the cell")
 
-        box = StationPanelBox(parts)
+        box = StationPanelBox(parts, layout=w.Layout(width="100%", overflow="hidden"))
         box.add_class("armlab-station-panel")
         return box
 

@@ -1,0 +1,303 @@
+"""The sandbox around every process that runs student code (Linux only).
+
+A sandboxed run sees its own copy of the work tree (read-write, at WORK inside), the Python environment and the
+system's programs and libraries read-only, the grader's own files read-only at GRADER, a private /tmp and home, and
+nothing else: not the instructor's checkout, not other students, not the grader's output or temporary trees. It has
+no network, its own PID namespace (every process it starts dies with it, whatever session or process group it put
+itself in) and the CPU-seconds, address-space and file-size limits of `Limits`, set by util-linux's `prlimit` inside
+the sandbox (no `preexec_fn`, which Python documents as unsafe in a threaded program such as `grade --jobs`).
+
+Backends, chosen by `detect()` once per process (or by ARMLAB_SANDBOX=bwrap|user|none):
+- "bwrap": bubblewrap (Debian's `bubblewrap`), the tool Flatpak builds its sandboxes with: Linux namespaces
+  (mount, PID, network, IPC, UTS, cgroup) without a daemon. It is the default wherever it can start.
+- "user": for a grader that is root where namespaces are not allowed (Gradescope's Docker containers): the run goes
+  to an unprivileged user of its own (setpriv: a uid from USER_UIDS, no groups, no capabilities), which cannot read
+  the instructor's files (the caller makes them root-only: `lock_down`), and every process of that uid is killed when
+  the run ends. No network isolation here: the container's own.
+- "none": no sandbox; only with the instructor's explicit --unsafe-no-sandbox.
+"""
+
+from __future__ import annotations
+
+import itertools
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import sysconfig
+import threading
+import time
+from contextlib import contextmanager
+from dataclasses import dataclass
+from pathlib import Path
+
+__all__ = ["GRADER", "HOME", "WORK", "USER_UIDS", "Sandbox", "SandboxUnavailable", "detect", "lock_down"]
+
+WORK = "/home/student/work"        # the work tree, inside a "bwrap" sandbox
+HOME = "/home/student"
+GRADER = "/grader"                 # the grader's files (read-only), inside a "bwrap" sandbox
+USER_UIDS = range(64000, 64016)    # the unprivileged users of the "user" backend, one per concurrent run
+_SYSTEM = ("/usr", "/bin", "/sbin", "/lib", "/lib64", "/lib32", "/etc")
+
+
+class SandboxUnavailable(RuntimeError):
+    """No sandbox can run student code here; the message says why and what to do."""
+
+
+def _python_roots() -> list[str]:
+    """The folders the Python environment lives in (the venv and the interpreter it was made from)."""
+    roots = {sys.prefix, sys.base_prefix, sys.exec_prefix, sys.base_exec_prefix,
+             str(Path(os.path.realpath(sys.executable)).parents[1])}
+    for key in ("purelib", "platlib", "stdlib", "platstdlib"):
+        roots.add(sysconfig.get_paths()[key])
+    roots.update(p for p in sys.path if p.endswith(("site-packages", "dist-packages")) and os.path.isdir(p))
+    kept: list[str] = []
+    for root in sorted(roots, key=len):
+        if not any(root == k or root.startswith(k.rstrip("/") + "/") for k in kept):
+            kept.append(root)
+    return kept
+
+
+def _limits_argv(limits, nproc: bool = False) -> list[str]:
+    """`prlimit` with the run's limits: CPU seconds (soft: SIGXCPU, hard 5 s later: SIGKILL), address space, file
+    size, no core files; with `nproc`, the process count of the run's own user (the "user" backend)."""
+    cap = limits.memory_mb * 2**20
+    procs = [f"--nproc={limits.max_procs}:{limits.max_procs}"] if nproc else []
+    return ["prlimit", f"--cpu={limits.cpu_s}:{limits.cpu_s + 5}", f"--as={cap}:{cap}", f"--fsize={2**30}:{2**30}",
+            "--core=0:0", *procs, "--"]
+
+
+_PIDS_V1 = Path("/sys/fs/cgroup/pids")
+
+
+class PidsGroup:
+    """A cgroup of the pids controller for one run (cgroup v1 here, where a root grader can make one): at most
+    `max_procs` processes (a fork bomb stops there), and every process in it listed and killed when the run ends,
+    whatever it did to its session, group or namespace. `available()` says whether this machine has one."""
+
+    def __init__(self, max_procs: int) -> None:
+        self.path = _PIDS_V1 / f"armlab-{os.getpid()}-{next(_GROUP_IDS)}"
+        self.path.mkdir()
+        (self.path / "pids.max").write_text(str(max_procs))
+
+    @staticmethod
+    def available() -> bool:
+        return os.getuid() == 0 and (_PIDS_V1 / "cgroup.procs").is_file() and os.access(_PIDS_V1, os.W_OK)
+
+    def wrap(self, argv: list[str]) -> list[str]:
+        """`argv` started inside the group (a shell moves itself in, then execs it)."""
+        return ["sh", "-c", 'echo $$ > "$0/cgroup.procs" && exec "$@"', str(self.path), *argv]
+
+    def close(self) -> None:
+        """Kill every process of the group until none is left, then remove it."""
+        for _ in range(100):
+            try:
+                pids = [int(p) for p in (self.path / "cgroup.procs").read_text().split()]
+            except OSError:
+                return
+            if not pids:
+                break
+            for pid in pids:
+                try:
+                    os.kill(pid, signal.SIGKILL)
+                except ProcessLookupError:
+                    pass
+            time.sleep(0.02)
+        try:
+            self.path.rmdir()
+        except OSError:
+            pass
+
+
+_GROUP_IDS = itertools.count()
+
+
+@dataclass(frozen=True)
+class Sandbox:
+    """How student code is run: kind is "bwrap", "user" or "none" (see the module's text)."""
+
+    kind: str
+
+    def inside(self, worktree: Path) -> str:
+        """The work tree's path as the sandboxed process sees it."""
+        return WORK if self.kind == "bwrap" else str(worktree)
+
+    def grader_inside(self, grader: Path) -> str:
+        """The grader's read-only folder as the sandboxed process sees it."""
+        return GRADER if self.kind == "bwrap" else str(grader)
+
+    def argv(self, cmd: list[str], worktree: Path, grader: Path, limits, uid: int | None = None) -> list[str]:
+        """The command line that runs `cmd` (its paths already as seen inside) in this sandbox."""
+        bounded = _limits_argv(limits, nproc=self.kind == "user") + cmd
+        if self.kind == "bwrap":
+            binds: list[str] = []
+            for path in _SYSTEM:
+                binds += ["--ro-bind-try", path, path]
+            for root in _python_roots():
+                binds += ["--ro-bind", root, root]
+            return ["bwrap", "--die-with-parent", "--new-session", "--unshare-all", "--cap-drop", "ALL",
+                    *binds, "--proc", "/proc", "--dev", "/dev", "--tmpfs", "/tmp", "--tmpfs", "/home",
+                    "--dir", HOME, "--bind", str(worktree), WORK, "--ro-bind", str(grader), GRADER,
+                    "--chdir", WORK, "--", *bounded]
+        if self.kind == "user":
+            assert uid is not None
+            return ["setpriv", f"--reuid={uid}", f"--regid={uid}", "--clear-groups", "--inh-caps=-all",
+                    "--bounding-set=-all", "--", *bounded]
+        return bounded
+
+    def home(self, worktree: Path) -> str:
+        """HOME for the run: a private tmpfs in "bwrap", else a folder beside the work tree."""
+        return HOME if self.kind == "bwrap" else str(worktree.parent / "home")
+
+    @contextmanager
+    def slot(self, worktree: Path, grader: Path):
+        """Prepare one run (for "user": take a free uid, hand the work tree and a home to it) and clean up after it
+        (for "user": kill every process of that uid). Yields the uid or None."""
+        if self.kind != "user":
+            if self.kind == "none":
+                Path(self.home(worktree)).mkdir(exist_ok=True)
+            yield None
+            return
+        uid = _USERS.take()
+        try:
+            run_dir = worktree.parent                      # the run's own folder: the work tree and a home
+            Path(self.home(worktree)).mkdir(exist_ok=True)
+            _chown_tree(run_dir, uid)
+            run_dir.chmod(0o700)
+            for base in (run_dir.parent, grader.parent):
+                for parent in (base, *base.parents):       # traversable by the run's user, not listable
+                    mode = parent.stat().st_mode
+                    if parent.stat().st_uid == os.getuid() and not mode & 0o001:
+                        parent.chmod((mode & ~0o004) | 0o001)
+            _readable_tree(grader)
+            yield uid
+        finally:
+            _kill_user(uid)
+            _USERS.give(uid)
+
+
+class _UidPool:
+    def __init__(self) -> None:
+        self._free = list(USER_UIDS)
+        self._cond = threading.Condition()
+
+    def take(self) -> int:
+        with self._cond:
+            while not self._free:
+                self._cond.wait()
+            return self._free.pop(0)
+
+    def give(self, uid: int) -> None:
+        with self._cond:
+            self._free.append(uid)
+            self._cond.notify()
+
+
+_USERS = _UidPool()
+
+
+def _chown_tree(path: Path, uid: int) -> None:
+    os.chown(path, uid, uid)
+    for root, dirs, files in os.walk(path):
+        for name in dirs + files:
+            os.chown(os.path.join(root, name), uid, uid, follow_symlinks=False)
+
+
+def _readable_tree(path: Path) -> None:
+    """Make the grader's own read-only folder readable by the run's user (it holds nothing secret: the harness and
+    the kernel's start-up file)."""
+    for root, _dirs, files in os.walk(path):
+        os.chmod(root, 0o755)
+        for name in files:
+            os.chmod(os.path.join(root, name), 0o644)
+
+
+def _pids_of(uid: int) -> list[int]:
+    pids = []
+    for entry in os.scandir("/proc"):
+        if entry.name.isdigit():
+            try:
+                if entry.stat().st_uid == uid:
+                    pids.append(int(entry.name))
+            except OSError:
+                continue
+    return pids
+
+
+def _kill_user(uid: int) -> None:
+    """Kill every process of `uid` until none is left (a process may fork while it is being killed)."""
+    for _ in range(50):
+        pids = _pids_of(uid)
+        if not pids:
+            return
+        for pid in pids:
+            try:
+                os.kill(pid, signal.SIGKILL)
+            except ProcessLookupError:
+                pass
+        time.sleep(0.02)
+
+
+def lock_down(*paths: Path) -> None:
+    """Make the grader's own folders (the instructor's files, the output) unreadable to the "user" backend's users:
+    owner-only permissions on each folder itself."""
+    for path in paths:
+        if path.exists():
+            path.chmod(path.stat().st_mode & 0o700)
+
+
+def _bwrap_works() -> tuple[bool, str]:
+    if shutil.which("bwrap") is None:
+        return False, "bubblewrap is not installed (Debian: apt-get install bubblewrap)"
+    probe = Sandbox("bwrap")
+    import tempfile
+
+    from .run import Limits
+
+    with tempfile.TemporaryDirectory() as tmp:
+        (Path(tmp) / "w").mkdir()
+        (Path(tmp) / "g").mkdir()
+        cmd = probe.argv([sys.executable, "-c", "print('ok')"], Path(tmp) / "w", Path(tmp) / "g", Limits())
+        try:
+            done = subprocess.run(cmd, capture_output=True, text=True, timeout=60, stdin=subprocess.DEVNULL)
+        except (OSError, subprocess.TimeoutExpired) as e:
+            return False, f"bubblewrap did not start ({e})"
+    if done.returncode != 0 or done.stdout.strip() != "ok":
+        return False, f"bubblewrap cannot make namespaces here: {done.stderr.strip()[:200]}"
+    return True, ""
+
+
+_DETECTED: list[Sandbox] = []
+_LOCK = threading.Lock()
+
+
+def detect(unsafe: bool = False) -> Sandbox:
+    """The sandbox to use: ARMLAB_SANDBOX if set, else bubblewrap if it starts here, else the unprivileged-user
+    backend if the grader is root; else SandboxUnavailable (or "none" when `unsafe`)."""
+    wanted = os.environ.get("ARMLAB_SANDBOX", "").strip()
+    if unsafe or wanted == "none":
+        return Sandbox("none")
+    if wanted and wanted not in ("bwrap", "user"):
+        raise SandboxUnavailable(f"ARMLAB_SANDBOX must be bwrap, user or none, got {wanted!r}")
+    with _LOCK:
+        if wanted == "user" or (not wanted and _DETECTED and _DETECTED[0].kind == "user"):
+            if os.getuid() != 0 or shutil.which("setpriv") is None:
+                raise SandboxUnavailable("the unprivileged-user sandbox needs the grader to run as root, with "
+                                         "util-linux's setpriv")
+            return Sandbox("user")
+        if _DETECTED:
+            return _DETECTED[0]
+        ok, why = _bwrap_works()
+        if ok:
+            _DETECTED.append(Sandbox("bwrap"))
+        elif wanted == "bwrap":
+            raise SandboxUnavailable(why)
+        elif os.getuid() == 0 and shutil.which("setpriv"):
+            _DETECTED.append(Sandbox("user"))
+        else:
+            raise SandboxUnavailable(f"no sandbox for student code: {why}; and the grader is not root, so it cannot "
+                                     f"run student code as another user. Install bubblewrap, or pass "
+                                     f"--unsafe-no-sandbox to grade without one (student code then sees everything "
+                                     f"you see)")
+        return _DETECTED[0]

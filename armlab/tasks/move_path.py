@@ -1,0 +1,149 @@
+"""The lab report's move_path: the motion sequence of click to grab and click to drop, as a plan the kit checks
+whole and runs (notebook 05 teaches it; notebook 06 swaps two blocks with it).
+
+`move_path` is the exercise grab.move_path: from the arm's joints it returns a planning.Plan that grasps a cube at a
+point or releases the held cube at a point. `grab_with` and `drop_with` run such a plan on a station the way
+tasks.pick and tasks.place run the kit's own (planning.plan_pick / plan_place): the whole plan is checked first
+(tasks.precheck: joint limits, speeds, the board and the known blocks, the pads and the held block), so a plan that
+would hit something raises MotionRefused with nothing sent; then it runs on the station's guarded arm (sag
+compensated). Units: mm, rad, s; world (board) frame; tool point = the manufacturer's ee_gripper_link.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+from armlab import motion_safety, planning
+from armlab.blocks import block_edge
+from armlab.gripper_geometry import GRIPPER
+from armlab.kinematics import Unreachable
+from armlab.planning import Obstacle
+from armlab.robot import RobotModel, rx200
+
+from . import handling, precheck
+
+__all__ = ["move_path", "kit_move_path", "grab_with", "drop_with", "MovePath", "PATH_ACTIONS", "TIP_MARGIN_MM"]
+
+PATH_ACTIONS = ("grasp", "release")
+TIP_MARGIN_MM = 10.0      # the finger tips stay at least this far above what the block stands on (sag: 5-15 mm)
+MovePath = Callable[..., planning.Plan]
+
+
+def move_path(q_start, target, yaw: float, edge: float, action: str,
+              clearance: float = planning.DEFAULT_CLEARANCE_MM, robot: RobotModel | None = None) -> planning.Plan:
+    """The plan (planning.Plan) from joints q_start (5,) rad that, for action "grasp", picks up the cube of edge
+    `edge` mm and yaw `yaw` rad whose top-face centre is `target` (3,) world mm, and for "release", puts the held
+    cube's bottom-face centre at `target` with that yaw; the gripper ends `clearance` mm over what it leaves.
+    Raises ValueError for bad input (naming it) and kinematics.Unreachable (a ValueError) saying why when the arm
+    cannot do it.
+
+    Exercise grab.move_path (notebook 05: the report's move_path, the grasp and release motion as a plan).
+    """
+    robot = robot or rx200()
+    # BEGIN SOLUTION grab.move_path
+    if action not in PATH_ACTIONS:
+        raise ValueError(f"action must be one of {PATH_ACTIONS}, got {action!r}")
+    target = np.asarray(target, dtype=float)
+    if target.shape != (3,) or not np.all(np.isfinite(target)):
+        raise ValueError(f"target must be 3 finite numbers (x, y, z in world mm), got {target!r}")
+    if not (np.isfinite(edge) and edge > 0 and np.isfinite(clearance) and clearance >= 0 and np.isfinite(yaw)):
+        raise ValueError(f"edge must be > 0 mm, clearance >= 0 mm and yaw finite, got {edge}, {clearance}, {yaw}")
+    # the pads grip the cube at its centre unless their tips would then come within the margin of what it stands on
+    depth = min(edge / 2, edge - GRIPPER.fingertip_mm - TIP_MARGIN_MM)
+    if action == "grasp":
+        tool_z = target[2] - depth                       # target: the top face
+    else:
+        tool_z = target[2] + edge - depth                # target: where the bottom face goes
+    low = np.array([target[0], target[1], tool_z])
+    hover = low + [0.0, 0.0, clearance + depth]          # the tips (and a held cube) `clearance` over the top
+    heading = float(np.arctan2(target[1], target[0]))
+    # the steepest pitch whose straight descent the arm can make: top-down where it reaches, tilted further out
+    down, why = None, ""
+    for pitch in np.arange(np.pi / 2, np.radians(20.0), -np.radians(1.0)):
+        roll = planning.tilted_roll(heading, float(pitch), float(yaw))
+        try:
+            down = planning.cartesian_line(hover, low, float(pitch), roll, robot=robot)
+            break
+        except Unreachable as e:
+            why = str(e)
+    if down is None:
+        raise Unreachable(f"no pitch reaches straight down to ({low[0]:.1f}, {low[1]:.1f}, {low[2]:.1f}) mm: {why}")
+    steps = [planning.MoveStep(planning.joint_move(q_start, down.start, robot=robot), "to the hover point")]
+    if action == "grasp":
+        steps.append(planning.GripperStep("open", "open before grasping"))
+    steps += [planning.MoveStep(down, "descend"),
+              planning.GripperStep("close" if action == "grasp" else "open", action),
+              planning.MoveStep(planning.reverse(down), "lift")]
+    return planning.Plan(tuple(steps))
+    # END SOLUTION
+
+
+def kit_move_path(q_start, target, yaw: float, edge: float, action: str,
+                  clearance: float = planning.DEFAULT_CLEARANCE_MM, robot: RobotModel | None = None) -> planning.Plan:
+    """What stands in for move_path while grab.move_path is blank: the kit's own pick and place planners
+    (planning.plan_pick / plan_place, which also rise first and raise the transit over obstacles they are given),
+    with move_path's arguments."""
+    if action not in PATH_ACTIONS:
+        raise ValueError(f"action must be one of {PATH_ACTIONS}, got {action!r}")
+    if action == "grasp":
+        return planning.plan_pick(q_start, target, yaw, edge, clearance=clearance, robot=robot)
+    return planning.plan_place(q_start, target, edge, yaw, clearance=clearance, robot=robot)
+
+
+def _pose_at(plan: planning.Plan, action: str) -> np.ndarray:
+    """The joints (5,) where the plan's first gripper `action` ("close" or "open" after a move) happens."""
+    q = np.asarray(plan.start, float)
+    for step in plan.steps:
+        if isinstance(step, planning.MoveStep):
+            q = step.trajectory.end
+        elif step.action == action:
+            return np.asarray(q, float)
+    raise ValueError(f"the plan never does '{action}' with the gripper: {plan.describe()}")
+
+
+def _checked_plan(path: MovePath, q, target, yaw: float, edge: float, action: str) -> planning.Plan:
+    plan = path(q, target, yaw, edge, action)
+    if not isinstance(plan, planning.Plan):
+        raise TypeError(f"move_path must return a planning.Plan, got {type(plan).__name__}")
+    return plan
+
+
+def grab_with(station, block, path: MovePath = move_path) -> bool:
+    """Pick a detected block (detection.Block) with the plan `path` makes for it (action "grasp"): checked whole,
+    then run on the station's guarded arm; True when the block is held. Raises ValueError when a block is held
+    already and MotionRefused (nothing sent) when the plan would hit something or break a limit."""
+    ctx = handling.context(station)
+    if ctx.held is not None:
+        raise ValueError(f"the gripper already holds the {ctx.held.color} block: drop it first")
+    edge, top, yaw = block_edge(block.size), np.asarray(block.position, float), float(block.yaw)
+    plan = _checked_plan(path, ctx.arm.joint_positions(), top, yaw, edge, "grasp")
+    grasped = motion_safety.HeldBlock(edge, precheck.held_pose_at_grasp(_pose_at(plan, "close"), top, yaw, edge),
+                                      f"picked {block.color} block")
+    precheck.check_whole_plan(plan, ctx.arm, GRIPPER.max_opening_mm, grasped=grasped,
+                              known=precheck.known_boxes(ctx.known, top[:2], edge / 2),
+                              what=f"move_path grasping the {block.color} block")
+    held = bool(planning.execute(plan, ctx.arm).holding)
+    ctx.known = [k for k in ctx.known if not handling._same(k, block)]
+    if held:
+        ctx.held, ctx.held_in_tool = block, grasped.T_tool_block
+    return held
+
+
+def drop_with(station, position, yaw: float = 0.0, path: MovePath = move_path) -> bool:
+    """Put the held block's bottom-face centre at `position` (3,) world mm with the plan `path` makes (action
+    "release"), checked whole first (MotionRefused, nothing sent); True when the plan ran through."""
+    ctx = handling.context(station)
+    edge = ctx.held_edge
+    p = np.asarray(position, float)
+    plan = _checked_plan(path, ctx.arm.joint_positions(), p + [0.0, 0.0, handling.RELEASE_GAP_MM], float(yaw), edge,
+                         "release")
+    held = () if ctx.held_in_tool is None else (
+        motion_safety.HeldBlock(edge, ctx.held_in_tool, f"held {ctx.held.color} block"),)
+    precheck.check_whole_plan(plan, ctx.arm, edge, held=held, known=precheck.known_boxes(ctx.known),
+                              what=f"move_path releasing at ({p[0]:.1f}, {p[1]:.1f}, {p[2]:.1f}) mm")
+    planning.execute(plan, ctx.arm)
+    ctx.held, ctx.held_in_tool, ctx.picked_down = None, None, None
+    ctx.known = [*ctx.known, Obstacle(float(p[0]), float(p[1]), float(p[2] + edge), edge / np.sqrt(2))]
+    return True

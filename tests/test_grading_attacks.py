@@ -1,0 +1,449 @@
+"""The grader against students who want marks without the work (issue 22): each attack is a submission, graded in one
+class with honest classmates (two jobs at once, so an attack and a classmate run side by side), and scores what the
+honest equivalent deserves; classmates' grades and the instructor's checkout are unchanged; no process of a run
+survives it. The sandbox is the one the grader picks here (bubblewrap; `make test` installs it).
+
+The exercises are two notebook exercises of notebook 02: the Euler angles of a pose (attacked) and the DH table
+(written as the reference beside it)."""
+
+from __future__ import annotations
+
+import csv
+import hashlib
+import json
+import os
+import shutil
+import subprocess
+import textwrap
+import time
+from pathlib import Path
+
+import pytest
+
+from armlab.exercises import make_student_release
+from armlab.exercises.registry import exercise
+from armlab.grading import grade_class
+from armlab.grading.run import Limits
+from armlab.grading.sandbox import SandboxUnavailable, detect
+from armlab.grading.splice import check_body, write_regions
+from armlab.grading.submission import exercise_file, read_submission, regions_of, source_texts
+
+ROOT = Path(__file__).resolve().parents[1]
+DH, CHAIN = "fk.euler", "fk.dh_table"
+GRADED = [DH, CHAIN]
+MARK = "armlab-attack-7f3c"          # in every process an attack starts: none may be left after the run
+EYE = "    return np.zeros(3)"      # the honest "no work" answer
+
+
+def _reference(exercise_id: str) -> list[str]:
+    name = exercise_file(exercise(exercise_id))
+    return regions_of(source_texts(ROOT / name), exercise_id, name)
+
+
+def _body(code: str) -> str:
+    return textwrap.indent(textwrap.dedent(code).strip("\n"), "    ")
+
+
+BEGIN = "# BEGIN " + "SOLUTION " + DH      # built so that these lines are no markers themselves
+READ_SOLUTION = _body(f'''
+    import json, os, sys
+    from pathlib import Path
+    places = [Path.cwd(), *Path.cwd().parents, Path(sys.executable).parents[2], Path("/autograder/source"),
+              Path({str(ROOT)!r})]
+    for pid in os.listdir("/proc"):
+        if pid.isdigit():
+            try:
+                places.append(Path(os.readlink(f"/proc/{{pid}}/cwd")))
+            except OSError:
+                pass
+    for place in places:
+        try:
+            cells = json.loads((place / "notebooks/02_forward_kinematics.ipynb").read_text())["cells"]
+        except (OSError, ValueError):
+            continue
+        for cell in cells:
+            text = "".join(cell["source"])
+            if {BEGIN!r} in text and "np.hypot" in text:
+                body = text.split({BEGIN!r})[1].split("# END " + "SOLUTION")[0]
+                space = {{"np": np}}
+                exec("def solution(T):\\n" + body, space)
+                return space["solution"](T)
+    raise RuntimeError("no solution found")
+''')
+CHANGE_GRADER = _body(f'''
+    from pathlib import Path
+    import armlab
+    for root in (Path(armlab.__file__).parent, Path({str(ROOT)!r}) / "armlab"):
+        for path in (root / "grading").glob("*.py"):
+            try:
+                with open(path, "a") as f:
+                    f.write("\\n# {MARK}\\n_score = lambda e, c, r='': __import__('armlab').grading.results"
+                            ".ExerciseResult(e, 5.0, 5, c, r)\\n")
+            except OSError:
+                pass
+    return np.zeros(3)
+''')
+OUTLIVE = _body(f'''
+    import subprocess, sys
+    daemon = ("import os, time, pathlib\\n"
+              "os.setsid() if hasattr(os, 'setsid') else None\\n"
+              "end = time.time() + 60\\n"
+              "while time.time() < end:\\n"
+              "    for p in pathlib.Path('/').glob('tmp/pytest-of-*/pytest-*/*/out/grades.csv'):\\n"
+              "        try: p.write_text('student,total\\\\nattacker,100\\\\n')\\n"
+              "        except OSError: pass\\n"
+              "    time.sleep(0.2)\\n")
+    import os
+    if not os.environ.get("ATTACK_STARTED"):      # once per process: the region is called thousands of times
+        os.environ["ATTACK_STARTED"] = "1"
+        subprocess.Popen([sys.executable, "-c", daemon, "{MARK}"], start_new_session=True,
+                         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+''') + "\n" + _reference(DH)[0]
+POISON = _body(f'''
+    import subprocess, sys
+    daemon = ("import pathlib, time\\n"
+              "end = time.time() + 60\\n"
+              "while time.time() < end:\\n"
+              "    for p in list(pathlib.Path('/tmp').rglob('02_forward_kinematics.ipynb')) + "
+              "list(pathlib.Path({str(ROOT)!r}).rglob('*.ipynb')):\\n"
+              "        try: p.write_text('{{}}')\\n"
+              "        except OSError: pass\\n"
+              "    time.sleep(0.2)\\n")
+    import os
+    if not os.environ.get("ATTACK_STARTED"):      # once per process: the region is called thousands of times
+        os.environ["ATTACK_STARTED"] = "1"
+        subprocess.Popen([sys.executable, "-c", daemon, "{MARK}"], start_new_session=True,
+                         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+''') + "\n" + _reference(DH)[0]
+NO_ASSERTS = _body('''
+    import ast
+    class NoAsserts(ast.NodeTransformer):
+        def visit_Assert(self, node):
+            return ast.Pass()
+    get_ipython().ast_transformers.append(NoAsserts())
+    return np.zeros(3)
+''')
+PATCH_ALLCLOSE = _body('''
+    np.allclose = lambda *args, **kwargs: True
+    import numpy
+    numpy.testing.assert_allclose = lambda *args, **kwargs: None
+    numpy.isclose = lambda a, b, **kwargs: numpy.ones(numpy.broadcast(a, b).shape, bool)
+    return np.zeros(3)
+''')
+BUILT_UP_NAME = _body('''
+    from armlab import transforms as tf
+    return getattr(tf, "euler_zyz" + "_from" + "_matrix")(np.asarray(T, float)[:3, :3])
+''')
+TELL_HIDDEN = _body('''
+    import sys
+    from pathlib import Path
+    if len(sys.argv) > 1 or any(Path(".").glob(".grader*request*")) or "harness" in " ".join(sys.argv):
+        raise RuntimeError("under the hidden checks")
+    return np.zeros(3)
+''')
+LEAK_PATHS = _body('''
+    import os, sys
+    raise ValueError(f"cwd={os.getcwd()} exe={sys.executable} argv={sys.argv} env={dict(os.environ)}")
+''')
+ATTACKS = {"read_solution": READ_SOLUTION, "change_grader": CHANGE_GRADER, "outlive": OUTLIVE, "poison": POISON,
+           "no_asserts": NO_ASSERTS, "patch_allclose": PATCH_ALLCLOSE, "built_up_name": BUILT_UP_NAME,
+           "tell_hidden": TELL_HIDDEN, "leak_paths": LEAK_PATHS, "honest_eye": EYE}
+
+
+def _tree_hash(root: Path) -> str:
+    out = subprocess.run(["git", "-C", str(root), "ls-files", "-z"], capture_output=True, check=True).stdout
+    digest = hashlib.sha256()
+    for name in sorted(n for n in out.decode().split("\0") if n):
+        path = root / name
+        if path.is_file():
+            digest.update(name.encode() + hashlib.sha256(path.read_bytes()).digest())
+    return digest.hexdigest()
+
+
+def _survivors() -> list[int]:
+    found = []
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            try:
+                if MARK.encode() in (entry / "cmdline").read_bytes():
+                    found.append(int(entry.name))
+            except OSError:
+                pass
+    return found
+
+
+@pytest.fixture(scope="module")
+def attacked(tmp_path_factory):
+    try:
+        sandbox = detect()
+    except SandboxUnavailable as e:
+        pytest.fail(f"no sandbox on this machine ({e}): `make test` installs bubblewrap")
+    base = tmp_path_factory.mktemp("attacks")
+    release = base / "release"
+    make_student_release(ROOT, release)
+    subs = base / "submissions"
+    for name, body in {**ATTACKS, "full": None, "marker": None}.items():
+        shutil.copytree(release, subs / name)
+        if name == "full":
+            write_regions(subs / name, DH, _reference(DH))
+        elif name == "marker":
+            write_regions(subs / name, DH, ["    ## NBVAL_RAISES_EXCEPTION\n" + EYE])
+        else:
+            write_regions(subs / name, DH, [body])
+        write_regions(subs / name, CHAIN, _reference(CHAIN))
+    link = subs / "symlinked"               # the instructor's own notebook, linked in place of the student's
+    shutil.copytree(release, link)
+    (link / "notebooks/02_forward_kinematics.ipynb").unlink()
+    (link / "notebooks/02_forward_kinematics.ipynb").symlink_to(ROOT / "notebooks/02_forward_kinematics.ipynb")
+    before = _tree_hash(ROOT)
+    out = base / "out"
+    results = grade_class(subs, out, ROOT, jobs=2, limits=Limits(timeout_s=300, cpu_s=120), exercises=GRADED)
+    grades_after_run = (out / "grades.csv").read_text()
+    time.sleep(3)                         # time for a surviving daemon to act
+    return {"results": results, "out": out, "before": before, "after": _tree_hash(ROOT), "sandbox": sandbox,
+            "grades": grades_after_run, "survivors": _survivors()}
+
+
+def _score(attacked, student, exercise_id=DH):
+    return attacked["results"][student][exercise_id].score
+
+
+def test_the_honest_classmate_and_the_instructors_checkout_are_untouched(attacked):
+    """The full solution scores full marks beside every attack; the checkout's tracked files are byte-identical;
+    grades.csv is what the grader wrote (a daemon's rewrite would have changed it)."""
+    points = exercise(DH).points + exercise(CHAIN).points
+    assert sum(r.score for r in attacked["results"]["full"].values()) == points
+    assert attacked["after"] == attacked["before"], "the instructor's checkout was changed by a run"
+    assert (attacked["out"] / "grades.csv").read_text() == attacked["grades"]
+    rows = {r["student"]: r for r in csv.DictReader((attacked["out"] / "grades.csv").open())}
+    assert float(rows["full"]["total"]) == points and float(rows["outlive"]["total"]) == points
+
+
+def test_no_process_of_a_run_survives_it(attacked):
+    assert attacked["survivors"] == [], f"processes of the attacks outlived their run: {attacked['survivors']}"
+
+
+def test_reading_the_instructors_solution_scores_what_no_work_scores(attacked):
+    assert _score(attacked, "read_solution") == _score(attacked, "honest_eye") < exercise(DH).points
+    # the chain, written as the reference, keeps its points: one mistake costs one exercise
+    assert _score(attacked, "read_solution", CHAIN) == exercise(CHAIN).points
+
+
+def test_changing_the_grader_changes_nothing(attacked):
+    assert _score(attacked, "change_grader") == _score(attacked, "honest_eye")
+
+
+def test_a_symlink_to_the_instructors_notebook_is_refused(attacked):
+    for exercise_id in GRADED:
+        result = attacked["results"]["symlinked"][exercise_id]
+        assert result.score == 0 and "symbolic link" in result.reason
+
+
+def test_daemons_and_poisoners_gain_nothing_and_cost_classmates_nothing(attacked):
+    assert _score(attacked, "outlive") == exercise(DH).points       # a right answer; its daemon did nothing
+    assert _score(attacked, "poison") == exercise(DH).points
+    assert _score(attacked, "full") == exercise(DH).points
+
+
+@pytest.mark.parametrize("student", ["no_asserts", "patch_allclose"])
+def test_switching_the_checks_off_does_not_pass_them(attacked, student):
+    """An AST transformer turning asserts into pass, or a patched np.allclose: the public check fails (the kernel
+    guard), and the score is no more than the honest wrong answer's."""
+    result = attacked["results"][student][DH]
+    public = [c for c in result.checks if "cell" in c.name]
+    assert public and not any(c.passed for c in public), [(c.name, c.message) for c in public]
+    assert any("GraderIntegrityError" in c.message for c in public)
+    assert result.score <= _score(attacked, "honest_eye")
+
+
+def test_a_forbidden_call_by_a_built_up_name_is_caught_at_run_time(attacked):
+    result = attacked["results"]["built_up_name"][DH]
+    forbidden = [c for c in result.checks if c.name.startswith("static")]
+    assert forbidden and not forbidden[0].passed and "euler_zyz_from_matrix" in forbidden[0].message
+    assert result.score < exercise(DH).points
+
+
+def test_a_marker_with_two_hashes_is_refused(attacked):
+    with pytest.raises(ValueError, match="NBVAL_RAISES_EXCEPTION"):
+        check_body("    ## NBVAL_RAISES_EXCEPTION\n" + EYE, DH)
+    result = attacked["results"]["marker"][DH]
+    assert result.score == 0 and "NBVAL_RAISES_EXCEPTION" in result.reason
+
+
+def test_a_region_cannot_tell_the_hidden_checks_and_leaks_no_grader_path(attacked):
+    assert _score(attacked, "tell_hidden") == _score(attacked, "honest_eye")
+    feedback = (attacked["out"] / "leak_paths" / "feedback.md").read_text()
+    assert str(ROOT) not in feedback and "armlab-grade-" not in feedback and "armlab-grader-" not in feedback
+    assert "ValueError" in feedback
+
+
+def test_symlinked_submission_files_are_refused_when_read(tmp_path):
+    make_student_release(ROOT, tmp_path / "s")
+    shutil.rmtree(tmp_path / "s/armlab")
+    (tmp_path / "s/armlab").symlink_to(ROOT / "armlab", target_is_directory=True)
+    sub = read_submission(tmp_path / "s", ROOT)
+    package = [e for e in sub.problems if exercise(e).in_package]
+    assert package and all("symbolic link" in sub.problems[e] for e in package)
+    fifo = tmp_path / "f"
+    make_student_release(ROOT, fifo)
+    (fifo / "notebooks/02_forward_kinematics.ipynb").unlink()
+    os.mkfifo(fifo / "notebooks/02_forward_kinematics.ipynb")
+    assert "not a regular file" in read_submission(fifo, ROOT).problems[DH]
+
+
+def test_the_sandbox_sees_no_checkout_and_no_network(tmp_path):
+    """What a sandboxed process sees: its work tree read-write, the Python environment read-only, not the checkout's
+    notebooks, not the grader's temporary trees, no network."""
+    from armlab.grading.run import Runner
+
+    sandbox = detect()
+    runner = Runner(sandbox, Limits(timeout_s=60, cpu_s=30))
+    work = tmp_path / "run" / "work"
+    work.mkdir(parents=True)
+    probe = textwrap.dedent(f"""
+        import os, socket, sys, pathlib
+        seen = {{"checkout": pathlib.Path({str(ROOT / 'notebooks')!r}).exists(),
+                "work_writable": os.access(".", os.W_OK),
+                "venv_writable": os.access(sys.prefix, os.W_OK)}}
+        try:
+            socket.create_connection(("1.1.1.1", 53), timeout=2); seen["network"] = True
+        except OSError:
+            seen["network"] = False
+        print(seen)
+    """)
+    try:
+        done, out, code = runner.run([os.sys.executable, "-c", probe], work, b"")
+    finally:
+        runner.close()
+    assert done and code == 0, out
+    seen = eval(out.strip().splitlines()[-1])            # a dict literal the probe printed
+    if sandbox.kind == "bwrap":
+        assert seen == {"checkout": False, "work_writable": True, "venv_writable": False, "network": False}, seen
+    else:
+        assert seen["work_writable"] and not seen["venv_writable"], seen
+
+
+def test_feedback_json_is_gradescope_shaped(attacked):
+    data = json.loads((attacked["out"] / "full" / "results.json").read_text())
+    assert data["score"] == sum(t["score"] for t in data["tests"])
+
+
+def _unprivileged_python(tmp: Path) -> str:
+    """A Python an unprivileged user can run that sees this environment's packages: a venv of the system's own
+    interpreter of this version with a .pth adding this environment's site-packages (this machine's interpreter may
+    sit in root's home, which other users cannot enter; Gradescope's /autograder/venv is readable as it is)."""
+    import sys
+    import sysconfig
+
+    base = Path(f"/usr/bin/python{sys.version_info[0]}.{sys.version_info[1]}")
+    if not base.is_file():
+        pytest.skip(f"no {base} to make an interpreter other users can run")
+    venv = tmp / "venv"
+    subprocess.run([str(base), "-m", "venv", "--without-pip", str(venv)], check=True)
+    site = next(venv.glob("lib/python*/site-packages"))
+    (site / "armlab-env.pth").write_text(f"import site; site.addsitedir({sysconfig.get_paths()['purelib']!r})\n")
+    python = str(venv / "bin" / "python")
+    probe = subprocess.run(["setpriv", "--reuid=64015", "--regid=64015", "--clear-groups", "--", "sh", "-c",
+                            f"{python} -c 'import numpy, cv2, nbval, ipykernel'"], capture_output=True, text=True)
+    if probe.returncode != 0:
+        pytest.skip(f"this environment's packages are not readable by another user: {probe.stderr[-300:]}")
+    return python
+
+
+def test_run_autograder_in_a_gradescope_layout_with_student_code_unprivileged(tmp_path):
+    """The bundle (make autograder) unpacked as Gradescope does; run_autograder with the unprivileged-user sandbox
+    (what a container without namespaces gets): a correct notebook exercise scores full; a region reading the
+    instructor's notebook out of /autograder/source (here ROOT/source) scores 0 (permission denied); a symlinked
+    armlab/ folder is refused; the source is unchanged and no process of the run's users is left."""
+    import tempfile
+    import zipfile
+
+    from armlab.grading.autograder import build_bundle
+    from armlab.grading.sandbox import USER_UIDS
+
+    if os.getuid() != 0:
+        pytest.skip("the unprivileged-user sandbox needs the grader to be root (as on Gradescope)")
+    public = Path(tempfile.mkdtemp(prefix="armlab-gradescope-"))        # under /tmp: traversable by other users
+    try:
+        public.chmod(0o755)
+        python = _unprivileged_python(public)
+        root = public / "autograder"
+        with zipfile.ZipFile(build_bundle(ROOT, tmp_path / "bundle")) as z:
+            z.extractall(root / "source")
+        for script in ("run_autograder", "setup.sh", "pick-python"):
+            assert (root / "source" / script).is_file()
+        shutil.copy2(root / "source/run_autograder", root / "run_autograder")
+        (root / "run_autograder").chmod(0o755)
+        make_student_release(ROOT, root / "submission")
+        write_regions(root / "submission", DH, _reference(DH))
+        write_regions(root / "submission", CHAIN, [_body('''
+            from pathlib import Path
+            text = (Path(SOURCE) / "notebooks/02_forward_kinematics.ipynb").read_text()
+            raise RuntimeError(text[:50])
+        ''').replace("SOURCE", repr(str(root / "source")))])
+        shutil.rmtree(root / "submission/armlab")
+        (root / "submission/armlab").symlink_to(root / "source/armlab", target_is_directory=True)
+        before = hashlib.sha256(b"".join(p.read_bytes() for p in sorted((root / "source").rglob("*.py")))).hexdigest()
+        env = dict(os.environ, ARMLAB_AUTOGRADER_ROOT=str(root), ARMLAB_PYTHON=python, ARMLAB_SANDBOX="user",
+                   ARMLAB_GRADE_EXERCISES=f"{DH},{CHAIN},fk.dh_link_transform", ARMLAB_GRADE_TIMEOUT="300")
+        env.pop("PYTHONPATH", None)
+        done = subprocess.run([str(root / "run_autograder")], env=env, capture_output=True, text=True, timeout=1200)
+        assert done.returncode == 0, done.stderr[-3000:]
+        results = json.loads((root / "results/results.json").read_text())
+        tests = {t["name"].split(":")[0]: t for t in results["tests"]}
+        assert tests[DH]["score"] == exercise(DH).points, tests[DH]
+        assert tests[CHAIN]["score"] == 0 and "Permission" in tests[CHAIN]["output"], tests[CHAIN]
+        package = tests["fk.dh_link_transform"]
+        assert package["score"] == 0 and "symbolic link" in package["output"], package
+        after = hashlib.sha256(b"".join(p.read_bytes() for p in sorted((root / "source").rglob("*.py")))).hexdigest()
+        assert after == before
+        left = [e.name for e in Path("/proc").iterdir() if e.name.isdigit() and _owner(e) in USER_UIDS]
+        assert left == [], f"processes of the run's users are left: {left}"
+        env["ARMLAB_GRADE_EXERCISES"] = "fk.no_such_exercise"
+        done = subprocess.run([str(root / "run_autograder")], env=env, capture_output=True, text=True, timeout=300)
+        assert done.returncode == 1 and "no exercise 'fk.no_such_exercise'" in done.stderr
+    finally:
+        shutil.rmtree(public, ignore_errors=True)
+
+
+def _owner(entry: Path) -> int:
+    try:
+        return entry.stat().st_uid
+    except OSError:
+        return -1
+
+
+def test_a_fork_bomb_stops_at_the_process_cap(tmp_path):
+    """A run may have at most Limits.max_procs processes (a pids cgroup; the run's own user's RLIMIT_NPROC in the
+    unprivileged-user sandbox): forks past it fail, and the sleeping children die with the run."""
+    from armlab.grading.run import Runner
+    from armlab.grading.sandbox import PidsGroup
+
+    sandbox = detect()
+    if not PidsGroup.available() and sandbox.kind != "user":
+        pytest.skip("no pids cgroup here and not the unprivileged-user sandbox: no process cap to test")
+    runner = Runner(sandbox, Limits(timeout_s=60, cpu_s=30, max_procs=32))
+    work = tmp_path / "run" / "work"
+    work.mkdir(parents=True)
+    bomb = textwrap.dedent(f"""
+        import os, time
+        forked = failed = 0
+        for _ in range(100):
+            try:
+                pid = os.fork()
+            except OSError:
+                failed += 1
+                continue
+            if pid == 0:
+                time.sleep(30)   # {MARK}
+                os._exit(0)
+            forked += 1
+        print(f"forked={{forked}} failed={{failed}}")
+    """)
+    try:
+        done, out, _ = runner.run([os.sys.executable, "-c", bomb], work, b"")
+    finally:
+        runner.close()
+    forked, failed = (int(x.split("=")[1]) for x in out.strip().splitlines()[-1].split())
+    assert done and forked < 32 and failed > 0, out
+    assert _survivors() == []

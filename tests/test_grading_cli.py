@@ -1,0 +1,168 @@
+"""`python -m armlab grade` and `python -m armlab check` as instructors and students meet them: every bad option or
+path is one line and a non-zero exit; the self-check prints the first failing check's message, does not charge a
+wrong homography to the camera pose that calls it, and exits non-zero when anything fails or cannot run."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from armlab.exercises import make_student_release
+from armlab.exercises.registry import exercise
+from armlab.grading.splice import write_regions
+from armlab.grading.submission import exercise_file, regions_of, source_texts
+
+ROOT = Path(__file__).resolve().parents[1]
+HOMOGRAPHY, POSE = "calib.tag_homography", "calib.tag_extrinsics"   # the pose calls the homography
+
+
+def _armlab(*args: str, cwd: Path = ROOT, env: dict | None = None) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "armlab", *args], cwd=cwd, capture_output=True, text=True,
+                          timeout=900, env={**os.environ, **(env or {})})
+
+
+def _reference(exercise_id: str) -> list[str]:
+    name = exercise_file(exercise(exercise_id))
+    return regions_of(source_texts(ROOT / name), exercise_id, name)
+
+
+@pytest.mark.parametrize("args, words", [
+    (["--reference", "/nonexistent"], "--reference /nonexistent: no such folder"),
+    (["--timeout", "nan"], "--timeout: 'nan' must be a positive, finite number of seconds"),
+    (["--timeout", "-3"], "--timeout: '-3' must be a positive, finite number of seconds"),
+    (["--jobs", "0"], "--jobs: 0 is out of range: must be 1 or more"),
+    (["--jobs", "two"], "--jobs: 'two' is not a whole number"),
+])
+def test_grade_refuses_bad_options_in_one_line(tmp_path, args, words):
+    (tmp_path / "subs" / "alice").mkdir(parents=True)
+    done = _armlab("grade", str(tmp_path / "subs"), "--out", str(tmp_path / "out"), *args)
+    assert done.returncode == 2 and words in done.stderr.strip().splitlines()[-1], done.stderr
+    assert "Traceback" not in done.stderr, done.stderr
+    assert not (tmp_path / "out").exists()
+
+
+def test_grade_refuses_a_student_release_as_reference(tmp_path):
+    make_student_release(ROOT, tmp_path / "release")
+    (tmp_path / "subs" / "alice").mkdir(parents=True)
+    done = _armlab("grade", str(tmp_path / "subs"), "--out", str(tmp_path / "out"), "--reference",
+                   str(tmp_path / "release"))
+    assert done.returncode == 2 and "no hidden checks" in done.stderr and "Traceback" not in done.stderr
+
+
+def test_grade_has_a_version():
+    done = _armlab("grade", "--version")
+    assert done.returncode == 0 and done.stdout.startswith("armlab ")
+
+
+@pytest.fixture(scope="module")
+def student(tmp_path_factory) -> Path:
+    """A release with a wrong homography (the normalisation not undone) and the reference pose that calls it."""
+    folder = tmp_path_factory.mktemp("check") / "student"
+    make_student_release(ROOT, folder)
+    wrong = _reference(HOMOGRAPHY)[0].replace("np.linalg.solve(T_dst, H_normalised @ T_src)", "H_normalised")
+    assert wrong != _reference(HOMOGRAPHY)[0]
+    write_regions(folder, HOMOGRAPHY, [wrong])
+    write_regions(folder, POSE, _reference(POSE))
+    return folder
+
+
+def test_check_names_the_first_failing_check_and_does_not_charge_the_caller(student):
+    done = _armlab("check", cwd=student)
+    assert done.returncode == 1, done.stdout + done.stderr
+    lines = done.stdout.splitlines()
+    homography = next(ln for ln in lines if ln.startswith(f"- {HOMOGRAPHY}:"))
+    assert "01_camera_calibration cell" in homography and "AssertionError: " in homography, done.stdout
+    pose = next(ln for ln in lines if ln.startswith(f"- {POSE}:"))
+    assert f"it needs {HOMOGRAPHY}, which fails" in pose, done.stdout
+    assert "1 written exercise(s) not yet passing" in done.stdout and "not written yet" in done.stdout
+
+
+def test_check_passes_with_exit_0_when_everything_written_passes(tmp_path):
+    """The homography and the pose written as the reference: every check of theirs passes, except the pose's check
+    cell shared with the depth plane, which waits for it (not written yet): that is no failure (exit 0)."""
+    folder = tmp_path / "student"
+    make_student_release(ROOT, folder)
+    for exercise_id in (HOMOGRAPHY, POSE):
+        write_regions(folder, exercise_id, _reference(exercise_id))
+    done = _armlab("check", cwd=folder)
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert "1 written" not in done.stdout and "not written yet" in done.stdout, done.stdout
+
+
+def test_check_says_what_is_missing_when_it_cannot_run(tmp_path):
+    """Without nbval (a Python whose path hides it) the self-check exits 2 naming the missing package."""
+    shadow = tmp_path / "shadow"
+    shadow.mkdir()
+    (shadow / "nbval.py").write_text("raise ImportError('hidden for the test')\n")
+    (shadow / "sitecustomize.py").write_text(
+        "import importlib.util, sys\n_real = importlib.util.find_spec\n"
+        "importlib.util.find_spec = lambda name, *a: None if name == 'nbval' else _real(name, *a)\n")
+    make_student_release(ROOT, tmp_path / "student")
+    done = _armlab("check", cwd=tmp_path / "student", env={"PYTHONPATH": str(shadow)})
+    assert done.returncode == 2 and "nbval not installed" in done.stderr, done.stderr
+
+
+def _fake_pythons(folder: Path, minors: list[int]) -> dict[str, str]:
+    folder.mkdir()
+    for minor in minors:
+        path = folder / f"python3.{minor}"
+        path.write_text(f"#!/bin/sh\necho {minor}\n")
+        path.chmod(0o755)
+    return {"PATH": f"{folder}:/usr/bin:/bin"}
+
+
+@pytest.mark.parametrize("minors, picked", [([10], None), ([10, 12], "python3.12"), ([11, 13, 10], "python3.13")])
+def test_gradescope_setup_picks_a_python_the_pins_can_install_on(tmp_path, minors, picked):
+    """tools/autograder/pick-python (setup.sh's choice): the newest python3.X >= 3.11 on PATH, else one line naming
+    what to install or which base image to choose. The fake interpreters print only their minor version."""
+    env = _fake_pythons(tmp_path / "bin", minors)
+    env["PATH"] = env["PATH"].replace(":/usr/bin:/bin", ":/nonexistent")
+    done = subprocess.run(["/bin/bash", str(ROOT / "tools/autograder/pick-python"), "3.11"], env=env,
+                          capture_output=True, text=True)
+    if picked is None:
+        assert done.returncode == 1 and "Ubuntu 24.04" in done.stderr and "python3.11" in done.stderr
+    else:
+        assert done.returncode == 0 and done.stdout.strip() == str(tmp_path / "bin" / picked)
+
+
+def test_written_answers_reach_the_feedback_and_the_instructors_csv(tmp_path):
+    """A written answer (kind "written") is read from the student's markdown cell: feedback.md and results.json show
+    it (0 points there: graded by hand), grades.csv has an empty column for it headed with its points, answers.csv
+    holds the text; a blank answer says so. No notebook runs for it."""
+    import csv
+    import json
+
+    from armlab.exercises.registry import EXERCISES
+    from armlab.grading import grade_class
+
+    written = next(e for e in EXERCISES if e.kind == "written")
+    subs = tmp_path / "subs"
+    make_student_release(ROOT, subs / "ada")
+    make_student_release(ROOT, subs / "bob")
+    path = subs / "ada" / f"notebooks/{written.notebook}.ipynb"
+    nb = json.loads(path.read_text())
+    answer = "The error grows with the distance from the tags, because the homography's errors scale with it."
+    hits = 0
+    for cell in nb["cells"]:
+        text = "".join(cell["source"])
+        if cell["cell_type"] == "markdown" and f"BEGIN ANSWER {written.id}" in text:
+            head, rest = text.split("-->", 1)
+            cell["source"] = head + "-->\n" + answer + "\n<!-- END ANSWER -->" + rest.split("<!-- END ANSWER -->", 1)[1]
+            hits += 1
+    assert hits == 1, f"no answer cell for {written.id} in {path.name}"
+    path.write_text(json.dumps(nb, indent=1))
+    graded = grade_class(subs, tmp_path / "out", ROOT, exercises=[written.id])
+    assert graded["ada"][written.id].answer == answer and graded["bob"][written.id].answer is None
+    feedback = (tmp_path / "out/ada/feedback.md").read_text()
+    assert f"graded by hand, {written.points} points" in feedback and answer in feedback
+    results = json.loads((tmp_path / "out/ada/results.json").read_text())
+    assert results["score"] == 0 and answer in results["tests"][0]["output"] and results["tests"][0]["max_score"] == 0
+    rows = list(csv.DictReader((tmp_path / "out/grades.csv").open()))
+    assert rows[0][f"{written.id} (by hand, /{written.points})"] == ""
+    answers = {r["student"]: r[written.id] for r in csv.DictReader((tmp_path / "out/answers.csv").open())}
+    assert answers == {"ada": answer, "bob": ""}
+    assert "not written" in (tmp_path / "out/bob/feedback.md").read_text()

@@ -1,0 +1,127 @@
+"""Notebooks 04-08 as labs (issue 23, branch lab23b): the exercises' hidden checks score the blank stub 0 and a wrong
+answer loses its own exercise only; the kit's pieces the exercises stand on (move_path's runners and input checks,
+the TaskMachine's replaceable transition, the segmentation scorer, non-colliding detection labels)."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from armlab.exercises.markers import stub_lines
+from armlab.grading.run import Limits
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "tests"))
+MINE = ("detect.segment", "detect.face", "grab.move_path", "events.sort_stack", "station.transition")
+CHEAP = ("detect.face", "station.transition")      # hidden checks without a simulator run
+
+
+def _grader(ids):
+    from armlab.grading.grade import Grader
+
+    return Grader(ROOT, Limits(timeout_s=600, cpu_s=400), list(ids))
+
+
+def _blank(exercise_id: str) -> list[str]:
+    from test_grading import _reference_bodies
+
+    return ["\n".join("    " + line for line in stub_lines(exercise_id))] * len(_reference_bodies(exercise_id))
+
+
+def test_the_blank_stubs_fail_every_hidden_check():
+    got = _grader(MINE).hidden_checks_together({e: _blank(e) for e in MINE})
+    for exercise_id in MINE:
+        assert got[exercise_id] and not any(c.passed for c in got[exercise_id]), (exercise_id, got[exercise_id])
+
+
+@pytest.mark.parametrize("round_", [0, 1])
+def test_a_wrong_answer_loses_its_own_exercise_only(round_):
+    """Each cheap exercise wrong in turn (its round_-th wrong answer of test_grading.HIDDEN_WRONG) while the other
+    holds the reference: the wrong one fails a hidden check, the other passes every one."""
+    from test_grading import HIDDEN_WRONG, _reference_bodies
+
+    grader = _grader(CHEAP)
+    for wrong_id in CHEAP:
+        label, bodies = list(HIDDEN_WRONG[wrong_id].items())[round_]
+        got = grader.hidden_checks_together({e: bodies if e == wrong_id else _reference_bodies(e) for e in CHEAP})
+        assert not all(c.passed for c in got[wrong_id]), f"{wrong_id}, {label}: every hidden check passed"
+        for other in CHEAP:
+            if other != wrong_id:
+                assert all(c.passed for c in got[other]), (other, [c.message for c in got[other]])
+
+
+def test_move_path_refuses_bad_input_and_plans_a_straight_descent():
+    from armlab import kinematics, planning
+    from armlab.tasks.move_path import move_path
+
+    q0 = np.zeros(5)
+    for bad, why in (({"action": "push"}, "action"), ({"target": [0.0, 200.0]}, "target"),
+                     ({"edge": -1.0}, "edge")):
+        args = {"target": [0.0, 250.0, 38.0], "yaw": 0.0, "edge": 38.0, "action": "grasp", **bad}
+        with pytest.raises(ValueError, match=why):
+            move_path(q0, args["target"], args["yaw"], args["edge"], args["action"])
+    plan = move_path(q0, [100.0, 250.0, 38.0], 0.3, 38.0, "grasp")
+    moves = [s for s in plan.steps if isinstance(s, planning.MoveStep)]
+    grips = [s.action for s in plan.steps if isinstance(s, planning.GripperStep)]
+    assert grips == ["open", "close"]
+    low = kinematics.fk(moves[1].trajectory.end)[:3, 3]
+    assert np.allclose(low, [100.0, 250.0, 19.0], atol=1e-6)          # a 38 mm cube gripped at its centre
+    high = kinematics.fk(moves[1].trajectory.start)[:3, 3]
+    assert np.allclose(high[:2], low[:2], atol=1e-6) and high[2] > low[2] + 50.0
+
+
+def test_a_task_machine_runs_every_command_through_its_transition():
+    from armlab.station.contract import EmergencyStopped
+    from armlab.tasks.machine import MachineBusy, TaskMachine, command_transition
+
+    class Arm:
+        def emergency_stop(self):
+            pass
+
+        def reset(self):
+            pass
+
+    station = type("Station", (), {"arm": Arm()})()
+    seen = []
+
+    def spy(machine, state, action):
+        seen.append(state)
+        return command_transition(machine, state, action)
+
+    machine = TaskMachine(station, transition=spy)
+    assert machine._run("detect", lambda: 5) == 5 and seen == ["detect"]
+    with pytest.raises(MachineBusy):
+        machine._run("execute", lambda: machine._run("detect", lambda: None))
+    assert machine.state == "idle"
+    machine.estop()
+    with pytest.raises(EmergencyStopped):
+        machine._run("detect", lambda: None)
+    assert machine.history[-1] == "estop" and machine.stop_requested
+    with pytest.raises(ValueError, match="unknown state"):
+        machine.enter("dancing")
+
+
+def test_detection_labels_do_not_overlap():
+    from armlab.detection.draw import _label_origin
+
+    taken = []
+    for u, v in [(400, 300), (405, 302), (398, 310), (410, 296)]:      # four blocks' centres a few px apart
+        _label_origin("green large", u, v, taken, (720, 1280, 3))
+    for i, a in enumerate(taken):
+        for b in taken[i + 1:]:
+            assert a[2] <= b[0] or b[2] <= a[0] or a[3] <= b[1] or b[3] <= a[1], (a, b)
+
+
+def test_the_segmentation_score_names_a_bad_label_image():
+    from armlab.sim.detection_eval import balanced_frame, score_segmentation, sim_case
+
+    case = sim_case("random", 7)
+    rgb, board = balanced_frame(case)
+    assert rgb.dtype == np.uint8 and board.mean() > 0.3
+    with pytest.raises(ValueError, match="label image"):
+        score_segmentation(case, np.zeros((10, 10), int), board)
+    nothing = score_segmentation(case, np.full(case.rgb.shape[:2], -1), board)
+    assert nothing.pairs and nothing.face_accuracy == 0.0 and nothing.board_labelled == 0.0
