@@ -26,7 +26,6 @@ def build_notebook_tool():
 def test_every_source_has_its_notebook_and_every_notebook_its_source():
     notebooks = {p.stem for p in (ROOT / "notebooks").glob("*.ipynb")}
     assert notebooks == {p.stem for p in SOURCES}
-    assert len(SOURCES) == 9
 
 
 @pytest.mark.parametrize("source", SOURCES, ids=[p.stem for p in SOURCES])

@@ -26,7 +26,7 @@ import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
-from .sandbox import PidsGroup, Sandbox
+from .sandbox import Limits, PidsGroup, Sandbox
 
 __all__ = ["DEFAULT_LIMITS", "Limits", "CellResult", "NotebookRun", "Runner", "check_cells", "verify_signed",
            "CHILD_FILES"]
@@ -41,17 +41,6 @@ CHILD_FILES = ("nbval_guard.py", "harness.py", "kernel_startup.py", "child_commo
 # the environment a run inherits from the grader: locale and the numerics settings, nothing else
 _KEEP_ENV = ("PATH", "LANG", "LANGUAGE", "TZ", "PYTHONHASHSEED", "TERM")
 _KEEP_PREFIXES = ("LC_", "OPENBLAS", "NPY_", "OPENCV_", "OMP_", "MKL_")
-
-
-@dataclass(frozen=True)
-class Limits:
-    """timeout_s: wall-clock seconds for one run; cpu_s: CPU seconds per process; memory_mb: address space per
-    process; max_procs: processes of one run at once (a pids cgroup, or the run's own user's RLIMIT_NPROC)."""
-
-    timeout_s: float = 300.0
-    cpu_s: int = 300
-    memory_mb: int = 8192
-    max_procs: int = 256
 
 
 DEFAULT_LIMITS = Limits()

@@ -32,7 +32,19 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
-__all__ = ["GRADER", "HOME", "WORK", "USER_UIDS", "Sandbox", "SandboxUnavailable", "detect", "lock_down"]
+__all__ = ["GRADER", "HOME", "WORK", "USER_UIDS", "Limits", "Sandbox", "SandboxUnavailable", "detect", "lock_down"]
+
+@dataclass(frozen=True)
+class Limits:
+    """timeout_s: wall-clock seconds for one run; cpu_s: CPU seconds per process; memory_mb: address space per
+    process; max_procs: processes of one run at once (a pids cgroup, or the run's own user's RLIMIT_NPROC).
+    (Defined here, where the sandbox applies them; armlab.grading.run re-exports it.)"""
+
+    timeout_s: float = 300.0
+    cpu_s: int = 300
+    memory_mb: int = 8192
+    max_procs: int = 256
+
 
 WORK = "/home/student/work"        # the work tree, inside a "bwrap" sandbox
 HOME = "/home/student"
@@ -252,8 +264,6 @@ def _bwrap_works() -> tuple[bool, str]:
         return False, "bubblewrap is not installed (Debian: apt-get install bubblewrap)"
     probe = Sandbox("bwrap")
     import tempfile
-
-    from .run import Limits
 
     with tempfile.TemporaryDirectory() as tmp:
         (Path(tmp) / "w").mkdir()

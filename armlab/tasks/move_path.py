@@ -21,6 +21,7 @@ from armlab.gripper_geometry import GRIPPER
 from armlab.kinematics import Unreachable
 from armlab.planning import Obstacle
 from armlab.robot import RobotModel, rx200
+from armlab.station.contract import Station
 
 from . import handling, precheck
 
@@ -110,7 +111,7 @@ def _checked_plan(path: MovePath, q, target, yaw: float, edge: float, action: st
     return plan
 
 
-def grab_with(station, block, path: MovePath = move_path) -> bool:
+def grab_with(station: Station, block, path: MovePath = move_path) -> bool:
     """Pick a detected block (detection.Block) with the plan `path` makes for it (action "grasp"): checked whole,
     then run on the station's guarded arm; True when the block is held. Raises ValueError when a block is held
     already and MotionRefused (nothing sent) when the plan would hit something or break a limit."""
@@ -131,7 +132,7 @@ def grab_with(station, block, path: MovePath = move_path) -> bool:
     return held
 
 
-def drop_with(station, position, yaw: float = 0.0, path: MovePath = move_path) -> bool:
+def drop_with(station: Station, position, yaw: float = 0.0, path: MovePath = move_path) -> bool:
     """Put the held block's bottom-face centre at `position` (3,) world mm with the plan `path` makes (action
     "release"), checked whole first (MotionRefused, nothing sent); True when the plan ran through."""
     ctx = handling.context(station)

@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
-from armlab.station.contract import EmergencyStopped, MotionRefused
+from armlab.station.contract import EmergencyStopped, MotionRefused, Station
 from armlab.tasks.click import ClickRefused, click_drop, click_grab, click_world, current_view
 from armlab.tasks.handling import context, look
 from armlab.tasks.machine import MachineBusy
@@ -39,7 +39,7 @@ MARKER_RGB = (255, 0, 255)     # the last click, drawn on the shown frame
 STALE_VIEW_RAD = 0.02          # a look is out of date once any joint has moved more than this since it was taken
 
 
-def view_is_current(station) -> bool:
+def view_is_current(station: Station) -> bool:
     """True when the station has a last look (tasks.context(station).last) and the arm has not moved since it was
     taken (every joint within STALE_VIEW_RAD of the look's reading): the frame then shows the board as it is."""
     ctx = context(station)
@@ -49,7 +49,7 @@ def view_is_current(station) -> bool:
     return bool(moved <= STALE_VIEW_RAD)
 
 
-def holding_text(station) -> str:
+def holding_text(station: Station) -> str:
     """What the gripper holds and what the next click does, in one line."""
     held = context(station).held
     if held is None:
@@ -192,7 +192,7 @@ class ClickToGrab:
             (refused while it is busy or emergency-stopped); default: tasks.click_grab / click_drop directly.
     """
 
-    def __init__(self, station, scale: float = 0.5, yaw: float = 0.0, display_width: int | None = None,
+    def __init__(self, station: Station, scale: float = 0.5, yaw: float = 0.0, display_width: int | None = None,
                  machine=None):
         if not 0.05 <= scale <= 1.0:
             raise ValueError(f"scale must lie in [0.05, 1], got {scale}")

@@ -47,6 +47,7 @@ import numpy as np
 from armlab import planning
 from armlab.blocks import LAB_RGB, ObjectState
 from armlab.lab import lab_config
+from armlab.station.contract import Station
 from armlab.tasks.click import ClickRefused
 from armlab.tasks.handling import context
 from armlab.tasks.machine import TaskMachine
@@ -129,7 +130,7 @@ class StationPanel:
             the last look is still current; False: start from a new capture wherever the arm is.
     """
 
-    def __init__(self, station, viewer=None, machine: TaskMachine | None = None, scale: float = 0.5,
+    def __init__(self, station: Station, viewer=None, machine: TaskMachine | None = None, scale: float = 0.5,
                  live_period_s: float = 0.5, follow_hz: float = 10.0, look: bool = True):
         if machine is not None and machine.station is not station:
             raise ValueError("the TaskMachine given drives another station")
@@ -791,6 +792,6 @@ class StationPanel:
             self._update_widgets()
 
 
-def station_panel(station, viewer=None, **options) -> StationPanel:
+def station_panel(station: Station, viewer=None, **options) -> StationPanel:
     """The control station over `station` (see StationPanel); display panel.widget() in a notebook."""
     return StationPanel(station, viewer=viewer, **options)
