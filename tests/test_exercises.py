@@ -59,7 +59,9 @@ def test_every_region_names_a_registered_exercise_and_every_exercise_has_its_reg
             cells = notebook_code_cells(e.notebook)
             assert any(r.exercise_id == e.id for c in cells for r in find_regions(c, e.notebook)), \
                 f"{e.id}: notebooks/{e.notebook}.ipynb has no region for it (rebuild the notebook)"
-    assert sum(e.points for e in EXERCISES) == 100 and len({e.id for e in EXERCISES}) == len(EXERCISES)
+    # 55 points in notebooks 01-03 and 65 in 04-08 (issue 23: the points follow the work, 30 of them on open tasks)
+    assert sum(e.points for e in EXERCISES) == 120 and len({e.id for e in EXERCISES}) == len(EXERCISES)
+    assert sum(e.points for e in EXERCISES if e.kind == "open") >= 30
 
 
 def test_package_exercises_say_which_notebook_teaches_them():
