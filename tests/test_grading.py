@@ -373,7 +373,7 @@ def test_static_check_names_the_forbidden_call():
     from armlab.grading.hidden import FORBIDDEN
     from armlab.grading.static import forbidden_uses, static_check
 
-    for ex in EXERCISES:
+    for ex in (e for e in EXERCISES if e.kind != "written"):        # written answers have no code to check
         assert static_check(ex.id, _reference_bodies(ex.id)).passed, ex.id
         for name in FORBIDDEN[ex.id]:
             module, _, last = name.rpartition(".")
