@@ -38,6 +38,8 @@ __all__ = [
     "jacobian",
     "tool_orientation",
     "ik",
+    "ik_branches",
+    "BRANCHES",
     "ik_batch",
     "IKResult",
     "IKBatchResult",
@@ -556,6 +558,20 @@ def ik(position, pitch, roll: float = 0.0, current=None, robot: RobotModel | Non
     robot = robot or rx200()
     fast = _ik_one(position, pitch, roll, current, robot)
     return fast if fast is not None else _ik_general(position, pitch, roll, current, robot)
+
+
+BRANCHES = tuple(", ".join(b) for b in _BRANCHES)    # "facing, elbow up", ..., "flipped, elbow down"
+
+
+def ik_branches(position, pitch, roll: float = 0.0, robot: RobotModel | None = None) -> np.ndarray:
+    """Every closed-form branch for one target (4, 5) rad, in the order of BRANCHES (waist facing the target or
+    flipped, x elbow up or down), joint limits NOT applied: NaN rows where the wrist centre is out of reach. The
+    same solutions ik() ranks and filters; position (3,) world mm, pitch and roll rad as in ik()."""
+    robot = robot or rx200()
+    P, pitch_a, roll_a, _, single = _prepare(position, pitch, roll, None, robot)
+    if not single:
+        raise ValueError("ik_branches takes one position (3,)")
+    return _ik_candidates(P, pitch_a, roll_a, robot).q[0]
 
 
 def _ik_general(position, pitch, roll, current, robot: RobotModel) -> np.ndarray:

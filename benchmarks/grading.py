@@ -3,7 +3,7 @@ submissions over several exercises: in turn correct (the reference regions), bla
 (the reference with one slip, a different text per student so that no result is shared). Each jobs setting grades
 the class with a fresh Grader (nothing cached from the other).
 
-    PYTHONPATH=. python benchmarks/grading.py [--students 20] [--exercises fk.dh_transform ik.planar_ik ...]
+    PYTHONPATH=. python benchmarks/grading.py [--students 20] [--exercises fk.dh_table ik.candidates ...]
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ from armlab.grading.splice import write_regions
 from armlab.grading.submission import exercise_file, regions_of, source_texts
 
 ROOT = Path(__file__).resolve().parents[1]
-EXERCISES = ["fk.dh_transform", "ik.planar_ik", "calib.tag_homography"]
+EXERCISES = ["fk.dh_table", "ik.candidates", "calib.tag_homography"]
 SLIPS = (("np.sin", "np.cos"), (" - ", " + "), (" + ", " - "), ("-x", "x"))   # the first that applies
 
 

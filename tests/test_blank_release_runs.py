@@ -97,7 +97,7 @@ def test_every_check_cell_fails_while_its_exercise_is_blank(blank_run):
     assert not passing, "check cells that pass with their exercise blank:\n" + "\n".join(passing)
     checked = {x for nb in notebooks.values() for c in nb.cells if c.cell_type == "code"
                for m in CHECK_TAG.findall(c.source) for x in m.split()}
-    every = {e.id for e in EXERCISES if e.kind != "written"}      # written answers are graded by hand
+    every = {e.id for e in EXERCISES if e.kind != "written"}     # written answers are graded by hand
     assert checked == every, f"exercises without a check cell: {sorted(every - checked)}"
 
 
@@ -113,5 +113,6 @@ def test_the_reference_paths_say_so_in_one_line_each(blank_run):
                      for line in _stderr(c).splitlines() if line.startswith("note: exercise ")]
                     for nb in notebooks.values()]
     assert all(len(n) == len(set(n)) for n in per_notebook), "a reference path announced itself twice"
-    assert {"calib.tag_extrinsics", "calib.depth_plane", "ik.candidates", "detect.classify",
+    assert {"calib.tag_extrinsics", "calib.depth_plane", "ik.candidates", "fk.dh_link_transform", "fk.dh_table",
+            "detect.classify",
             "grab.move_path", "teach.replay", "events.sort_stack"} <= set(ids), sorted(set(ids))

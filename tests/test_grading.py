@@ -21,19 +21,18 @@ from armlab.grading.splice import write_regions
 from armlab.grading.submission import exercise_file, regions_of, source_texts
 
 ROOT = Path(__file__).resolve().parents[1]
-GRADED = ["fk.dh_transform", "fk.fk_from_table", "ik.planar_ik"]
+GRADED = ["fk.dh_table", "fk.euler", "ik.candidates"]
 CONTAINED = {   # region prefixes that break the run before the (correct) solution
     "kernel_exit": "    import os\n    os._exit(1)\n",
     "kernel_kill": "    import os\n    import signal\n    os.kill(os.getpid(), signal.SIGKILL)\n",
     "memory_hog": "    hog = bytearray(12 * 2**30)   # past the 8 GB cap, within the RAM: only the cap stops it\n",
     "huge_output": "    print('x' * (200 * 2**20))\n",
 }
-LIBRARY_DH = ("    from armlab.kinematics import dh_link_transform\n"     # right values, the kit's work
-              "    return dh_link_transform(theta, d, a, alpha)")
-WRONG = {"fk.dh_transform": "    ct, st, ca, sa = np.cos(theta), np.sin(theta), np.cos(alpha), np.sin(alpha)\n"
-                            "    return np.array([[ct, -st * ca, st * sa, a * ct], [st, ct * ca, -ct * sa, a * st],\n"
-                            "                     [0.0, sa, ca, -d], [0.0, 0.0, 0.0, 1.0]])",
-         "ik.planar_ik": None}
+LIBRARY_EULER = ("    from armlab.transforms import euler_zyz_from_matrix\n"     # right values, the kit's work
+                 "    return euler_zyz_from_matrix(np.asarray(T, dtype=float)[:3, :3])")
+WRONG_DH = ("    return np.array([[np.pi / 2, h0, 0.0, np.pi / 2], [-(np.pi / 2 - beta), 0.0, L1, 0.0],\n"
+            "                     [np.pi / 2 - beta, 0.0, L2, 0.0], [-np.pi / 2, 0.0, 0.0, -np.pi / 2],\n"
+            "                     [0.0, Lt, 0.0, 0.0]])")      # alpha1's sign slipped: z1 points the other way
 
 
 def _reference_bodies(exercise_id: str) -> list[str]:
@@ -41,9 +40,11 @@ def _reference_bodies(exercise_id: str) -> list[str]:
     return regions_of(source_texts(ROOT / name), exercise_id, name)
 
 
-def _wrong_ik() -> list[str]:
-    # the elbow branches swapped: the classic sign slip of notebook 03
-    return [_reference_bodies("ik.planar_ik")[0].replace("(-1 if elbow_up else 1)", "(1 if elbow_up else -1)")]
+def _wrong_euler() -> list[str]:
+    # psi's sign slipped: the classic slip reading the third rotation off the bottom row
+    body = _reference_bodies("fk.euler")[0]
+    assert "-R[2, 0]" in body
+    return [body.replace("-R[2, 0]", "R[2, 0]")]
 
 
 def _tamper_checks(student: Path) -> None:
@@ -77,32 +78,31 @@ def graded(tmp_path_factory) -> tuple[dict, Path]:
     for exercise_id in GRADED:
         write_regions(full, exercise_id, _reference_bodies(exercise_id))
     student("blank")
-    write_regions(student("wrong_dh"), "fk.dh_transform", [WRONG["fk.dh_transform"]])
-    wrong_ik = student("wrong_ik")
-    write_regions(wrong_ik, "ik.planar_ik", _wrong_ik())
-    write_regions(wrong_ik, "fk.dh_transform", _reference_bodies("fk.dh_transform"))
+    write_regions(student("wrong_dh"), "fk.dh_table", [WRONG_DH])
+    wrong_euler = student("wrong_euler")
+    write_regions(wrong_euler, "fk.euler", _wrong_euler())
+    write_regions(wrong_euler, "fk.dh_table", _reference_bodies("fk.dh_table"))
     tampered = student("tampered")          # a wrong DH, every trick on the check cells, a conftest that passes all
-    write_regions(tampered, "fk.dh_transform", [WRONG["fk.dh_transform"].replace("-d]", "-1.0 * d]")])
+    write_regions(tampered, "fk.dh_table", [WRONG_DH.replace("0.0, np.pi / 2]", "0.0, 1.0 * np.pi / 2]")])
     _tamper_checks(tampered)
     (tampered / "conftest.py").write_text(
         "import pytest\n\n@pytest.hookimpl(hookwrapper=True)\ndef pytest_runtest_makereport(item, call):\n"
         "    outcome = yield\n    outcome.get_result().outcome = 'passed'\n")
     (tampered / "pytest.ini").write_text("[pytest]\naddopts = -p no:nbval\n")
-    write_regions(student("marker"), "fk.dh_transform",
-          ["    # NBVAL_RAISES_EXCEPTION\n" + WRONG["fk.dh_transform"].replace("-d]", "-2 * d]")])
-    write_regions(student("loop"), "fk.dh_transform", ["    while True:\n        pass"])
+    write_regions(student("marker"), "fk.dh_table",
+                  ["    # NBVAL_RAISES_EXCEPTION\n" + WRONG_DH.replace("0.0, np.pi / 2]", "0.0, 2 * np.pi / 2]")])
+    write_regions(student("loop"), "fk.dh_table", ["    while True:\n        pass"])
     corrupt = student("corrupt")
     (corrupt / "notebooks/02_forward_kinematics.ipynb").write_text('{"cells": [ not json')
     edited_only = subs / "edited_only"     # only the edited file, the rest not submitted
-    (edited_only / "notebooks").mkdir(parents=True)
-    shutil.copy2(full / "notebooks/03_inverse_kinematics.ipynb", edited_only / "notebooks")
+    (edited_only / "armlab").mkdir(parents=True)
+    shutil.copy2(full / "armlab/kinematics.py", edited_only / "armlab")
     for name, prefix in CONTAINED.items():   # each then runs the reference: only the limits can make it score 0
-        write_regions(student(name), "fk.dh_transform", [prefix + _reference_bodies("fk.dh_transform")[0]])
-        write_regions(subs / name, "fk.fk_from_table", _reference_bodies("fk.fk_from_table"))
-    write_regions(student("library_call"), "fk.dh_transform", [LIBRARY_DH])
-    kit = student("kit_call")            # the kit's reference function in place of the DH chain
-    write_regions(kit, "fk.fk_from_table", ["    from armlab import kinematics\n"
-                                    "    return kinematics.fk_pox(q, check_limits=False)"])
+        write_regions(student(name), "fk.dh_table", [prefix + _reference_bodies("fk.dh_table")[0]])
+        write_regions(subs / name, "fk.euler", _reference_bodies("fk.euler"))
+    write_regions(student("library_call"), "fk.euler", [LIBRARY_EULER])
+    kit = student("kit_call")            # the notebook's stand-in (the kit's table with the lengths put in)
+    write_regions(kit, "fk.dh_table", ["    return kit_table(h0, L1, beta, L2, Lt)"])
     out = base / "out"
     results = grade_class(subs, out, ROOT, jobs=2, limits=Limits(timeout_s=240, cpu_s=25), exercises=GRADED)
     return results, out
@@ -123,40 +123,40 @@ def test_blank_release_scores_zero_without_running(graded):
 
 
 def test_wrong_answer_costs_its_own_exercise_only(graded):
-    assert _score(graded, "wrong_dh", "fk.dh_transform") < exercise("fk.dh_transform").points
-    assert _score(graded, "wrong_ik", "ik.planar_ik") < exercise("ik.planar_ik").points
-    assert _score(graded, "wrong_ik", "fk.dh_transform") == exercise("fk.dh_transform").points
-    ik = graded[0]["wrong_ik"]["ik.planar_ik"]
-    assert ik.checks[0].passed          # the public check right after the exercise misses the swapped branches
-    first = next(c for c in ik.checks if not c.passed)
-    assert first.name.startswith("hidden check") and "differs" in first.message
+    assert _score(graded, "wrong_dh", "fk.dh_table") < exercise("fk.dh_table").points
+    assert _score(graded, "wrong_euler", "fk.euler") < exercise("fk.euler").points
+    assert _score(graded, "wrong_euler", "fk.dh_table") == exercise("fk.dh_table").points
+    euler = graded[0]["wrong_euler"]["fk.euler"]
+    hidden = [c for c in euler.checks if c.name.startswith("hidden check")]
+    assert hidden and any("differs" in c.message for c in hidden if not c.passed)
 
 
 def test_tricks_score_below_full_marks(graded):
-    assert _score(graded, "tampered", "fk.dh_transform") == 0        # edited asserts, verdicts, markers, conftest
-    marker = graded[0]["marker"]["fk.dh_transform"]
+    assert _score(graded, "tampered", "fk.dh_table") == 0        # edited asserts, verdicts, markers, conftest
+    marker = graded[0]["marker"]["fk.dh_table"]
     assert marker.score == 0 and "NBVAL_RAISES_EXCEPTION" in marker.reason and not marker.checks
 
 
 def test_calling_the_kits_reference_function_fails_the_hidden_checks(graded):
-    kit = graded[0]["kit_call"]["fk.fk_from_table"]
+    kit = graded[0]["kit_call"]["fk.dh_table"]
     hidden = [c for c in kit.checks if c.name.startswith("hidden")]
-    assert hidden and not any(c.passed for c in hidden) and kit.score < exercise("fk.fk_from_table").points
+    assert hidden and not all(c.passed for c in hidden) and kit.score < exercise("fk.dh_table").points
 
 
 def test_the_release_lacks_the_hidden_checks(tmp_path):
     make_student_release(ROOT, tmp_path / "s")
-    assert (ROOT / "armlab/grading/hidden/__init__.py").is_file() and not (tmp_path / "s/armlab/grading/hidden").exists()
+    assert (ROOT / "armlab/grading/hidden/__init__.py").is_file()
+    assert not (tmp_path / "s/armlab/grading/hidden").exists()
     assert (tmp_path / "s/armlab/grading/harness.py").is_file()
     assert not list((tmp_path / "s/tests").glob("test_grading*.py"))
 
 
 def test_infinite_loop_and_corrupt_notebook_are_contained(graded):
-    loop = graded[0]["loop"]["fk.dh_transform"]
+    loop = graded[0]["loop"]["fk.dh_table"]
     assert loop.score == 0 and loop.checks and not any(c.passed for c in loop.checks)
-    corrupt = graded[0]["corrupt"]["fk.dh_transform"]
+    corrupt = graded[0]["corrupt"]["fk.dh_table"]
     assert corrupt.score == 0 and "not a readable notebook" in corrupt.reason
-    assert _score(graded, "corrupt", "ik.planar_ik") == 0            # blank in that release copy, not broken
+    assert _score(graded, "corrupt", "ik.candidates") == 0            # blank in that release copy, not broken
 
 
 @pytest.mark.parametrize("student, why", [("kernel_exit", "the kernel died"), ("kernel_kill", "the kernel died"),
@@ -166,30 +166,30 @@ def test_kernel_death_memory_hog_and_huge_output_are_contained(graded, student, 
     of the class is graded (the grader survived). The memory hog's 12 GB fit this machine's RAM: only the address-space
     cap on the kernel (and on the hidden checks' process) turns it into a MemoryError."""
     results, out = graded
-    broken = results[student]["fk.dh_transform"]
+    broken = results[student]["fk.dh_table"]
     assert broken.score == 0 and broken.checks and not any(c.passed for c in broken.checks)
-    assert _score(graded, student, "fk.fk_from_table") == exercise("fk.fk_from_table").points
+    assert _score(graded, student, "fk.euler") == exercise("fk.euler").points
     feedback = (out / student / "feedback.md").read_text()
     assert why in feedback and "FAILED" in feedback
     assert len(feedback) < 50_000 and (out / student / "results.json").stat().st_size < 50_000
-    assert _score(graded, "full", "fk.dh_transform") == exercise("fk.dh_transform").points
+    assert _score(graded, "full", "fk.dh_table") == exercise("fk.dh_table").points
 
 
 def test_a_library_call_in_place_of_the_exercise_scores_below_full_marks(graded):
-    """The kit's dh_link_transform computes the right values (every public and hidden check passes); the static
+    """The kit's euler_zyz_from_matrix computes the right values (every public and hidden check passes); the static
     check fails naming the call."""
-    result = graded[0]["library_call"]["fk.dh_transform"]
+    result = graded[0]["library_call"]["fk.euler"]
     static = [c for c in result.checks if c.name.startswith("static")]
     assert all(c.passed for c in result.checks if not c.name.startswith("static"))
-    assert len(static) == 1 and not static[0].passed and "kinematics.dh_link_transform" in static[0].message
-    assert 0 < result.score < exercise("fk.dh_transform").points
-    kit = graded[0]["kit_call"]["fk.fk_from_table"]
-    assert any("kinematics.fk_pox" in c.message for c in kit.checks if c.name.startswith("static"))
+    assert len(static) == 1 and not static[0].passed and "euler_zyz_from_matrix" in static[0].message
+    assert 0 < result.score < exercise("fk.euler").points
+    kit = graded[0]["kit_call"]["fk.dh_table"]
+    assert any("kit_table" in c.message for c in kit.checks if c.name.startswith("static"))
 
 
 def test_a_submission_of_the_edited_files_only(graded):
-    assert _score(graded, "edited_only", "ik.planar_ik") == exercise("ik.planar_ik").points
-    assert graded[0]["edited_only"]["fk.dh_transform"].reason == "not written (blank region)"
+    assert _score(graded, "edited_only", "ik.candidates") == exercise("ik.candidates").points
+    assert graded[0]["edited_only"]["fk.dh_table"].reason == "not written (blank region)"
 
 
 def test_reports(graded):
@@ -204,7 +204,7 @@ def test_reports(graded):
     assert {"name", "score", "max_score", "output", "visibility"} <= set(gradescope["tests"][0])
     assert gradescope["score"] == sum(t["score"] for t in gradescope["tests"])
     feedback = (out / "wrong_dh" / "feedback.md").read_text()
-    assert "fk.dh_transform" in feedback and "FAILED" in feedback and "first failing check" in \
+    assert "fk.dh_table" in feedback and "FAILED" in feedback and "first failing check" in \
         gradescope["tests"][0]["output"]
 
 
@@ -223,7 +223,10 @@ def test_grade_command_on_a_blank_class(tmp_path):
     make_student_release(ROOT, tmp_path / "subs" / "alice")
     assert main(["grade", str(tmp_path / "subs"), "--out", str(tmp_path / "out"), "--reference", str(ROOT)]) == 0
     rows = list(csv.DictReader((tmp_path / "out" / "grades.csv").open()))
-    assert rows[0]["student"] == "alice" and rows[0]["total"] == "0" and rows[0]["max"] == "100"
+    from armlab.exercises.registry import EXERCISES
+
+    assert rows[0]["student"] == "alice" and rows[0]["total"] == "0"
+    assert float(rows[0]["max"]) == sum(e.points for e in EXERCISES)
     with pytest.raises(SystemExit, match="no such folder"):
         main(["grade", str(tmp_path / "missing"), "--out", str(tmp_path / "out")])
 
@@ -243,21 +246,21 @@ def test_run_autograder_in_a_gradescope_layout(tmp_path):
     root = tmp_path / "autograder"
     with zipfile.ZipFile(zip_path) as z:
         z.extractall(root / "source")
-    assert (root / "source/setup.sh").is_file() and (root / "source/armlab/grading/hidden.py").is_file()
+    assert (root / "source/setup.sh").is_file() and (root / "source/armlab/grading/hidden/__init__.py").is_file()
     shutil.copy2(root / "source/run_autograder", root / "run_autograder")
     (root / "run_autograder").chmod(0o755)
     make_student_release(ROOT, root / "submission")
-    write_regions(root / "submission", "fk.dh_transform", _reference_bodies("fk.dh_transform"))
+    write_regions(root / "submission", "fk.dh_table", _reference_bodies("fk.dh_table"))
     (root / "results").mkdir()
     env = dict(os.environ, ARMLAB_AUTOGRADER_ROOT=str(root), ARMLAB_PYTHON=sys.executable,
-               ARMLAB_GRADE_EXERCISES="fk.dh_transform,ik.planar_ik", ARMLAB_GRADE_TIMEOUT="240")
+               ARMLAB_GRADE_EXERCISES="fk.dh_table,fk.euler", ARMLAB_GRADE_TIMEOUT="240")
     env.pop("PYTHONPATH", None)
     done = subprocess.run([str(root / "run_autograder")], env=env, capture_output=True, text=True, timeout=600)
     assert done.returncode == 0, done.stderr[-2000:]
     results = json.loads((root / "results/results.json").read_text())
     scores = {t["name"].split(":")[0]: (t["score"], t["max_score"]) for t in results["tests"]}
-    points = exercise("fk.dh_transform").points
-    assert scores == {"fk.dh_transform": (points, points), "ik.planar_ik": (0, exercise("ik.planar_ik").points)}
+    points = exercise("fk.dh_table").points
+    assert scores == {"fk.dh_table": (points, points), "fk.euler": (0, exercise("fk.euler").points)}
     assert results["score"] == points
     env["ARMLAB_GRADE_EXERCISES"] = "fk.no_such_exercise"
     done = subprocess.run([str(root / "run_autograder")], env=env, capture_output=True, text=True, timeout=120)
@@ -271,10 +274,10 @@ def _replaced(exercise_id: str, old: str, new: str) -> list[str]:
 
 
 HIDDEN_WRONG = {   # per exercise: wrong answers its hidden checks must catch (a "hard-coded" one must fail them all)
-    "calib.project_pinhole": {"no translation": _replaced("calib.project_pinhole", " + T_cam_world[:3, 3]", "")},
-    "calib.pixel_to_world_pinhole": {
-        "rotation not transposed": _replaced("calib.pixel_to_world_pinhole", "T_cam_world[:3, :3].T @",
-                                             "T_cam_world[:3, :3] @")},
+    "calib.pinhole": {
+        "no translation": _replaced("calib.pinhole", " + T_cam_world[:3, 3]", ""),
+        "rotation not transposed": _replaced("calib.pinhole", "T_cam_world[:3, :3].T @", "T_cam_world[:3, :3] @"),
+    },
     "calib.tag_homography": {
         "hard-coded": ["    H = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])"],
         "normalisation not undone": _replaced("calib.tag_homography", "np.linalg.solve(T_dst, H_normalised @ T_src)",
@@ -285,11 +288,23 @@ HIDDEN_WRONG = {   # per exercise: wrong answers its hidden checks must catch (a
         "pixels, not normalised points": _replaced("calib.tag_extrinsics", "dlt_homography(world[:, :2], normalised)",
                                                    "dlt_homography(world[:, :2], pixels)"),
     },
-    "calib.depth_plane": {"one fit, no rejection": _replaced("calib.depth_plane", "range(iterations)", "range(1)")},
-    "fk.dh_transform": {"d negated": [WRONG["fk.dh_transform"]]},
-    "fk.fk_from_table": {"joint offsets left out": _replaced("fk.fk_from_table", "qi + offset", "qi")},
-    "fk.dh_link_transform": {"d negated": _replaced("fk.dh_link_transform", "= sa, ca, d", "= sa, ca, -d")},
-    "ik.planar_ik": {"elbow branches swapped": _wrong_ik()},
+    "calib.depth_plane": {
+        "one fit, no rejection": _replaced("calib.depth_plane", "range(iterations)", "range(1)"),
+        "outliers kept": _replaced("calib.depth_plane", "< inlier_mm", "< 1e9"),
+    },
+    "fk.dh_table": {
+        "alpha1's sign slipped": [WRONG_DH],
+        "the L's tilt added, not taken off": _replaced("fk.dh_table", "[-(np.pi / 2 - beta), 0.0, L1, 0.0]",
+                                                       "[-(np.pi / 2 + beta), 0.0, L1, 0.0]"),
+    },
+    "fk.euler": {
+        "psi's sign slipped": _wrong_euler(),
+        "no singular case": _replaced("fk.euler", "if sin_theta > 1e-12:", "if True:"),
+    },
+    "fk.dh_link_transform": {
+        "d negated": _replaced("fk.dh_link_transform", "= sa, ca, d", "= sa, ca, -d"),
+        "theta and alpha swapped in row 0": _replaced("fk.dh_link_transform", "-st * ca, st * sa", "-ct * sa, st * ca"),
+    },
     "ik.candidates": {
         "hard-coded": ["    q1 = q2 = q3 = q4 = heading * 0.0\n    ok, d2 = heading == heading, heading * 0.0 + 1.0"],
         "elbow sign swapped": _replaced("ik.candidates", "* delta_sign", "* -delta_sign"),
@@ -304,9 +319,13 @@ HIDDEN_WRONG = {   # per exercise: wrong answers its hidden checks must catch (a
         "size from pixels, not mm": _replaced("detect.face", "edge_mm = np.sqrt(m[\"m00\"]) * mm_per_px",
                                               "edge_mm = np.sqrt(m[\"m00\"])"),
     },
-    "detect.classify": {"per-class spreads ignored": _replaced(
-        "detect.classify", "d = self.distances(rgb_means)",
-        "d = np.linalg.norm(color_features(rgb_means)[:, None, :] - self.means[None], axis=-1)")},
+    "detect.classify": {
+        "per-class spreads ignored": _replaced(
+            "detect.classify", "d = self.distances(rgb_means)",
+            "d = np.linalg.norm(color_features(rgb_means)[:, None, :] - self.means[None], axis=-1)"),
+        "margin to the farthest class": _replaced("detect.classify", "d[rows, order[:, 1]] - d[rows, order[:, 0]]",
+                                                  "d[rows, order[:, -1]] - d[rows, order[:, 0]]"),
+    },
     "grab.move_path": {
         "roll ignores the yaw": _replaced("grab.move_path",
                                           "roll = planning.tilted_roll(heading, float(pitch), float(yaw))",
@@ -331,16 +350,17 @@ HIDDEN_WRONG = {   # per exercise: wrong answers its hidden checks must catch (a
     },
 }
 # exercises whose function calls another's region go into a second batch, apart from the one they call
-SECOND_BATCH = {"calib.tag_extrinsics", "fk.fk_from_table", "fk.dh_link_transform"}
+SECOND_BATCH = {"calib.tag_extrinsics", "fk.dh_link_transform"}
 
 
 def test_every_exercise_has_hidden_checks_and_wrong_answers():
     from armlab.exercises.registry import EXERCISES
     from armlab.grading import hidden
 
-    graded = sorted(e.id for e in EXERCISES if e.kind != "written")      # written answers are graded by hand
-    assert sorted(hidden.SPECS) == graded == sorted(HIDDEN_WRONG)
-    assert sorted(hidden.FORBIDDEN) == graded
+    graded_by_code = sorted(e.id for e in EXERCISES if e.kind != "written")
+    assert sorted(hidden.SPECS) == graded_by_code == sorted(HIDDEN_WRONG)
+    assert sorted(hidden.FORBIDDEN) == graded_by_code
+    assert all(len(wrong) >= 2 for wrong in HIDDEN_WRONG.values()), "each exercise has two plausible wrong answers"
 
 
 def test_hidden_checks_pass_the_reference_and_fail_wrong_answers():
@@ -373,7 +393,7 @@ def test_static_check_names_the_forbidden_call():
     from armlab.grading.hidden import FORBIDDEN
     from armlab.grading.static import forbidden_uses, static_check
 
-    for ex in (e for e in EXERCISES if e.kind != "written"):        # written answers have no code to check
+    for ex in (e for e in EXERCISES if e.kind != "written"):
         assert static_check(ex.id, _reference_bodies(ex.id)).passed, ex.id
         for name in FORBIDDEN[ex.id]:
             module, _, last = name.rpartition(".")

@@ -4,6 +4,7 @@ module, or an attribute path in the kit or a library the students have. A misspe
 from __future__ import annotations
 
 import ast
+import dataclasses
 import importlib
 import pkgutil
 from pathlib import Path
@@ -16,9 +17,12 @@ from armlab.exercises import EXERCISES, exercise
 from armlab.grading import hidden
 
 LIBRARIES = ("cv2", "numpy", "numpy.polynomial", "scipy", "scipy.optimize", "scipy.stats", "scipy.ndimage",
-             "modern_robotics")
+             "scipy.spatial.transform", "modern_robotics")
 SKIP = ("armlab.hardware", "armlab.__main__", "armlab.grading", "armlab.viz", "armlab.demo")   # side effects or
 # hardware on import; none of them holds a forbidden name
+
+
+_FIELD = object()          # an instance field of a dataclass: a real attribute, though not one of the class
 
 
 def _modules() -> dict[str, ModuleType]:
@@ -48,7 +52,9 @@ def _resolves(name: str, modules: dict[str, ModuleType]) -> bool:
         roots += [getattr(m, head) for m in modules.values() if k == 1 and hasattr(m, head)]
         for obj in roots:
             for part in parts[k:]:
-                obj = getattr(obj, part, None)
+                fields = {f.name for f in dataclasses.fields(obj)} if isinstance(obj, type) and \
+                    dataclasses.is_dataclass(obj) else set()
+                obj = getattr(obj, part, None) if part not in fields else _FIELD
                 if obj is None:
                     break
             if obj is not None:
@@ -86,6 +92,7 @@ def test_every_forbidden_name_resolves_to_a_real_object(modules):
 def test_the_resolver_can_fail(modules):
     assert not _resolves("cv2.findHomographyy", modules) and not _resolves("kinematics.no_such_thing", modules)
     assert _resolves("cv2.findHomography", modules) and _resolves("Camera.project", modules)
+    assert _resolves("RobotModel.dh", modules) and not _resolves("RobotModel.dhh", modules)
 
 
 def test_every_exercise_but_a_written_one_has_its_hidden_module():

@@ -98,9 +98,10 @@ def stub_regions(text: str, where: str = "<text>") -> str:
     return "\n".join(out) + ("\n" if text.endswith("\n") else "")
 
 
-_ANSWER = re.compile(r"<!--[ \t]*BEGIN ANSWER[ \t]+(?P<id>\S+)[ \t]*-->(?P<body>.*?)<!--[ \t]*END ANSWER[ \t]*-->",
-                     re.S)
-_ANSWER_OPEN = re.compile(r"<!--[ \t]*(BEGIN|END) ANSWER\b")
+# each marker alone on its line (in a notebook source's markdown, after "# "): marker text quoted in prose is not one
+_ANSWER = re.compile(r"^(?:# )?<!--[ \t]*BEGIN ANSWER[ \t]+(?P<id>\S+)[ \t]*-->[ \t]*$(?P<body>.*?)"
+                     r"^(?:# )?<!--[ \t]*END ANSWER[ \t]*-->[ \t]*$", re.S | re.M)
+_ANSWER_OPEN = re.compile(r"^(?:# )?<!--[ \t]*(BEGIN|END) ANSWER\b.*-->[ \t]*$", re.M)
 
 
 def answer_prompt(exercise_id: str) -> str:
@@ -144,5 +145,5 @@ def is_blank_answer(exercise_id: str, answer: str) -> bool:
 def blank_answers(text: str, where: str = "<markdown>") -> str:
     """A markdown text with every written answer replaced by its prompt line (the markers stay)."""
     _answers(text, where)
-    return _ANSWER.sub(lambda m: f"<!-- BEGIN ANSWER {m['id']} -->\n{answer_prompt(m['id'])}\n<!-- END ANSWER -->",
+    return _ANSWER.sub(lambda m: f"<!-- BEGIN ANSWER {m['id']} -->\n\n{answer_prompt(m['id'])}\n\n<!-- END ANSWER -->",
                        text)

@@ -90,27 +90,30 @@ def _src(number: str) -> str:
 
 
 # -- notebook 01: the camera ------------------------------------------------------------------------------------
-PROJECT_PINHOLE = Exercise("calib.project_pinhole", "project world points through the pinhole model", 4, _NB["01"],
-                          _src("01"), ("project_pinhole",))
-PIXEL_TO_WORLD_PINHOLE = Exercise("calib.pixel_to_world_pinhole", "back-project a pixel with its depth into the world",
-                                  4, _NB["01"], _src("01"), ("pixel_to_world_pinhole",))
+PINHOLE = Exercise("calib.pinhole", "the pinhole model both ways: project world points, back-project a pixel with its "
+                   "depth", 8, _NB["01"], _src("01"), ("project_pinhole", "pixel_to_world_pinhole"))
 TAG_HOMOGRAPHY = Exercise("calib.tag_homography", "the homography by the normalised direct linear transform (DLT)",
                           6, _NB["01"], "armlab/calibration/homography.py", ("dlt_homography",))
 TAG_EXTRINSICS = Exercise("calib.tag_extrinsics", "the camera's pose from the AprilTag corners (planar pose from a "
                           "homography)", 8, _NB["01"], "armlab/calibration/extrinsics.py", ("pose_from_corners",))
 DEPTH_PLANE = Exercise("calib.depth_plane", "fit the depth camera's planar bias", 4, _NB["01"],
                        "armlab/calibration/depth.py", ("fit_depth_correction",))
+Q_REPROJECTION = Exercise("calib.q_reprojection", "why the board-to-image error grows toward the corners", 3,
+                          _NB["01"], _src("01"), ("the homography error figure",), kind="written")
 # -- notebook 02: forward kinematics ----------------------------------------------------------------------------
-DH_TRANSFORM = Exercise("fk.dh_transform", "one DH link transform", 4, _NB["02"], _src("02"), ("dh_transform",))
-FK_FROM_TABLE = Exercise("fk.fk_from_table", "forward kinematics by chaining the DH table", 4, _NB["02"], _src("02"),
-                         ("fk_from_table",))
-DH_LINK = Exercise("fk.dh_link_transform", "the kit's batched DH link transform", 3, _NB["02"],
+DH_LINK = Exercise("fk.dh_link_transform", "one DH link transform, batched (the kit's)", 4, _NB["02"],
                    "armlab/kinematics.py", ("dh_link_transform",))
+DH_TABLE = Exercise("fk.dh_table", "the RX200's DH frame assignment and table, from its geometry", 8, _NB["02"],
+                    _src("02"), ("dh_table",))
+EULER = Exercise("fk.euler", "ZYZ Euler angles from a pose (the report's get_euler_angles_from_T)", 5, _NB["02"],
+                 _src("02"), ("euler_angles_from_T",))
+Q_FRAMES = Exercise("fk.q_frames", "what frame 4 adds and why x2 runs along the hypotenuse", 3, _NB["02"],
+                    _src("02"), ("the DH frames figure",), kind="written")
 # -- notebook 03: inverse kinematics ----------------------------------------------------------------------------
-PLANAR_IK = Exercise("ik.planar_ik", "the planar two-link IK with both elbow branches", 8, _NB["03"], _src("03"),
-                     ("planar_ik",))
-IK_BRANCHES = Exercise("ik.candidates", "the kit's closed-form IK: all four branches", 10, _NB["03"],
-                       "armlab/kinematics.py", ("_branch_joints",))
+IK_BRANCHES = Exercise("ik.candidates", "the geometric IK from the triangle figure: the planar two-link problem and "
+                       "the wrist pitch, every branch", 14, _NB["03"], "armlab/kinematics.py", ("_branch_joints",))
+Q_BRANCHES = Exercise("ik.q_branches", "which branches the arm can use, from the branches figure", 3, _NB["03"],
+                      _src("03"), ("the IK branches figure",), kind="written")
 # -- notebook 04: block detection -------------------------------------------------------------------------------
 SEGMENT = Exercise("detect.segment", "the report's segmentation: blur, HSV boxes tuned on training frames, erosion "
                    "and dilation", 8, _NB["04"], _src("04"), ("segment_colours", "tuned_hsv_ranges"), kind="open")

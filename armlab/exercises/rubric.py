@@ -20,7 +20,7 @@ _HOW = {"code": "hidden inputs", "open": "outcome on hidden seeds", "written": "
 
 
 def _notebook_texts(e: Exercise, root: Path, kind: str) -> list[str] | None:
-    """The code (kind "code") or markdown cells of the exercise's executed notebook, None when it is not there."""
+    """The code (kind "code") or markdown cells of the exercise's notebook, None when it is not there."""
     path = root / "notebooks" / f"{e.notebook}.ipynb"
     if not path.is_file():
         return None
@@ -28,29 +28,38 @@ def _notebook_texts(e: Exercise, root: Path, kind: str) -> list[str] | None:
     return ["".join(c["source"]) for c in cells if c["cell_type"] == kind]
 
 
+def _texts(e: Exercise, root: Path, kind: str) -> list[str]:
+    """Where the exercise lives: its package file, or the notebook's percent-format source in the instructor's
+    checkout, else (a student release: no sources) the saved notebook a student edits."""
+    source = root / e.where
+    if source.is_file():
+        return [source.read_text(encoding="utf-8")]
+    return _notebook_texts(e, root, kind) or []
+
+
 def _region_bodies(e: Exercise, root: Path) -> list[list[str]]:
-    """The bodies (lines) of the exercise's regions: in its package file, else its notebook (the .ipynb a student
-    edits; the instructor's percent-format source when there is no notebook)."""
-    if e.in_package or not (root / "notebooks" / f"{e.notebook}.ipynb").is_file():
-        path = root / e.where
-        texts = [path.read_text(encoding="utf-8")] if path.is_file() else []
-    else:
-        texts = _notebook_texts(e, root, "code") or []
+    """The bodies (lines) of the exercise's regions."""
     bodies = []
-    for text in texts:
+    for text in _texts(e, root, "code"):
         lines = text.splitlines()
         bodies += [lines[r.begin + 1:r.end] for r in find_regions(text, e.where) if r.exercise_id == e.id]
     return bodies
 
 
 def _answer(e: Exercise, root: Path) -> str | None:
-    texts = _notebook_texts(e, root, "markdown")
-    return None if texts is None else find_answers(texts, e.notebook).get(e.id)
+    answers = find_answers(_texts(e, root, "markdown"), e.where)
+    answer = answers.get(e.id)
+    if answer is None:
+        return None
+    return "\n".join(line[2:] if line.startswith("# ") else line.lstrip("#") for line in answer.splitlines())
 
 
 def solution_lines(e: Exercise | str, root: Path | str = ROOT) -> int:
-    """Non-blank, non-comment lines of the exercise's regions (for a written answer: non-blank lines of it)."""
+    """Non-blank, non-comment lines of the exercise's regions (for a written answer: non-blank lines of it); 0 while
+    it is blank."""
     e, root = exercise(e) if isinstance(e, str) else e, Path(root)
+    if exercise_state(e, root) != "written":
+        return 0
     if e.kind == "written":
         answer = _answer(e, root) or ""
         return sum(1 for line in answer.splitlines() if line.strip())

@@ -9,7 +9,11 @@
 # This notebook is for every student on day one. You will learn
 # 1. the **coordinate frames** every function of the kit uses,
 # 2. how to **move the arm in the 3D viewer** and read where its tool is,
-# 3. how the **check cells** at the end of each section tell you whether your work is right.
+# 3. how the lab is graded: **exercises** you write, the **check cells** that test them, and the **rubric** at the
+#    end of each notebook.
+#
+# This notebook has no exercise: its cells that verify something are **demonstrations** of the kit (they test the
+# kit's own code, not yours) and carry no grade.
 #
 # Units everywhere: **millimetres and radians**.
 
@@ -118,13 +122,15 @@ top.add_patch(plt.Rectangle((lab.board_x[0], lab.board_y[0]), 1000, 650, color="
 top.plot(tag_centres[:, 0], tag_centres[:, 1], "ks", ms=4)
 for name, q in poses.items():
     p = kinematics.joint_positions(q)
-    top.plot(p[:, 0], p[:, 1], "o-", label=name)
+    line, = top.plot(p[:, 0], p[:, 1], "o-")
+    top.annotate(name, p[-1, :2], xytext=(4, 4), textcoords="offset points", color=line.get_color(), fontsize=9)
     heading = np.array([-np.sin(q[0]), np.cos(q[0])])  # the arm's forward direction on the board
-    side.plot(p[:, :2] @ heading, p[:, 2], "o-", label=name)
+    side.plot(p[:, :2] @ heading, p[:, 2], "o-", color=line.get_color())
+    side.annotate(name, (p[-1, :2] @ heading, p[-1, 2]), xytext=(4, 4), textcoords="offset points",
+                  color=line.get_color(), fontsize=9)
 top.set(xlabel="x (mm)", ylabel="y (mm)", title="top view (world)", aspect="equal")
 side.set(xlabel="along the arm's heading (mm)", ylabel="z (mm)", title="side view", aspect="equal")
 side.axhline(0, color="peru")
-side.legend()
 fig.tight_layout()
 
 # %% [markdown]
@@ -152,8 +158,9 @@ end = kinematics.fk(qs[-1])[:3, 3].round(1)
 print(f"sleep -> home in {T:.2f} s, {len(times)} keyframes; the tool ends at {end} mm")
 
 # %% [markdown]
-# **Check:** the links the viewer draws must join exactly the joint positions of the kinematic model, at every pose
-# (the viewer's cylinders run along their local y axis, so a link's ends are its pose applied to (0, ±L/2, 0)).
+# **Demonstration (the kit testing itself, not a check of your work):** the links the viewer draws join exactly the
+# joint positions of the kinematic model, at every pose (the viewer's cylinders run along their local y axis, so a
+# link's ends are its pose applied to (0, ±L/2, 0)).
 
 # %%
 from armlab.viz.geometry import LINK_NAMES, arm_part_poses
@@ -241,7 +248,8 @@ n_points = viewer.draw_rgbd(frame.rgb, frame.depth, station.camera.truth, stride
 print(f"drew {len(station.world.objects)} blocks, the camera and a cloud of {n_points} points")
 
 # %% [markdown]
-# **Check:** the depth the camera measures at each block's top-face centre must put that point back on the block
+# **Demonstration (the simulated camera against its own ground truth):** the depth the simulated camera measures at
+# each block's top-face centre puts that point back on the block
 # (pixel + depth → world through the true camera), within the sensor's noise and bias (about 2.5 mm noise, up to
 # ~20 mm of planar bias before calibration — notebook 01 removes it).
 
@@ -269,10 +277,24 @@ print(f"OK: {len(tops)} block tops seen where they are: error {err.min():.0f}-{e
 # %% [markdown]
 # ## 4 · How to check your work
 #
-# - Each section ends with a **check cell** like the ones above: it asserts a number against a known answer and
-#   prints one line starting with `OK`. If it raises, your code (or your calibration) is not right yet.
+# - Each notebook states its **exercises** at the top: what you write, how many points, and how it is graded —
+#   *code* (checked on hidden inputs), *open tasks* (graded by outcome on hidden seeds or held-out frames) and
+#   *written answers* (a question about a figure, in a marked answer cell, graded by hand).
+# - You write code between `# BEGIN SOLUTION <id>` and `# END SOLUTION`, and written answers between
+#   `<!-- BEGIN ANSWER <id> -->` and `<!-- END ANSWER -->`. Until you do, the kit's own method stands in where it
+#   can and says so in one line.
+# - A cell titled **Check** tests *your* work: it starts with `# CHECK <id>`, asserts against a known answer and
+#   prints one line starting with `OK`. If it raises, your code is not right yet. (The demonstrations above test the
+#   kit and carry no `# CHECK`.)
+# - The last cell of each notebook prints your own rubric table (the same as `python -m armlab check` lists for it):
+#   exercises, points, kind, and whether each is still blank.
 # - Your instructor runs every notebook top to bottom with `pytest --nbval`, which re-executes each cell and compares
 #   its printed output with the stored one: keep outputs deterministic (seeded random numbers, no timings).
 # - `make test` runs the kit's own tests and all notebooks; `make lab` opens JupyterLab on `notebooks/`.
 #
 # Next: **01 · camera calibration**.
+
+# %%
+from armlab.exercises import rubric
+
+rubric("00")

@@ -6,10 +6,22 @@
 # $(x, y, z)$, a **pitch** $\psi$ (the approach direction's angle below horizontal, in the vertical plane through the
 # base axis and the target: 0 = horizontal, $\pi/2$ = straight down) and a **roll** (the wrist_rotate angle).
 # In this notebook you
-# 1. derive the closed-form solution geometrically and write its planar core yourself,
-# 2. draw the four branches (waist facing or flipped × elbow up or down) and see which the joint limits allow,
-# 3. map which board cells can be grasped straight down, and how steep the approach can be elsewhere,
+# 1. derive the closed-form solution geometrically from the triangle figure and write it, every branch, as the kit's
+#    IK (`_branch_joints` in `armlab/kinematics.py`),
+# 2. draw the four branches (waist facing or flipped × elbow up or down) and answer a question about which the arm
+#    can use,
+# 3. see (a demonstration) which board cells can be grasped straight down, and how steep the approach can be
+#    elsewhere,
 # 4. compare with the lab report's equations (4)–(14).
+#
+# ### Exercises and how they are graded
+#
+# | exercise | what you write | points | kind | graded on |
+# |---|---|---|---|---|
+# | `ik.candidates` | `_branch_joints` (`armlab/kinematics.py`): every branch | 14 | code | `ik` at hidden targets |
+# | `ik.q_branches` | a written answer about the branches figure (section 2) | 3 | written | by hand |
+#
+# A **Check** cell (`# CHECK <id>`) tests your work; cells marked *demonstration* show the kit and are not graded.
 #
 # Units: millimetres and radians; world (board) frame.
 
@@ -19,7 +31,7 @@ import matplotlib.pyplot as plt
 from IPython import get_ipython
 
 from armlab import kinematics
-from armlab.exercises import references, require_written, with_reference
+from armlab.exercises import require_written, rubric
 from armlab.lab import lab_config
 from armlab.robot import rx200
 
@@ -40,56 +52,67 @@ beta = np.arctan2(50.0, 200.0)      # the L's angle from vertical
 print(f"h0 = {h0:.2f} mm, L1 = {L1:.3f} mm, L2 = {L2:.1f} mm, Lt = {Lt:.3f} mm, beta = {np.degrees(beta):.2f} deg")
 
 # %% [markdown]
-# ## 1 · The geometry
+# ## 1 · The geometry: the triangle figure
 #
 # **Waist.** Everything below the waist moves in one vertical plane, so the waist must turn that plane through the
-# target. At home the arm points along +y, and positive waist turns it towards −x:
+# target — or half a turn further, so that the arm reaches backwards over its own base (the **flipped** waist).
 #
-# $$q_1 = \operatorname{atan2}(y, x) - \tfrac{\pi}{2} \quad\text{(facing)}, \qquad q_1 + \pi \quad\text{(flipped:
-# the arm reaches backwards over its own base)}.$$
+# **Wrist centre.** The tool point is a fixed distance $L_t$ from the wrist_angle axis, along the approach direction,
+# and the approach direction is given (pitch $\psi$ below horizontal). So the wrist centre is known before any other
+# joint: step back from the target along the approach.
 #
-# **Wrist centre.** In the arm's plane let $r = \sqrt{x^2 + y^2}$ be the distance from the base axis and $z$ the
-# height. The wrist_angle axis sits $L_t$ behind the tool point along the approach direction, which points
-# $\psi$ below horizontal; relative to the shoulder (height $h_0$) the wrist centre is at
+# **A triangle.** Shoulder, elbow and wrist centre form a triangle with two known sides, the upper arm $L_1$ and the
+# forearm $L_2$, and a third side $d$ you can compute once the wrist centre is known. The law of cosines,
+# $c^2 = a^2 + b^2 - 2ab\cos\gamma$ (the angle $\gamma$ opposite side $c$), gives the angle at the elbow; a triangle
+# and its mirror image share the sides, so there are two elbows (**up** and **down**), and none when $d$ is longer
+# than $L_1 + L_2$ or shorter than $|L_1 - L_2|$. The upper arm's elevation then follows from the direction of
+# the shoulder-to-wrist line and the angle at the shoulder.
 #
-# $$r_w = r - L_t \cos\psi, \qquad z_w = z - h_0 + L_t \sin\psi .$$
-#
-# **Law of cosines.** Shoulder, elbow and wrist centre form a triangle with sides $L_1$, $L_2$ and
-# $d = \sqrt{r_w^2 + z_w^2}$. The forearm's angle $\delta$ from the upper arm's line satisfies
-#
-# $$\cos\delta = \frac{d^2 - L_1^2 - L_2^2}{2 L_1 L_2}, \quad |\cos\delta| \le 1 \iff |L_1 - L_2| \le d \le L_1 + L_2,$$
-#
-# two solutions $\pm\delta$: **elbow up** ($\delta < 0$, the forearm bends down from an upper arm raised above the
-# shoulder–wrist line) and **elbow down**. The upper arm's elevation above horizontal is
-# $\varepsilon = \operatorname{atan2}(z_w, r_w) - \operatorname{atan2}(L_2 \sin\delta, L_1 + L_2 \cos\delta)$.
-#
-# **The 50 mm offset.** The upper arm is L-shaped: at $q_2 = 0$ its hypotenuse is raised $\pi/2 - \beta$, and the
-# forearm is then horizontal, so the elbow joint angle also carries $\pi/2 - \beta$. With positive joints tipping
-# the arm down:
-#
-# $$q_2 = \left(\tfrac{\pi}{2} - \beta\right) - \varepsilon, \qquad q_3 = -\delta - \left(\tfrac{\pi}{2} - \beta\right),
-# \qquad q_4 = \psi - q_2 - q_3, \qquad q_5 = \text{roll}.$$
-#
-# ### Exercise: the planar core
-#
-# Write `planar_ik(r, z, psi, elbow_up)`: joints 2–4 (rad) for a target at distance `r` (mm) in front of the arm
-# (negative = behind it) and height `z` (mm), approached at `psi` below the arm's forward horizontal. Return NaNs when
-# the wrist centre is out of reach. It must work on numpy arrays.
+# **Joint angles from geometric angles.** Your DH table (notebook 02) says how each joint angle relates to the
+# geometric angles: $\theta_i = q_i + \theta_i^{\text{offset}}$, and positive shoulder, elbow and wrist_angle tip the
+# arm down. The wrist pitch closes the chain: the three joint angles in the plane add up to the approach angle.
 
 # %%
-def planar_ik(r, z, psi, elbow_up=True):
-    """(q2, q3, q4) rad in the arm's plane; NaN where the wrist centre is out of reach. r, z mm; psi rad."""
-    # BEGIN SOLUTION ik.planar_ik
-    rw = r - Lt * np.cos(psi)
-    zw = z - h0 + Lt * np.sin(psi)
-    cos_delta = (rw**2 + zw**2 - L1**2 - L2**2) / (2 * L1 * L2)
-    delta = np.arccos(np.where(np.abs(cos_delta) <= 1, cos_delta, np.nan)) * (-1 if elbow_up else 1)
-    elevation = np.arctan2(zw, rw) - np.arctan2(L2 * np.sin(delta), L1 + L2 * np.cos(delta))
-    q2 = (np.pi / 2 - beta) - elevation
-    q3 = -delta - (np.pi / 2 - beta)
-    q4 = psi - q2 - q3
-    return q2, q3, q4
-    # END SOLUTION
+target_demo, psi_demo = np.array([0.0, 300.0, 60.0]), 0.9
+q_demo = kinematics.ik(target_demo, psi_demo)[0]
+pts = kinematics.joint_positions(q_demo)
+shoulder, elbow, wrist, tool = (np.array([p[1], p[2]]) for p in pts[[2, 3, 4, 6]])
+fig, ax = plt.subplots(figsize=(8, 4.4))
+ax.plot(*np.array([shoulder, elbow, wrist]).T, "-o", color="0.35", lw=4, ms=7)
+ax.plot(*np.array([wrist, tool]).T, "-", color="0.35", lw=4)
+ax.plot(*np.array([shoulder, wrist]).T, "--", color="tab:purple", lw=1.5)
+ax.plot([shoulder[0], shoulder[0] + 330], [shoulder[1]] * 2, ":", color="k", lw=1)
+ax.plot([tool[0] - 120, tool[0] + 40], [tool[1]] * 2, ":", color="k", lw=1)
+ax.plot(*tool, "kx", ms=12, mew=2.5)
+for point, text, off in ((shoulder, "shoulder", (8, -18)), (elbow, "elbow", (-14, 10)),
+                         (wrist, "wrist centre", (8, 8)), (tool, "target (tool point)", (8, -16))):
+    ax.annotate(text, point, xytext=off, textcoords="offset points", fontsize=10)
+for p0, p1, text, off in ((shoulder, elbow, "$L_1$", (-22, 0)), (elbow, wrist, "$L_2$", (0, 8)),
+                          (wrist, tool, "$L_t$", (6, 6)), (shoulder, wrist, "$d$", (4, -16))):
+    ax.annotate(text, (p0 + p1) / 2, xytext=off, textcoords="offset points", fontsize=12)
+ax.annotate("$\\psi$ (pitch)", tool, xytext=(-95, 8), textcoords="offset points", fontsize=11)
+ax.axhline(0, color="peru", lw=4)
+ax.annotate("$h_0$", (shoulder[0], shoulder[1] / 2), xytext=(-30, 0), textcoords="offset points", fontsize=12)
+ax.set(title="the arm's plane: the triangle shoulder-elbow-wrist centre", xlabel="distance from the base axis (mm)",
+       ylabel="height z (mm)", aspect="equal", xlim=(-90, 420), ylim=(-20, 360))
+fig.tight_layout()
+
+# %% [markdown]
+# **Exercise `ik.candidates` (14 points, code).** Open `armlab/kinematics.py` and write the region of `_branch_joints`:
+# for one branch (`flipped`: 0 facing, 1 flipped; `delta_sign`: the elbow's side, see `_DELTA_SIGN`), return the
+# joint angles $q_1 \dots q_4$ (rad, not yet wrapped), `ok` (the wrist centre is within the arm's span) and `d2` (the
+# squared shoulder-to-wrist distance, mm²). Use only `xp.<function>` (`xp.cos`, `xp.arctan2`, `xp.arccos`, ...): the
+# same code runs on numpy arrays (every target and branch at once) and on Python floats (the fast single solve).
+# `kinematics.ik`, `ik_batch`, `ik_branches` and every later notebook use it; while it is blank, the kit solves
+# numerically instead (slower, and says so once). Restart the kernel after editing the package.
+#
+# **Check** (below): for 1000 random targets made by FK of random joint angles (so they are reachable), every
+# branch in reach must land on its target with the requested pitch, and the original joint angles must be among
+# the branches.
+
+# %%
+# CHECK ik.candidates
+require_written("ik.candidates")
 
 
 def wrap(a):
@@ -97,49 +120,25 @@ def wrap(a):
     return np.pi - np.mod(np.pi - np.asarray(a), 2 * np.pi)
 
 
-def four_branches(p, pitch, roll=0.0, solve=None):
-    """All four candidate joint vectors (4, 5) for target p (mm): facing/flipped x elbow up/down (NaN = no reach),
-    each from solve(r, z, psi, elbow_up) (default: your planar_ik).
-
-    Flipping the waist mirrors the arm's plane: the target is then at -r, the approach at pi - pitch from the arm's
-    forward horizontal, and what looks like elbow up from the target's side is the arm's elbow-down solution."""
-    x, y, z = p
-    r, q1 = np.hypot(x, y), np.arctan2(y, x) - np.pi / 2
-    rows = []
-    for flipped in (False, True):
-        for up in (True, False):
-            args = (-r, z, np.pi - pitch, not up) if flipped else (r, z, pitch, up)
-            rows.append([q1 + np.pi * flipped, *(solve or planar_ik)(*args), roll])
-    return wrap(np.array(rows))
-
-
-BRANCHES = ["facing, elbow up", "facing, elbow down", "flipped, elbow up", "flipped, elbow down"]
-print(np.round(four_branches([150.0, 200.0, 60.0], 0.8), 3) + 0.0)  # + 0.0 turns -0 into 0
-
-# %% [markdown]
-# Check: FK of every branch that is in reach must land on the target with the requested pitch, over many random
-# targets (made by FK of random joint angles, so they are reachable).
-
-# %%
-# CHECK ik.planar_ik
-Q = rng.uniform(robot.lower, robot.upper, (2000, 5))
+Q = rng.uniform(robot.lower, robot.upper, (1000, 5))
 T = kinematics.fk(Q)
 P, approach = T[:, :3, 3], T[:, :3, 0]
 radial = P[:, :2] / np.linalg.norm(P[:, :2], axis=1, keepdims=True)
 pitches = np.arctan2(-approach[:, 2], np.sum(approach[:, :2] * radial, axis=1))
 worst, found = 0.0, 0
 for p, pitch, q in zip(P, pitches, Q):
-    cand = four_branches(p, pitch, q[4])
+    cand = kinematics.ik_branches(p, pitch, q[4])
     cand = cand[~np.isnan(cand).any(axis=1)]
     Tc = kinematics.fk(cand, check_limits=False)
     worst = max(worst, np.abs(Tc[:, :3, 3] - p).max())
     assert np.allclose(Tc[:, :3, 0], kinematics.fk(q)[:3, 0], atol=1e-9), \
-        f"a branch for target {p.round(1)} mm points the tool another way: check q4 = psi - q2 - q3"
+        f"a branch for target {p.round(1)} mm points the tool another way: check the wrist pitch"
     found += np.abs(wrap(cand - q)).max(axis=1).min() < 1e-9
-assert worst < 1e-9, f"a branch misses its target by {worst:.2g} mm: check the law of cosines and the wrist angle"
-assert found == len(Q), f"the original joints are among the branches for only {found} of {len(Q)} targets"
-print(f"OK: planar_ik: every branch lands on its target (within 1e-9 mm) and the original joint angles are "
-      f"among the branches for all {found} targets")
+assert worst < 1e-9, f"a branch misses its target by {worst:.2g} mm: check the triangle and the wrist centre"
+assert found == len(Q), f"the original joints are among the branches for only {found} of {len(Q)} targets: " \
+    "check the flipped branches and the elbow's side"
+print(f"OK: every branch lands on its target (within 1e-9 mm) and the original joint angles are among the branches "
+      f"for all {found} targets")
 
 # %% [markdown]
 # ## 2 · Four branches, side by side
@@ -148,30 +147,39 @@ print(f"OK: planar_ik: every branch lands on its target (within 1e-9 mm) and the
 # returns only those within limits, best first: elbow up before elbow down, then the least motion from the current
 # joint angles. Below: a target at (60, 380, 60) mm near the edge of the top-down reach, approached straight down,
 # seen from the side in the vertical plane through the base axis and the target (horizontal axis: distance towards
-# the target). From the side a flipped branch draws the same shape as its facing twin: the waist turned half a turn,
-# the shoulder leaning back past vertical and the wrist rolled over. Only the joint limits tell them apart.
+# the target). A flipped branch puts the links through the same points as a facing twin, so the figure marks what
+# differs: the **waist's forward direction** (the arrow at the base: towards the target when facing, away when
+# flipped) and the **top of the gripper** (tool z, the short arrow at the tool: it turns over with the flipped
+# waist). Flipped branches are drawn dashed.
 
 # %%
-# your planar_ik; while it is blank the kit's numerical reference draws the branches (it says so once)
-planar = with_reference(planar_ik, "ik.planar_ik", references.planar_ik_numerical,
-                        "the branches come from a numerical solve on the kit's FK")
 target, pitch = np.array([60.0, 380.0, 60.0]), np.pi / 2
-cand = four_branches(target, pitch, solve=planar)
+cand = kinematics.ik_branches(target, pitch)
 u = np.append(target[:2] / np.linalg.norm(target[:2]), 0.0)
-fig, axes = plt.subplots(2, 2, figsize=(9, 6.6), sharey=True)
+fig, axes = plt.subplots(2, 2, figsize=(9, 6.8), sharey=True)
 axes = axes.ravel()
-for ax, name, q in zip(axes, BRANCHES, cand):
+for ax, name, q in zip(axes, kinematics.BRANCHES, cand):
     pts = kinematics.joint_positions(q)
     bad = robot.limit_violations(q)
-    ax.plot(pts @ u, pts[:, 2], "-o", lw=3, ms=4, color="tab:red" if bad else "tab:green")
+    colour, style = ("tab:red" if bad else "tab:green"), ("--" if name.startswith("flipped") else "-")
+    ax.plot(pts @ u, pts[:, 2], style, marker="o", lw=3, ms=4, color=colour)
+    forward = kinematics.link_frames(q, check_limits=False)[1, :3, 0] @ u      # frame 1's x: the waist's forward
+    ax.annotate("", (70 * np.sign(forward), 14), (0, 14), arrowprops=dict(arrowstyle="-|>", lw=2, color="k"))
+    tool = kinematics.fk(q, check_limits=False)
+    top = tool[:3, 2] @ u
+    tip = np.array([tool[:3, 3] @ u, tool[2, 3]])
+    ax.annotate("", (tip[0] + 45 * top, tip[1] + 45 * tool[2, 2]), tip,
+                arrowprops=dict(arrowstyle="-|>", lw=2, color="tab:blue"))
     ax.plot(target @ u, target[2], "kx", ms=10, mew=2)
     ax.axhline(0, color="peru", lw=4)
-    verdict = "OK" if not bad else "breaks " + ", ".join(b.split(" = ")[0] for b in bad)
+    verdict = "within the limits" if not bad else "breaks " + ", ".join(b.split(" = ")[0] for b in bad)
     degrees = np.round(np.degrees(q[:4])).astype(int)
-    ax.set_title(f"{name}\nq1-4 = {degrees} deg\n{verdict}")
-    ax.set(xlabel="towards the target (mm)", aspect="equal", xlim=(-120, 430), ylim=(-40, 330))
+    ax.set_title(f"{name}\nq1-4 = {degrees} deg\n{verdict}", fontsize=10)
+    ax.set(aspect="equal", xlim=(-120, 430), ylim=(-40, 330))
 for ax in axes[::2]:
     ax.set_ylabel("z (mm)")
+for ax in axes[2:]:
+    ax.set_xlabel("towards the target (mm)")
 fig.tight_layout()
 
 # %%
@@ -179,15 +187,31 @@ fig.tight_layout()
 require_written("ik.candidates")
 solutions = kinematics.ik(target, pitch)
 order = ["facing, elbow up", "flipped, elbow up", "facing, elbow down"]   # elbow up first, then least motion
-within = [name for name, q in zip(BRANCHES, cand) if not robot.limit_violations(q)]
-assert within == sorted(order, key=BRANCHES.index), \
-    f"the branches within the joint limits are {within}, expected {sorted(order, key=BRANCHES.index)}"
-assert np.allclose(solutions, [cand[BRANCHES.index(name)] for name in order]), \
-    "kinematics.ik's solutions are not your branches in the order elbow up first, then least motion"
+within = [name for name, q in zip(kinematics.BRANCHES, cand) if not robot.limit_violations(q)]
+expected = sorted(order, key=kinematics.BRANCHES.index)
+assert within == expected, f"the branches within the joint limits are {within}, expected {expected}"
+assert np.allclose(solutions, [cand[kinematics.BRANCHES.index(name)] for name in order]), \
+    "kinematics.ik's solutions are not the branches in the order elbow up first, then least motion"
 print(f"OK: kinematics.ik returns {len(solutions)} solutions, in the order {order}")
 
 # %% [markdown]
-# ## 3 · Which board cells can be grasped straight down?
+# **Exercise `ik.q_branches` (3 points, written).** In the branches figure, (a) which branch breaks a joint limit,
+# and which joint stops it? (b) The kit ranks elbow up first. Looking at the figure, give one physical reason to
+# prefer the facing elbow-up branch over the flipped one for a top-down grasp on the board, and one situation where
+# only the flipped waist can reach (section 4 counts how often). Two or three sentences each.
+
+# %% [markdown]
+# <!-- BEGIN ANSWER ik.q_branches -->
+# (a) The flipped elbow-down branch breaks a limit: its shoulder would have to lean back past −96° (the shoulder's
+# lower limit), so only three branches remain.
+# (b) The facing elbow-up branch keeps the upper arm and the elbow above the shoulder-wrist line, high above the
+# board and the blocks, and needs the least waist and shoulder motion from home; the flipped one swings the whole arm
+# over the base and rolls the wrist over. Only the flipped waist reaches targets behind the base that the shoulder
+# cannot lean forward to (or poses whose approach points back towards the base), about a sixth of random poses.
+# <!-- END ANSWER -->
+
+# %% [markdown]
+# ## 3 · Which board cells can be grasped straight down? (demonstration)
 #
 # For a top-down grasp ($\psi = \pi/2$) the wrist centre sits right above the target, $L_t$ higher, so the law of
 # cosines caps the reach at
@@ -218,11 +242,12 @@ fig, ax = plt.subplots(figsize=(8, 5))
 im = ax.pcolormesh(X, Y, np.degrees(steepest), shading="nearest", cmap="viridis", vmin=0, vmax=90)
 ax.contour(X, Y, top_down.astype(float), levels=[0.5], colors="white", linewidths=1.5)
 a = np.linspace(0, np.pi, 100)
-ax.plot(r_max * np.cos(a), r_max * np.sin(a), "r--", lw=1, label=f"r_max = {r_max:.0f} mm")
+ax.plot(r_max * np.cos(a), r_max * np.sin(a), "r--", lw=1)
+ax.annotate(f"r_max = {r_max:.0f} mm", (r_max * np.cos(2.2), r_max * np.sin(2.2)), xytext=(-80, 6),
+            textcoords="offset points", color="r", fontsize=10)
 ax.plot(0, 0, "r^", ms=9)
 ax.set(title="steepest approach pitch per board cell (deg); white: top-down boundary", xlabel="world x (mm)",
        ylabel="world y (mm)", aspect="equal")
-ax.legend(loc="lower right")
 fig.colorbar(im, ax=ax, shrink=0.8)
 fig.tight_layout()
 
@@ -233,9 +258,10 @@ fig.tight_layout()
 # $r_{\max}$ the pitch falls smoothly until even a horizontal approach cannot reach (the corners of the board).
 # `kinematics.steepest_pitch(p)` finds the boundary for one target to $10^{-7}$ rad by bisection.
 
+# %% [markdown]
+# *Demonstration* (the kit's reach, not graded): the map agrees with the disc and with `steepest_pitch`.
+
 # %%
-# CHECK ik.candidates
-require_written("ik.candidates")
 r_cells = np.hypot(X, Y)
 behind = (X == 0) & (Y < 0)
 assert np.all(top_down[(r_cells < r_max - 15) & ~behind]), "a cell well inside r_max cannot be reached top-down"
@@ -274,22 +300,25 @@ for p, pitch in [((0.0, 450.0, 19.0), np.pi / 2), ((0.0, -150.0, 19.0), np.pi / 
 # * (4) $\theta_1 = \tan^{-1}(-x_e / y_e)$ and (5) the same $+\pi$ — **dropped** ("the arm mostly needs to be within
 #   quadrants I and II"). With a one-argument $\tan^{-1}$, (4) alone is right only for $y_e > 0$; behind the base it
 #   turns the arm away from the target.
-# * (6)–(9) the wrist centre: $r_c = r_e - l_5 \cos\psi$ in (8) uses $l_5$ where (7) uses $l_4 + l_5$ for $z_c$ —
+# * (6)–(9) the wrist centre: its horizontal distance in (8) uses $l_5$ where its height in (7) uses $l_4 + l_5$ —
 #   both need the full wrist-to-tool length $L_t$.
-# * (10)–(11) the law of cosines — only **elbow up** kept; (12)–(13) the offset angle $\beta$; (14) $\theta_4 = \psi
-#   - \theta_2 - \theta_3$; $\theta_5 = 0$ (no roll, so blocks cannot be grasped at their yaw).
+# * (10)–(11) the law of cosines — only **elbow up** kept; (12)–(13) the offset angle $\beta$; (14) the wrist angle
+#   from the pitch; $\theta_5 = 0$ (no roll, so blocks cannot be grasped at their yaw).
 #
-# Here is that solution with the manufacturer's lengths (and $L_t$ in both (7) and (8)), against `kinematics.ik`,
-# over the board at the steepest working pitch of each cell:
+# Here is that solution (the report's real-arm equations, evaluated here on the kit's model of the arm) with the
+# manufacturer's lengths and $L_t$ in both (7) and (8), against `kinematics.ik`, over the board at the steepest
+# working pitch of each cell:
 
 # %%
 def report_ik(p, psi):
-    """The report's equations (4), (6)-(14): waist from (4) only, elbow up only, wrist_rotate 0."""
-    x, y, z = np.asarray(p, dtype=float).T
-    theta1 = np.arctan(-x / y)                                # (4); (5) dropped
-    r_e = np.sqrt((-x) ** 2 + y**2)                           # (6)
-    q2, q3, q4 = planar(r_e, z, psi, elbow_up=True)           # (7)-(14), your planar_ik
-    return np.stack([theta1, q2, q3, q4, np.zeros_like(x)], -1)
+    """The report's equations (4), (6)-(14): waist from (4) only, elbow up only (the same triangle as your facing
+    elbow-up branch), wrist_rotate 0."""
+    out = []
+    for (x, y, z), pitch in zip(np.asarray(p, dtype=float), np.broadcast_to(psi, len(p))):
+        q = kinematics.ik_branches([x, y, z], pitch)[0]        # (6)-(14): facing, elbow up
+        q[0], q[4] = np.arctan(-x / y), 0.0                    # (4); (5) dropped; no roll
+        out.append(q)
+    return np.array(out)
 
 
 reach = np.isfinite(steepest.ravel())
@@ -336,3 +365,12 @@ for p, pitch, q in zip(P, pitches, Q):
 assert 0 < only_flipped < len(Q), f"{only_flipped} of {len(Q)} poses need the flipped waist"
 print(f"OK: {only_flipped} of {len(Q)} random reachable poses ({only_flipped / len(Q):.0%}) need the flipped waist; "
       "dropping equation (5) loses them")
+
+# %% [markdown]
+# ## Your rubric
+#
+# Read from the saved notebook and package (save first): this notebook's exercises, points, how they are graded and
+# whether each is still blank. `python -m armlab check` runs the checks.
+
+# %%
+rubric("03")
