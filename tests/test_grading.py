@@ -98,8 +98,8 @@ def graded(tmp_path_factory) -> tuple[dict, Path]:
     (edited_only / "armlab").mkdir(parents=True)
     shutil.copy2(full / "armlab/kinematics.py", edited_only / "armlab")
     for name, prefix in CONTAINED.items():   # each then runs the reference: only the limits can make it score 0
-        write_regions(student(name), "fk.dh_table", [prefix + _reference_bodies("fk.dh_table")[0]])
-        write_regions(subs / name, "fk.euler", _reference_bodies("fk.euler"))
+        write_regions(student(name), "fk.euler", [prefix + _reference_bodies("fk.euler")[0]])   # called 300 times
+        write_regions(subs / name, "fk.dh_table", _reference_bodies("fk.dh_table"))
     write_regions(student("library_call"), "fk.euler", [LIBRARY_EULER])
     kit = student("kit_call")            # the notebook's stand-in (the kit's table with the lengths put in)
     write_regions(kit, "fk.dh_table", ["    return kit_table(h0, L1, beta, L2, Lt)"])
@@ -166,13 +166,13 @@ def test_kernel_death_memory_hog_and_huge_output_are_contained(graded, student, 
     of the class is graded (the grader survived). The memory hog's 12 GB fit this machine's RAM: only the address-space
     cap on the kernel (and on the hidden checks' process) turns it into a MemoryError."""
     results, out = graded
-    broken = results[student]["fk.dh_table"]
+    broken = results[student]["fk.euler"]
     assert broken.score == 0 and broken.checks and not any(c.passed for c in broken.checks)
-    assert _score(graded, student, "fk.euler") == exercise("fk.euler").points
+    assert _score(graded, student, "fk.dh_table") == exercise("fk.dh_table").points
     feedback = (out / student / "feedback.md").read_text()
     assert why in feedback and "FAILED" in feedback
     assert len(feedback) < 50_000 and (out / student / "results.json").stat().st_size < 50_000
-    assert _score(graded, "full", "fk.dh_table") == exercise("fk.dh_table").points
+    assert _score(graded, "full", "fk.euler") == exercise("fk.euler").points
 
 
 def test_a_library_call_in_place_of_the_exercise_scores_below_full_marks(graded):
