@@ -346,10 +346,10 @@ def test_require_written_names_the_blank_exercise(monkeypatch):
     from armlab.exercises import fallback, require_written
 
     require_written("fk.dh_link_transform")                # written in the instructor's checkout: no error
-    monkeypatch.setattr(fallback, "_standing_in", {"grab.pixel_to_world"})
-    with pytest.raises(NotImplementedError, match=r"exercise grab\.pixel_to_world \(notebook 05\): write "
-                                                  r"pixel_to_world"):
-        require_written("grab.pixel_to_world")
+    monkeypatch.setattr(fallback, "_standing_in", {"teach.replay"})
+    with pytest.raises(NotImplementedError, match=r"exercise teach\.replay \(notebook 06\): write "
+                                                  r"teach_program, scaled_durations and scaled_plan"):
+        require_written("teach.replay")
 
 
 def _with_regions_of(text: str, source: str, where: str) -> str:

@@ -283,9 +283,13 @@ HIDDEN_WRONG = {   # per exercise: wrong answers its hidden checks must catch (a
         "size from pixels, not mm": _replaced("detect.face", "edge_mm = np.sqrt(m[\"m00\"]) * mm_per_px",
                                               "edge_mm = np.sqrt(m[\"m00\"])"),
     },
-    "detect.classify": {"per-class spreads ignored": _replaced(
-        "detect.classify", "d = self.distances(rgb_means)",
-        "d = np.linalg.norm(color_features(rgb_means)[:, None, :] - self.means[None], axis=-1)")},
+    "detect.classify": {
+        "per-class spreads ignored": _replaced(
+            "detect.classify", "d = self.distances(rgb_means)",
+            "d = np.linalg.norm(color_features(rgb_means)[:, None, :] - self.means[None], axis=-1)"),
+        "margin to the farthest class": _replaced("detect.classify", "d[rows, order[:, 1]] - d[rows, order[:, 0]]",
+                                                  "d[rows, order[:, -1]] - d[rows, order[:, 0]]"),
+    },
     "grab.move_path": {
         "roll ignores the yaw": _replaced("grab.move_path",
                                           "roll = planning.tilted_roll(heading, float(pitch), float(yaw))",
@@ -320,8 +324,7 @@ def test_every_exercise_has_hidden_checks_and_wrong_answers():
     graded_by_code = sorted(e.id for e in EXERCISES if e.kind != "written")
     assert sorted(hidden.SPECS) == graded_by_code == sorted(HIDDEN_WRONG)
     assert sorted(hidden.FORBIDDEN) == graded_by_code
-    assert all(len(wrong) >= 2 for e, wrong in HIDDEN_WRONG.items() if exercise(e).notebook < "04"), \
-        "each exercise of notebooks 01-03 has two plausible wrong answers"
+    assert all(len(wrong) >= 2 for wrong in HIDDEN_WRONG.values()), "each exercise has two plausible wrong answers"
 
 
 def test_hidden_checks_pass_the_reference_and_fail_wrong_answers():

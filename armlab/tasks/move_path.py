@@ -61,16 +61,17 @@ def move_path(q_start, target, yaw: float, edge: float, action: str,
     hover = low + [0.0, 0.0, clearance + depth]          # the tips (and a held cube) `clearance` over the top
     heading = float(np.arctan2(target[1], target[0]))
     # the steepest pitch whose straight descent the arm can make: top-down where it reaches, tilted further out
-    down, why = None, ""
+    down, last_refusal = None, ""
     for pitch in np.arange(np.pi / 2, np.radians(20.0), -np.radians(1.0)):
         roll = planning.tilted_roll(heading, float(pitch), float(yaw))
         try:
             down = planning.cartesian_line(hover, low, float(pitch), roll, robot=robot)
             break
-        except Unreachable as e:
-            why = str(e)
+        except Unreachable as refusal:
+            last_refusal = str(refusal)
     if down is None:
-        raise Unreachable(f"no pitch reaches straight down to ({low[0]:.1f}, {low[1]:.1f}, {low[2]:.1f}) mm: {why}")
+        raise Unreachable(f"no pitch reaches straight down to ({low[0]:.1f}, {low[1]:.1f}, {low[2]:.1f}) mm: "
+                          f"{last_refusal}")
     steps = [planning.MoveStep(planning.joint_move(q_start, down.start, robot=robot), "to the hover point")]
     if action == "grasp":
         steps.append(planning.GripperStep("open", "open before grasping"))
@@ -86,11 +87,11 @@ def kit_move_path(q_start, target, yaw: float, edge: float, action: str,
     """What stands in for move_path while grab.move_path is blank: the kit's own pick and place planners
     (planning.plan_pick / plan_place, which also rise first and raise the transit over obstacles they are given),
     with move_path's arguments."""
-    if action not in PATH_ACTIONS:
-        raise ValueError(f"action must be one of {PATH_ACTIONS}, got {action!r}")
     if action == "grasp":
         return planning.plan_pick(q_start, target, yaw, edge, clearance=clearance, robot=robot)
-    return planning.plan_place(q_start, target, edge, yaw, clearance=clearance, robot=robot)
+    if action == "release":
+        return planning.plan_place(q_start, target, edge, yaw, clearance=clearance, robot=robot)
+    raise ValueError(f"action is {action!r}: kit_move_path knows {' and '.join(PATH_ACTIONS)}")
 
 
 def _pose_at(plan: planning.Plan, action: str) -> np.ndarray:

@@ -29,7 +29,7 @@ import matplotlib.pyplot as plt
 from IPython import get_ipython
 
 from armlab import kinematics, make_station, planning, tasks
-from armlab.exercises import with_reference
+from armlab.exercises import require_written, with_reference
 from armlab.tasks.experiments import LAB_TABLE_III_ERROR_MM, format_table, reach_experiment
 from armlab.tasks.move_path import drop_with, grab_with, kit_move_path, move_path
 from armlab.tasks.sag import LAB_BASELINE, calibration_poses, hover_pose
@@ -121,6 +121,7 @@ fig.tight_layout()
 
 # %%
 # CHECK grab.move_path
+require_written("grab.move_path")
 check_station = make_station("sim", seed=1, scene=SCENE)
 spots = {"red": [-250.0, 80.0, 0.0], "blue": [250.0, 60.0, 0.0], "green": [0.0, 220.0, 0.0]}
 landed = {}

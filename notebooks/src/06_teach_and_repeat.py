@@ -51,7 +51,8 @@ for o in station.world.blocks:
 # (closed), above the destination (closed), down until the block is a few mm above the board (open), back up (open).
 # A waypoint's gripper state is the state *after* arriving there. `teach.swap_waypoints()` gives the poses a careful
 # student would hold the arm in (top-down, fingers square to the block); teaching records what the encoders read.
-# **Exercise:** record one waypoint per pose with the `Recorder` (torque goes off when it is created).
+# **Exercise `teach.replay`, first part:** record one waypoint per pose with the `Recorder` (torque goes off when it is
+# created).
 
 # %%
 def teach_program(arm, poses, gripper, name="swap"):

@@ -40,5 +40,4 @@ def _call_face(function, centre, edge, yaw, mm_per_px):
 
 
 SPECS = (HiddenSpec("face_geometry", _square_faces, atol=0, adapter="_call_face", prelude="definitions"),)
-FORBIDDEN = ("scipy.ndimage.center_of_mass", "transforms.wrap_quarter", "wrap_quarter", "detect_objects",
-             "detect_blocks")
+FORBIDDEN = ("scipy.ndimage.center_of_mass", "transforms.wrap_quarter", "detect_objects", "detect_blocks")
