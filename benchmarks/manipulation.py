@@ -332,7 +332,7 @@ def _sector(x: float, y: float) -> str:
 
 
 def main_fuzz(n_stations: int = 10, places: int = 50) -> None:
-    from armlab.tasks.place_fuzz import run_station
+    from scenarios.place_fuzz import run_station
 
     kinds = ("done < 3 mm", "done >= 3 mm", "refused before", "refused mid-plan")
     counts: dict[str, dict[str, int]] = {}

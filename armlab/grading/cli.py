@@ -8,7 +8,7 @@ import sys
 import time
 from pathlib import Path
 
-from armlab.command_line import int_at_least, positive_seconds
+from armlab._command_line import int_at_least, positive_seconds
 
 from .run import Limits
 

@@ -18,8 +18,8 @@ from armlab import motion_safety
 from armlab.blocks import block_edge
 from armlab.kinematics import Unreachable
 from armlab.station.contract import MotionRefused
+from armlab.tasks import handling
 
-from . import handling
 from .board_grid import GridSpot, Outcome
 
 __all__ = ["REGION", "PLACE_REACH_MM", "PICK_MIN_REACH_MM", "DETECTION_OFF_MM", "random_place_spot", "run_station"]
