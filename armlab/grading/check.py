@@ -95,15 +95,15 @@ def self_check(checkout: Path | str = ".", limits: Limits = DEFAULT_LIMITS, unsa
     blocked: dict[str, tuple[str, str]] = {}
     failing = [e for e in written if results[e.id].score < results[e.id].max_score]
     for ex in failing:
-        messages = " ".join(c.message for c in results[ex.id].checks if not c.passed)
-        missing = next((b for b in sorted(sub.blank) if f"exercise {b} (" in messages), None)
-        if missing is not None:
-            blocked[ex.id] = (missing, "is not written yet")
-            continue
         text = "\n".join(sub.bodies.get(ex.id, [])) + "\n".join(
             sources[ex.notebook][int(c.name.rsplit(" ", 1)[-1])] for c in results[ex.id].checks if not c.passed)
         earlier = [a for a in failing if EXERCISES.index(a) < EXERCISES.index(ex)]   # what ex may build on
         needed = next((a for a in earlier if _uses(a, text)), None)
         if needed is not None:
             blocked[ex.id] = (needed.id, "fails")
+            continue
+        messages = " ".join(c.message for c in results[ex.id].checks if not c.passed)
+        missing = next((b for b in sorted(sub.blank) if f"exercise {b} (" in messages), None)
+        if missing is not None:
+            blocked[ex.id] = (missing, "is not written yet")
     return SelfCheck(results, blocked)

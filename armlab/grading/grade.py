@@ -296,14 +296,19 @@ class Grader:
         finally:
             self._discard(tree)
 
-    def _together(self, written: dict[str, list[str]]) -> dict[str, list[CheckResult]]:
-        """Every written exercise's checks from one pass (each notebook once, the hidden checks in one run)."""
+    def _together(self, written: dict[str, list[str]]) -> dict[str, tuple[list[CheckResult], str]]:
+        """Every written exercise's checks from one pass (each notebook once, the hidden checks in one run), with
+        its notebook run's problem ('' when none)."""
         tree = self._spliced(written)
         try:
             notebooks = sorted({exercise(e).notebook for e in written})
             runs = {name: self._notebook(tree, name) for name in notebooks}
             hidden = self._harness(tree, self._with_specs(written))
-            return {e: self._checks(e, b, runs[exercise(e).notebook], tree, hidden) for e, b in written.items()}
+            out = {}
+            for e, b in written.items():
+                run = runs[exercise(e).notebook]
+                out[e] = (self._checks(e, b, run, tree, hidden), run.problem)
+            return out
         finally:
             self._discard(tree)
 
@@ -334,14 +339,14 @@ class Grader:
                     results[exercise_id] = ExerciseResult(exercise_id, 0.0, points, [], str(e))
         if written:
             together = self._once(("together", self._digest(written)), lambda: self._together(written))
-            failing = {e for e, checks in together.items() if not checks or not all(c.passed for c in checks)}
-            for exercise_id, checks in together.items():
+            failing = {e for e, (checks, _) in together.items() if not checks or not all(c.passed for c in checks)}
+            for exercise_id, (checks, problem) in together.items():
                 others_fail = failing - {exercise_id}
                 if exercise_id not in failing or not any(written[e] != self._reference_bodies(e)
                                                          for e in others_fail):
                     # every check passed, or each other exercise that failed is the reference itself: the pass
                     # was already this exercise alone as far as a failure can tell
-                    results[exercise_id] = _score(exercise_id, checks)
+                    results[exercise_id] = _score(exercise_id, checks, problem)
                 else:
                     results[exercise_id] = self.grade_exercise(exercise_id, written[exercise_id])
         return {e: results[e] for e in self.exercise_ids}
