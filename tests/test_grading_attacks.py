@@ -83,38 +83,29 @@ CHANGE_GRADER = _body(f'''
                 pass
     return np.zeros(3)
 ''')
-OUTLIVE = _body(f'''
-    import subprocess, sys
-    daemon = ("import os, time, pathlib\\n"
-              "os.setsid() if hasattr(os, 'setsid') else None\\n"
-              "end = time.time() + 60\\n"
-              "while time.time() < end:\\n"
-              "    for p in pathlib.Path('/').glob('tmp/pytest-of-*/pytest-*/*/out/grades.csv'):\\n"
-              "        try: p.write_text('student,total\\\\nattacker,100\\\\n')\\n"
-              "        except OSError: pass\\n"
-              "    time.sleep(0.2)\\n")
-    import os
-    if not os.environ.get("ATTACK_STARTED"):      # once per process: the region is called thousands of times
-        os.environ["ATTACK_STARTED"] = "1"
-        subprocess.Popen([sys.executable, "-c", daemon, "{MARK}"], start_new_session=True,
-                         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-''') + "\n" + _reference(DH)[0]
-POISON = _body(f'''
-    import subprocess, sys
-    daemon = ("import pathlib, time\\n"
-              "end = time.time() + 60\\n"
-              "while time.time() < end:\\n"
-              "    for p in list(pathlib.Path('/tmp').rglob('02_forward_kinematics.ipynb')) + "
-              "list(pathlib.Path({str(ROOT)!r}).rglob('*.ipynb')):\\n"
-              "        try: p.write_text('{{}}')\\n"
-              "        except OSError: pass\\n"
-              "    time.sleep(0.2)\\n")
-    import os
-    if not os.environ.get("ATTACK_STARTED"):      # once per process: the region is called thousands of times
-        os.environ["ATTACK_STARTED"] = "1"
-        subprocess.Popen([sys.executable, "-c", daemon, "{MARK}"], start_new_session=True,
-                         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-''') + "\n" + _reference(DH)[0]
+def _daemon(loop_body: str) -> str:
+    """A region that starts, once per process (the region is called thousands of times), a daemon in a new session
+    running `loop_body` every 0.2 s for a minute, then returns the reference's answer."""
+    script = ("import os, pathlib, time\n"
+              "end = time.time() + 60\n"
+              "while time.time() < end:\n"
+              + textwrap.indent(loop_body, "    ") + "\n    time.sleep(0.2)\n")
+    return _body(f'''
+        import os, subprocess, sys
+        if not os.environ.get("ATTACK_STARTED"):
+            os.environ["ATTACK_STARTED"] = "1"
+            subprocess.Popen([sys.executable, "-c", {script!r}, "{MARK}"], start_new_session=True,
+                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    ''') + "\n" + _reference(DH)[0]
+
+
+OUTLIVE = _daemon("for p in pathlib.Path('/').glob('tmp/pytest-of-*/pytest-*/*/out/grades.csv'):\n"
+                  "    try: p.write_text('student,total\\nattacker,100\\n')\n"
+                  "    except OSError: pass")
+POISON = _daemon(f"for p in list(pathlib.Path('/tmp').rglob('02_forward_kinematics.ipynb')) + "
+                 f"list(pathlib.Path({str(ROOT)!r}).rglob('*.ipynb')):\n"
+                 "    try: p.write_text('{}')\n"
+                 "    except OSError: pass")
 NO_ASSERTS = _body('''
     import ast
     class NoAsserts(ast.NodeTransformer):

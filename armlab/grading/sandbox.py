@@ -101,21 +101,15 @@ class PidsGroup:
         """`argv` started inside the group (a shell moves itself in, then execs it)."""
         return ["sh", "-c", 'echo $$ > "$0/cgroup.procs" && exec "$@"', str(self.path), *argv]
 
+    def _members(self) -> list[int]:
+        try:
+            return [int(p) for p in (self.path / "cgroup.procs").read_text().split()]
+        except OSError:
+            return []
+
     def close(self) -> None:
         """Kill every process of the group until none is left, then remove it."""
-        for _ in range(100):
-            try:
-                pids = [int(p) for p in (self.path / "cgroup.procs").read_text().split()]
-            except OSError:
-                return
-            if not pids:
-                break
-            for pid in pids:
-                try:
-                    os.kill(pid, signal.SIGKILL)
-                except ProcessLookupError:
-                    pass
-            time.sleep(0.02)
+        _kill_until_gone(self._members)
         try:
             self.path.rmdir()
         except OSError:
@@ -237,10 +231,11 @@ def _pids_of(uid: int) -> list[int]:
     return pids
 
 
-def _kill_user(uid: int) -> None:
-    """Kill every process of `uid` until none is left (a process may fork while it is being killed)."""
-    for _ in range(50):
-        pids = _pids_of(uid)
+def _kill_until_gone(members) -> None:
+    """SIGKILL every pid members() lists, again until it lists none (a process may fork while it is being killed;
+    at most 100 rounds)."""
+    for _ in range(100):
+        pids = members()
         if not pids:
             return
         for pid in pids:
@@ -249,6 +244,11 @@ def _kill_user(uid: int) -> None:
             except ProcessLookupError:
                 pass
         time.sleep(0.02)
+
+
+def _kill_user(uid: int) -> None:
+    """Kill every process of `uid` until none is left."""
+    _kill_until_gone(lambda: _pids_of(uid))
 
 
 def lock_down(*paths: Path) -> None:
