@@ -183,7 +183,8 @@ class Grader:
         try:
             inside = self.runner.sandbox.inside(run_tree)
             jobs = {e: self._jobs(e, inside) for e in exercise_ids}
-            got, problem = self.runner.harness(run_tree, [job for e in exercise_ids for job in jobs[e]])
+            got, problem = self.runner.harness(run_tree, [job for e in exercise_ids for job in jobs[e]],
+                                               exercises=len(exercise_ids))
         finally:
             self._discard(run_tree)
         if got is None:

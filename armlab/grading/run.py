@@ -23,7 +23,7 @@ import signal
 import subprocess
 import sys
 import tempfile
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from .sandbox import Limits, PidsGroup, Sandbox
@@ -149,12 +149,15 @@ class Runner:
         env.setdefault("PATH", "/usr/bin:/bin")
         return env
 
-    def run(self, cmd: list[str], worktree: Path, stdin: bytes) -> tuple[bool, str, int]:
-        """Run `cmd` (paths as seen inside) in the work tree in the sandbox with `stdin`; (finished in time, the last
-        OUTPUT_TAIL bytes of its output, its return code). Everything the run started is gone when this returns."""
+    def run(self, cmd: list[str], worktree: Path, stdin: bytes, limits: Limits | None = None
+            ) -> tuple[bool, str, int]:
+        """Run `cmd` (paths as seen inside) in the work tree in the sandbox with `stdin` under `limits` (default: the
+        runner's); (finished in time, the last OUTPUT_TAIL bytes of its output, its return code). Everything the run
+        started is gone when this returns."""
+        limits = limits or self.limits
         with self.sandbox.slot(worktree, self.files) as uid:
-            argv = self.sandbox.argv(cmd, worktree, self.files, self.limits, uid)
-            group = PidsGroup(self.limits.max_procs) if PidsGroup.available() else None
+            argv = self.sandbox.argv(cmd, worktree, self.files, limits, uid)
+            group = PidsGroup(limits.max_procs) if PidsGroup.available() else None
             if group is not None:
                 argv = group.wrap(argv)
             with tempfile.TemporaryFile() as log:
@@ -166,7 +169,7 @@ class Runner:
                 except (BrokenPipeError, OSError):
                     pass
                 try:
-                    proc.wait(timeout=self.limits.timeout_s)
+                    proc.wait(timeout=limits.timeout_s)
                     done = True
                 except subprocess.TimeoutExpired:
                     done = False
@@ -210,10 +213,13 @@ class Runner:
         died = next((f"cell {i}: {c.message}" for i, c in sorted(cells.items()) if "the kernel died" in c.message), "")
         return NotebookRun(cells, died)
 
-    def harness(self, worktree: Path, jobs: list[dict]) -> tuple[list | None, str]:
+    def harness(self, worktree: Path, jobs: list[dict], exercises: int = 1) -> tuple[list | None, str]:
         """The hidden checks' jobs run in one sandboxed harness process of `worktree` (armlab_grader.harness): per job
         {"results": per call {"value": ...} or {"error": ...}, "forbidden": forbidden calls seen}; or None and
-        why."""
+        why. The run's wall-clock and CPU limits are the runner's times `exercises` (the hidden checks of that many
+        exercises run in this one process)."""
+        limits = replace(self.limits, timeout_s=self.limits.timeout_s * max(1, exercises),
+                         cpu_s=self.limits.cpu_s * max(1, exercises))
         work = self.sandbox.inside(worktree)
         private = worktree / ".grader"
         private.mkdir(exist_ok=True)
@@ -221,9 +227,9 @@ class Runner:
         key = secrets.token_bytes(32)
         request = json.dumps({"out": f"{work}/.grader/hidden-results.json", "jobs": jobs}).encode()
         done, out, code = self.run([sys.executable, "-m", "armlab_grader.harness"], worktree,
-                                   key.hex().encode() + b"\n" + request)
+                                   key.hex().encode() + b"\n" + request, limits)
         if not done:
-            return None, f"the hidden checks did not finish within {self.limits.timeout_s:g} s (wall clock)"
+            return None, f"the hidden checks did not finish within {limits.timeout_s:g} s (wall clock)"
         try:
             got = verify_signed(results, key)
             if not isinstance(got, list) or len(got) != len(jobs) or not all(
