@@ -142,8 +142,9 @@ class Sandbox:
                 binds += ["--ro-bind-try", path, path]
             for root in _python_roots():
                 binds += ["--ro-bind", root, root]
+            # the private /tmp and /home first: a bind below them (a venv under /tmp, say) must come after
             return ["bwrap", "--die-with-parent", "--new-session", "--unshare-all", "--cap-drop", "ALL",
-                    *binds, "--proc", "/proc", "--dev", "/dev", "--tmpfs", "/tmp", "--tmpfs", "/home",
+                    "--proc", "/proc", "--dev", "/dev", "--tmpfs", "/tmp", "--tmpfs", "/home", *binds,
                     "--dir", HOME, "--bind", str(worktree), WORK, "--ro-bind", str(grader), GRADER,
                     "--chdir", WORK, "--", *bounded]
         if self.kind == "user":
