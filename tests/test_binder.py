@@ -23,14 +23,20 @@ BINDER = REPO / "binder"
 
 
 def pins(path: Path) -> dict[str, str]:
-    """name -> version of the `name==version` lines of a requirements file, following `-r other` lines."""
+    """name -> version of the `name==version` lines of a requirements file whose environment marker holds for this
+    Python (the binder venv is made from it), following `-r other` lines."""
+    from packaging.markers import Marker
+
     out: dict[str, str] = {}
     for line in path.read_text().splitlines():
         line = line.split("#", 1)[0].strip()
         if line.startswith("-r "):
             out.update(pins((path.parent / line[3:].strip()).resolve()))
         elif "==" in line:
-            name, version = line.split("==", 1)
+            requirement, _, marker = line.partition(";")
+            if marker.strip() and not Marker(marker.strip()).evaluate():
+                continue
+            name, version = requirement.split("==", 1)
             out[name.strip().lower()] = version.strip()
     return out
 
