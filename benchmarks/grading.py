@@ -71,7 +71,8 @@ def main() -> None:
         one = time.perf_counter() - t
         runs = grader.runs
         grader.close()
-        full = sum(r.score for r in results.values()) == sum(r.max_score for r in results.values())
+        auto = [r for r in results.values() if not r.by_hand]         # written answers are graded by hand
+        full = sum(r.score for r in auto) == sum(r.max_score for r in auto)
         print(f"sandbox: {grader.sandbox.kind}; {len(args.exercises)} exercises; the full submission scored "
               f"{'full marks' if full else 'BELOW full marks'} with {runs} notebook runs")
         print("| what | seconds | / plain nbval pass |")
