@@ -78,7 +78,7 @@ def test_check_names_the_first_failing_check_and_does_not_charge_the_caller(stud
     assert "01_camera_calibration cell" in homography and "Error: " in homography, done.stdout   # the cell's error
     pose = next(ln for ln in lines if ln.startswith(f"- {POSE}:"))
     assert f"it needs {HOMOGRAPHY}, which fails" in pose, done.stdout
-    assert "1 written exercise(s) not yet passing" in done.stdout and "not written yet" in done.stdout
+    assert "2 written exercise(s) not yet passing" in done.stdout and "not written yet" in done.stdout
 
 
 def test_check_passes_with_exit_0_when_everything_written_passes(tmp_path):
