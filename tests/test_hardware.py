@@ -455,7 +455,7 @@ class Guard:
 
 sys.meta_path.insert(0, Guard())
 import armlab, armlab.station, armlab.hardware, armlab.hardware.interbotix, armlab.hardware.realsense
-import armlab.hardware.safety, armlab.hardware.ros_session, armlab.hardware.sigint, armlab.hardware.sigterm
+import armlab.hardware.safety, armlab.hardware.ros_session, armlab.station.interrupt, armlab.hardware.sigterm
 import armlab.hardware.record
 from armlab import make_station
 print(sorted(set(tried) | {m for m in sys.modules if m.split(".")[0] in GUARDED}))

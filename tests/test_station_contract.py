@@ -331,15 +331,18 @@ def test_a_move_asked_for_during_a_non_blocking_one_waits_for_it(station):
     np.testing.assert_allclose(arm.joint_positions(), Q_READY, atol=ATOL)
 
 
-def test_ctrl_c_during_a_move_holds_the_arm_and_closing_parks_it(paced_station):
+@pytest.mark.parametrize("blocking", [True, False], ids=["blocking", "non-blocking"])
+def test_ctrl_c_during_a_move_holds_the_arm_and_closing_parks_it(paced_station, blocking):
+    """Ctrl+C while a blocking move waits, or while Python sleeps during a non-blocking one (the station's SIGINT
+    handler, armlab.station.interrupt): the arm holds, then closing parks it."""
     arm = paced_station.arm
     arm.move_to(Q_READY, moving_time=2.0)
     timer = threading.Timer(0.3, os.kill, (os.getpid(), signal.SIGINT))    # Ctrl+C (a Jupyter interrupt)
     timer.start()
     try:
         with pytest.raises(KeyboardInterrupt):
-            arm.move_to(Q_OTHER, moving_time=3.0)
-            time.sleep(5.0)                           # only reached when the interrupt came after the move
+            arm.move_to(Q_OTHER, moving_time=3.0, blocking=blocking)
+            time.sleep(5.0)                           # the interrupt comes here during a non-blocking move
     finally:
         timer.join()
     q = physical_joints(paced_station)

@@ -8,7 +8,7 @@ The arm is connected before the camera (a missing driver is reported before the 
 station (Station.close(), leaving a `with` block, normally or by an exception, Ctrl+C, interpreter exit through
 atexit, or a SIGTERM to the process: armlab.hardware.sigterm) puts the arm in its sleep pose, then stops the camera.
 ROS stays up for the next station of the process and shuts down at exit (armlab.hardware.ros_session). While a real
-station with an arm is open, Ctrl+C holds the arm, then raises KeyboardInterrupt (armlab.hardware.sigint).
+station with an arm is open, Ctrl+C holds the arm, then raises KeyboardInterrupt (armlab.station.interrupt).
 
 `make_station("real", arm=False, playback="session.bag")` replays a recording (`python -m armlab record`) through the
 real librealsense pipeline instead of a camera.
@@ -53,8 +53,8 @@ def make_real_station(arm: bool = True, camera: bool = True, robot_model: str = 
     """
     from armlab.hardware import interbotix, realsense
     from armlab.hardware.ros_session import shutdown_session
-    from armlab.hardware.sigint import install_sigint
     from armlab.hardware.sigterm import install_sigterm
+    from armlab.station.interrupt import install_sigint
 
     if robot_model != "rx200":
         raise ValueError(f"robot_model {robot_model!r} is not supported: armlab models the 'rx200' only")

@@ -17,7 +17,7 @@ Safety, in the order a move is handled:
   position (the arm stops within HOLD_TIME_S and holds there under torque) and every further motion, gripper
   included, raises EmergencyStopped until reset(). The gripper keeps its state (a held block is not dropped).
   Closing the station while stopped leaves the arm holding where it is (it is not moved to sleep) and warns.
-- Ctrl+C: armlab.hardware.sigint calls hold() (the measured position, not an e-stop), then KeyboardInterrupt.
+- Ctrl+C: armlab.station.interrupt calls hold() (the measured position, not an e-stop), then KeyboardInterrupt.
 - Teaching: set_torque(False) lets the arm be moved by hand (it warns: the arm falls unless supported) and
   joint_positions() reads it; moves are refused until set_torque(True), which first commands the measured position.
 - Servo reboots (reboot_motors) reset the servos' RAM registers: Profile_Velocity 0 means no profile at all. The

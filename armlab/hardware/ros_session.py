@@ -9,7 +9,7 @@ exit (atexit) or when the process is asked to stop (SIGTERM), always after the a
 Why no rclpy signal handlers: rclpy's default SIGINT handler shuts every ROS context down, so after a Ctrl+C (or a
 Jupyter interrupt) the sleep move could not be sent. armlab initialises rclpy with SignalHandlerOptions.NO (before the
 Interbotix API would initialise it with the defaults) and installs its own SIGINT handler while a station is open
-(armlab.hardware.sigint).
+(armlab.station.interrupt).
 
 Why a probe: InterbotixManipulatorXS(...) waits forever for the driver's services and joint states. The probe waits
 at most `timeout_s` for them on a node of its own and names the missing driver; it also refuses a second driver

@@ -10,6 +10,7 @@ Units: mm, rad, s; world (board) frame.
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 
 import numpy as np
 
@@ -19,6 +20,7 @@ from armlab.sim.gripper import GripperGeometry
 from armlab.sim.scenes import PRESETS, SceneError, load_scene, save_scene, scene_objects
 from armlab.sim.world import World
 from armlab.station.contract import Capabilities, Pacing, SagReference, Station
+from armlab.station.interrupt import install_sigint
 
 __all__ = ["make_sim_station", "SimArm", "ArmRealism", "GripperGeometry", "World", "PRESETS", "SceneError",
            "scene_objects", "load_scene", "save_scene"]
@@ -44,7 +46,8 @@ def make_sim_station(seed: int = 0, scene: str | os.PathLike | dict = "random",
             CameraRealism (armlab.sim.realism: e.g. CameraRealism.realistic(0), the camera of data/checkerboard).
     The arm starts at the sleep pose with the gripper open, as the real lab's arm does. Closing the station
     (close(), the end of its `with` block) parks the arm in its sleep pose as the real station does; every later
-    command raises StationClosed.
+    command raises StationClosed. While it is open, Ctrl+C holds the arm where it is, then raises KeyboardInterrupt,
+    as on the real station (armlab.station.interrupt; when made in the main thread).
     """
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
         raise ValueError(f"seed must be an integer, got {plain(seed)}")
@@ -58,16 +61,19 @@ def make_sim_station(seed: int = 0, scene: str | os.PathLike | dict = "random",
     from armlab.sim.camera import SimCamera  # the renderer is heavier: import it only when a station is built
 
     camera = SimCamera(world, arm, realism=camera_realism, seed=camera_seed)
+    restore_sigint = install_sigint(arm.hold, warn_outside_main=False)
     return Station(kind="sim", arm=arm, camera=camera, world=world,
                    capabilities=Capabilities(camera_intrinsics=lambda: _camera_intrinsics(camera),
                                              sag_reference=lambda: _sag_reference(arm),
                                              pose_by_hand=arm.move_by_hand, pacing=_pacing(world, arm)),
-                   _closer=lambda: _close(arm, camera))
+                   _closer=lambda: _close(arm, camera, restore_sigint))
 
 
-def _close(arm: SimArm, camera) -> None:
-    """What closing a simulated station does, as on the real one: the arm parks (SimArm.close), then the camera
-    stops; afterwards both refuse every command (StationClosed). The world's ground truth stays readable."""
+def _close(arm: SimArm, camera, restore_sigint: Callable[[], None]) -> None:
+    """What closing a simulated station does, as on the real one: Ctrl+C stops holding the arm, the arm parks
+    (SimArm.close), then the camera stops; afterwards both refuse every command (StationClosed). The world's ground
+    truth stays readable."""
+    restore_sigint()
     try:
         arm.close()
     finally:
