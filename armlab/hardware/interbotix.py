@@ -74,6 +74,7 @@ from armlab.hardware.safety import DEFAULT_BOARD_MARGIN_MM, check_move, pad_open
 from armlab.profile import MIN_MOVING_TIME_S
 from armlab.robot import RobotModel, rx200
 from armlab.station.contract import EmergencyStopped, MotionRefused, StationClosed
+from armlab.station.parking import park_and_close
 
 __all__ = ["HELD_THRESHOLD_MM", "HOLD_TIME_S", "import_interbotix", "RealArm", "connect_arm", "park"]
 
@@ -393,24 +394,11 @@ class RealArm:
 
 
 def park(arm: RealArm) -> None:
-    """Put the arm to sleep (torque on first if it was off) and close it; ROS stays up (armlab.hardware.ros_session
-    shuts it down at exit). While emergency-stopped the arm is not moved (it keeps holding its position) and a
-    RuntimeWarning says so. A refused or failed sleep move raises RuntimeError telling to put the arm down by hand."""
-    if arm.closed:
-        return
-    try:
-        if arm.emergency_stopped:
-            warnings.warn("the arm is emergency-stopped: it was not moved to its sleep pose and holds its position; "
-                          "support it before powering the arm off", RuntimeWarning, stacklevel=2)
-        else:
-            if not arm.torque_enabled:
-                arm.set_torque(True)
-            arm.sleep()
-    except Exception as e:
-        raise RuntimeError(f"the arm could not go to its sleep pose ({e}); support it before powering it "
-                           "off") from e
-    finally:
-        arm.closed = True
+    """Put the arm to sleep (torque on first if it was off) and close it (armlab.station.parking); ROS stays up
+    (armlab.hardware.ros_session shuts it down at exit). While emergency-stopped the arm is not moved (it keeps holding
+    its position) and a RuntimeWarning says so. A refused or failed sleep move raises RuntimeError telling to put the
+    arm down by hand."""
+    park_and_close(arm, "the arm", "; support it before powering it off")
 
 
 def connect_arm(robot_name: str | None = None, gripper_pressure: float = 0.5,

@@ -18,7 +18,6 @@ Units: rad, s, mm; world (board) frame. Three joint vectors are kept apart:
 from __future__ import annotations
 
 import time
-import warnings
 from dataclasses import dataclass, fields, replace
 
 import numpy as np
@@ -32,6 +31,7 @@ from armlab.sim.geometry import convex_penetration, prism_features
 from armlab.sim.gripper import GripperGeometry, close_on, push_with_pads
 from armlab.sim.world import World, describe_object
 from armlab.station.contract import EmergencyStopped, MotionRefused, StationClosed
+from armlab.station.parking import park_and_close
 from armlab.transforms import homogeneous, invert_transform, rot_z, rpy_from_matrix
 
 __all__ = ["ArmRealism", "SimArm", "gravity_deflection"]
@@ -500,22 +500,8 @@ class SimArm:
             self._refresh()
 
     def close(self) -> None:
-        """Park and end the arm (what closing its station does): to its sleep pose unless emergency-stopped (then it
-        holds where it is and a RuntimeWarning says so), torque on first if it was off; afterwards every command
-        raises StationClosed. Idempotent. A refused sleep move still closes the arm and raises RuntimeError."""
-        if self.closed:
-            return
-        try:
-            if self._estopped:
-                warnings.warn("the simulated arm is emergency-stopped: it was not moved to its sleep pose and holds "
-                              "its position", RuntimeWarning, stacklevel=2)
-                return
-            if not self._torque:
-                self.set_torque(True)
-            self.hold()
-            try:
-                self.sleep()
-            except MotionRefused as e:
-                raise RuntimeError(f"the arm could not go to its sleep pose ({e})") from e
-        finally:
-            self.closed = True
+        """Park and end the arm (what closing its station does, armlab.station.parking): to its sleep pose unless
+        emergency-stopped (then it holds where it is and a RuntimeWarning says so), torque on first if it was off;
+        afterwards every command raises StationClosed. Idempotent. A refused sleep move still closes the arm and
+        raises RuntimeError."""
+        park_and_close(self, "the simulated arm")
