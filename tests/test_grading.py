@@ -2,8 +2,8 @@
 marks, the blank release 0, a wrong answer costs its own exercise only, the tricks of issue 11 score below full
 marks (a library or kit call in place of the exercise by the static check), an infinite loop, a kernel death, a
 memory hog, a huge output and a corrupt notebook are contained. One class is graded once (module fixture) on three
-exercises of the two cheapest notebooks to keep the run short; the hidden checks of every exercise are tried on the
-reference and on wrong answers in a few batched harness runs."""
+exercises of the two cheapest notebooks to keep the run short. (The hidden checks of every exercise, on the reference
+and on wrong answers: test_hidden_checks.py and test_hidden_checks_open.py.)"""
 
 from __future__ import annotations
 
@@ -12,13 +12,13 @@ import json
 from pathlib import Path
 
 import pytest
+from wrong_answers import WRONG_DH, reference_bodies, wrong_euler
 
 from armlab.exercises import make_student_release
 from armlab.exercises.registry import exercise
 from armlab.grading import grade_class, read_submission
 from armlab.grading.run import Limits
 from armlab.grading.splice import write_regions
-from armlab.grading.submission import exercise_file, regions_of, source_texts
 
 ROOT = Path(__file__).resolve().parents[1]
 GRADED = ["fk.dh_table", "fk.euler", "ik.candidates"]
@@ -30,21 +30,7 @@ CONTAINED = {   # region prefixes that break the run before the (correct) soluti
 }
 LIBRARY_EULER = ("    from armlab.transforms import euler_zyz_from_matrix\n"     # right values, the kit's work
                  "    return euler_zyz_from_matrix(np.asarray(T, dtype=float)[:3, :3])")
-WRONG_DH = ("    return np.array([[np.pi / 2, h0, 0.0, np.pi / 2], [-(np.pi / 2 - beta), 0.0, L1, 0.0],\n"
-            "                     [np.pi / 2 - beta, 0.0, L2, 0.0], [-np.pi / 2, 0.0, 0.0, -np.pi / 2],\n"
-            "                     [0.0, Lt, 0.0, 0.0]])")      # alpha1's sign slipped: z1 points the other way
 
-
-def _reference_bodies(exercise_id: str) -> list[str]:
-    name = exercise_file(exercise(exercise_id))
-    return regions_of(source_texts(ROOT / name), exercise_id, name)
-
-
-def _wrong_euler() -> list[str]:
-    # psi's sign slipped: the classic slip reading the third rotation off the bottom row
-    body = _reference_bodies("fk.euler")[0]
-    assert "-R[2, 0]" in body
-    return [body.replace("-R[2, 0]", "R[2, 0]")]
 
 
 def _tamper_checks(student: Path) -> None:
@@ -76,12 +62,12 @@ def graded(tmp_path_factory) -> tuple[dict, Path]:
 
     full = student("full")
     for exercise_id in GRADED:
-        write_regions(full, exercise_id, _reference_bodies(exercise_id))
+        write_regions(full, exercise_id, reference_bodies(exercise_id))
     student("blank")
     write_regions(student("wrong_dh"), "fk.dh_table", [WRONG_DH])
-    wrong_euler = student("wrong_euler")
-    write_regions(wrong_euler, "fk.euler", _wrong_euler())
-    write_regions(wrong_euler, "fk.dh_table", _reference_bodies("fk.dh_table"))
+    slipped = student("wrong_euler")
+    write_regions(slipped, "fk.euler", wrong_euler())
+    write_regions(slipped, "fk.dh_table", reference_bodies("fk.dh_table"))
     tampered = student("tampered")          # a wrong DH, every trick on the check cells, a conftest that passes all
     write_regions(tampered, "fk.dh_table", [WRONG_DH.replace("0.0, np.pi / 2]", "0.0, 1.0 * np.pi / 2]")])
     _tamper_checks(tampered)
@@ -98,8 +84,8 @@ def graded(tmp_path_factory) -> tuple[dict, Path]:
     (edited_only / "armlab").mkdir(parents=True)
     shutil.copy2(full / "armlab/kinematics.py", edited_only / "armlab")
     for name, prefix in CONTAINED.items():   # each then runs the reference: only the limits can make it score 0
-        write_regions(student(name), "fk.euler", [prefix + _reference_bodies("fk.euler")[0]])   # called 300 times
-        write_regions(subs / name, "fk.dh_table", _reference_bodies("fk.dh_table"))
+        write_regions(student(name), "fk.euler", [prefix + reference_bodies("fk.euler")[0]])   # called 300 times
+        write_regions(subs / name, "fk.dh_table", reference_bodies("fk.dh_table"))
     write_regions(student("library_call"), "fk.euler", [LIBRARY_EULER])
     kit = student("kit_call")            # the notebook's stand-in (the kit's table with the lengths put in)
     write_regions(kit, "fk.dh_table", ["    return kit_table(h0, L1, beta, L2, Lt)"])
@@ -217,9 +203,16 @@ def test_submission_reading_reports_damaged_markers(tmp_path):
     assert damaged and "markers" in sub.problems[damaged[0]]
 
 
-def test_grade_command_on_a_blank_class(tmp_path):
+def test_grade_command_on_a_blank_class(tmp_path, monkeypatch):
+    """Nothing runs for a class that wrote nothing: not even the reference's expected values (none is needed)."""
     from armlab.__main__ import main
+    from armlab.grading.run import Runner
 
+    def ran(*args, **kwargs):
+        raise AssertionError("a blank class ran something")
+
+    monkeypatch.setattr(Runner, "harness", ran)
+    monkeypatch.setattr(Runner, "notebook", ran)
     make_student_release(ROOT, tmp_path / "subs" / "alice")
     assert main(["grade", str(tmp_path / "subs"), "--out", str(tmp_path / "out"), "--reference", str(ROOT)]) == 0
     rows = list(csv.DictReader((tmp_path / "out" / "grades.csv").open()))
@@ -228,151 +221,6 @@ def test_grade_command_on_a_blank_class(tmp_path):
     assert rows[0]["student"] == "alice" and rows[0]["total"] == "0"
     assert float(rows[0]["max"]) == sum(e.points for e in EXERCISES if e.kind != "written")   # those by hand
     assert main(["grade", str(tmp_path / "missing"), "--out", str(tmp_path / "out")]) == 2   # one line, exit 2
-
-
-def _replaced(exercise_id: str, old: str, new: str) -> list[str]:
-    bodies = _reference_bodies(exercise_id)
-    assert any(old in b for b in bodies), f"{old!r} not in the reference of {exercise_id}"
-    return [b.replace(old, new) for b in bodies]
-
-
-HIDDEN_WRONG = {   # per exercise: wrong answers its hidden checks must catch (a "hard-coded" one must fail them all)
-    "calib.pinhole": {
-        "no translation": _replaced("calib.pinhole", " + T_cam_world[:3, 3]", ""),
-        "rotation not transposed": _replaced("calib.pinhole", "T_cam_world[:3, :3].T @", "T_cam_world[:3, :3] @"),
-    },
-    "calib.tag_homography": {
-        "hard-coded": ["    H = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])"],
-        "normalisation not undone": _replaced("calib.tag_homography", "np.linalg.solve(T_dst, H_normalised @ T_src)",
-                                              "H_normalised"),
-    },
-    "calib.tag_extrinsics": {   # the refinement after the region would repair both: the adapter leaves it out
-        "hard-coded": ["    R, t = np.diag([1.0, -1.0, -1.0]), np.array([0.0, 150.0, 1000.0])"],
-        "pixels, not normalised points": _replaced("calib.tag_extrinsics", "dlt_homography(world[:, :2], normalised)",
-                                                   "dlt_homography(world[:, :2], pixels)"),
-    },
-    "calib.depth_plane": {
-        "one fit, no rejection": _replaced("calib.depth_plane", "range(iterations)", "range(1)"),
-        "outliers kept": _replaced("calib.depth_plane", "< inlier_mm", "< 1e9"),
-    },
-    "fk.dh_table": {
-        "alpha1's sign slipped": [WRONG_DH],
-        "the L's tilt added, not taken off": _replaced("fk.dh_table", "[-(np.pi / 2 - beta), 0.0, L1, 0.0]",
-                                                       "[-(np.pi / 2 + beta), 0.0, L1, 0.0]"),
-    },
-    "fk.euler": {
-        "psi's sign slipped": _wrong_euler(),
-        "no singular case": _replaced("fk.euler", "if sin_theta > 1e-12:", "if True:"),
-    },
-    "fk.dh_link_transform": {
-        "d negated": _replaced("fk.dh_link_transform", "= sa, ca, d", "= sa, ca, -d"),
-        "theta and alpha swapped in row 0": _replaced("fk.dh_link_transform", "-st * ca, st * sa", "-ct * sa, st * ca"),
-    },
-    "ik.candidates": {
-        "hard-coded": ["    q1 = q2 = q3 = q4 = heading * 0.0\n    ok, d2 = heading == heading, heading * 0.0 + 1.0"],
-        "elbow sign swapped": _replaced("ik.candidates", "* delta_sign", "* -delta_sign"),
-    },
-    "detect.segment": {
-        "red's wrap ignored": _replaced("detect.segment", "if h0 <= h1:", "if True:"),
-        "ranges tuned too tight": _replaced("detect.segment", "120, 60)", "250, 250)"),
-    },
-    "detect.face": {
-        "yaw not wrapped": _replaced("detect.face", "yaw = (np.radians(angle) + np.pi / 4) % (np.pi / 2) - np.pi / 4",
-                                     "yaw = np.radians(angle)"),
-        "size from pixels, not mm": _replaced("detect.face", "edge_mm = np.sqrt(m[\"m00\"]) * mm_per_px",
-                                              "edge_mm = np.sqrt(m[\"m00\"])"),
-    },
-    "detect.classify": {
-        "per-class spreads ignored": _replaced(
-            "detect.classify", "d = self.distances(rgb_means)",
-            "d = np.linalg.norm(color_features(rgb_means)[:, None, :] - self.means[None], axis=-1)"),
-        "margin to the farthest class": _replaced("detect.classify", "d[rows, order[:, 1]] - d[rows, order[:, 0]]",
-                                                  "d[rows, order[:, -1]] - d[rows, order[:, 0]]"),
-    },
-    "grab.move_path": {
-        "roll ignores the yaw": _replaced("grab.move_path",
-                                          "roll = planning.tilted_roll(heading, float(pitch), float(yaw))",
-                                          "roll = 0.0"),
-        "release at the grasp height": _replaced("grab.move_path", "tool_z = target[2] + edge - depth",
-                                                 "tool_z = target[2] - depth"),
-    },
-    "teach.replay": {
-        "recorded before posing": _replaced("teach.replay", "arm.move_by_hand(q)\n            recorder.record(g)",
-                                            "recorder.record(g)\n            arm.move_by_hand(q)"),
-        "no velocity floor": _replaced("teach.replay", "np.maximum(np.maximum(lab_pace, velocity_floor), 0.4)",
-                                       "np.maximum(lab_pace, 0.4)"),
-    },
-    "events.sort_stack": {
-        "no unstacking": _replaced("events.sort_stack", "if standing_on_something:", "if False:"),
-        "stack height not tracked": _replaced("events.sort_stack", "len(built[b.size]) * block_edge(b.size)", "0.0"),
-    },
-    "station.transition": {
-        "no stop at the end of the work": _replaced("station.transition", "    if machine.stop_requested:\n",
-                                                    "    if False:\n"),
-        "errors always back to idle": _replaced("station.transition", "if not machine.stop_requested:\n", "if True:\n"),
-    },
-}
-# exercises whose function calls another's region go into a second batch, apart from the one they call
-SECOND_BATCH = {"calib.tag_extrinsics", "fk.dh_link_transform"}
-
-
-def test_every_exercise_has_hidden_checks_and_wrong_answers():
-    from armlab.exercises.registry import EXERCISES
-    from armlab.grading import hidden
-
-    graded_by_code = sorted(e.id for e in EXERCISES if e.kind != "written")
-    assert sorted(hidden.SPECS) == graded_by_code == sorted(HIDDEN_WRONG)
-    assert sorted(hidden.FORBIDDEN) == graded_by_code
-    assert all(len(wrong) >= 2 for wrong in HIDDEN_WRONG.values()), "each exercise has two plausible wrong answers"
-
-
-def test_hidden_checks_pass_the_reference_and_fail_wrong_answers():
-    """All exercises' hidden checks: the reference (in one harness run after the one computing the expected values)
-    passes every one; each wrong answer (one batch per round of wrong answers and per group of exercises that do not
-    call each other) fails at least one, a hard-coded answer every one."""
-    from armlab.grading.grade import Grader
-
-    ids = sorted(HIDDEN_WRONG)
-    grader = Grader(ROOT, Limits(timeout_s=300, cpu_s=200), ids)
-    reference = grader.hidden_checks_together({e: _reference_bodies(e) for e in ids})
-    for exercise_id in ids:
-        checks = reference[exercise_id]
-        assert len(checks) >= 3 and all(c.passed for c in checks), (exercise_id, [c.message for c in checks])
-    rounds = max(len(w) for w in HIDDEN_WRONG.values())
-    for r in range(rounds):
-        for group in ([e for e in ids if e not in SECOND_BATCH], sorted(SECOND_BATCH)):
-            wrong = {e: list(HIDDEN_WRONG[e].items())[r] for e in group if len(HIDDEN_WRONG[e]) > r}
-            got = grader.hidden_checks_together({e: bodies for e, (_, bodies) in wrong.items()})
-            for exercise_id, (label, _) in wrong.items():
-                passed = [c.passed for c in got[exercise_id]]
-                assert not all(passed), f"{exercise_id}, {label}: every hidden check passed"
-                assert not (label == "hard-coded" and any(passed)), f"{exercise_id}, {label}: {passed}"
-
-
-def test_static_check_names_the_forbidden_call():
-    """Every reference region passes; each exercise's forbidden names and the kit's reference module, called,
-    imported, aliased or named in a string, fail the check with the name; the region's own names do not count."""
-    from armlab.exercises.registry import EXERCISES
-    from armlab.grading.hidden import FORBIDDEN
-    from armlab.grading.static import forbidden_uses, static_check
-
-    for ex in (e for e in EXERCISES if e.kind != "written"):
-        assert static_check(ex.id, _reference_bodies(ex.id)).passed, ex.id
-        for name in FORBIDDEN[ex.id]:
-            module, _, last = name.rpartition(".")
-            module = module or "lib"
-            uses = [f"    x = {module}.{last}(1)", f"    from {module} import {last}\n    x = {last}(2)",
-                    f"    f = getattr({module}, {last!r})"]
-            for body in uses:
-                result = static_check(ex.id, [body])
-                assert not result.passed and name in result.message, (ex.id, body, result)
-    ref = static_check("teach.replay", ["    from armlab.exercises import references\n"
-                                             "    return references.scaled_durations_by_search(program, speed)"])
-    assert not ref.passed and "armlab.exercises.references" in ref.message
-    assert forbidden_uses("    fk = 1.0\n    return fk * 2", ("kinematics.fk",)) == []      # its own variable
-    assert forbidden_uses("    return sky_points(n - 1) + 30", ("scoring.sky_points",), ("sky_points",)) == []
-    assert forbidden_uses("    if x:\n        pass\n    H = cv2.findHomography(a, b)",
-                          ("cv2.findHomography",)) == [("cv2.findHomography", 3)]
 
 
 def test_regrading_gives_the_same_scores(graded):
@@ -399,3 +247,14 @@ def test_a_hard_coded_answer_fails_the_hidden_checks():
         checks = grader.hidden_checks("fk.euler", [lookup])
     assert checks and not any(c.passed for c in checks)
     assert all("differs from the expected value" in c.message for c in checks)
+
+
+def test_a_grader_told_an_exercise_is_not_written_refuses_to_grade_it_unprepared():
+    """Expected values are computed only for exercises some submission writes (grade_class reads every submission
+    first); a submission writing another one is refused, never graded against values computed after it ran."""
+    from armlab.grading.grade import Grader
+    from armlab.grading.submission import Submission
+
+    with Grader(ROOT, exercises=["fk.euler"], written=[]) as grader:
+        with pytest.raises(ValueError, match="bob wrote fk.euler, which this Grader was told no submission writes"):
+            grader.grade(Submission("bob", bodies={"fk.euler": wrong_euler()}))

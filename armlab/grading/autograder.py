@@ -67,7 +67,7 @@ def run(root: Path | str) -> Path:
     """Grade ROOT/submission against ROOT/source and write ROOT/results/results.json; returns its path. The
     instructor's files and the results folder are made owner-only first, so that student code run as an
     unprivileged user (Gradescope's containers allow no namespaces: see armlab.grading.sandbox) reads neither."""
-    from .grade import Grader
+    from .grade import Grader, check_reference
     from .report import atomic_write, results_json
     from .sandbox import lock_down
     from .submission import read_submission
@@ -78,8 +78,9 @@ def run(root: Path | str) -> Path:
             raise NotADirectoryError(f"{root / part}: no such folder (is {root} laid out as Gradescope's /autograder?)")
     (root / "results").mkdir(exist_ok=True)
     lock_down(root / "source", root / "results")
-    with Grader(root / "source", limits_from_env(), exercises_from_env()) as grader:
-        results = grader.grade(read_submission(root / "submission", grader.reference))
+    submission = read_submission(root / "submission", check_reference(root / "source"))    # read only: nothing runs
+    with Grader(root / "source", limits_from_env(), exercises_from_env(), written=submission.bodies) as grader:
+        results = grader.grade(submission)
         grader.verify_sources()
     path = root / "results" / "results.json"
     atomic_write(path, results_json(results))

@@ -98,12 +98,16 @@ class Grader:
     results of identical regions are shared (thread-safe). close() removes its temporary trees."""
 
     def __init__(self, reference: Path | str, limits: Limits = DEFAULT_LIMITS, exercises: Iterable[str] | None = None,
-                 unsafe: bool = False, sandbox: Sandbox | None = None):
+                 unsafe: bool = False, sandbox: Sandbox | None = None, written: Iterable[str] | None = None):
+        """exercises: those graded (default every one); written: those some submission to grade has written (default
+        every graded one): only their expected values are computed, and grading another written one raises
+        ValueError."""
         self.reference = check_reference(Path(reference))
         self.limits = limits
         self.exercise_ids = list(exercises) if exercises is not None else [e.id for e in EXERCISES]
         for exercise_id in self.exercise_ids:
             exercise(exercise_id)
+        self._computed = [e for e in self.exercise_ids if written is None or e in set(written)]
         self.sandbox = sandbox or detect(unsafe)
         self._sources = source_hashes()
         self._tmp = tempfile.TemporaryDirectory(prefix="armlab-grade-")
@@ -162,54 +166,54 @@ class Grader:
         finally:
             self._discard(run_tree)
 
-    def _jobs(self, exercise_id: str, tree_inside: str) -> list[dict]:
+    def _jobs(self, exercise_id: str, tree_inside: str, compared_only: bool = False) -> list[dict | None]:
         """The harness jobs of the exercise's hidden specs: one per spec, every call of its checks, with the
-        exercise's forbidden names."""
+        exercise's forbidden names; with compared_only, None in place of an outcome spec's (nothing to compute)."""
         from .static import forbidden_of
 
         ex = exercise(exercise_id)
         notebook = None if ex.in_package else f"{tree_inside}/notebooks/{ex.notebook}.ipynb"
         forbidden = list(forbidden_of(exercise_id))
-        return [{"notebook": notebook, "function": spec.function, "adapter": spec.adapter, "prelude": spec.prelude,
+        return [None if compared_only and spec.outcome else
+                {"notebook": notebook, "function": spec.function, "adapter": spec.adapter, "prelude": spec.prelude,
                  "cases": [args for check in checks for args in check], "forbidden": forbidden}
                 for spec, checks in zip(_hidden.specs_of(exercise_id), _hidden.cases_of(exercise_id), strict=True)]
 
     def _with_specs(self, exercise_ids: Iterable[str]) -> list[str]:
         return [e for e in exercise_ids if _hidden is not None and _hidden.specs_of(e)]
 
-    def _harness(self, tree: Path, exercise_ids: list[str]) -> tuple[dict[str, list[dict]] | None, str]:
-        """Per exercise, its jobs' outputs from one harness run on a fresh copy of `tree`; or None and why."""
+    def _harness(self, tree: Path, exercise_ids: list[str], compared_only: bool = False
+                 ) -> tuple[dict[str, list[dict | None]] | None, str]:
+        """Per exercise, its jobs' outputs (None for a job not run: see _jobs) from one harness run on a fresh copy
+        of `tree`; or None and why."""
         run_tree = self._fresh(tree)
         try:
             inside = self.runner.sandbox.inside(run_tree)
-            jobs = {e: self._jobs(e, inside) for e in exercise_ids}
-            got, problem = self.runner.harness(run_tree, [job for e in exercise_ids for job in jobs[e]],
-                                               exercises=len(exercise_ids))
+            jobs = {e: self._jobs(e, inside, compared_only) for e in exercise_ids}
+            wanted = [job for e in exercise_ids for job in jobs[e] if job is not None]
+            got, problem = self.runner.harness(run_tree, wanted, exercises=len(exercise_ids)) if wanted else ([], "")
         finally:
             self._discard(run_tree)
         if got is None:
             return None, problem
-        out, k = {}, 0
-        for e in exercise_ids:
-            out[e] = got[k:k + len(jobs[e])]
-            k += len(jobs[e])
-        return out, ""
+        outputs = iter(got)
+        return {e: [None if job is None else next(outputs) for job in jobs[e]] for e in exercise_ids}, ""
 
-    def _compute_expected(self) -> dict[str, list[list[dict]]]:
-        """The reference's results of every hidden check, in one harness run, before any student code runs;
-        RuntimeError when the reference fails its own."""
-        ids = self._with_specs(self.exercise_ids)
+    def _compute_expected(self) -> dict[str, list[list[dict] | None]]:
+        """Per exercise with hidden checks, per spec, the reference's results (None for an outcome spec: all ones),
+        from one harness run before any student code runs; RuntimeError when the reference fails its own."""
+        ids = self._with_specs(self._computed)
         if not ids:
             return {}
-        got, problem = self._harness(self._pristine, ids)
+        got, problem = self._harness(self._pristine, ids, compared_only=True)
         if got is None:
             raise RuntimeError(f"the reference's hidden checks gave no results: {problem}")
         expected = {}
         for e in ids:
-            errors = [r["error"] for job in got[e] for r in job["results"] if "error" in r]
+            errors = [r["error"] for job in got[e] if job is not None for r in job["results"] if "error" in r]
             if errors:
                 raise RuntimeError(f"the reference fails its own hidden checks of {e}: {errors[0]}")
-            expected[e] = [job["results"] for job in got[e]]
+            expected[e] = [None if job is None else job["results"] for job in got[e]]
         return expected
 
     # -- checks -----------------------------------------------------------------------------------------------
@@ -332,6 +336,9 @@ class Grader:
                 results[exercise_id] = ExerciseResult(exercise_id, 0.0, points, [], "graded by hand",
                                                       submission.answers[exercise_id])
             else:
+                if exercise_id not in self._computed:
+                    raise ValueError(f"{submission.name} wrote {exercise_id}, which this Grader was told no "
+                                     f"submission writes (its expected values were not computed)")
                 try:
                     for body in submission.bodies[exercise_id]:
                         check_body(body, exercise_id)
@@ -384,8 +391,9 @@ def grade_submission(folder: Path | str, reference: Path | str, limits: Limits =
     """The results of one submission folder (a student release copy or only the edited files)."""
     if grader is not None:
         return grader.grade(read_submission(folder, grader.reference))
-    with Grader(reference, limits, exercises, unsafe=unsafe) as own:
-        return own.grade(read_submission(folder, own.reference))
+    submission = read_submission(folder, check_reference(Path(reference)))
+    with Grader(reference, limits, exercises, unsafe=unsafe, written=submission.bodies) as own:
+        return own.grade(submission)
 
 
 def grade_class(submissions: Path | str, out: Path | str, reference: Path | str, jobs: int = 1,
@@ -406,9 +414,12 @@ def grade_class(submissions: Path | str, out: Path | str, reference: Path | str,
         raise ValueError(f"{submissions} holds no student folder")
     if jobs < 1:
         raise ValueError(f"--jobs must be at least 1, got {jobs}")
-    with Grader(reference, limits, exercises, unsafe=unsafe) as grader:
+    reference = check_reference(Path(reference))
+    read = {p: read_submission(p, reference) for p in students}       # read only: nothing runs yet
+    written = {e for submission in read.values() for e in submission.bodies}
+    with Grader(reference, limits, exercises, unsafe=unsafe, written=written) as grader:
         def one(path: Path) -> dict[str, ExerciseResult]:
-            results = grader.grade(read_submission(path, grader.reference))
+            results = grader.grade(read[path])
             if progress is not None:
                 progress(path.name, results)
             return results

@@ -42,7 +42,9 @@ class HiddenSpec:
     function of this module the child calls as adapter(function, *args) instead of function(*args) ('' for none);
     prelude: how the child reaches a notebook function ('cells': every code cell before it runs; 'definitions':
     only their imports, definitions and literal constants, no simulator run); agree: the fraction of a result's
-    numbers that must match the expected ones within atol (1.0: all)."""
+    numbers that must match the expected ones within atol (1.0: all); outcome: an open task graded on outcomes,
+    each number of a result a criterion met (1.0) or not (0.0), so the expected value is all ones and the reference
+    does not run for it (the kit's tests hold the reference to full marks)."""
 
     function: str
     cases: Callable[[np.random.Generator], list[list[list]]]
@@ -50,6 +52,7 @@ class HiddenSpec:
     adapter: str = ""
     prelude: str = "cells"
     agree: float = 1.0
+    outcome: bool = False
 
 
 # Calls that would do an exercise for the student: a name matches any reference to it in the region (a call, an
@@ -111,22 +114,23 @@ def cases_of(exercise_id: str) -> list[list[list[list]]] | None:
     return [json.loads(json.dumps(spec.cases(rng), default=float)) for spec in specs]
 
 
-def compare(spec: HiddenSpec, student: list[dict], expected: list[dict], sizes: list[int], first: int = 1
+def compare(spec: HiddenSpec, student: list[dict], expected: list[dict] | None, sizes: list[int], first: int = 1
             ) -> list[tuple[bool, str]]:
     """Per hidden check of `spec` (`sizes` calls each, numbered from `first`): passed, and a message naming the
-    first call that differs."""
+    first call that differs. `expected`: the reference's results, None for an outcome spec (every number 1.0)."""
     out, k = [], 0
     for i, n in enumerate(sizes, start=first):
         message = ""
         for j in range(k, k + n):
-            got, want = student[j] if j < len(student) else {"error": "no result"}, expected[j]
+            got = student[j] if j < len(student) else {"error": "no result"}
             if "error" in got:
                 message = f"hidden check {i}, call {j - k + 1}: raised {got['error']}"
                 break
             try:
                 a = np.asarray(got["value"], dtype=float)
-                b = np.asarray(want["value"], dtype=float)
-                close = np.isclose(a, b, rtol=0, atol=spec.atol, equal_nan=True) if a.shape == b.shape else None
+                b = np.ones_like(a) if expected is None else np.asarray(expected[j]["value"], dtype=float)
+                comparable = a.shape == b.shape and (a.size > 0 or expected is not None)   # an outcome: some
+                close = np.isclose(a, b, rtol=0, atol=spec.atol, equal_nan=True) if comparable else None
                 same = close is not None and (close.all() if spec.agree >= 1 else close.mean() >= spec.agree)
             except (ValueError, TypeError):
                 same = False

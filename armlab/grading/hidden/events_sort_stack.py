@@ -23,5 +23,5 @@ def _call_sort_stack(function, level, seed):
 
 
 SPECS = (HiddenSpec("SortStackStrategy", _sort_stack_seeds, atol=0, adapter="_call_sort_stack",
-                    prelude="definitions"),)
+                    prelude="definitions", outcome=True),)
 FORBIDDEN = ("SortStack", "make_strategy", "sort_stack.EVENT")

@@ -53,6 +53,6 @@ def _call_move_path(function, seed, blocks, spots):
     return out + [0.0] * (2 * len(blocks) - len(out))
 
 
-SPECS = (HiddenSpec("armlab.tasks.move_path.move_path", _grab_scenes, atol=0, adapter="_call_move_path"),)
+SPECS = (HiddenSpec("armlab.tasks.move_path.move_path", _grab_scenes, atol=0, adapter="_call_move_path", outcome=True),)
 FORBIDDEN = ("planning.plan_pick", "planning.plan_place", "planning.plan_pick_place", "choose_grasp", "kit_move_path",
              "grasp_height", "place_tool_height", "default_grasp_depth", "tasks.pick", "tasks.place", "handling")

@@ -1,0 +1,62 @@
+"""The hidden checks of the exercises graded by comparison with the reference (every one but the open tasks of
+test_hidden_checks_open.py): the reference passes them, plausible wrong answers fail them (tests/wrong_answers.py);
+every exercise has them; the static check names a forbidden call; an open task's outcome is compared with all ones."""
+
+from __future__ import annotations
+
+import pytest
+from wrong_answers import HIDDEN_WRONG, OPEN_TASKS, check_wrong_answers, reference_bodies
+
+
+def test_every_exercise_has_hidden_checks_and_wrong_answers():
+    from armlab.exercises.registry import EXERCISES
+    from armlab.grading import hidden
+
+    graded_by_code = sorted(e.id for e in EXERCISES if e.kind != "written")
+    assert sorted(hidden.SPECS) == graded_by_code == sorted(HIDDEN_WRONG)
+    assert sorted(hidden.FORBIDDEN) == graded_by_code
+    assert all(len(wrong) >= 2 for wrong in HIDDEN_WRONG.values()), "each exercise has two plausible wrong answers"
+
+
+def test_hidden_checks_pass_the_reference_and_fail_wrong_answers():
+    check_wrong_answers(sorted(set(HIDDEN_WRONG) - set(OPEN_TASKS)))
+
+
+def test_static_check_names_the_forbidden_call():
+    """Every reference region passes; each exercise's forbidden names and the kit's reference module, called,
+    imported, aliased or named in a string, fail the check with the name; the region's own names do not count."""
+    from armlab.exercises.registry import EXERCISES
+    from armlab.grading.hidden import FORBIDDEN
+    from armlab.grading.static import forbidden_uses, static_check
+
+    for ex in (e for e in EXERCISES if e.kind != "written"):
+        assert static_check(ex.id, reference_bodies(ex.id)).passed, ex.id
+        for name in FORBIDDEN[ex.id]:
+            module, _, last = name.rpartition(".")
+            module = module or "lib"
+            uses = [f"    x = {module}.{last}(1)", f"    from {module} import {last}\n    x = {last}(2)",
+                    f"    f = getattr({module}, {last!r})"]
+            for body in uses:
+                result = static_check(ex.id, [body])
+                assert not result.passed and name in result.message, (ex.id, body, result)
+    ref = static_check("teach.replay", ["    from armlab.exercises import references\n"
+                                             "    return references.scaled_durations_by_search(program, speed)"])
+    assert not ref.passed and "armlab.exercises.references" in ref.message
+    assert forbidden_uses("    fk = 1.0\n    return fk * 2", ("kinematics.fk",)) == []      # its own variable
+    assert forbidden_uses("    return sky_points(n - 1) + 30", ("scoring.sky_points",), ("sky_points",)) == []
+    assert forbidden_uses("    if x:\n        pass\n    H = cv2.findHomography(a, b)",
+                          ("cv2.findHomography",)) == [("cv2.findHomography", 3)]
+
+
+@pytest.mark.parametrize("value, passed", [([1.0, 1.0], True), ([1.0, 0.0], False), ([0.5, 1.0], False),
+                                           ([], False)])
+def test_an_open_tasks_outcome_passes_only_when_every_criterion_is_met(value, passed):
+    """An outcome spec has no reference run: a result passes when every number of it is 1.0 (a criterion met), and
+    an empty one (no criterion at all) fails."""
+    from armlab.grading.hidden import compare, specs_of
+
+    spec = specs_of("events.sort_stack")[0]
+    assert spec.outcome
+    (ok, message), = compare(spec, [{"value": [1.0, 1.0]}, {"value": value}], None, [2])
+    assert ok == passed, message
+    assert passed or message == "hidden check 1, call 2: the result differs from the expected value"

@@ -1,0 +1,144 @@
+"""Wrong answers to every exercise graded by code, for the tests of the grader's hidden checks (test_hidden_checks*.py)
+and of its scoring (test_grading.py): each plausible slip a student makes, written into the reference's region; a
+"hard-coded" one returns a fixed value. `check_wrong_answers` runs them: the reference passes every hidden check, each
+wrong answer fails at least one, a hard-coded one every one."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from armlab.exercises.registry import exercise
+from armlab.grading.run import Limits
+from armlab.grading.submission import exercise_file, regions_of, source_texts
+
+ROOT = Path(__file__).resolve().parents[1]
+WRONG_DH = ("    return np.array([[np.pi / 2, h0, 0.0, np.pi / 2], [-(np.pi / 2 - beta), 0.0, L1, 0.0],\n"
+            "                     [np.pi / 2 - beta, 0.0, L2, 0.0], [-np.pi / 2, 0.0, 0.0, -np.pi / 2],\n"
+            "                     [0.0, Lt, 0.0, 0.0]])")      # alpha1's sign slipped: z1 points the other way
+
+
+def reference_bodies(exercise_id: str) -> list[str]:
+    name = exercise_file(exercise(exercise_id))
+    return regions_of(source_texts(ROOT / name), exercise_id, name)
+
+
+def wrong_euler() -> list[str]:
+    # psi's sign slipped: the classic slip reading the third rotation off the bottom row
+    body = reference_bodies("fk.euler")[0]
+    assert "-R[2, 0]" in body
+    return [body.replace("-R[2, 0]", "R[2, 0]")]
+
+
+def _replaced(exercise_id: str, old: str, new: str) -> list[str]:
+    bodies = reference_bodies(exercise_id)
+    assert any(old in b for b in bodies), f"{old!r} not in the reference of {exercise_id}"
+    return [b.replace(old, new) for b in bodies]
+
+
+HIDDEN_WRONG = {   # per exercise: wrong answers its hidden checks must catch (a "hard-coded" one must fail them all)
+    "calib.pinhole": {
+        "no translation": _replaced("calib.pinhole", " + T_cam_world[:3, 3]", ""),
+        "rotation not transposed": _replaced("calib.pinhole", "T_cam_world[:3, :3].T @", "T_cam_world[:3, :3] @"),
+    },
+    "calib.tag_homography": {
+        "hard-coded": ["    H = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])"],
+        "normalisation not undone": _replaced("calib.tag_homography", "np.linalg.solve(T_dst, H_normalised @ T_src)",
+                                              "H_normalised"),
+    },
+    "calib.tag_extrinsics": {   # the refinement after the region would repair both: the adapter leaves it out
+        "hard-coded": ["    R, t = np.diag([1.0, -1.0, -1.0]), np.array([0.0, 150.0, 1000.0])"],
+        "pixels, not normalised points": _replaced("calib.tag_extrinsics", "dlt_homography(world[:, :2], normalised)",
+                                                   "dlt_homography(world[:, :2], pixels)"),
+    },
+    "calib.depth_plane": {
+        "one fit, no rejection": _replaced("calib.depth_plane", "range(iterations)", "range(1)"),
+        "outliers kept": _replaced("calib.depth_plane", "< inlier_mm", "< 1e9"),
+    },
+    "fk.dh_table": {
+        "alpha1's sign slipped": [WRONG_DH],
+        "the L's tilt added, not taken off": _replaced("fk.dh_table", "[-(np.pi / 2 - beta), 0.0, L1, 0.0]",
+                                                       "[-(np.pi / 2 + beta), 0.0, L1, 0.0]"),
+    },
+    "fk.euler": {
+        "psi's sign slipped": wrong_euler(),
+        "no singular case": _replaced("fk.euler", "if sin_theta > 1e-12:", "if True:"),
+    },
+    "fk.dh_link_transform": {
+        "d negated": _replaced("fk.dh_link_transform", "= sa, ca, d", "= sa, ca, -d"),
+        "theta and alpha swapped in row 0": _replaced("fk.dh_link_transform", "-st * ca, st * sa", "-ct * sa, st * ca"),
+    },
+    "ik.candidates": {
+        "hard-coded": ["    q1 = q2 = q3 = q4 = heading * 0.0\n    ok, d2 = heading == heading, heading * 0.0 + 1.0"],
+        "elbow sign swapped": _replaced("ik.candidates", "* delta_sign", "* -delta_sign"),
+    },
+    "detect.segment": {
+        "red's wrap ignored": _replaced("detect.segment", "if h0 <= h1:", "if True:"),
+        "ranges tuned too tight": _replaced("detect.segment", "120, 60)", "250, 250)"),
+    },
+    "detect.face": {
+        "yaw not wrapped": _replaced("detect.face", "yaw = (np.radians(angle) + np.pi / 4) % (np.pi / 2) - np.pi / 4",
+                                     "yaw = np.radians(angle)"),
+        "size from pixels, not mm": _replaced("detect.face", "edge_mm = np.sqrt(m[\"m00\"]) * mm_per_px",
+                                              "edge_mm = np.sqrt(m[\"m00\"])"),
+    },
+    "detect.classify": {
+        "per-class spreads ignored": _replaced(
+            "detect.classify", "d = self.distances(rgb_means)",
+            "d = np.linalg.norm(color_features(rgb_means)[:, None, :] - self.means[None], axis=-1)"),
+        "margin to the farthest class": _replaced("detect.classify", "d[rows, order[:, 1]] - d[rows, order[:, 0]]",
+                                                  "d[rows, order[:, -1]] - d[rows, order[:, 0]]"),
+    },
+    "grab.move_path": {
+        "roll ignores the yaw": _replaced("grab.move_path",
+                                          "roll = planning.tilted_roll(heading, float(pitch), float(yaw))",
+                                          "roll = 0.0"),
+        "release at the grasp height": _replaced("grab.move_path", "tool_z = target[2] + edge - depth",
+                                                 "tool_z = target[2] - depth"),
+    },
+    "teach.replay": {
+        "recorded before posing": _replaced("teach.replay", "arm.move_by_hand(q)\n            recorder.record(g)",
+                                            "recorder.record(g)\n            arm.move_by_hand(q)"),
+        "no velocity floor": _replaced("teach.replay", "np.maximum(np.maximum(lab_pace, velocity_floor), 0.4)",
+                                       "np.maximum(lab_pace, 0.4)"),
+    },
+    "events.sort_stack": {
+        "no unstacking": _replaced("events.sort_stack", "if standing_on_something:", "if False:"),
+        "stack height not tracked": _replaced("events.sort_stack", "len(built[b.size]) * block_edge(b.size)", "0.0"),
+    },
+    "station.transition": {
+        "no stop at the end of the work": _replaced("station.transition", "    if machine.stop_requested:\n",
+                                                    "    if False:\n"),
+        "errors always back to idle": _replaced("station.transition", "if not machine.stop_requested:\n", "if True:\n"),
+    },
+}
+# the exercises whose hidden checks run the simulator at length (tested apart: test_hidden_checks_open.py)
+OPEN_TASKS = ("events.sort_stack", "grab.move_path", "teach.replay", "detect.segment")
+# exercises whose function calls another's region go into a second batch, apart from the one they call
+SECOND_BATCH = {"calib.tag_extrinsics", "fk.dh_link_transform"}
+
+
+def check_wrong_answers(ids: list[str]) -> None:
+    """The hidden checks of these exercises: the reference (in one harness run after the one computing the expected
+    values) passes every one; each wrong answer (one batch per round of wrong answers and per group of exercises that
+    do not call each other) fails at least one, a hard-coded answer every one."""
+    from armlab.grading.grade import Grader
+
+    grader = Grader(ROOT, Limits(timeout_s=300, cpu_s=200), ids)
+    try:
+        reference = grader.hidden_checks_together({e: reference_bodies(e) for e in ids})
+        for exercise_id in ids:
+            checks = reference[exercise_id]
+            assert len(checks) >= 3 and all(c.passed for c in checks), (exercise_id, [c.message for c in checks])
+        rounds = max(len(HIDDEN_WRONG[e]) for e in ids)
+        for r in range(rounds):
+            for group in ([e for e in ids if e not in SECOND_BATCH], sorted(SECOND_BATCH & set(ids))):
+                wrong = {e: list(HIDDEN_WRONG[e].items())[r] for e in group if len(HIDDEN_WRONG[e]) > r}
+                if not wrong:
+                    continue
+                got = grader.hidden_checks_together({e: bodies for e, (_, bodies) in wrong.items()})
+                for exercise_id, (label, _) in wrong.items():
+                    passed = [c.passed for c in got[exercise_id]]
+                    assert not all(passed), f"{exercise_id}, {label}: every hidden check passed"
+                    assert not (label == "hard-coded" and any(passed)), f"{exercise_id}, {label}: {passed}"
+    finally:
+        grader.close()
