@@ -26,7 +26,7 @@ def _grader(ids):
 
 
 def _blank(exercise_id: str) -> list[str]:
-    from test_grading import _reference_bodies
+    from wrong_answers import reference_bodies as _reference_bodies
 
     return ["\n".join("    " + line for line in stub_lines(exercise_id))] * len(_reference_bodies(exercise_id))
 
@@ -39,9 +39,10 @@ def test_the_blank_stubs_fail_every_hidden_check():
 
 @pytest.mark.parametrize("round_", [0, 1])
 def test_a_wrong_answer_loses_its_own_exercise_only(round_):
-    """Each cheap exercise wrong in turn (its round_-th wrong answer of test_grading.HIDDEN_WRONG) while the other
+    """Each cheap exercise wrong in turn (its round_-th wrong answer of wrong_answers.HIDDEN_WRONG) while the other
     holds the reference: the wrong one fails a hidden check, the other passes every one."""
-    from test_grading import HIDDEN_WRONG, _reference_bodies
+    from wrong_answers import HIDDEN_WRONG
+    from wrong_answers import reference_bodies as _reference_bodies
 
     grader = _grader(CHEAP)
     for wrong_id in CHEAP:
