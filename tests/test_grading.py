@@ -258,3 +258,10 @@ def test_a_grader_told_an_exercise_is_not_written_refuses_to_grade_it_unprepared
     with Grader(ROOT, exercises=["fk.euler"], written=[]) as grader:
         with pytest.raises(ValueError, match="bob wrote fk.euler, which this Grader was told no submission writes"):
             grader.grade(Submission("bob", bodies={"fk.euler": wrong_euler()}))
+
+
+def test_a_grader_needs_at_least_one_run_at_a_time():
+    from armlab.grading.grade import Grader
+
+    with pytest.raises(ValueError, match="parallel must be at least 1, got 0"):
+        Grader(ROOT, exercises=["fk.euler"], written=[], parallel=0)

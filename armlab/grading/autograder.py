@@ -79,7 +79,9 @@ def run(root: Path | str) -> Path:
     (root / "results").mkdir(exist_ok=True)
     lock_down(root / "source", root / "results")
     submission = read_submission(root / "submission", check_reference(root / "source"))    # read only: nothing runs
-    with Grader(root / "source", limits_from_env(), exercises_from_env(), written=submission.bodies) as grader:
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+    with Grader(root / "source", limits_from_env(), exercises_from_env(), written=submission.bodies,
+                parallel=max(1, min(cores, 4))) as grader:         # one submission: its runs side by side
         results = grader.grade(submission)
         grader.verify_sources()
     path = root / "results" / "results.json"

@@ -11,7 +11,8 @@ stays in place for the blank ones), each notebook that checks a written exercise
 of every written exercise run in one harness process. An exercise whose checks all pass there is scored from that
 run. An exercise with a failing check is run again alone -- its regions in the reference, the reference in place for
 every other exercise -- and scored from that run, so that one mistake costs one exercise. Results of identical
-regions are shared within one Grader (the work tree, so the outcome, is the same).
+regions are shared within one Grader (the work tree, so the outcome, is the same). A submission's runs (each notebook,
+the hidden checks) are independent: with `parallel` > 1 they go side by side.
 
 Everything of the grader is imported, the instructor's tree copied and every expected value computed when the
 Grader is made, before any student code runs; student code runs only in the sandbox (armlab.grading.sandbox), each
@@ -98,10 +99,14 @@ class Grader:
     results of identical regions are shared (thread-safe). close() removes its temporary trees."""
 
     def __init__(self, reference: Path | str, limits: Limits = DEFAULT_LIMITS, exercises: Iterable[str] | None = None,
-                 unsafe: bool = False, sandbox: Sandbox | None = None, written: Iterable[str] | None = None):
+                 unsafe: bool = False, sandbox: Sandbox | None = None, written: Iterable[str] | None = None,
+                 parallel: int = 1):
         """exercises: those graded (default every one); written: those some submission to grade has written (default
         every graded one): only their expected values are computed, and grading another written one raises
-        ValueError."""
+        ValueError; parallel: how many runs of one submission (its notebooks, its hidden checks) go at once."""
+        if parallel < 1:
+            raise ValueError(f"parallel must be at least 1, got {parallel}")
+        self.parallel = int(parallel)
         self.reference = check_reference(Path(reference))
         self.limits = limits
         self.exercise_ids = list(exercises) if exercises is not None else [e.id for e in EXERCISES]
@@ -295,8 +300,8 @@ class Grader:
             ex = exercise(exercise_id)
             if not any(exercise_id in ids for ids in check_cells(tree / f"notebooks/{ex.notebook}.ipynb").values()):
                 return _score(exercise_id, [], f"notebooks/{ex.notebook}.ipynb has no '# CHECK {exercise_id}' cell")
-            run = self._notebook(tree, ex.notebook)
-            hidden = self._harness(tree, self._with_specs([exercise_id]))
+            runs, hidden = self._run_all(tree, [ex.notebook], [exercise_id])
+            run = runs[ex.notebook]
             return _score(exercise_id, self._checks(exercise_id, bodies, run, tree, hidden), run.problem)
         finally:
             self._discard(tree)
@@ -306,9 +311,7 @@ class Grader:
         its notebook run's problem ('' when none)."""
         tree = self._spliced(written)
         try:
-            notebooks = sorted({exercise(e).notebook for e in written})
-            runs = {name: self._notebook(tree, name) for name in notebooks}
-            hidden = self._harness(tree, self._with_specs(written))
+            runs, hidden = self._run_all(tree, sorted({exercise(e).notebook for e in written}), list(written))
             out = {}
             for e, b in written.items():
                 run = runs[exercise(e).notebook]
@@ -316,6 +319,15 @@ class Grader:
             return out
         finally:
             self._discard(tree)
+
+    def _run_all(self, tree: Path, notebooks: list[str], exercise_ids: list[str]
+                 ) -> tuple[dict[str, NotebookRun], tuple[dict | None, str]]:
+        """The notebooks' runs and the exercises' hidden checks on `tree`, `parallel` runs at a time (the hidden
+        checks, the longest, first)."""
+        with ThreadPoolExecutor(max_workers=self.parallel) as pool:
+            hidden = pool.submit(self._harness, tree, self._with_specs(exercise_ids))
+            runs = dict(zip(notebooks, pool.map(lambda name: self._notebook(tree, name), notebooks), strict=True))
+            return runs, hidden.result()
 
     def _reference_bodies(self, exercise_id: str) -> list[str]:
         """The reference's region bodies of the exercise (from the grader's private copy)."""
@@ -417,7 +429,9 @@ def grade_class(submissions: Path | str, out: Path | str, reference: Path | str,
     reference = check_reference(Path(reference))
     read = {p: read_submission(p, reference) for p in students}       # read only: nothing runs yet
     written = {e for submission in read.values() for e in submission.bodies}
-    with Grader(reference, limits, exercises, unsafe=unsafe, written=written) as grader:
+    # a class smaller than the jobs: the spare ones run a submission's notebooks and hidden checks side by side
+    parallel = max(1, jobs // len(students))
+    with Grader(reference, limits, exercises, unsafe=unsafe, written=written, parallel=parallel) as grader:
         def one(path: Path) -> dict[str, ExerciseResult]:
             results = grader.grade(read[path])
             if progress is not None:
