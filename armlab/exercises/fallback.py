@@ -12,7 +12,7 @@ written the exercise, the reference is never used.
 from __future__ import annotations
 
 import functools
-import sys
+import logging
 from collections.abc import Callable
 from typing import TypeVar
 
@@ -21,6 +21,10 @@ from .registry import Exercise, ExerciseNotWritten, exercise
 __all__ = ["reference_fallback", "with_reference", "require_written", "fallbacks_used"]
 
 F = TypeVar("F", bound=Callable)
+# The note that a reference path stands in: a WARNING of the "armlab.exercises" logger. With no logging set up (a
+# notebook, a script) Python's last-resort handler writes the bare message to stderr; an application that configures
+# logging formats, routes or silences it like any other record.
+_log = logging.getLogger("armlab.exercises")
 _announced: set[str] = set()
 _standing_in: set[str] = set()     # exercises whose last call went to the reference
 
@@ -36,8 +40,8 @@ def _declared(which: Exercise | str) -> Exercise:
 
 def reference_fallback(which: Exercise | str, reference: Callable, instead: str) -> Callable[[F], F]:
     """Decorate a kit function whose work includes the package exercise `which` (its declaration in
-    armlab.exercises.registry): when that exercise's ExerciseNotWritten is raised, print one line to stderr (once per
-    exercise) saying `instead` is used, and return reference(*args, **kwargs).
+    armlab.exercises.registry): when that exercise's ExerciseNotWritten is raised, log one line (a warning of the
+    "armlab.exercises" logger, once per exercise) saying `instead` is used, and return reference(*args, **kwargs).
     Any other error, including one from a student's own attempt or another exercise's stub, propagates."""
     declared = _declared(which)                             # KeyError now for an unregistered id
 
@@ -52,8 +56,8 @@ def reference_fallback(which: Exercise | str, reference: Callable, instead: str)
                 _standing_in.add(declared.id)
                 if declared.id not in _announced:
                     _announced.add(declared.id)
-                    print(f"note: exercise {declared.id} (notebook {declared.notebook_number}) is not written yet: "
-                          f"{instead}", file=sys.stderr)
+                    _log.warning("note: exercise %s (notebook %s) is not written yet: %s", declared.id,
+                                 declared.notebook_number, instead)
                 return reference(*args, **kwargs)
             _standing_in.discard(declared.id)
             return result
@@ -65,8 +69,8 @@ def reference_fallback(which: Exercise | str, reference: Callable, instead: str)
 
 
 def with_reference(function: Callable, which: Exercise | str, reference: Callable, instead: str) -> Callable:
-    """For a notebook: the student's `function` for exercise `which`, with `reference` standing in (after one line on
-    stderr saying `instead`) while the exercise's stub is still blank. The notebook's demonstrations call this; its
+    """For a notebook: the student's `function` for exercise `which`, with `reference` standing in (after one logged
+    line saying `instead`) while the exercise's stub is still blank. The notebook's demonstrations call this; its
     check cells call the student's function itself, so they fail until it is written."""
     return reference_fallback(which, reference, instead)(function)
 
