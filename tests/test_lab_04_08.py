@@ -54,6 +54,40 @@ def test_a_wrong_answer_loses_its_own_exercise_only(round_):
                 assert all(c.passed for c in got[other]), (other, [c.message for c in got[other]])
 
 
+@pytest.mark.parametrize("round_", [0, 1])
+def test_a_wrong_stack_answer_loses_detect_stacks_only(round_):
+    """detect.stacks (section 6 of notebook 04) blank or wrong (its round_-th wrong answer) while detect.face, another
+    cheap exercise of the notebook, holds the reference: detect.stacks fails a hidden check (blank: every one),
+    detect.face passes every one."""
+    from wrong_answers import HIDDEN_WRONG
+    from wrong_answers import reference_bodies as _reference_bodies
+
+    grader = _grader(("detect.stacks", "detect.face"))
+    label, bodies = list(HIDDEN_WRONG["detect.stacks"].items())[round_]
+    for what, stacks in ((label, bodies), ("blank", _blank("detect.stacks"))):
+        got = grader.hidden_checks_together({"detect.stacks": stacks, "detect.face": _reference_bodies("detect.face")})
+        assert got["detect.stacks"] and not all(c.passed for c in got["detect.stacks"]), what
+        if what == "blank":
+            assert not any(c.passed for c in got["detect.stacks"]), got["detect.stacks"]
+        assert all(c.passed for c in got["detect.face"]), (what, [c.message for c in got["detect.face"]])
+
+
+def test_the_stack_renderer_of_the_hidden_checks_sees_the_stack():
+    """The hidden checks' ray-cast stack: the mask's highest returns are the top face at the cubes' summed edges,
+    the sides reach down towards the board, and the lost returns are NaN or 0."""
+    from armlab.camera import Camera
+    from armlab.grading.hidden import detect_stacks
+
+    K, T, blocks, _, lost, seed = detect_stacks._stacks(np.random.default_rng(3))[0][0]
+    depth, mask = detect_stacks.render_stack(K, T, blocks, 0.0, lost, seed)
+    v, u = np.nonzero(mask)
+    d = depth[v, u]
+    assert 0.02 < np.isnan(d).mean() + (d == 0).mean() < 0.2
+    ok = np.isfinite(d) & (d > 0)
+    z = Camera(K, np.zeros(5), T).pixel_to_world(np.column_stack([u[ok], v[ok]]).astype(float), d[ok])[:, 2]
+    assert abs(np.percentile(z, 80) - sum(b[3] for b in blocks)) < 0.5 and z.min() < 0.6 * sum(b[3] for b in blocks)
+
+
 def test_move_path_refuses_bad_input_and_plans_a_straight_descent():
     from armlab import kinematics, planning
     from armlab.tasks.move_path import move_path

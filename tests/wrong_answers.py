@@ -88,6 +88,13 @@ HIDDEN_WRONG = {   # per exercise: wrong answers its hidden checks must catch (a
         "margin to the farthest class": _replaced("detect.classify", "d[rows, order[:, 1]] - d[rows, order[:, 0]]",
                                                   "d[rows, order[:, -1]] - d[rows, order[:, 0]]"),
     },
+    "detect.stacks": {
+        "mean over the whole mask": _replaced("detect.stacks", "top_z = float(np.median(central[:, 2]))",
+                                              "top_z = float(np.mean(z))"),
+        "levels with one block size": _replaced(
+            "detect.stacks", "levels = min(n for n, h in candidates if abs(top_z - h) <= best + 1.5)",
+            "levels = max(1, round(top_z / large))"),
+    },
     "grab.move_path": {
         "roll ignores the yaw": _replaced("grab.move_path",
                                           "roll = planning.tilted_roll(heading, float(pitch), float(yaw))",

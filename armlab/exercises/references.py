@@ -14,7 +14,7 @@ from armlab.robot import RobotModel, rx200
 from armlab.transforms import wrap_quarter
 
 __all__ = ["centroid_by_scipy", "wrap_yaw_by_kit", "line_by_scipy",
-           "scaled_durations_by_search", "segment_by_colour_model"]
+           "scaled_durations_by_search", "segment_by_colour_model", "stack_by_kit"]
 
 
 def centroid_by_scipy(mask) -> tuple[float, float]:
@@ -80,3 +80,28 @@ def segment_by_colour_model(rgb_balanced, max_distance: float = 8.0) -> np.ndarr
     labels = np.array([COLORS.index(n) for n in model.names])[d.argmin(axis=1)]
     labels[d.min(axis=1) > max_distance] = -1
     return labels.reshape(rgb.shape[:2])
+
+
+def stack_by_kit(depth_mm, mask, camera, edges_mm=(38.0, 25.0)) -> tuple[float, int, np.ndarray]:
+    """detect.stacks' reference: the kit's height map (armlab.detection.height_from_depth) over the mask; the top face
+    as the pixels within 5 mm of the median of the mask's highest 20 %, its height their median; their world points on
+    that plane (armlab.detection.heightmap.pixels_to_plane), the top block's size from their minimum-area rectangle
+    (cv2.minAreaRect) and the kit's stack rule (armlab.detection.stacks.stack_levels): (top_z mm, levels, centre (3,)
+    world mm)."""
+    import cv2
+
+    from armlab.detection import height_from_depth
+    from armlab.detection.heightmap import pixels_to_plane
+    from armlab.detection.stacks import stack_levels
+
+    depth = np.asarray(depth_mm, dtype=float)
+    height = height_from_depth(np.where(depth > 0, depth, np.nan), camera)
+    h = height[np.asarray(mask, bool) & np.isfinite(height)]
+    top_z = float(np.median(h[h >= np.percentile(h, 80)]))
+    top_z = float(np.median(h[np.abs(h - top_z) < 5.0]))
+    v, u = np.nonzero(np.asarray(mask, bool) & (np.abs(height - top_z) < 5.0))
+    xy = pixels_to_plane(camera, np.column_stack([u, v]), top_z)[:, :2]
+    (cx, cy), (w, l), _ = cv2.minAreaRect(xy.astype(np.float32))
+    large, small = max(edges_mm), min(edges_mm)
+    edge = large if np.sqrt(w * l) > 0.5 * (large + small) else small
+    return top_z, stack_levels(top_z, edge, {"large": large, "small": small}), np.array([cx, cy, top_z])

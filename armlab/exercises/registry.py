@@ -123,6 +123,8 @@ CLASSIFY = Exercise("detect.classify", "nearest colour class with per-class spre
                     "armlab/detection/color.py", ("ColorModel.classify",))
 CONFUSION_QUESTION = Exercise("detect.confusion_question", "why the report's HSV table misses rendered faces", 2,
                               _NB["04"], _src("04"), ("the confusion matrices",), kind="written")
+STACKS = Exercise("detect.stacks", "a stack's top height, levels and top-face centre from the depth image", 6,
+                  _NB["04"], _src("04"), ("stack_from_depth",))
 # -- notebook 05: click to grab ---------------------------------------------------------------------------------
 MOVE_PATH = Exercise("grab.move_path", "the report's move_path: the grasp and release motion as a plan", 10,
                      _NB["05"], "armlab/tasks/move_path.py", ("move_path",), kind="open")

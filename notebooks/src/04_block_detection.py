@@ -22,6 +22,7 @@
 # | `detect.face` | 6 | code | hidden masks: centre, yaw and size class against the truth |
 # | `detect.classify` (in `armlab/detection/color.py`) | 5 | code | hidden colour models and colours |
 # | `detect.confusion_question` | 2 | written | by hand, from your answer under the confusion matrices |
+# | `detect.stacks` | 6 | code | hidden rendered stacks: top height, levels and centre against the reference |
 #
 # `detect.segment` is tuned on the training frames of section 2 and graded by outcome on held-out frames: on other
 # seeded scenes, at least 95 % of the visible block faces must get their colour and under 0.5 % of the board a colour
@@ -357,8 +358,173 @@ _ = ax.set_title("the kit's detections: outline, label, yaw axes (x red, y green
 # ## 6. Stacks
 #
 # A stack shows its top face; a lower block's top face counts where it is still visible (a large block under a small
-# one). The stack height `levels` comes from the top face's height: the number of large (38 mm) and small (25 mm)
-# blocks whose heights add up to it, larger blocks below.
+# one). How high is a stack, and where is its top? The depth camera answers both.
+#
+# **Depth to world.** A pixel $(u, v)$ with depth $Z$ (the camera-frame $z$, mm) sees the camera-frame point
+# $Z\,K^{-1}(u, v, 1)^\top$, and the world point $p = R^\top(Z\,K^{-1}(u, v, 1)^\top - t)$ with the extrinsic
+# $T_{cam \leftarrow world} = (R, t)$: notebook 01's back-projection (`camera.pixel_to_world(uv, depth)`, or your
+# own `calib.pinhole`). Its $z$ is the height above the board. A depth of NaN or 0 means *no return* (a RealSense
+# reports both): such a pixel has no point at all.
+#
+# **Which pixels.** Below, a stack's mask is the connected group of pixels higher than 10 mm around it: its top
+# face, but also the sides the camera sees at an angle (every height from the board up to the top), the *mixed*
+# pixels along the outline (a return somewhere between the top and the board), a lower block's visible rim, and now
+# and then a return above the top (noise). The histogram shows one stack's heights: the top face is the highest
+# plateau, and the rest spreads below it. A **mean** over the mask is pulled down by every side pixel, in proportion
+# to how many there are; a **median** is not moved by outliers as long as they are fewer than half of the pixels it is
+# taken over, so take it over the pixels that are the top face (away from its edges).
+#
+# **Levels.** The cubes are 38 mm (large) and 25 mm (small), and the lab stacks larger blocks below smaller ones. A
+# top face at height $z$ over $n_L$ large and $n_S$ small blocks under a top block of edge $e$ satisfies
+# $z \approx e + 38\,n_L + 25\,n_S$, and the stack is $1 + n_L + n_S$ blocks high. The top face's size in the world
+# tells $e$. Two stacks can nearly tie (a small block on two large ones is 101 mm, four small ones 100 mm): the
+# depth's noise cannot tell them apart, so on a tie within 1.5 mm take the stack of fewer blocks.
+#
+# **Exercise `detect.stacks`:** write `stack_from_depth(depth_mm, mask, camera, edges_mm)` → `(top_z, levels,
+# centre)`: the top face's height (mm), the number of blocks and the top face's centre in the world (mm).
+
+
+# %%
+def stack_from_depth(depth_mm, mask, camera, edges_mm=(38.0, 25.0)):
+    """A stack seen by the depth camera: depth_mm (H, W) mm (NaN or 0: no return), mask (H, W) bool of the stack's
+    pixels (top face, sides, edges), camera (armlab.camera.Camera), edges_mm (large, small) the cubes' edges. Returns
+    (top_z, levels, centre): the top face's height (mm), how many blocks high the stack is, and the top face's centre
+    (3,) world mm."""
+    # BEGIN SOLUTION detect.stacks
+    v, u = np.nonzero(mask)
+    d = np.asarray(depth_mm, dtype=float)[v, u]
+    returned = np.isfinite(d) & (d > 0)                     # NaN and 0: no return
+    if returned.sum() < 20:
+        raise ValueError(f"only {int(returned.sum())} pixels of the mask have a depth")
+    points = camera.pixel_to_world(np.column_stack([u[returned], v[returned]]).astype(float), d[returned])
+    z = points[:, 2]
+    large, small = max(edges_mm), min(edges_mm)
+    # the top face is the highest plateau: start high in the heights (sides and edges lie below, few returns above)
+    # and re-centre a band narrower than a small block on the plateau's median
+    band = 0.3 * small
+    level = np.percentile(z, 90)
+    for _ in range(3):
+        face = points[np.abs(z - level) < band]
+        level = np.median(face[:, 2])
+    if len(face) < 10:
+        raise ValueError("no top face found in the mask")
+    # the face's size: a square of edge e has var(x) + var(y) = e^2 / 6 in the world, whatever its yaw
+    middle = np.median(face[:, :2], axis=0)
+    edge = np.sqrt(6.0 * face[:, :2].var(axis=0).sum())
+    top_edge = large if edge > 0.5 * (large + small) else small
+    # the central part of the face: its mixed outline pixels and a lower face's rim stay out of the median
+    central = face[np.hypot(*(face[:, :2] - middle).T) < 0.35 * top_edge]
+    top_z = float(np.median(central[:, 2]))
+    centre = np.array([*central[:, :2].mean(axis=0), top_z])
+    # the blocks under the top one: large ones below small ones, so no small block under a large top
+    candidates = [(1 + n_large + n_small, top_edge + n_large * large + n_small * small)
+                  for n_large in range(6) for n_small in range(6 - n_large)
+                  if not (n_small and top_edge == large)]
+    best = min(abs(top_z - h) for _, h in candidates)
+    levels = min(n for n, h in candidates if abs(top_z - h) <= best + 1.5)   # a near tie: the fewer blocks
+    return top_z, levels, centre
+    # END SOLUTION
+
+
+def stack_masks(c, depth_mm, reach=60):
+    """The truth of every stack's top block of a simulated case (a TruthFace), with its mask (H, W) bool and the
+    heights (H, W) mm around it (NaN elsewhere): the connected pixels higher than 10 mm around the stack, within
+    `reach` px of its top's centre in the image (only there are heights computed: it is quicker)."""
+    objects = [t.obj for t in c.truth]
+    out = []
+    for t in c.truth:
+        covered = any(o is not t.obj and o.bottom_z >= t.obj.top_z - 0.5
+                      and np.all(np.abs(o.position[:2] - t.obj.position[:2]) < t.obj.edge / 2) for o in objects)
+        if not t.is_block or covered:
+            continue
+        u0, v0 = np.rint(c.camera.project(t.centre[None])[0]).astype(int)
+        win = np.s_[max(v0 - reach, 0):v0 + reach, max(u0 - reach, 0):u0 + reach]
+        v, u = np.mgrid[win]
+        height = np.full(depth_mm.shape, np.nan)
+        height[win] = c.camera.pixel_to_world(np.column_stack([u.ravel(), v.ravel()]).astype(float),
+                                              depth_mm[win].ravel())[:, 2].reshape(v.shape)
+        _, components = cv2.connectedComponents((np.nan_to_num(height) > 10.0).astype(np.uint8))
+        out.append((t, components == components[v0, u0], height))
+    return out
+
+
+# the seeded frames with stacks (no arm over them): section 1's and the held-out ones of section 2
+stack_frames = [c for c in cases + held_out if c.scene in ("stacks", "sort_stack_3")]
+stacks = []                                      # (case, truth, mask, depth, heights) per stack
+for c in stack_frames:
+    d = corrected_depth(c)
+    stacks += [(c, t, m, d, h) for t, m, h in stack_masks(c, d)]
+c0, t0, m0, _, h0 = next(s for s in stacks if s[1].levels == 3)
+h0 = h0[m0]
+fig, ax = plt.subplots(figsize=(8, 3.2))
+ax.hist(h0[np.isfinite(h0)], bins=np.arange(0, t0.centre[2] + 12, 2), color="0.6")
+ax.axvline(t0.centre[2], color="k", lw=2, label="true top")
+ax.axvline(np.nanmean(h0), color="tab:red", lw=2, ls="--", label="mean over the mask")
+ax.set_xlabel("height above the board (mm)")
+ax.set_ylabel("pixels")
+ax.legend(loc="upper left")
+_ = ax.set_title(f"one stack's mask, {t0.levels} blocks high: top face, sides and edges", fontsize=10)
+
+# %% [markdown]
+# **Your stacks against the simulator's truth.** Each stack of the seeded frames: its true top height and levels,
+# the mean over its mask (what the sides do to it) and yours. While your function is blank the kit's reference stands
+# in (it says so once).
+
+# %%
+stack_of = with_reference(stack_from_depth, "detect.stacks", references.stack_by_kit,
+                          "stacks are measured by the kit's reference")
+rows = []
+for c, t, m, d, h in stacks:
+    top_z, levels, centre = stack_of(d, m, c.camera)
+    mean_z = float(np.nanmean(h[m]))
+    rows.append((c.seed, t.centre[2], t.levels, mean_z, top_z, levels))
+print("frame  true top  levels   mask mean   yours  levels")
+for seed, true_z, true_l, mean_z, top_z, levels in rows:
+    print(f"{seed:5d}  {true_z:6.0f} mm  {true_l:4d}   {mean_z:6.0f} mm  {top_z:6.0f} mm  {levels:4d}")
+r = np.array([row[1:] for row in rows])
+fig, ax = plt.subplots(figsize=(8, 3.6))
+k = np.arange(len(r))
+ax.bar(k, r[:, 0], color="0.85", label="true top")
+ax.plot(k, r[:, 2], "x", color="tab:red", ms=8, mew=2, label="mean over the mask")
+ax.plot(k, r[:, 3], "o", color="tab:blue", label="yours")
+for i, (true_l, levels) in enumerate(r[:, [1, 4]].astype(int)):
+    ax.text(i, 4, f"{levels}", ha="center", color="k" if levels == true_l else "tab:red")
+ax.set_xticks(k, [f"{row[0]}" for row in rows], rotation=90, fontsize=8)
+ax.set_xlabel("stack (frame seed); the number at its foot: your levels (red: wrong)")
+ax.set_ylabel("top height (mm)")
+ax.legend(loc="lower center", bbox_to_anchor=(0.5, 1.0), ncol=3, fontsize=8, frameon=False)
+fig.tight_layout()
+
+# %% [markdown]
+# ## Check: your stacks
+#
+# Every stack above: your levels the truth's, your top height within 3 mm of the truth and the top face's centre
+# within 5 mm; then the same with a fifth of each mask's depths lost (half of them NaN, half 0: no return), which must
+# change nothing beyond those bounds.
+
+# %%
+# CHECK detect.stacks
+rng = np.random.default_rng(6)
+worst = {"top": 0.0, "centre": 0.0}
+for c, t, m, d, _ in stacks:
+    lost = d.copy()
+    v, u = np.nonzero(m)
+    gone = rng.random(len(v)) < 0.2
+    lost[v[gone], u[gone]] = np.where(rng.random(gone.sum()) < 0.5, np.nan, 0.0)
+    for depth_in, how in ((d, ""), (lost, " with a fifth of the depths lost")):
+        top_z, levels, centre = stack_from_depth(depth_in, m, c.camera)
+        assert levels == t.levels, f"frame {c.seed}: a {t.levels}-block stack{how} counted {levels} high " \
+            f"(top at {top_z:.1f} mm, true {t.centre[2]:.0f} mm)"
+        assert abs(top_z - t.centre[2]) < 3.0, f"frame {c.seed}{how}: top at {top_z:.1f} mm, true " \
+            f"{t.centre[2]:.0f} mm: are the sides or the lost depths in your estimate?"
+        off = np.hypot(*(np.asarray(centre)[:2] - t.centre[:2]))
+        assert off < 5.0, f"frame {c.seed}{how}: the top face's centre is {off:.1f} mm off"
+        worst = {"top": max(worst["top"], abs(top_z - t.centre[2])), "centre": max(worst["centre"], off)}
+print(f"OK: {len(stacks)} stacks: levels right, top heights within {int(np.ceil(worst['top']))} mm and centres within "
+      f"{int(np.ceil(worst['centre']))} mm of the truth, with and without lost depths")
+
+# %% [markdown]
+# **Demonstration.** The kit's detector finds the same from its height map's plateaus (`b.levels`):
 
 # %%
 for b in found:
