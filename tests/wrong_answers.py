@@ -71,6 +71,12 @@ HIDDEN_WRONG = {   # per exercise: wrong answers its hidden checks must catch (a
         "hard-coded": ["    q1 = q2 = q3 = q4 = heading * 0.0\n    ok, d2 = heading == heading, heading * 0.0 + 1.0"],
         "elbow sign swapped": _replaced("ik.candidates", "* delta_sign", "* -delta_sign"),
     },
+    "ik.numerical": {
+        "cross product's order swapped": _replaced("ik.numerical", "np.cross(z, p - o)", "np.cross(p - o, z)"),
+        "orientation left out of the error": _replaced(
+            "ik.numerical", "dq = J.T @ np.linalg.solve(J @ J.T + damping**2 * np.eye(6), W * e)",
+            "dq = J[:3].T @ np.linalg.solve(J[:3] @ J[:3].T + damping**2 * np.eye(3), e[:3])"),
+    },
     "detect.segment": {
         "red's wrap ignored": _replaced("detect.segment", "if h0 <= h1:", "if True:"),
         "ranges tuned too tight": _replaced("detect.segment", "120, 60)", "250, 250)"),
