@@ -29,6 +29,21 @@ def wrong_euler() -> list[str]:
     return [body.replace("-R[2, 0]", "R[2, 0]")]
 
 
+def jacobian_by_differences() -> list[str]:
+    # tool_jacobian by central differences of fk: close (1e-8), not exact
+    bodies = reference_bodies("ik.numerical")
+    assert "np.cross(z, p - o)" in bodies[0]
+    return ["    J = np.zeros((6, 5))\n"
+            "    R = kinematics.fk(q, check_limits=False)[:3, :3]\n"
+            "    for i in range(5):\n"
+            "        step = np.eye(5)[i] * 1e-5\n"
+            "        plus, minus = kinematics.fk(np.stack([q + step, q - step]), check_limits=False)\n"
+            "        J[:3, i] = (plus[:3, 3] - minus[:3, 3]) / 2e-5\n"
+            "        W = (plus[:3, :3] - minus[:3, :3]) / 2e-5 @ R.T\n"
+            "        J[3:, i] = [W[2, 1], W[0, 2], W[1, 0]]\n"
+            "    return J"] + bodies[1:]
+
+
 def _replaced(exercise_id: str, old: str, new: str) -> list[str]:
     bodies = reference_bodies(exercise_id)
     assert any(old in b for b in bodies), f"{old!r} not in the reference of {exercise_id}"
@@ -76,6 +91,7 @@ HIDDEN_WRONG = {   # per exercise: wrong answers its hidden checks must catch (a
         "orientation left out of the error": _replaced(
             "ik.numerical", "dq = J.T @ np.linalg.solve(J @ J.T + damping**2 * np.eye(6), W * e)",
             "dq = J[:3].T @ np.linalg.solve(J[:3] @ J[:3].T + damping**2 * np.eye(3), e[:3])"),
+        "finite differences, not the exact Jacobian": jacobian_by_differences(),
     },
     "detect.segment": {
         "red's wrap ignored": _replaced("detect.segment", "if h0 <= h1:", "if True:"),

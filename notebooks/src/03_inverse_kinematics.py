@@ -405,7 +405,9 @@ print(f"OK: {only_flipped} of {len(Q)} random reachable poses ({only_flipped / l
 # error and the orientation error times $w$ are both below `tol_mm`, or raise `NotConverged` after `max_iterations`
 # saying how far from the target the tool ends.
 #
-# **Exercise `ik.numerical` (8 points, code).** Write `tool_jacobian(q)` (6, 5), `pose_error(T, T_target)` (6,) and
+# **Exercise `ik.numerical` (8 points, code).** Write `tool_jacobian(q)` (6, 5) from the frames, exactly (the check
+# below compares it with finite differences, which are accurate to about 1e-8; the grader compares it far more
+# tightly with the exact Jacobian), `pose_error(T, T_target)` (6,) and
 # `solve_ik_dls(T_target, q0, ...)`, which returns `(q, history)`: the joint angles and, per iteration, the position
 # error (mm) and the orientation error (rad) before its step, an array (n, 2). Use numpy, `kinematics.link_frames` and
 # `kinematics.fk`; not the kit's own Jacobian, numerical or closed-form IK, or its matrix logarithm (the grader's
@@ -574,7 +576,7 @@ fig, ax = plt.subplots(figsize=(8, 4.2))
 for name, q0 in starts.items():
     try:
         q, history = dls(target_pose(target, pitch), q0)
-        gap = np.abs(wrap(cand - q)).max(axis=1)
+        gap = np.abs(np.pi - np.mod(np.pi - (cand - q), 2 * np.pi)).max(axis=1)     # wrapped to (-pi, pi]
         landed = kinematics.BRANCHES[int(np.nanargmin(gap))] if np.nanmin(gap) < 1e-3 else "none of the branches"
         verdict = f"{landed}, after {len(history) - 1} steps"
     except NotConverged as e:
