@@ -32,7 +32,7 @@ def wrong_euler() -> list[str]:
 def jacobian_by_differences() -> list[str]:
     # tool_jacobian by central differences of fk: close (1e-8), not exact
     bodies = reference_bodies("ik.numerical")
-    assert "np.cross(z, p - o)" in bodies[0]
+    assert "J[:3, i]" in bodies[0]
     return ["    J = np.zeros((6, 5))\n"
             "    R = kinematics.fk(q, check_limits=False)[:3, :3]\n"
             "    for i in range(5):\n"
@@ -87,10 +87,10 @@ HIDDEN_WRONG = {   # per exercise: wrong answers its hidden checks must catch (a
         "elbow sign swapped": _replaced("ik.candidates", "* delta_sign", "* -delta_sign"),
     },
     "ik.numerical": {
-        "cross product's order swapped": _replaced("ik.numerical", "np.cross(z, p - o)", "np.cross(p - o, z)"),
-        "orientation left out of the error": _replaced(
-            "ik.numerical", "dq = J.T @ np.linalg.solve(J @ J.T + damping**2 * np.eye(6), W * e)",
-            "dq = J[:3].T @ np.linalg.solve(J[:3] @ J[:3].T + damping**2 * np.eye(3), e[:3])"),
+        # small edits only: this file ships in the student release
+        "cross product's order swapped (its sign)": _replaced("ik.numerical", "J[:3, i] = ", "J[:3, i] = -"),
+        "orientation left out of the step": _replaced("ik.numerical", "weight_mm, weight_mm, weight_mm])",
+                                                      "0.0, 0.0, 0.0])"),
         "finite differences, not the exact Jacobian": jacobian_by_differences(),
     },
     "detect.segment": {
