@@ -29,6 +29,21 @@ def wrong_euler() -> list[str]:
     return [body.replace("-R[2, 0]", "R[2, 0]")]
 
 
+def jacobian_by_differences() -> list[str]:
+    # tool_jacobian by central differences of fk: close (1e-8), not exact
+    bodies = reference_bodies("ik.numerical")
+    assert "J[:3, i]" in bodies[0]
+    return ["    J = np.zeros((6, 5))\n"
+            "    R = kinematics.fk(q, check_limits=False)[:3, :3]\n"
+            "    for i in range(5):\n"
+            "        step = np.eye(5)[i] * 1e-5\n"
+            "        plus, minus = kinematics.fk(np.stack([q + step, q - step]), check_limits=False)\n"
+            "        J[:3, i] = (plus[:3, 3] - minus[:3, 3]) / 2e-5\n"
+            "        W = (plus[:3, :3] - minus[:3, :3]) / 2e-5 @ R.T\n"
+            "        J[3:, i] = [W[2, 1], W[0, 2], W[1, 0]]\n"
+            "    return J"] + bodies[1:]
+
+
 def _replaced(exercise_id: str, old: str, new: str) -> list[str]:
     bodies = reference_bodies(exercise_id)
     assert any(old in b for b in bodies), f"{old!r} not in the reference of {exercise_id}"
@@ -70,6 +85,13 @@ HIDDEN_WRONG = {   # per exercise: wrong answers its hidden checks must catch (a
     "ik.candidates": {
         "hard-coded": ["    q1 = q2 = q3 = q4 = heading * 0.0\n    ok, d2 = heading == heading, heading * 0.0 + 1.0"],
         "elbow sign swapped": _replaced("ik.candidates", "* delta_sign", "* -delta_sign"),
+    },
+    "ik.numerical": {
+        # small edits only: this file ships in the student release
+        "cross product's order swapped (its sign)": _replaced("ik.numerical", "J[:3, i] = ", "J[:3, i] = -"),
+        "orientation left out of the step": _replaced("ik.numerical", "weight_mm, weight_mm, weight_mm])",
+                                                      "0.0, 0.0, 0.0])"),
+        "finite differences, not the exact Jacobian": jacobian_by_differences(),
     },
     "detect.segment": {
         "red's wrap ignored": _replaced("detect.segment", "if h0 <= h1:", "if True:"),

@@ -14,7 +14,8 @@ from armlab.robot import RobotModel, rx200
 from armlab.transforms import wrap_quarter
 
 __all__ = ["centroid_by_scipy", "wrap_yaw_by_kit", "line_by_scipy",
-           "scaled_durations_by_search", "segment_by_colour_model", "stack_by_kit"]
+           "scaled_durations_by_search", "segment_by_colour_model", "stack_by_kit", "jacobian_by_differences",
+           "pose_error_by_log", "ik_by_least_squares"]
 
 
 def centroid_by_scipy(mask) -> tuple[float, float]:
@@ -105,3 +106,55 @@ def stack_by_kit(depth_mm, mask, camera, edges_mm=(38.0, 25.0)) -> tuple[float, 
     large, small = max(edges_mm), min(edges_mm)
     edge = large if np.sqrt(w * l) > 0.5 * (large + small) else small
     return top_z, stack_levels(top_z, edge, {"large": large, "small": small}), np.array([cx, cy, top_z])
+
+
+def jacobian_by_differences(q, step: float = 1e-6) -> np.ndarray:
+    """ik.numerical's reference for tool_jacobian: central differences of the kit's fk, (6, 5): the tool point's
+    motion and the angular velocity (the vee of dR/dq R^T) per joint."""
+    from armlab import kinematics
+
+    q = np.asarray(q, dtype=float)
+    J = np.empty((6, 5))
+    R = kinematics.fk(q, check_limits=False)[:3, :3]
+    for i in range(5):
+        dq = np.zeros(5)
+        dq[i] = step
+        plus, minus = kinematics.fk(np.stack([q + dq, q - dq]), check_limits=False)
+        J[:3, i] = (plus[:3, 3] - minus[:3, 3]) / (2 * step)
+        W = (plus[:3, :3] - minus[:3, :3]) / (2 * step) @ R.T
+        J[3:, i] = [W[2, 1], W[0, 2], W[1, 0]]
+    return J
+
+
+def pose_error_by_log(T, T_target) -> np.ndarray:
+    """ik.numerical's reference for pose_error: the position difference and the kit's matrix logarithm
+    (armlab.transforms.log_so3) of the rotation from the tool's orientation to the target's."""
+    from armlab.transforms import log_so3
+
+    T, T_target = np.asarray(T, dtype=float), np.asarray(T_target, dtype=float)
+    return np.concatenate([T_target[:3, 3] - T[:3, 3], log_so3(T_target[:3, :3] @ T[:3, :3].T)])
+
+
+def ik_by_least_squares(T_target, q0, weight_mm: float = 100.0, tol_mm: float = 1e-3, max_iterations: int = 200,
+                        **_ignored) -> tuple[np.ndarray, np.ndarray]:
+    """ik.numerical's reference for solve_ik_dls: scipy.optimize.least_squares (trust region, within the joint
+    limits) on the weighted pose error; (q, history) with the position (mm) and orientation (rad) errors at each
+    evaluation. The damping and step options of the exercise do not apply (accepted and ignored)."""
+    from scipy.optimize import least_squares
+
+    from armlab import kinematics
+
+    robot = rx200()
+    weight = np.array([1.0, 1.0, 1.0, weight_mm, weight_mm, weight_mm])
+    history = []
+
+    def residual(q):
+        e = pose_error_by_log(kinematics.fk(q, check_limits=False), T_target)
+        history.append([np.linalg.norm(e[:3]), np.linalg.norm(e[3:])])
+        return weight * e
+
+    q0 = np.clip(np.asarray(q0, dtype=float), robot.lower + 1e-9, robot.upper - 1e-9)   # strictly inside
+    fit = least_squares(residual, q0, jac=lambda q: -weight[:, None] * kinematics.jacobian(q),
+                        bounds=(robot.lower, robot.upper), xtol=1e-12, ftol=1e-12, gtol=1e-12,
+                        max_nfev=max_iterations)
+    return fit.x, np.array(history)

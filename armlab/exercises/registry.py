@@ -114,6 +114,9 @@ IK_BRANCHES = Exercise("ik.candidates", "the geometric IK from the triangle figu
                        "the wrist pitch, every branch", 14, _NB["03"], "armlab/kinematics.py", ("_branch_joints",))
 Q_BRANCHES = Exercise("ik.q_branches", "which branches the arm can use, from the branches figure", 3, _NB["03"],
                       _src("03"), ("the IK branches figure",), kind="written")
+IK_NUMERICAL = Exercise("ik.numerical", "the geometric Jacobian from the link frames, the pose error and a damped "
+                        "least squares IK", 8, _NB["03"], _src("03"),
+                        ("tool_jacobian", "pose_error", "solve_ik_dls"))
 # -- notebook 04: block detection -------------------------------------------------------------------------------
 SEGMENT = Exercise("detect.segment", "the report's segmentation: blur, HSV boxes tuned on training frames, erosion "
                    "and dilation", 8, _NB["04"], _src("04"), ("segment_colours", "tuned_hsv_ranges"), kind="open")

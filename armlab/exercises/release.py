@@ -46,6 +46,7 @@ RELEASE_EXCLUDES = (
     "tests/wrong_answers.py",      # the wrong answers (pieces of every solution) and the tests that run them
     "tests/test_hidden_checks*.py",
     "tests/test_lab_04_08.py",
+    "tests/test_ik_numerical.py",
 )
 
 
