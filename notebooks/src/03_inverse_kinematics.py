@@ -231,7 +231,7 @@ xs = np.arange(lab.board_x[0], lab.board_x[1] + 1, 20.0)        # includes x = 0
 ys = np.arange(lab.board_y[0], lab.board_y[1] + 1, 20.0)
 X, Y = np.meshgrid(xs, ys)
 cells = np.stack([X.ravel(), Y.ravel(), np.full(X.size, z_grasp)], 1)
-ladder = np.radians(np.arange(90.0, -0.1, -1.0))           # 90, 89, ..., 0 deg
+ladder = np.radians(np.arange(90.0, -0.1, -5.0))           # 90, 85, ..., 0 deg
 res = kinematics.ik_batch(np.repeat(cells, len(ladder), 0), np.tile(ladder, len(cells)))
 ok = res.success.reshape(len(cells), len(ladder))
 steepest = np.where(ok.any(1), ladder[np.argmax(ok, axis=1)], np.nan).reshape(X.shape)
@@ -274,8 +274,8 @@ assert behind.sum() >= 8 and not np.any(top_down[behind & (r_cells > 50)]), \
 assert top_down[behind & (r_cells < 20)].all(), "a cell right at the base axis is not reached top-down"
 for p in cells[np.isfinite(steepest.ravel()) & ~top_down.ravel()][::40]:
     s = kinematics.steepest_pitch(p)
-    assert abs(s - steepest.ravel()[np.all(cells == p, axis=1)][0]) < np.radians(1) + 1e-9, \
-        f"steepest_pitch at {p.round(0)} mm disagrees with the 1-degree ladder"
+    assert -1e-6 < s - steepest.ravel()[np.all(cells == p, axis=1)][0] < np.radians(5) + 1e-9, \
+        f"steepest_pitch at {p.round(0)} mm disagrees with the 5-degree ladder"
     _ = kinematics.ik(p, s)                                     # reachable at its steepest pitch ...
     try:
         kinematics.ik(p, s + 1e-6)                              # ... and not a hair steeper
