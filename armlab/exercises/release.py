@@ -43,6 +43,9 @@ RELEASE_EXCLUDES = (
     "armlab/grading/hidden/*",     # (one module per exercise)
     "tools/autograder/*",          # the Gradescope bundle's scripts (make autograder)
     "tests/test_grading*.py",      # the grader's tests (they hold wrong answers and the tricks)
+    "tests/wrong_answers.py",      # the wrong answers (pieces of every solution) and the tests that run them
+    "tests/test_hidden_checks*.py",
+    "tests/test_lab_04_08.py",
 )
 
 
