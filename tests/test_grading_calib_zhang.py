@@ -65,8 +65,11 @@ def _camera_and_views(n_views=4, seed=3):
 
 def test_the_reference_recovers_K_and_refuses_bad_input():
     """The reference of the built notebook (its definitions only), on exact views of a known camera; and its
-    ValueErrors: too few views, a matrix that is not 3 x 3, views square-on to the camera (B not definite)."""
+    ValueErrors: too few views, a matrix that is not 3 x 3, views that leave B undetermined (square-on to the
+    camera, or in parallel planes)."""
     from wrong_answers import reference_bodies
+
+    from armlab.grading.hidden.calib_zhang import _rotation
 
     body = reference_bodies("calib.zhang")[0]
     scope = {"np": np}
@@ -80,8 +83,12 @@ def test_the_reference_recovers_K_and_refuses_bad_input():
             solve(bad, (1280, 720))
     square_on = [K @ np.column_stack([[np.cos(a), np.sin(a), 0.0], [np.sin(a), -np.cos(a), 0.0], [0.0, 0.0, 700.0]])
                  for a in (0.1, 0.7, 1.9)]
-    with pytest.raises(ValueError, match="do not fix K"):
-        solve(square_on, (1280, 720))
+    parallel = [K @ np.column_stack([R[:, 0], R[:, 1], [-100.0, -60.0, 600.0 + 50 * k]]) for k, R in
+                enumerate(np.diag([1.0, -1.0, -1.0]) @ _rotation([1.0, 0.0, 0.0], 0.5) @ _rotation([0.0, 0.0, 1.0], a)
+                          for a in (0.0, 1.0, 2.0))]          # tilted, but the three boards in parallel planes
+    for degenerate in (square_on, parallel, parallel[:2]):
+        with pytest.raises(ValueError, match="do not fix K"):
+            solve(degenerate, (1280, 720))
 
 
 def test_the_blank_stand_in_is_opencvs_initial_guess():

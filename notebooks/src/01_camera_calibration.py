@@ -148,10 +148,12 @@ print("OK: project_pinhole matches Camera.project on the 4 tag centres (within 1
 #
 # * **How many views.** $B$ is symmetric (6 entries) and known only up to scale: 5 unknowns, so three views in
 #   general. Here we assume **zero skew** ($s = 0$, true of this camera and of OpenCV's model), which removes one
-#   entry of $B$; two views then fix it in exact arithmetic, and every further view averages the corners' noise.
+#   entry of $B$; two views tilted about different axes then fix it in exact arithmetic, and every further view
+#   averages the corners' noise.
 # * **Why tilted views.** A board seen square-on looks the same to a camera with a longer focal length further away:
 #   such a view only says $f_x/f_y$. It is the foreshortening of a tilted board that depends on $f$ and on the
-#   principal point; views tilted about the same axis repeat each other's equations.
+#   principal point. Views of the board in parallel planes (only turned in its plane, or moved) repeat each
+#   other's equations.
 # * **Conditioning.** Pixel coordinates are in the hundreds, so $B$'s entries span six orders of magnitude (compare
 #   $1/f^2$ with $c_x^2/f^2$): as for the DLT, first move the image coordinates to the image centre and scale them to
 #   about ±1 with a similarity $N$ ($N H$ maps the board into those coordinates, and its camera matrix is $N K$), and
@@ -164,7 +166,7 @@ print("OK: project_pinhole matches Camera.project on the 4 tag centres (within 1
 # **Exercise `calib.zhang` (8 points, code):** write `intrinsics_from_homographies(homographies, image_size)`: from
 # the board-to-image homographies (each 3 × 3, any scale and sign) of two or more views and the image size
 # (width, height) px, return $K$ (3 × 3, zero skew, $K_{33} = 1$). Raise `ValueError` for fewer than two views, a
-# matrix that is not a finite 3 × 3, or views that do not fix $K$ ($B$ not positive definite).
+# matrix that is not a finite 3 × 3, or views that do not fix $K$ ($B$ undetermined, or not positive definite).
 #
 # The kit's `calibration.calibrate_intrinsics` (`cv2.calibrateCamera`) starts from the same kind of closed-form
 # estimate and then refines $K$, the lens distortion and every pose by minimising the reprojection error.
@@ -195,7 +197,12 @@ def intrinsics_from_homographies(homographies, image_size):
         G = G / np.linalg.norm(G)                  # any scale and sign: a common size for every view
         h1, h2 = G[:, 0], G[:, 1]
         rows += [v(h1, h2), v(h1, h1) - v(h2, h2)]
-    b = np.linalg.svd(np.array(rows))[2][-1]
+    _, sv, Vt = np.linalg.svd(np.array(rows))
+    sv = np.concatenate([sv, np.zeros(5 - len(sv))])   # two views: 4 equations for 5 unknowns
+    if sv[3] < 1e-8 * sv[0]:                       # a second null direction: b is not determined
+        raise ValueError("the views do not fix K (their equations leave B undetermined): tilt the board in "
+                         "planes that are not parallel")
+    b = Vt[-1]
     B11, B22, B13, B23, B33 = b
     B = np.array([[B11, 0.0, B13], [0.0, B22, B23], [B13, B23, B33]])
     if B[0, 0] < 0:                                # the SVD's sign is arbitrary; B is positive definite
