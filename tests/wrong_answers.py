@@ -55,6 +55,10 @@ HIDDEN_WRONG = {   # per exercise: wrong answers its hidden checks must catch (a
         "no translation": _replaced("calib.pinhole", " + T_cam_world[:3, 3]", ""),
         "rotation not transposed": _replaced("calib.pinhole", "T_cam_world[:3, :3].T @", "T_cam_world[:3, :3] @"),
     },
+    "calib.zhang": {
+        "rows of H for its columns": _replaced("calib.zhang", "h1, h2 = G[:, 0], G[:, 1]", "h1, h2 = G[0], G[1]"),
+        "B's sign not fixed": _replaced("calib.zhang", "    if B[0, 0] < 0:", "    if False:"),
+    },
     "calib.tag_homography": {
         "hard-coded": ["    H = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])"],
         "normalisation not undone": _replaced("calib.tag_homography", "np.linalg.solve(T_dst, H_normalised @ T_src)",

@@ -7,15 +7,29 @@ a check cell never uses them.
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
 from scipy import ndimage, stats
 
 from armlab.robot import RobotModel, rx200
 from armlab.transforms import wrap_quarter
 
-__all__ = ["centroid_by_scipy", "wrap_yaw_by_kit", "line_by_scipy",
+__all__ = ["intrinsics_by_opencv", "centroid_by_scipy", "wrap_yaw_by_kit", "line_by_scipy",
            "scaled_durations_by_search", "segment_by_colour_model", "stack_by_kit", "jacobian_by_differences",
            "pose_error_by_log", "ik_by_least_squares"]
+
+
+def intrinsics_by_opencv(homographies, image_size) -> np.ndarray:
+    """calib.zhang's reference: OpenCV's initial guess (cv2.initCameraMatrix2D) from a 5 x 5 grid of board points
+    mapped through each homography: the principal point fixed at the image centre, only the focal lengths fitted."""
+    grid = np.stack(np.meshgrid(np.linspace(0.0, 200.0, 5), np.linspace(0.0, 125.0, 5)), -1).reshape(-1, 2)
+    board = np.column_stack([grid, np.zeros(len(grid))]).astype(np.float32)
+    pixels = []
+    for H in homographies:
+        p = np.column_stack([grid, np.ones(len(grid))]) @ np.asarray(H, dtype=float).T
+        pixels.append((p[:, :2] / p[:, 2:]).astype(np.float32))
+    size = (int(image_size[0]), int(image_size[1]))
+    return np.asarray(cv2.initCameraMatrix2D([board] * len(pixels), pixels, size, 0.0), dtype=float)
 
 
 def centroid_by_scipy(mask) -> tuple[float, float]:

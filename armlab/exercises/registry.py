@@ -92,6 +92,8 @@ def _src(number: str) -> str:
 # -- notebook 01: the camera ------------------------------------------------------------------------------------
 PINHOLE = Exercise("calib.pinhole", "the pinhole model both ways: project world points, back-project a pixel with its "
                    "depth", 8, _NB["01"], _src("01"), ("project_pinhole", "pixel_to_world_pinhole"))
+ZHANG = Exercise("calib.zhang", "the intrinsics K in closed form from the checkerboard views' homographies "
+                 "(Zhang's method)", 8, _NB["01"], _src("01"), ("intrinsics_from_homographies",))
 TAG_HOMOGRAPHY = Exercise("calib.tag_homography", "the homography by the normalised direct linear transform (DLT)",
                           6, _NB["01"], "armlab/calibration/homography.py", ("dlt_homography",))
 TAG_EXTRINSICS = Exercise("calib.tag_extrinsics", "the camera's pose from the AprilTag corners (planar pose from a "
