@@ -15,8 +15,9 @@ from armlab.grading.run import Limits
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
-MINE = ("detect.segment", "detect.face", "grab.move_path", "events.sort_stack", "station.transition")
-CHEAP = ("detect.face", "station.transition")      # hidden checks without a simulator run
+MINE = ("detect.segment", "detect.face", "grab.click_target", "grab.move_path", "events.sort_stack",
+        "station.transition")
+CHEAP = ("detect.face", "grab.click_target", "station.transition")      # hidden checks without a simulator run
 
 
 def _grader(ids):

@@ -121,6 +121,13 @@ HIDDEN_WRONG = {   # per exercise: wrong answers its hidden checks must catch (a
             "detect.stacks", "levels = min(n for n, h in candidates if abs(top_z - h) <= best + 1.5)",
             "levels = max(1, round(top_z / large))"),
     },
+    "grab.click_target": {
+        "the face's yaw ignored": _replaced(
+            "grab.click_target", "    along = cos * offset[:, 0] + sin * offset[:, 1]       # the offset in each "
+            "face's own axes\n    across = -sin * offset[:, 0] + cos * offset[:, 1]", "    along, across = offset.T"),
+        "the depth ignored (the first face containing the click)": _replaced(
+            "grab.click_target", "return int(hit[np.argmin(height_gap)])", "return int(hit[0])"),
+    },
     "grab.move_path": {
         "roll ignores the yaw": _replaced("grab.move_path",
                                           "roll = planning.tilted_roll(heading, float(pitch), float(yaw))",

@@ -14,7 +14,7 @@ from scipy import ndimage, stats
 from armlab.robot import RobotModel, rx200
 from armlab.transforms import wrap_quarter
 
-__all__ = ["intrinsics_by_opencv", "centroid_by_scipy", "wrap_yaw_by_kit", "line_by_scipy",
+__all__ = ["click_target_by_kit", "intrinsics_by_opencv", "centroid_by_scipy", "wrap_yaw_by_kit", "line_by_scipy",
            "scaled_durations_by_search", "segment_by_colour_model", "stack_by_kit", "jacobian_by_differences",
            "pose_error_by_log", "ik_by_least_squares"]
 
@@ -172,3 +172,14 @@ def ik_by_least_squares(T_target, q0, weight_mm: float = 100.0, tol_mm: float = 
                         bounds=(robot.lower, robot.upper), xtol=1e-12, ftol=1e-12, gtol=1e-12,
                         max_nfev=max_iterations)
     return fit.x, np.array(history)
+
+
+def click_target_by_kit(click, tops, yaws, edges, margin_mm: float = 3.0) -> int:
+    """grab.click_target's reference: the kit's click rule (armlab.tasks.click_grab): the detected top-face centre
+    nearest the click in x and y, if it is within one block edge; -1 otherwise (yaw, margin and depth not used)."""
+    click, tops, edges = np.asarray(click, float), np.asarray(tops, float).reshape(-1, 3), np.asarray(edges, float)
+    if not len(tops):
+        return -1
+    d = np.hypot(*(tops[:, :2] - click[:2]).T)
+    best = int(np.argmin(d))
+    return best if d[best] <= edges[best] else -1

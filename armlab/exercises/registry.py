@@ -131,6 +131,8 @@ CONFUSION_QUESTION = Exercise("detect.confusion_question", "why the report's HSV
 STACKS = Exercise("detect.stacks", "a stack's top height, levels and top-face centre from the depth image", 6,
                   _NB["04"], _src("04"), ("stack_from_depth",))
 # -- notebook 05: click to grab ---------------------------------------------------------------------------------
+CLICK_TARGET = Exercise("grab.click_target", "which detected block a click hit: its turned top face under the click, "
+                        "the surface the depth saw", 5, _NB["05"], _src("05"), ("click_target",))
 MOVE_PATH = Exercise("grab.move_path", "the report's move_path: the grasp and release motion as a plan", 10,
                      _NB["05"], "armlab/tasks/move_path.py", ("move_path",), kind="open")
 SAG_QUESTION = Exercise("grab.sag_question", "what the sag figure says about the report's flat offset", 2, _NB["05"],

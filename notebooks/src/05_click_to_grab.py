@@ -14,6 +14,7 @@
 #
 # | exercise | points | kind | how it is graded |
 # |---|---|---|---|
+# | `grab.click_target` | 5 | code | hidden boards of turned and stacked blocks, and clicks on them |
 # | `grab.move_path` (in `armlab/tasks/move_path.py`) | 10 | open task | outcome on the simulator (below) |
 # | `grab.sag_question` | 2 | written | by hand, from your answer under the sag figure |
 #
@@ -65,6 +66,116 @@ p = tasks.surface_point(ctx.calibration, obs.depth, red.pixel)
 truth = next(o for o in station.world.blocks if o.color == "red")
 print("clicked the red block at pixel", np.round(red.pixel, 1), "-> world", p, "mm; true top-face centre",
       truth.position + [0, 0, truth.edge / 2])
+
+# %% [markdown]
+# ### Which block did the click hit?
+#
+# The click's world point $p$ lies on whatever surface the camera saw under the pointer. Each detected block is known
+# by its top face: a square of edge $e$ (38 or 25 mm) centred at $c$ (world mm), turned by its yaw $\psi$ about the
+# vertical, at the height $c_z$. Two facts decide which block the click hit:
+#
+# * **the face's own axes.** A square turned by $\psi$ is easy to test in the frame that turns with it: express the
+#   click's offset from the centre, $p - c$ in $x$ and $y$, in that frame (a rotation about $z$), and the square is
+#   just two bounds on its two coordinates. The outline of a face in the depth image is blurred by a pixel or two, so
+#   allow a margin $m$ (3 mm) around it;
+# * **the depth.** Seen from above, faces can overlap: a small block stacked off-centre on a large one sits inside the
+#   large one's square. The click's height $p_z$ tells which surface was under the pointer.
+#
+# The kit's rule (`tasks.click_grab`: the nearest face centre within one block edge) ignores both: near the corner of
+# a turned block, or on the bare board just beside one, it can pick the wrong block or one that was not clicked.
+#
+# **Exercise `grab.click_target` (5 points, code):** write `click_target(click, tops, yaws, edges, margin_mm=3.0)`:
+# `click` the world point (3,) mm, `tops` (n, 3) the top-face centres (world mm), `yaws` (n,) rad, `edges` (n,) mm;
+# return the index of the block whose face the click hit (the one whose height matches the click's best when several
+# faces contain it), or -1 when it hit none. Refuse (ValueError) a click that is not a finite point and blocks whose
+# arrays do not match.
+
+# %%
+def click_target(click, tops, yaws, edges, margin_mm=3.0):
+    """The index of the block whose top face the click hit, or -1 (see above)."""
+    # BEGIN SOLUTION grab.click_target
+    click = np.asarray(click, dtype=float)
+    tops = np.asarray(tops, dtype=float).reshape(-1, 3)
+    yaws = np.asarray(yaws, dtype=float).reshape(-1)
+    edges = np.asarray(edges, dtype=float).reshape(-1)
+    if click.shape != (3,) or not np.isfinite(click).all():
+        raise ValueError(f"click must be a finite world point (3,) mm, got {click}")
+    if not len(tops) == len(yaws) == len(edges):
+        raise ValueError(f"tops, yaws and edges must describe the same blocks: {len(tops)}, {len(yaws)} and "
+                         f"{len(edges)} given")
+    if not len(tops):
+        return -1
+    offset = click[:2] - tops[:, :2]                      # (n, 2) from each face's centre, world axes
+    cos, sin = np.cos(yaws), np.sin(yaws)
+    along = cos * offset[:, 0] + sin * offset[:, 1]       # the offset in each face's own axes
+    across = -sin * offset[:, 0] + cos * offset[:, 1]
+    half = edges / 2 + margin_mm
+    hit = np.flatnonzero((np.abs(along) <= half) & (np.abs(across) <= half))
+    if not hit.size:
+        return -1
+    height_gap = np.abs(tops[hit, 2] - click[2])          # the depth says which surface the camera saw
+    return int(hit[np.argmin(height_gap)])
+    # END SOLUTION
+
+
+# %% [markdown]
+# *Demonstration* on this scene (your rule where you have written it, the kit's otherwise): clicks near the corners of
+# the turned green block, at 0.47 of its edge along its diagonals, and on bare board 6 mm beside each block.
+
+# %%
+from armlab.exercises import references
+
+my_click_target = with_reference(click_target, "grab.click_target", references.click_target_by_kit,
+                                 "the kit's nearest-centre rule stands in for your click_target")
+tops = np.array([b.position for b in obs.blocks])
+yaws = np.array([b.yaw for b in obs.blocks])
+edges = np.array([b.edge_mm for b in obs.blocks])
+green = [b.color for b in obs.blocks].index("green")
+turn = np.array([[np.cos(yaws[green]), -np.sin(yaws[green])], [np.sin(yaws[green]), np.cos(yaws[green])]])
+corners = [tops[green] + [*(turn @ (0.47 * edges[green] * np.array(d))), 0.0]
+           for d in ((1, 1), (1, -1), (-1, 1), (-1, -1))]
+beside = [t + [*(turn_k @ [e / 2 + 6.0, 0.0]), -t[2]] for t, e, turn_k in
+          zip(tops, edges, [np.array([[np.cos(y), -np.sin(y)], [np.sin(y), np.cos(y)]]) for y in yaws])]
+
+
+def name(k):
+    return "none" if k < 0 else obs.blocks[k].color
+
+
+print(f"{'click (world mm)':>24}  {'yours':>6}  {'kit':>6}")
+for point in [*corners, *beside]:
+    mine, kit = my_click_target(point, tops, yaws, edges), references.click_target_by_kit(point, tops, yaws, edges)
+    print(f"{np.array2string(np.round(point, 0), precision=0):>24}  {name(mine):>6}  {name(kit):>6}")
+
+# %% [markdown]
+# ### Check: which block a click hit
+
+# %%
+# CHECK grab.click_target
+require_written("grab.click_target")
+for k, b in enumerate(obs.blocks):
+    assert click_target(b.position, tops, yaws, edges) == k, f"a click at the {b.color} face's centre is not on it"
+for point in corners:
+    got = click_target(point, tops, yaws, edges)
+    assert got == green, f"a click inside the turned green face near its corner {point.round(0)} gave {got}: " \
+                         "test the point in the face's own axes"
+for point in beside:
+    got = click_target(point, tops, yaws, edges)
+    assert got == -1, f"a click on the board 6 mm beside a face {point.round(0)} gave {got}, not -1"
+stack_tops = np.array([[0.0, 250.0, 38.0], [4.0, 247.0, 63.0]])        # a small block off-centre on a large one
+stack_yaws, stack_edges = np.array([0.2, -0.4]), np.array([38.0, 25.0])
+assert click_target([4.0, 247.0, 63.4], stack_tops, stack_yaws, stack_edges) == 1, \
+    "a click on the small block on top went to the large one below: let the click's height decide"
+assert click_target([-15.0, 250.0, 37.6], stack_tops, stack_yaws, stack_edges) == 0, \
+    "a click on the large block's uncovered edge did not hit it"
+assert click_target([0.0, 250.0, 0.0], np.empty((0, 3)), [], []) == -1, "no blocks: the answer is -1"
+try:
+    click_target([0.0, np.nan, 0.0], tops, yaws, edges)
+    raise AssertionError("a NaN click was not refused")
+except ValueError:
+    pass
+print(f"OK: every face centre, the four corners of the turned green face and the stack's two surfaces hit the "
+      f"right block; the {len(beside)} clicks beside the faces hit none")
 
 # %% [markdown]
 # ## 2 · The motion sequence: `move_path`
