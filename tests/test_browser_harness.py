@@ -38,8 +38,10 @@ def test_a_starting_kernel_is_waited_for_not_called_dead(starting_kernel):
     client = client_of(starting_kernel, hb=False)
     try:
         browser.wait_for_kernel_info(client, lambda: "" if starting_kernel.is_alive() else "its process is gone", 300)
-        reply = client.execute_interactive("x = 6 * 7", user_expressions={"x": "x"}, timeout=120,
-                                           output_hook=lambda msg: None)
+        msg_id = client.execute("x = 6 * 7", user_expressions={"x": "x"})
+        reply = client.get_shell_msg(timeout=120)          # the reply on the shell channel: no iopub subscription
+        while reply["parent_header"].get("msg_id") != msg_id:   # to race on a loaded machine
+            reply = client.get_shell_msg(timeout=120)
         assert reply["content"]["user_expressions"]["x"]["data"]["text/plain"] == "42"
     finally:
         client.stop_channels()
