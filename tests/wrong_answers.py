@@ -182,3 +182,16 @@ def check_wrong_answers(ids: list[str]) -> None:
                     assert not (label == "hard-coded" and any(passed)), f"{exercise_id}, {label}: {passed}"
     finally:
         grader.close()
+
+
+def check_each_wrong_loses_only_its_own(grader, ids, round_: int) -> None:
+    """Each exercise of `ids` wrong in turn (its round_-th wrong answer) while the others hold the reference, in one
+    harness run per exercise (`grader`: a Grader of these exercises): the wrong one fails a hidden check, the others
+    pass every one."""
+    for wrong_id in ids:
+        label, bodies = list(HIDDEN_WRONG[wrong_id].items())[round_]
+        got = grader.hidden_checks_together({e: bodies if e == wrong_id else reference_bodies(e) for e in ids})
+        assert not all(c.passed for c in got[wrong_id]), f"{wrong_id}, {label}: every hidden check passed"
+        for other in ids:
+            if other != wrong_id:
+                assert all(c.passed for c in got[other]), (other, label, [c.message for c in got[other]])
