@@ -112,7 +112,8 @@ class Grader:
         self.exercise_ids = list(exercises) if exercises is not None else [e.id for e in EXERCISES]
         for exercise_id in self.exercise_ids:
             exercise(exercise_id)
-        self._computed = [e for e in self.exercise_ids if written is None or e in set(written)]
+        written = None if written is None else set(written)
+        self._computed = [e for e in self.exercise_ids if written is None or e in written]
         self.sandbox = sandbox or detect(unsafe)
         self._sources = source_hashes()
         self._tmp = tempfile.TemporaryDirectory(prefix="armlab-grade-")
@@ -201,6 +202,8 @@ class Grader:
             self._discard(run_tree)
         if got is None:
             return None, problem
+        if len(got) != len(wanted):
+            return None, f"the hidden checks gave {len(got)} results for {len(wanted)} jobs"
         outputs = iter(got)
         return {e: [None if job is None else next(outputs) for job in jobs[e]] for e in exercise_ids}, ""
 
