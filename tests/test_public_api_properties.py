@@ -98,14 +98,6 @@ def test_ik(value, which):
     _holds(f"ik({which})", lambda: kinematics.ik(args["position"], args["pitch"], args["roll"]), (which,))
 
 
-@SETTINGS
-@given(value=anything, which=st.sampled_from(["damping", "tol_mm", "max_iterations", "max_step", "pitch"]))
-def test_ik_numerical(value, which):
-    kwargs = {"damping": 0.05, "tol_mm": 1e-3, "max_iterations": 20, "max_step": 0.2, "pitch": 1.0, which: value}
-    pitch = kwargs.pop("pitch")
-    _holds(f"ik_numerical({which})", lambda: kinematics.ik_numerical([0.0, 300.0, 30.0], pitch, **kwargs), (which,))
-
-
 def _camera_args(station):
     t = station.camera.truth
     return {"K": t.K, "dist": t.dist, "T_cam_world": t.T_cam_world, "width": 1280, "height": 720}

@@ -15,7 +15,7 @@ from armlab.robot import RobotModel, rx200
 from armlab.transforms import wrap_quarter
 
 __all__ = ["click_target_by_kit", "intrinsics_by_opencv", "centroid_by_scipy", "wrap_yaw_by_kit", "line_by_scipy",
-           "scaled_durations_by_search", "segment_by_colour_model", "stack_by_kit", "jacobian_by_differences",
+           "scaled_durations_by_search", "segment_by_colour_model", "stack_by_kit",
            "pose_error_by_log", "ik_by_least_squares"]
 
 
@@ -120,24 +120,6 @@ def stack_by_kit(depth_mm, mask, camera, edges_mm=(38.0, 25.0)) -> tuple[float, 
     large, small = max(edges_mm), min(edges_mm)
     edge = large if np.sqrt(w * l) > 0.5 * (large + small) else small
     return top_z, stack_levels(top_z, edge, {"large": large, "small": small}), np.array([cx, cy, top_z])
-
-
-def jacobian_by_differences(q, step: float = 1e-6) -> np.ndarray:
-    """ik.numerical's reference for tool_jacobian: central differences of the kit's fk, (6, 5): the tool point's
-    motion and the angular velocity (the vee of dR/dq R^T) per joint."""
-    from armlab import kinematics
-
-    q = np.asarray(q, dtype=float)
-    J = np.empty((6, 5))
-    R = kinematics.fk(q, check_limits=False)[:3, :3]
-    for i in range(5):
-        dq = np.zeros(5)
-        dq[i] = step
-        plus, minus = kinematics.fk(np.stack([q + dq, q - dq]), check_limits=False)
-        J[:3, i] = (plus[:3, 3] - minus[:3, 3]) / (2 * step)
-        W = (plus[:3, :3] - minus[:3, :3]) / (2 * step) @ R.T
-        J[3:, i] = [W[2, 1], W[0, 2], W[1, 0]]
-    return J
 
 
 def pose_error_by_log(T, T_target) -> np.ndarray:

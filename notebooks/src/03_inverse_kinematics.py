@@ -410,8 +410,8 @@ print(f"OK: {only_flipped} of {len(Q)} random reachable poses ({only_flipped / l
 # tightly with the exact Jacobian), `pose_error(T, T_target)` (6,) and
 # `solve_ik_dls(T_target, q0, ...)`, which returns `(q, history)`: the joint angles and, per iteration, the position
 # error (mm) and the orientation error (rad) before its step, an array (n, 2). Use numpy, `kinematics.link_frames` and
-# `kinematics.fk`; not the kit's own Jacobian, numerical or closed-form IK, or its matrix logarithm (the grader's
-# static check refuses them).
+# `kinematics.fk`; not the kit's own Jacobian (finite differences), its closed-form IK or its matrix logarithm (the
+# grader's static check refuses them).
 
 # %%
 class NotConverged(RuntimeError):
@@ -638,8 +638,7 @@ fig.tight_layout()
 # Out of reach (left), a weakly damped step keeps asking for an impossible outward motion: the step hits the
 # `max_step` clamp and the arm chatters between two poses for ever, never settling. Strong damping trades a little
 # speed for a bounded step and settles at the nearest point the arm can reach, 10 mm short. Inside the reach (right),
-# every damping converges, the strong one a little slower. The kit's `kinematics.ik_numerical` uses the same
-# iteration with a small damping and a clamped step.
+# every damping converges, the strong one a little slower.
 
 # %% [markdown]
 # ## Your rubric

@@ -85,7 +85,7 @@ SPECS: tuple[HiddenSpec, ...] = (
     HiddenSpec("solve_ik_dls", _dls_runs, atol=0.0, adapter="_call_dls", prelude="definitions"),
 )
 FORBIDDEN: tuple[str, ...] = (
-    "kinematics.jacobian", "kinematics.ik_numerical", "kinematics.ik", "kinematics.ik_branches",
+    "kinematics.jacobian", "kinematics.ik", "kinematics.ik_branches",
     "kinematics.ik_batch", "kinematics._ik_candidates", "kinematics._numerical_candidates", "kinematics._ik_one",
     "kinematics.steepest_pitch", "transforms.log_so3", "scipy.spatial.transform.Rotation", "scipy.optimize",
     "JacobianSpace", "JacobianBody", "IKinSpace", "IKinBody",
