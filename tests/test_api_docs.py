@@ -36,6 +36,7 @@ def test_the_module_list_is_every_public_module():
     assert {"armlab", "armlab.kinematics", "armlab.station.contract", "armlab.tasks.events.registry"} <= set(modules)
     assert not [m for m in modules if any(p.startswith("_") for p in m.split("."))]
     assert "armlab.grading.kernel_startup" not in modules          # a startup script: importing it runs it
+    assert not [m for m in modules if m.startswith("armlab.grading.hidden")]    # the instructor's hidden checks
     assert len(modules) >= 100
 
 
@@ -48,5 +49,16 @@ def test_the_reference_builds_a_page_per_module_with_its_docstrings(reference):
     from armlab import kinematics
 
     assert 'id="ik"' in raw, "no entry for kinematics.ik"
-    assert kinematics.ik.__doc__.splitlines()[0] in page, "the page lacks ik's docstring"
+    first_line = kinematics.ik.__doc__.splitlines()[0].replace("`", "")      # rendered: `x` becomes <code>x</code>
+    assert first_line in page, "the page lacks ik's docstring"
     assert (reference / "index.html").is_file() and (reference / "search.js").is_file()
+
+
+def test_the_reference_shows_no_source_so_no_solution(reference):
+    """Built from the instructor's checkout (which holds every solution), the pages carry docstrings only: no
+    exercise region's text, no marker, no hidden check."""
+    pages = {p: p.read_text() for p in reference.rglob("*.html")}
+    assert not [p for p, text in pages.items() if re.search(r"BEGIN SOLUTION [a-z]+\.[a-z_]+", text)]
+    kinematics = " ".join(html.unescape(re.sub(r"<[^>]+>", "", pages[reference / "armlab" / "kinematics.html"])).split())
+    assert "ct, st, ca, sa = np.cos(theta)" not in kinematics     # fk.dh_link_transform's solution
+    assert not (reference / "armlab" / "grading" / "hidden.html").exists()
