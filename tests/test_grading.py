@@ -12,7 +12,7 @@ import json
 from pathlib import Path
 
 import pytest
-from wrong_answers import WRONG_DH, reference_bodies, wrong_euler
+from wrong_answers import DEPENDS, HIDDEN_WRONG, WRONG_DH, reference_bodies, wrong_euler
 
 from armlab.exercises import make_student_release
 from armlab.exercises.registry import exercise
@@ -21,7 +21,7 @@ from armlab.grading.run import Limits
 from armlab.grading.splice import write_regions
 
 ROOT = Path(__file__).resolve().parents[1]
-GRADED = ["fk.dh_table", "fk.euler", "ik.candidates"]
+GRADED = ["fk.dh_table", "fk.euler", "ik.candidates", "fk.dh_link_transform", "ik.numerical"]
 CONTAINED = {   # region prefixes that break the run before the (correct) solution
     "kernel_exit": "    import os\n    os._exit(1)\n",
     "kernel_kill": "    import os\n    import signal\n    os.kill(os.getpid(), signal.SIGKILL)\n",
@@ -68,6 +68,10 @@ def graded(tmp_path_factory) -> tuple[dict, Path]:
     slipped = student("wrong_euler")
     write_regions(slipped, "fk.euler", wrong_euler())
     write_regions(slipped, "fk.dh_table", reference_bodies("fk.dh_table"))
+    wrong_link = student("wrong_link")       # the kit's link transform wrong: ik.numerical calls it (kinematics.fk)
+    write_regions(wrong_link, "fk.dh_link_transform", list(HIDDEN_WRONG["fk.dh_link_transform"].values())[0])
+    for exercise_id in ("ik.numerical", "ik.candidates"):
+        write_regions(wrong_link, exercise_id, reference_bodies(exercise_id))
     tampered = student("tampered")          # a wrong DH, every trick on the check cells, a conftest that passes all
     write_regions(tampered, "fk.dh_table", [WRONG_DH.replace("0.0, np.pi / 2]", "0.0, 1.0 * np.pi / 2]")])
     _tamper_checks(tampered)
@@ -115,6 +119,18 @@ def test_wrong_answer_costs_its_own_exercise_only(graded):
     euler = graded[0]["wrong_euler"]["fk.euler"]
     hidden = [c for c in euler.checks if c.name.startswith("hidden check")]
     assert hidden and any("differs" in c.message for c in hidden if not c.passed)
+
+
+def test_a_wrong_kit_function_does_not_cost_the_exercise_that_calls_it(graded):
+    """fk.dh_link_transform wrong (d negated): kinematics.fk, which ik.numerical's solution calls, goes wrong with it,
+    so ik.numerical fails in the submission's one pass (tests/wrong_answers.py DEPENDS); the grader runs it again
+    alone, the reference in place of the link transform, and it scores full marks there."""
+    assert "fk.dh_link_transform" in DEPENDS["ik.numerical"]
+    results = graded[0]["wrong_link"]
+    assert results["fk.dh_link_transform"].score < exercise("fk.dh_link_transform").points
+    assert results["ik.numerical"].score == exercise("ik.numerical").points, \
+        [c.message for c in results["ik.numerical"].checks if not c.passed]
+    assert results["ik.candidates"].score == exercise("ik.candidates").points
 
 
 def test_tricks_score_below_full_marks(graded):

@@ -153,14 +153,33 @@ HIDDEN_WRONG = {   # per exercise: wrong answers its hidden checks must catch (a
 }
 # the exercises whose hidden checks run the simulator at length (tested apart: test_hidden_checks_open.py)
 OPEN_TASKS = ("events.sort_stack", "grab.move_path", "teach.replay", "detect.segment")
-# exercises whose function calls another's region go into a second batch, apart from the one they call
-SECOND_BATCH = {"calib.tag_extrinsics", "fk.dh_link_transform"}
+# exercises whose hidden checks call another exercise's region (through the kit: kinematics.fk chains the student's
+# dh_link_transform; pose_from_corners calls the student's dlt_homography), so that the other one's wrong answer fails
+# them too; the grader then runs the exercise again alone, the reference in place of the rest (Grader.grade), which
+# test_grading.py::test_a_wrong_kit_function_does_not_cost_the_exercise_that_calls_it shows on the first pair
+DEPENDS = {"ik.numerical": {"fk.dh_link_transform"}, "calib.tag_extrinsics": {"calib.tag_homography"}}
+
+
+def wrong_sets(ids: list[str]) -> list[list[str]]:
+    """Runs of the hidden checks, each a set of exercises given a wrong answer (the rest the reference), such that
+    for every ordered pair (x, y) of `ids` some run has x wrong and y not: each exercise is wrong in a different half
+    of the runs (an antichain of k/2-subsets of range(k), k the fewest runs with C(k, k/2) >= len(ids))."""
+    from itertools import combinations
+    from math import comb
+
+    k = 2
+    while comb(k, k // 2) < len(ids):
+        k += 2
+    halves = list(combinations(range(k), k // 2))[:len(ids)]
+    return [[e for e, half in zip(ids, halves, strict=True) if run in half] for run in range(k)]
 
 
 def check_wrong_answers(ids: list[str]) -> None:
     """The hidden checks of these exercises: the reference (in one harness run after the one computing the expected
-    values) passes every one; each wrong answer (one batch per round of wrong answers and per group of exercises that
-    do not call each other) fails at least one, a hard-coded answer every one."""
+    values) passes every one; then, in the runs of wrong_sets (each exercise wrong in half of them, its wrong answers
+    in turn), each wrong answer fails at least one of its exercise's checks (a hard-coded one every check), and every
+    exercise at its reference passes all of its checks unless it calls (DEPENDS) an exercise that is wrong in that
+    run: a wrong answer costs its own exercise only. Each declared dependency is seen failing once (DEPENDS is true)."""
     from armlab.grading.grade import Grader
 
     grader = Grader(ROOT, Limits(timeout_s=300, cpu_s=200), ids)
@@ -169,17 +188,30 @@ def check_wrong_answers(ids: list[str]) -> None:
         for exercise_id in ids:
             checks = reference[exercise_id]
             assert len(checks) >= 3 and all(c.passed for c in checks), (exercise_id, [c.message for c in checks])
-        rounds = max(len(HIDDEN_WRONG[e]) for e in ids)
-        for r in range(rounds):
-            for group in ([e for e in ids if e not in SECOND_BATCH], sorted(SECOND_BATCH & set(ids))):
-                wrong = {e: list(HIDDEN_WRONG[e].items())[r] for e in group if len(HIDDEN_WRONG[e]) > r}
-                if not wrong:
+        used = {e: 0 for e in ids}
+        dependents_failed = set()
+        for wrong in wrong_sets(ids):
+            answers = {}
+            for e in wrong:
+                answers[e] = list(HIDDEN_WRONG[e].items())[used[e] % len(HIDDEN_WRONG[e])]
+                used[e] += 1
+            got = grader.hidden_checks_together(
+                {e: answers[e][1] if e in answers else reference_bodies(e) for e in ids})
+            for exercise_id, (label, _) in answers.items():
+                passed = [c.passed for c in got[exercise_id]]
+                assert not all(passed), f"{exercise_id}, {label}: every hidden check passed"
+                assert not (label == "hard-coded" and any(passed)), f"{exercise_id}, {label}: {passed}"
+            for other in set(ids) - set(answers):
+                if DEPENDS.get(other, set()) & set(answers):
+                    if not all(c.passed for c in got[other]):
+                        dependents_failed.add(other)
                     continue
-                got = grader.hidden_checks_together({e: bodies for e, (_, bodies) in wrong.items()})
-                for exercise_id, (label, _) in wrong.items():
-                    passed = [c.passed for c in got[exercise_id]]
-                    assert not all(passed), f"{exercise_id}, {label}: every hidden check passed"
-                    assert not (label == "hard-coded" and any(passed)), f"{exercise_id}, {label}: {passed}"
+                assert all(c.passed for c in got[other]), \
+                    (f"{other} (at its reference) failed while {sorted(answers)} were wrong",
+                     [c.message for c in got[other] if not c.passed])
+        assert all(used[e] >= len(HIDDEN_WRONG[e]) for e in ids), f"a wrong answer never ran: {used}"
+        declared = {e for e, needs in DEPENDS.items() if e in ids and needs <= set(ids)}
+        assert dependents_failed == declared, f"DEPENDS is stale: {declared - dependents_failed} never failed"
     finally:
         grader.close()
 
