@@ -48,6 +48,25 @@ def screenshot(html_path, png_path, size: tuple[int, int] = (1024, 768), budget_
     return cv2.cvtColor(image, cv2.COLOR_BGR2RGB)
 
 
+def changed(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Mask (H, W) of the pixels where RGB pictures a and b (same shape, uint8) differ by more than 40 in a channel:
+    what the browser tests count as a visible change of a 3D view."""
+    return np.abs(a.astype(int) - b.astype(int)).max(axis=2) > 40
+
+
+def blank_why(picture: np.ndarray) -> str | None:
+    """Why an RGB picture (H, W, 3) uint8 of a 3D view is blank, or None when it shows a scene: quantised to 16
+    levels a channel, one colour must cover under 60 % of it, more than 40 colours must occur, and the standard
+    deviation of its values must exceed 15 (a grey box, an empty canvas or a lone grid fails)."""
+    quantised = (picture // 16).reshape(-1, 3)
+    _, counts = np.unique(quantised, axis=0, return_counts=True)
+    if counts.max() / counts.sum() >= 0.6:
+        return f"one colour covers {counts.max() / counts.sum():.0%} of the picture (a blank or covered scene)"
+    if len(counts) <= 40 or picture.std() <= 15:
+        return f"the picture is nearly uniform ({len(counts)} colours, standard deviation {picture.std():.1f})"
+    return None
+
+
 # -- JupyterLab + Playwright (the control-station checks, tests/test_station_panel_browser.py) ---------------------
 CHROMIUM_FLAGS = ("--no-sandbox", "--disable-gpu", "--enable-unsafe-swiftshader", "--disable-background-networking",
                   "--disable-component-update", "--disable-sync", "--no-first-run")
@@ -99,7 +118,11 @@ class JupyterLab:
     """A JupyterLab server on 127.0.0.1 (a free port, a random token, a fresh runtime/settings/workspace folder
     under `home`) serving `root` under `base_url` (a JupyterHub's /user/NAME/). Use as a context manager: on exit
     its kernels are shut down, the server is terminated (killed after a timeout) and every process it started is
-    checked gone (killed if not)."""
+    checked gone (killed if not). The page exposes the application as `window.jupyterapp`."""
+
+    APP = ("jupyter", "lab")          # python -m APP starts the server
+    APP_CLASS = "LabApp"              # whose expose_app_in_browser puts the application in window.jupyterapp
+    DOCUMENTS = "lab/tree"            # the page of a document: {base_url}DOCUMENTS/{path}
 
     def __init__(self, root, home, python: str, timeout_s: float = 120.0, base_url: str = "/"):
         import os
@@ -127,12 +150,12 @@ class JupyterLab:
                         "config"), JUPYTER_DATA_DIR=str(self.home / "data"), JUPYTERLAB_SETTINGS_DIR=str(settings),
                         JUPYTERLAB_WORKSPACES_DIR=str(self.home / "workspaces"))
         self.env.pop("MPLBACKEND", None)
-        self.cmd = [python, "-m", "jupyter", "lab", "--no-browser", "--ip=127.0.0.1", f"--port={self.port}",
+        self.cmd = [python, "-m", *self.APP, "--no-browser", "--ip=127.0.0.1", f"--port={self.port}",
                     "--port-retries=0", f"--ServerApp.root_dir={self.root}", f"--IdentityProvider.token={self.token}",
-                    "--allow-root", "--LabApp.expose_app_in_browser=True", "--ServerApp.shutdown_no_activity_timeout=0",
-                    f"--ServerApp.base_url={base_url}"]
+                    "--allow-root", f"--{self.APP_CLASS}.expose_app_in_browser=True",
+                    "--ServerApp.shutdown_no_activity_timeout=0", f"--ServerApp.base_url={base_url}"]
         self.proc = None
-        self.log = self.home / "jupyterlab.log"
+        self.log = self.home / f"{self.APP[-1]}.log"
         self.started: set[int] = set()
 
     def api(self, path: str, method: str = "GET", timeout_s: float = 10.0):
@@ -155,19 +178,21 @@ class JupyterLab:
         while True:
             if self.proc.poll() is not None:
                 self.__exit__(None, None, None)
-                raise RuntimeError(f"jupyter lab exited ({self.proc.returncode}): {self.log.read_text()[-3000:]}")
+                raise RuntimeError(f"{' '.join(self.APP)} exited ({self.proc.returncode}): "
+                                   f"{self.log.read_text()[-3000:]}")
             try:
                 self.api("/api/status", timeout_s=2.0)
                 return self
             except OSError:
                 if time.monotonic() > deadline:
                     self.__exit__(None, None, None)
-                    raise RuntimeError(f"jupyter lab did not answer within {self.timeout_s:g} s: "
+                    raise RuntimeError(f"{' '.join(self.APP)} did not answer within {self.timeout_s:g} s: "
                                        f"{self.log.read_text()[-3000:]}") from None
                 time.sleep(0.25)
 
-    def lab_url(self, path: str) -> str:
-        return f"{self.url}/lab/tree/{path}?token={self.token}"
+    def document_url(self, path: str) -> str:
+        """The page that opens the document `path` (relative to root), with the token."""
+        return f"{self.url}/{self.DOCUMENTS}/{path}?token={self.token}"
 
     def kernel_ids(self) -> list[str]:
         """The running kernels' ids; [] while the server cannot list them yet (jupyter_server 2.21 answers 500 to
@@ -216,6 +241,17 @@ class JupyterLab:
                     os.kill(pid, signal.SIGKILL)
         self._log_file.close()
         self.leftovers = [p for p in self.started if _alive(p)]
+
+
+class Notebook7(JupyterLab):
+    """The same server as Notebook 7 (`python -m notebook`: one document a page, built from JupyterLab 4's
+    components). notebook 7.6.5's JupyterNotebookApp has its own expose_app_in_browser (notebook/app.py), and its page
+    bundle sets `window.jupyterapp` to the NotebookApp when the page config's exposeAppInBrowser is "true"
+    (notebook/static/2343.*.js); a notebook opens at {base_url}notebooks/{path}."""
+
+    APP = ("notebook",)
+    APP_CLASS = "JupyterNotebookApp"
+    DOCUMENTS = "notebooks"
 
 
 def wait_for_kernel_info(client, dead, timeout_s: float, name: str = "the kernel") -> None:
