@@ -2,10 +2,9 @@
 fakes of interbotix_xs_modules and pyrealsense2) must keep the same contract (armlab.station.contract): state names,
 torque, an emergency stop that wins, limits refused with the joint named, the board refused, frames' shapes and
 dtypes, move and grip semantics, and the capabilities each declares; and the motion contract
-(armlab.station.contract.Arm): a stop from another thread always wins (200 trials a backend, none lost; and 200
-TaskMachine.estop() calls during a pick on each backend), a stopped
-blocking move raises, a move asked for during a non-blocking one waits for it, Ctrl+C holds the arm and closing parks
-it, a closed station refuses."""
+(armlab.station.contract.Arm): a stop from another thread always wins (a looped move_to, and TaskMachine.estop()
+during a pick: 200 trials each on each backend, none lost), a stopped blocking move raises, a move asked for during a
+non-blocking one waits for it, Ctrl+C holds the arm and closing parks it, a closed station refuses."""
 
 from __future__ import annotations
 
