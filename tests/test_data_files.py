@@ -18,6 +18,7 @@ import pytest
 from armlab import calibration as cal
 from armlab._paths import DATA_ENV, packaged_data_dir
 from armlab.detection.color import ColorModel
+from armlab.detection.color_labels import LABELS_FILE, load_labelled_frames
 from armlab.files import read_json
 from armlab.lab import load_lab
 from armlab.schemas import field_name
@@ -195,6 +196,24 @@ def test_pathological_files_are_refused_naming_the_file(tmp_path, loader, kind, 
     with pytest.raises(error, match="loop.json") as err:
         loader(loop)
     assert "Errno" not in str(err.value) or kind in str(err.value)
+
+
+@pytest.mark.parametrize("loader, file", [(cal.load_checkerboard_set, "checkerboard.json"),
+                                          (load_labelled_frames, LABELS_FILE)])
+def test_a_folders_pathological_json_is_refused_naming_the_file(tmp_path, loader, file):
+    """The folders' own JSON (a checkerboard set's metadata, a colour-label set's labels) go through the same reader:
+    deep nesting, a 10,000-digit number and a symlink loop are each a ValueError naming the file."""
+    for name, text in {"deep": _deep(100_000), "digits": '{"x": ' + "9" * 10_000 + "}", "loop": None}.items():
+        folder = tmp_path / name
+        folder.mkdir()
+        p = folder / file
+        if text is None:
+            os.symlink(p, p)
+        else:
+            p.write_text(text)
+        with pytest.raises(ValueError) as err:
+            loader(folder)
+        assert str(p) in str(err.value), (name, str(err.value))
 
 
 def test_read_json_refuses_an_oversized_file_without_reading_it(tmp_path, monkeypatch):

@@ -161,6 +161,35 @@ def test_fit_square_by_the_blocked_share(n_blocked, complete):
             np.testing.assert_array_equal(got, want)
 
 
+def _one_side_seen(centre, yaw: float, side: int) -> tuple[np.ndarray, np.ndarray]:
+    """The outline (N, 2) mm and its blocked flags of a 25 mm face of which only a strip 8.5 mm wide is in view, the
+    rest hidden behind an occluder (the arm in front of a block behind the base): the strip's one free outline is the
+    face's side at local x = -side * 12.5 mm (side +1: the occluder on the +x side); its other sides touch it."""
+    t = np.linspace(-12.5, 12.5, 21)
+    xs = np.linspace(-side * 12.5, -side * 4.0, 8)[1:]
+    seen = np.column_stack([np.full_like(t, -side * 12.5), t])
+    rest = np.concatenate([np.column_stack([xs, np.full_like(xs, 12.5)]),
+                           np.column_stack([np.full_like(t, -side * 4.0), t[::-1]]),
+                           np.column_stack([xs[::-1], np.full_like(xs, -12.5)])])
+    c, s = np.cos(yaw), np.sin(yaw)
+    local = np.concatenate([seen, rest])
+    return local @ np.array([[c, s], [-s, c]]) + centre, np.r_[np.zeros(len(seen), bool), np.ones(len(rest), bool)]
+
+
+@pytest.mark.parametrize("side", [1, -1])
+@pytest.mark.parametrize("yaw", [0.0, 0.1, -0.1, 0.7, 1.5, -1.45])
+def test_a_mostly_hidden_face_goes_on_under_what_hides_it(side, yaw):
+    """Only one side of the face is free outline: the face's centre is half an edge from it towards the occluder,
+    never out over the board that is seen bare (the fuzz test's seed 242: a block behind the robot's base, seen as a
+    strip beside the arm, was placed 21.7 mm off towards the free board; the side was chosen by which end of the
+    free outline had more points near it, a tie for a single straight side)."""
+    points, blocked = _one_side_seen([-40.0, -140.0], yaw, side)
+    centre, sides, _, done = E.fit_square(points, blocked, 1.2, 25.0)
+    assert not done
+    np.testing.assert_allclose(centre, [-40.0, -140.0], atol=1.0)
+    np.testing.assert_allclose(sides, 25.0, atol=1.25)   # a side seen whole: + pixel_mm (1.2)
+
+
 def test_edge_direction_of_a_turned_square_and_its_free_chords():
     points = _square_outline([0.0, 0.0], 38.0, -0.3)
     assert E.edge_direction(points, -0.28) == pytest.approx(-0.3, abs=1e-9)

@@ -2,7 +2,7 @@
 pick a detected block 150 mm or more from the waist axis and place it at a random free spot anywhere around the arm
 (in front, beside, behind the waist axis; 100-420 mm out) with a random yaw, block after block
 (benchmarks/scenarios/place_fuzz.py). Every place is done within 3 mm or refused before anything moves, never mid-plan.
-Up to 200 places here (4 stations, up to 50 each: 152 are tried, the others end when no block is left 150 mm
+Up to 200 places here (4 stations, up to 50 each: 143 are tried, the others end when no block is left 150 mm
 out); `benchmarks/manipulation.py fuzz` runs more, by sector."""
 
 from __future__ import annotations
@@ -28,15 +28,14 @@ TOLERANCE_MM = 3.0
 def test_student_places_are_done_within_3_mm_or_refused_before_moving():
     outcomes = [(seed, o) for seed in SEEDS for o in run_station(seed, PLACES_PER_STATION)]
     counts = Counter(o.outcome for _, o in outcomes)
-    print(f"student fuzz: {len(outcomes)} places: {dict(counts)}")
+    worst = max((float(np.abs(o.error).max()) for _, o in outcomes if o.outcome == "done"), default=0.0)
+    print(f"student fuzz: {len(outcomes)} places: {dict(counts)}; the worst done place {worst:.2f} mm off")
     assert len(outcomes) >= 0.6 * len(SEEDS) * PLACES_PER_STATION, f"only {len(outcomes)} places were tried"
     mid_plan = [f"seed {seed}, {o.spot}: {o.message}" for seed, o in outcomes if o.outcome == "refused mid-plan"]
     assert not mid_plan, "refused after the arm had moved:\n" + "\n".join(mid_plan)
-    # within 3 mm, unless the pick was made from a detection more than DETECTION_OFF_MM off its block (a detection
-    # error, which the pads only take out across the fingers: seed 242 at (218, 95) mm, a small block seen 21 mm
-    # off, carried 4.7 mm off-centre along the pads); at most one such in a hundred
+    # every place done is within 3 mm: none excused (a block seen as a strip beside the arm was once measured 21.7 mm
+    # off and carried 4.7 mm off-centre along the pads: detection.edges._seen_edge_is_low)
     off = [f"seed {seed}, {o.spot}: {np.round(o.error, 2)} {o.message}" for seed, o in outcomes
            if o.outcome == "done" and np.abs(o.error).max() >= TOLERANCE_MM]
-    assert not [m for m in off if "detection" not in m], f"placed {TOLERANCE_MM} mm or more off:\n" + "\n".join(off)
-    assert len(off) <= len(outcomes) // 100, off
+    assert not off, f"placed {TOLERANCE_MM} mm or more off:\n" + "\n".join(off)
     assert counts["done"] >= 0.8 * len(outcomes), [o.message for _, o in outcomes if o.outcome != "done"]

@@ -2,9 +2,9 @@
 fakes of interbotix_xs_modules and pyrealsense2) must keep the same contract (armlab.station.contract): state names,
 torque, an emergency stop that wins, limits refused with the joint named, the board refused, frames' shapes and
 dtypes, move and grip semantics, and the capabilities each declares; and the motion contract
-(armlab.station.contract.Arm): a stop from another thread always wins (200 trials a backend, none lost), a stopped
-blocking move raises, a move asked for during a non-blocking one waits for it, Ctrl+C holds the arm and closing parks
-it, a closed station refuses."""
+(armlab.station.contract.Arm): a stop from another thread always wins (a looped move_to, and TaskMachine.estop()
+during a pick: 200 trials each on each backend, none lost), a stopped blocking move raises, a move asked for during a
+non-blocking one waits for it, Ctrl+C holds the arm and closing parks it, a closed station refuses."""
 
 from __future__ import annotations
 
@@ -291,6 +291,7 @@ def _loop_moves(arm) -> None:
 
 def test_a_stop_always_wins_the_race_with_a_looped_move(station):
     lost, ended = stop_race(station.arm, lambda: physical_joints(station), RACE_TRIALS)
+    print(f"looped move_to stopped ({station.kind}): {lost} of {RACE_TRIALS} lost, the loops ended {ended}")
     assert lost == 0, f"the arm moved after emergency_stop() returned in {lost} of {RACE_TRIALS} trials"
     assert ended == {"EmergencyStopped": RACE_TRIALS}, ended
 
@@ -388,33 +389,30 @@ def test_closing_while_emergency_stopped_holds_where_it_is(station):
 MACHINE_TRIALS = 200
 
 
-def machine_stop_race(station, trials: int, seed: int = 0) -> tuple[int, float, int]:
-    """TaskMachine.estop() from the test thread 0-0.4 s into a pick (a plan from tasks.pick's planner, run by
-    TaskMachine.execute on the guarded arm, simulated time) while another thread runs it; between trials the block
-    goes back where it stood and the arm to the plan's start. Returns (trials in which the arm moved after estop()
-    returned, the largest such motion in rad, trials stopped before the pick's end)."""
+def machine_stop_race(station, plan: planning.Plan, physical, restore, trials: int, window_s: float,
+                      seed: int = 0) -> tuple[int, float, int]:
+    """TaskMachine.estop() from the test thread 0-window_s into a pick (`plan`, from tasks.pick's planner, run by
+    TaskMachine.execute on the guarded arm) while another thread runs it; between trials restore() puts the block
+    back where it stood and the arm goes to the plan's start. physical() is where the arm physically is (5,) rad.
+    Returns (trials in which the arm moved after estop() returned, the largest such motion in rad, trials stopped
+    before the pick's end)."""
     machine = tasks.TaskMachine(station)
     ctx = tasks.context(station)
-    block = machine.detect()[0]
-    truth = min(station.world.blocks, key=lambda o: np.hypot(*(o.position[:2] - block.position[:2])))
-    pose = (truth.position.copy(), truth.yaw)
-    plan = planning.plan_pick(ctx.arm.joint_positions(), block.position, float(block.yaw), truth.edge,
-                              obstacles=ctx.known)
     rng = np.random.default_rng(seed)
     lost, worst, stopped = 0, 0.0, 0
     for _ in range(trials):
         station.arm.open_gripper()
-        truth.position, truth.yaw = pose[0].copy(), pose[1]
+        restore()
         ctx.arm.move_to(plan.start)
         errors: list = []
         runner = threading.Thread(target=_capture, args=(errors, machine.execute, plan))
         runner.start()
-        time.sleep(rng.uniform(0.0, 0.25))
+        time.sleep(rng.uniform(0.0, window_s))
         machine.estop()
-        q_stop = station.arm.q_true
+        q_stop = physical()
         runner.join(timeout=120)
         assert not runner.is_alive()
-        moved = float(np.abs(station.arm.q_true - q_stop).max())
+        moved = float(np.abs(physical() - q_stop).max())
         lost, worst = lost + int(moved > 1e-12), max(worst, moved)
         stopped += int(bool(errors) and isinstance(errors[0], EmergencyStopped))
         machine.reset()
@@ -430,6 +428,39 @@ def _capture(errors: list, f, *args) -> None:
 
 def test_the_state_machines_estop_wins_during_a_pick():
     station = make_station("sim", seed=1)
-    lost, worst, stopped = machine_stop_race(station, MACHINE_TRIALS)
+    ctx = tasks.context(station)
+    block = tasks.TaskMachine(station).detect()[0]
+    truth = min(station.world.blocks, key=lambda o: np.hypot(*(o.position[:2] - block.position[:2])))
+    pose = (truth.position.copy(), truth.yaw)
+
+    def restore():
+        truth.position, truth.yaw = pose[0].copy(), pose[1]
+
+    plan = planning.plan_pick(ctx.arm.joint_positions(), block.position, float(block.yaw), truth.edge,
+                              obstacles=ctx.known)
+    lost, worst, stopped = machine_stop_race(station, plan, lambda: station.arm.q_true, restore, MACHINE_TRIALS,
+                                             window_s=0.25)
+    print(f"estop during a pick ({station.kind}): {lost} of {MACHINE_TRIALS} lost, {stopped} stopped mid-pick")
+    assert lost == 0, f"the arm moved up to {worst:.3f} rad after estop() returned in {lost} of {MACHINE_TRIALS}"
+    assert stopped >= MACHINE_TRIALS // 4, f"only {stopped} of {MACHINE_TRIALS} stops came during the pick"
+
+
+def test_the_state_machines_estop_wins_during_a_pick_on_the_real_arm(request):
+    """The same race on the real arm (fake driver, simulated clock: a pick's plan runs in milliseconds, so the stop
+    comes 0-1.2 times the plan's own wall time in). The fake camera shows no board: the task context is made without
+    a calibration (what a lab without one has; the plan is given)."""
+    fakes = request.getfixturevalue("vendors")
+    station = make_station("real")
+    station._tasks_context = tasks.TaskContext(GuardedArm(station.arm))
+    with station:
+        ctx = tasks.context(station)
+        plan = planning.plan_pick(ctx.arm.joint_positions(), np.array([0.0, 250.0, 38.0]), 0.3, 38.0)
+        ctx.arm.move_to(plan.start)
+        start = time.perf_counter()
+        tasks.TaskMachine(station).execute(plan)
+        window = 1.2 * (time.perf_counter() - start)
+        physical = lambda: np.array(fakes.world.q, float)          # noqa: E731
+        lost, worst, stopped = machine_stop_race(station, plan, physical, lambda: None, MACHINE_TRIALS, window)
+    print(f"estop during a pick ({station.kind}): {lost} of {MACHINE_TRIALS} lost, {stopped} stopped mid-pick")
     assert lost == 0, f"the arm moved up to {worst:.3f} rad after estop() returned in {lost} of {MACHINE_TRIALS}"
     assert stopped >= MACHINE_TRIALS // 4, f"only {stopped} of {MACHINE_TRIALS} stops came during the pick"

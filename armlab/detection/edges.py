@@ -47,7 +47,8 @@ def fit_square(points: np.ndarray, blocked: np.ndarray, pixel_mm: float, edge_hi
 
     Outline points next to an occluder (`blocked`) are not the face's edge: when there are any, the rectangle's
     orientation comes from the free points, and along each side direction the centre is set from the edges the
-    free points show (both: their middle; one: half an edge, `edge_hint`, inside it). With no hint (None), the edge
+    free points show (both: their middle; one: half an edge, `edge_hint`, inside it, the face going on towards what
+    hides it: _seen_edge_is_low). With no hint (None), the edge
     is the lab edge (`edges`, mm) nearest to a side length the free points show whole (else the largest)."""
     n_blocked = int(np.count_nonzero(blocked))
     if n_blocked > 0.8 * len(points) or len(points) - n_blocked < 12:
@@ -71,15 +72,30 @@ def fit_square(points: np.ndarray, blocked: np.ndarray, pixel_mm: float, edge_hi
         edge_hint = min(edges, key=lambda e: abs(e - seen))
     elif edge_hint is None:
         edge_hint = max(edges)
+    hidden = (points[blocked] - [cx, cy]) @ axes.T       # where the occluders hide the face, in the same axes
     for i in range(2):
         if both[i] and hi[i] - lo[i] > 0.85 * edge_hint:
             centre_local[i] = (lo[i] + hi[i]) / 2
         else:
             complete = False
-            centre_local[i] = (lo[i] + (edge_hint - pixel_mm) / 2 if n_lo[i] >= n_hi[i]
+            centre_local[i] = (lo[i] + (edge_hint - pixel_mm) / 2 if _seen_edge_is_low(hidden[:, i], lo[i], hi[i],
+                                                                                     n_lo[i], n_hi[i])
                                else hi[i] - (edge_hint - pixel_mm) / 2)
             sides[i] = edge_hint
     return np.array([cx, cy]) + centre_local @ axes, sides, theta, complete
+
+
+def _seen_edge_is_low(hidden: np.ndarray, lo: float, hi: float, n_lo: int, n_hi: int) -> bool:
+    """For a side direction the free outline does not span whole (its coordinates along it from lo to hi, mm, with
+    n_lo and n_hi points near each end): whether the edge it shows is its low end, so that the face goes on past hi.
+    The face goes on under what hides it: towards the blocked outline points (`hidden`, their coordinates along the
+    direction, mm) when their mean lies off the free span's middle by more than a sixth of the span; otherwise the
+    end with more free points near it (a straight edge) is the seen one."""
+    if len(hidden):
+        off = float(hidden.mean()) - (lo + hi) / 2
+        if abs(off) > (hi - lo) / 6:
+            return off > 0
+    return bool(n_lo >= n_hi)
 
 
 EDGE_SEARCH_MM = 3.5    # the side refinement looks this far inside and outside each fitted side
