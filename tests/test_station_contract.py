@@ -393,19 +393,19 @@ def machine_stop_race(station, trials: int, seed: int = 0) -> tuple[int, float, 
     TaskMachine.execute on the guarded arm, simulated time) while another thread runs it; between trials the block
     goes back where it stood and the arm to the plan's start. Returns (trials in which the arm moved after estop()
     returned, the largest such motion in rad, trials stopped before the pick's end)."""
-    machine = tasks.TaskMachine(station)
-    ctx = tasks.context(station)
+    session = tasks.start_session(station)
+    machine = tasks.TaskMachine(session)
     block = machine.detect()[0]
     truth = min(station.world.blocks, key=lambda o: np.hypot(*(o.position[:2] - block.position[:2])))
     pose = (truth.position.copy(), truth.yaw)
-    plan = planning.plan_pick(ctx.arm.joint_positions(), block.position, float(block.yaw), truth.edge,
-                              obstacles=ctx.known)
+    plan = planning.plan_pick(session.arm.joint_positions(), block.position, float(block.yaw), truth.edge,
+                              obstacles=session.known)
     rng = np.random.default_rng(seed)
     lost, worst, stopped = 0, 0.0, 0
     for _ in range(trials):
         station.arm.open_gripper()
         truth.position, truth.yaw = pose[0].copy(), pose[1]
-        ctx.arm.move_to(plan.start)
+        session.arm.move_to(plan.start)
         errors: list = []
         runner = threading.Thread(target=_capture, args=(errors, machine.execute, plan))
         runner.start()

@@ -20,13 +20,14 @@ def test_places_behind_the_waist_axis_are_done_or_refused_before_moving(seed):
     outcomes = []
     for x, y in SPOTS:
         st = make_station("sim", seed=seed)
-        obs = tasks.look(st)
+        session = tasks.start_session(st)
+        obs = tasks.look(session)
         block = next(b for b in obs.blocks if b.size == "large")
-        assert tasks.pick(st, block)
-        guarded = tasks.context(st).arm
+        assert tasks.pick(session, block)
+        guarded = session.arm
         sent, q, held = len(guarded.sent), st.arm.joint_positions(), list(st.arm.holding)
         try:
-            tasks.place(st, (x, y, 0.0), yaw=0.0)
+            tasks.place(session, (x, y, 0.0), yaw=0.0)
         except (MotionRefused, Unreachable) as e:
             # refused: nothing was sent, the arm stands where it was, the block is still held
             assert len(guarded.sent) == sent, f"({x}, {y}): refused after {len(guarded.sent) - sent} commands: {e}"
@@ -46,9 +47,10 @@ def test_the_pre_check_sees_exactly_the_commands_the_guarded_arm_sends():
     from armlab.tasks import precheck
 
     st = make_station("sim", seed=0)
-    obs = tasks.look(st)
+    session = tasks.start_session(st)
+    obs = tasks.look(session)
     block = next(b for b in obs.blocks if b.size == "large")
-    guarded = tasks.context(st).arm
+    guarded = session.arm
     from armlab import planning
 
     plan = planning.plan_pick(guarded.joint_positions(), block.position, float(block.yaw), 38.0, obstacles=obs.blocks)
@@ -66,20 +68,20 @@ def test_a_plan_that_would_carry_the_block_into_a_known_one_is_refused_naming_it
     from armlab.tasks import precheck
 
     st = make_station("sim", seed=0)
-    obs = tasks.look(st)
+    session = tasks.start_session(st)
+    obs = tasks.look(session)
     block = next(b for b in obs.blocks if b.size == "large")
-    assert tasks.pick(st, block)
-    guarded = tasks.context(st).arm
+    assert tasks.pick(session, block)
+    guarded = session.arm
     sent = len(guarded.sent)
     grid = np.array([(x, y) for x in range(-250, 300, 50) for y in range(150, 400, 50)], float)
     free = grid[np.argmax([min(np.hypot(*(g - b.position[:2])) for b in obs.blocks) for g in grid])]
     stand_in = precheck.KnownBox(float(free[0]), float(free[1]), 25.0, 12.5, 0.0)   # a small block seen there
-    ctx = tasks.context(st)
-    ctx.known = [*ctx.known, planning_obstacle(stand_in)]
+    session.known = [*session.known, planning_obstacle(stand_in)]
     where = rf"\({free[0]:.1f}, {free[1]:.1f}"
     with pytest.raises(MotionRefused, match=rf"placing at {where}, 15\.0\) mm refused before moving: step \d "
                                             rf"\(descend\).*would go .* mm into the known block at {where}\)"):
-        tasks.place(st, (free[0], free[1], 15.0))                # 10 mm into its top: impossible
+        tasks.place(session, (free[0], free[1], 15.0))           # 10 mm into its top: impossible
     assert len(guarded.sent) == sent and st.arm.holding
 
 
