@@ -161,6 +161,20 @@ def test_a_stop_requested_mid_plan_sends_no_further_command(monkeypatch, after):
     assert not st.arm.holding
 
 
+def test_guarded_arm_recording_lists_the_commands_the_arm_accepted():
+    st = make_station("sim", seed=0, scene="empty", realism="ideal")
+    arm = tasks.GuardedArm(st.arm)
+    arm.open_gripper()                                                  # before the block: not listed
+    with arm.recording() as log:
+        arm.move_to(st.arm.robot.home, 2.0)
+        assert arm.close_gripper() is False
+        with pytest.raises(MotionRefused):
+            arm.move_to([9.0, 0.0, 0.0, 0.0, 0.0])                     # refused: not listed
+    arm.open_gripper()                                                  # after the block: not listed
+    assert [c[0] for c in log] == ["move", "close"] and log[0][2] == 2.0 and log[1] == ("close", False)
+    np.testing.assert_array_equal(log[0][1], st.arm.robot.home)
+
+
 def test_a_stop_request_refuses_the_gripper_too():
     st = make_station("sim", seed=2, scene="empty")
     stop = False

@@ -134,37 +134,6 @@ class ClickResult:
         return bool(self.commands)
 
 
-class _Recorder:
-    """Stands in for the session's arm during one click: forwards everything, records the commands."""
-
-    def __init__(self, arm):
-        self._arm, self.log = arm, []
-
-    def move_to(self, q, moving_time=None, accel_time=None, blocking=True):
-        self._arm.move_to(q, moving_time, accel_time, blocking)
-        self.log.append(("move", np.asarray(q, float).copy(), moving_time))
-
-    def open_gripper(self):
-        self._arm.open_gripper()
-        self.log.append(("open",))
-
-    def close_gripper(self):
-        held = self._arm.close_gripper()
-        self.log.append(("close", bool(held)))
-        return held
-
-    @property
-    def should_stop(self):          # a TaskMachine sets its stop flag on the session's arm: pass it through
-        return self._arm.should_stop
-
-    @should_stop.setter
-    def should_stop(self, value):
-        self._arm.should_stop = value
-
-    def __getattr__(self, name):
-        return getattr(self._arm, name)
-
-
 def _num(x: float) -> str:
     return str(int(round(float(x))))           # whole numbers, no "-0"
 
@@ -248,21 +217,20 @@ class ClickToGrab:
         uv = tuple(float(c) for c in np.asarray(uv, dtype=float).reshape(-1))
         action = self.next_action
         session = self.session
-        recorder = _Recorder(session.arm)
         world, ok = None, False
         valid = len(uv) == 2 and bool(np.all(np.isfinite(uv)))
         where = f"{action} at pixel {_fmt(uv)}" if valid else f"{action} at {uv}"
-        try:
-            if not valid:
-                raise ClickRefused(f"a click is a pixel (u, v) of 2 finite numbers, got {uv}")
-            if check_view and not view_is_current(self.session):
-                self._look()
-                raise ClickRefused("the picture was out of date (the arm had moved since it was taken): the camera "
-                                   "looked again, click on the new picture")
-            world = click_world(self.session, uv, current_view(self.session).frame)
-            where += f" -> world {_fmt(world)} mm"
-            session.arm = recorder
+        with session.arm.recording() as log:
             try:
+                if not valid:
+                    raise ClickRefused(f"a click is a pixel (u, v) of 2 finite numbers, got {uv}")
+                if check_view and not view_is_current(session):
+                    self._look()
+                    raise ClickRefused("the picture was out of date (the arm had moved since it was taken): the "
+                                       "camera looked again, click on the new picture")
+                world = click_world(session, uv, current_view(session).frame)
+                where += f" -> world {_fmt(world)} mm"
+                del log[:]                      # what the click did, not the look that may have come before
                 if action == "grab":
                     ok = self._grab(uv)
                     block = session.held
@@ -272,15 +240,17 @@ class ClickToGrab:
                     held = session.held
                     ok = self._drop(uv)
                     did = f"put the {held.color} block down there"
-            finally:
-                session.arm = recorder._arm
-            message = f"{where}: {did}; {_summary(recorder.log)}"
-        except (ClickRefused, MachineBusy) as e:
-            message = f"{where}: refused, nothing moved: {e}"
-        except (MotionRefused, EmergencyStopped) as e:
-            message = (f"{where}: stopped by the arm after {_summary(recorder.log)}: "
-                       f"{type(e).__name__}: {str(e).splitlines()[0]}")
-        result = ClickResult(action, uv[:2], bool(ok), world, message, tuple(recorder.log))
+                message = f"{where}: {did}; {_summary(log)}"
+            except (ClickRefused, MachineBusy) as e:
+                if world is None:
+                    del log[:]                  # refused before the click's action: a look is not what it did
+                message = f"{where}: refused, nothing moved: {e}"
+            except (MotionRefused, EmergencyStopped) as e:
+                if world is None:
+                    del log[:]
+                message = (f"{where}: stopped by the arm after {_summary(log)}: "
+                           f"{type(e).__name__}: {str(e).splitlines()[0]}")
+        result = ClickResult(action, uv[:2], bool(ok), world, message, tuple(log))
         self.history.append(result)
         if valid:
             self._marker = uv
