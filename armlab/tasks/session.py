@@ -35,7 +35,9 @@ START = "session = tasks.start_session(station)"
 
 @dataclass(eq=False)
 class Session:
-    """A station in use by the task layer (see the module notes); made by start_session.
+    """A station in use by the task layer (see the module notes); made by start_session. Built directly,
+    Session(station, GuardedArm(station.arm)) is one with no calibration and no sag model, made without moving
+    anything: enough for teaching by hand and for stand-ins, not for looking at the board.
 
     Attributes:
         station: the station (make_station(...)); its raw arm is station.arm.
