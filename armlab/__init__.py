@@ -5,15 +5,16 @@ Public entry points: `armlab.kinematics`, `armlab.calibration`, `armlab.detectio
 """
 
 from armlab.station import make_station
-from armlab.station.contract import Station
 
 __all__ = ["make_station", "station_panel"]
 
 
-def station_panel(station: Station, viewer=None, **options):
-    """The lab's control station in JupyterLab for a station (armlab.ui.station_panel: live camera, mouse-over
-    world coordinates, click-to-grab/drop, teach/repeat, emergency stop, joint sliders, the inline 3D view)."""
-    from armlab.ui.station_panel import station_panel as make
+def __getattr__(name: str):
+    """`armlab.station_panel` is armlab.ui.station_panel.station_panel (the lab's control station over a task
+    session, tasks.start_session(station)), imported when first asked for: `import armlab` stays light."""
+    if name == "station_panel":
+        from armlab.ui.station_panel import station_panel
 
-    return make(station, viewer=viewer, **options)
+        return station_panel
+    raise AttributeError(f"module 'armlab' has no attribute {name!r}")
 __version__ = "0.1.0"

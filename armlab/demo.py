@@ -72,19 +72,19 @@ def run_demo(out_dir: str = "out", seed: int = 0, event: str = "sort_stack", lev
     """Run the demo (module notes); returns a process exit code (0 when the event got full marks)."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    from armlab.tasks import handling
+    from armlab.tasks import start_session
 
     print(f"armlab demo: {event} level {level} on the simulator (seed {seed})")
     station = event_station(event, level, seed=seed)
-    ctx = handling.context(station)
-    print(f"calibration: {ctx.calibration.notes}")
-    look = see(station, ctx)
+    session = start_session(station)           # calibrates the camera, fits the sag model
+    print(f"calibration: {session.calibration.notes}")
+    look = see(session)
     acc = detection_accuracy(look.objects, station.world.objects)
     from armlab.detection import draw_detections
 
-    _write_png(out / "detections.png", draw_detections(look.frame.rgb, look.objects, ctx.calibration.camera))
+    _write_png(out / "detections.png", draw_detections(look.frame.rgb, look.objects, session.calibration.camera))
 
-    result = run_event(station, event, level, seed=seed)
+    result = run_event(session, event, level, seed=seed)
     print()
     print("SCORE (from the simulator's ground truth)")
     print(result.score.table())

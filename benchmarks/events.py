@@ -13,6 +13,7 @@ import time
 
 import numpy as np
 
+from armlab.tasks import start_session
 from armlab.tasks.events import event_station, run_event
 
 CASES = [("sort_stack", 1), ("sort_stack", 2), ("sort_stack", 3), ("line_up", 1), ("line_up", 2), ("line_up", 3),
@@ -26,8 +27,8 @@ def event_rows(seeds=(0,), cases=CASES) -> list[dict]:
     for event, level in cases:
         for seed in seeds:
             t = time.perf_counter()
-            station = event_station(event, level, seed=seed)
-            r = run_event(station, event, level, seed=seed, record=False)
+            session = start_session(event_station(event, level, seed=seed))
+            r = run_event(session, event, level, seed=seed, record=False)
             err = np.linalg.norm(r.placement_errors[:, :2], axis=1) if len(r.placement_errors) else np.zeros(1)
             rows.append({"event": event, "level": level, "seed": seed, "points": r.score.points,
                          "max": r.score.max_points, "sim_s": r.time_s, "limit_s": r.time_limit_s,

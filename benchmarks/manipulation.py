@@ -63,21 +63,21 @@ def free_spot(rng, world, keep_out_mm: float = 75.0, reach=(160.0, 330.0)):
             return p
 
 
-def _recover(station, ctx) -> bool:
+def _recover(session: tasks.Session) -> bool:
     """After a failed pick or place: open, forget the held block, go to the camera-clear pose. False if stuck."""
     try:
-        station.arm.open_gripper()
-        ctx.held = None
-        tasks.clear_view(ctx.arm)
+        session.station.arm.open_gripper()
+        session.held = None
+        tasks.clear_view(session.arm)
         return True
     except Exception:
         return False
 
 
-def _seen_again(station, block, within_mm: float = 40.0):
+def _seen_again(session: tasks.Session, block, within_mm: float = 40.0):
     """The block of the same colour and size nearest to where `block` was seen, in a new look (None if none within
     within_mm)."""
-    same = [b for b in tasks.look(station).blocks if (b.color, b.size) == (block.color, block.size)]
+    same = [b for b in tasks.look(session).blocks if (b.color, b.size) == (block.color, block.size)]
     if not same:
         return None
     near = min(same, key=lambda b: np.hypot(*(b.position[:2] - block.position[:2])))
@@ -91,13 +91,13 @@ def pick_place_trials(method: str, seeds, blocks_per_scene: int = 8, reach=(160.
     for seed in seeds:
         st = make_station("sim", seed=int(seed), scene="random", n=blocks_per_scene)
         rng = np.random.default_rng(1000 + int(seed))
-        ctx = tasks.context(st)
+        session = tasks.start_session(st)
         if method != "tasks.sag":
-            ctx.arm.sag = SagModel()
-        seen = tasks.look(st).blocks
+            session.arm.sag = SagModel()
+        seen = tasks.look(session).blocks
         for listed in seen:
             # look again before each pick, as the tasks do: an earlier pick's pads may have nudged this block
-            block = _seen_again(st, listed)
+            block = _seen_again(session, listed)
             if block is None:
                 trials.append({"grasped": False, "error": None, "yaw_error": None,
                                "failure": f"the {listed.size} {listed.color} block is not seen again"})
@@ -108,9 +108,9 @@ def pick_place_trials(method: str, seeds, blocks_per_scene: int = 8, reach=(160.
             trial = {"grasped": False, "error": None, "yaw_error": None, "failure": ""}
             try:
                 shifted = dataclasses.replace(block, position=block.position + [0, 0, dz(block.position)])
-                trial["grasped"] = tasks.pick(st, shifted)
+                trial["grasped"] = tasks.pick(session, shifted)
                 if trial["grasped"]:
-                    tasks.place(st, target + [0, 0, dz(target)], yaw)
+                    tasks.place(session, target + [0, 0, dz(target)], yaw)
                     trial["error"] = truth.position - [0, 0, truth.edge / 2] - target
                     trial["yaw_error"] = abs((truth.yaw - yaw + np.pi / 4) % (np.pi / 2) - np.pi / 4)
                 else:
@@ -118,7 +118,7 @@ def pick_place_trials(method: str, seeds, blocks_per_scene: int = 8, reach=(160.
             except Exception as e:      # refused motions (the board in the way) count as failures
                 trial["failure"] = f"{type(e).__name__}: {str(e).splitlines()[0][:70]}"
                 trials.append(trial)
-                if not _recover(st, ctx):
+                if not _recover(session):
                     break
                 continue
             trials.append(trial)
@@ -174,7 +174,8 @@ def region_trials(n_per_region: int = 6, first_seed: int = 500) -> list[list]:
             seed = first_seed + 100 * k + i
             st = make_station("sim", seed=seed, scene="random", n=4)
             rng = np.random.default_rng(seed)
-            seen = tasks.look(st).blocks
+            session = tasks.start_session(st)
+            seen = tasks.look(session).blocks
             block = next((b for b in seen if b.size == "large"), seen[0])
             truth = min(st.world.blocks, key=lambda o: np.hypot(*(o.position[:2] - block.position[:2])))
             if stack:
@@ -187,14 +188,14 @@ def region_trials(n_per_region: int = 6, first_seed: int = 500) -> list[list]:
                 target = _spot(rng, reach, heading, st.world)
                 if target is None:
                     continue
-            if not tasks.pick(st, block):
+            if not tasks.pick(session, block):
                 counts["not grasped"] += 1
                 continue
-            sent = len(tasks.context(st).arm.sent)
+            sent = len(session.arm.sent)
             try:
-                tasks.place(st, target, 0.0)
+                tasks.place(session, target, 0.0)
             except Exception as e:
-                moved = len(tasks.context(st).arm.sent) != sent
+                moved = len(session.arm.sent) != sent
                 counts["refused mid-plan" if moved else "refused before"] += 1
                 examples.append(f"({target[0]:.0f}, {target[1]:.0f}, {target[2]:.0f}): {str(e)[:110]}")
                 continue
@@ -235,15 +236,15 @@ def grid_rows(outcomes: list[board_grid.Outcome]) -> list[list]:
 
 
 def sag_by_region(seed: int = 0, z: float = 40.0, hover_mm: float = 60.0) -> list[list]:
-    """How right the fitted sag model (tasks.context's, fitted on calibration poses within 60 deg of straight ahead)
-    is over the whole board: on the station's empty-board twin (the same arm errors), the tool goes to z mm above
+    """How right the fitted sag model (tasks.start_session's, fitted on calibration poses within 60 deg of straight
+    ahead) is over the whole board: on the station's empty-board twin (the same arm errors), the tool goes to z mm above
     each grid spot (top-down, or the steepest pitch the spot allows) from hover_mm above it, once commanded as
     planned and once through the sag model (GuardedArm); per region the |error| of the true tool point (3-D, mm)."""
     from armlab import kinematics
     from armlab.tasks.guard import GuardedArm
 
     st = make_station("sim", seed=seed, scene="empty")
-    sag = tasks.context(st).arm.sag
+    sag = tasks.start_session(st).arm.sag
     reference = st.capabilities.sag_reference()
     guarded = GuardedArm(reference.arm)
     guarded.sag = sag
@@ -310,10 +311,11 @@ def main(n_stations: int = 13) -> None:
             print(f"  {method}: {len(fails)} failed, e.g. {fails[0]}")
 
     st = make_station("sim", seed=0, scene="empty")
-    ctx = tasks.context(st)
-    tasks.look(st)
+    session = tasks.start_session(st)
+    tasks.look(session)
     measure = lambda: st.arm.tool_pose_true()[:3, 3]    # noqa: E731
-    six = {name: reach_experiment(st, arm, measure) for name, arm in (("none", st.arm), ("tasks.sag", ctx.arm))}
+    six = {name: reach_experiment(session, arm, measure)
+           for name, arm in (("none", st.arm), ("tasks.sag", session.arm))}
     lab = LAB_TABLE_III_ERROR_MM
     print("\nSix locations (lab report Table III), |error| mm at z = 37 mm")
     table = []

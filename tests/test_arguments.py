@@ -46,7 +46,12 @@ def station():
     return make_station("sim", seed=0)
 
 
-def test_the_cases_the_issue_found(station):
+@pytest.fixture(scope="module")
+def session(station):
+    return tasks.start_session(station)
+
+
+def test_the_cases_the_issue_found(station, session):
     frame = station.camera.capture()
     cam = station.camera.truth
     cases = [
@@ -56,23 +61,23 @@ def test_the_cases_the_issue_found(station):
         (lambda: station.arm.move_to([HUGE, 0, 0, 0, 0]), MotionRefused, "joint angles hold a number too large"),
         (lambda: station.arm.move_to(station.arm.joint_positions(), moving_time=HUGE), MotionRefused,
          "moving_time holds a number too large"),
-        (lambda: tasks.place(station, [HUGE, 0, 0]), ValueError, "position holds a number too large"),
+        (lambda: tasks.place(session, [HUGE, 0, 0]), ValueError, "position holds a number too large"),
         (lambda: detect_blocks(frame.rgb, frame.depth, None), TypeError, "camera must be a Camera"),
-        (lambda: tasks.pick(station, None), TypeError, "block must be a detected block"),
+        (lambda: tasks.pick(session, None), TypeError, "block must be a detected block"),
         (lambda: calibration.fit_depth_correction(frame.depth, cam, step=0), ValueError, "step must be at least 1"),
         (lambda: kinematics.jacobian([0, 0, 0, 0, 0], step=0), ValueError, "step must be a positive number"),
         (lambda: calibration.Calibration(cam).pixel_to_world([[640, 360]], frame.depth, radius=10**6), ValueError,
          "radius must be at least 0 and at most 50"),
         (lambda: kinematics.ik(["1", "2", "x"], 1.0), TypeError, "position must be real numbers"),
         (lambda: cam.project([["a", "b", "c"]]), TypeError, "points_world must be real numbers"),
-        (lambda: tasks.click_grab(station, [np.float64(-10.0), "x"]), TypeError, "uv must be real numbers"),
+        (lambda: tasks.click_grab(session, [np.float64(-10.0), "x"]), TypeError, "uv must be real numbers"),
     ]
     for call, error, words in cases:
         with pytest.raises(error, match=words):
             call()
 
 
-def test_a_click_off_the_image_prints_plain_numbers(station):
+def test_a_click_off_the_image_prints_plain_numbers(session):
     with pytest.raises(tasks.ClickRefused) as err:
-        tasks.click_grab(station, (np.float64(-10.0), np.float64(5.0)))
+        tasks.click_grab(session, (np.float64(-10.0), np.float64(5.0)))
     assert "np.float64" not in str(err.value), str(err.value)

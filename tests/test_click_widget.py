@@ -98,8 +98,9 @@ def panel():
         {"color": "red", "size": "large", "position_mm": [-150.0, 200.0], "yaw_rad": 0.0},
         {"color": "blue", "size": "small", "position_mm": [200.0, 150.0], "yaw_rad": 0.3},
     ]})
-    tasks.look(station)
-    return ClickToGrab(station)
+    session = tasks.start_session(station)
+    tasks.look(session)
+    return ClickToGrab(session)
 
 
 def truth(panel, color):
@@ -108,7 +109,7 @@ def truth(panel, color):
 
 @pytest.mark.exercise("calib.tag_extrinsics", "calib.depth_plane", "detect.classify")
 def test_first_click_grabs_second_click_drops(panel):
-    blue = next(b for b in tasks.context(panel.station).last.blocks if b.color == "blue")
+    blue = next(b for b in panel.session.last.blocks if b.color == "blue")
     assert panel.next_action == "grab" and panel.image_size() == IMAGE and panel.frame_size() == FRAME
     grab = panel.handle_event(browser_event(blue.pixel, drawn_width=900.0))
     assert grab.action == "grab" and grab.ok and panel.holding is not None and panel.holding.color == "blue"
@@ -159,15 +160,16 @@ def test_malformed_and_other_events(panel):
 
 
 def test_a_stopped_arm_is_reported_not_raised(panel):
-    station = panel.station
-    red = next(b for b in tasks.context(station).last.blocks if b.color == "red")
+    station, session = panel.station, panel.session
+    arm = session.arm
+    red = next(b for b in session.last.blocks if b.color == "red")
     station.arm.emergency_stop()
     try:
         result = panel.click(red.pixel)
     finally:
         station.arm.reset()
     assert not result.ok and "EmergencyStopped" in result.message and panel.holding is None
-    assert tasks.context(station).arm is not None and not hasattr(tasks.context(station).arm, "log")  # restored
+    assert session.arm is arm           # the click recorded through the session's own arm, swapped nothing
 
 
 def test_widget_wires_the_image_clicks_to_the_handler(panel, capsys):
@@ -179,7 +181,7 @@ def test_widget_wires_the_image_clicks_to_the_handler(panel, capsys):
     assert image.format == "jpeg" and bytes(image.value[:2]) == b"\xff\xd8"
     assert panel._events.source is image and panel._events.watched_events == ["click"]
     shown = bytes(image.value)
-    red = next(b for b in tasks.context(panel.station).last.blocks if b.color == "red")
+    red = next(b for b in panel.session.last.blocks if b.color == "red")
     panel._events._handle_mouse_msg(None, browser_event(red.pixel, drawn_width=700.0), None)   # what the browser does
     assert panel.holding is not None and panel.holding.color == "red"
     shown_text = panel._out.outputs[-1]
@@ -201,27 +203,29 @@ SCENE3 = {"objects": [
 
 def test_a_panel_opened_after_a_pick_starts_from_a_fresh_look_and_says_what_is_held():
     station = make_station("sim", seed=0, scene=SCENE3)
-    green = next(b for b in tasks.look(station).blocks if b.color == "green")
-    assert tasks.pick(station, green)                       # picked outside the panel: the last look is stale
-    assert not click_widget.view_is_current(station)
-    panel = ClickToGrab(station)
+    session = tasks.start_session(station)
+    green = next(b for b in tasks.look(session).blocks if b.color == "green")
+    assert tasks.pick(session, green)                       # picked outside the panel: the last look is stale
+    assert not click_widget.view_is_current(session)
+    panel = ClickToGrab(session)
     box = panel.widget()
-    assert click_widget.view_is_current(station)      # widget() looked again
-    assert [b.color for b in tasks.context(station).last.blocks] == ["red"]   # the green block is in the gripper
+    assert click_widget.view_is_current(session)      # widget() looked again
+    assert [b.color for b in session.last.blocks] == ["red"]   # the green block is in the gripper
     assert "holding the green large block: the next click drops it where you click" in box.children[0].value
     assert panel.next_action == "drop"
 
 
 def test_a_click_on_a_stale_picture_is_refused_after_a_new_look():
     station = make_station("sim", seed=0, scene=SCENE3)
-    obs = tasks.look(station)
-    panel = ClickToGrab(station)
+    session = tasks.start_session(station)
+    obs = tasks.look(session)
+    panel = ClickToGrab(session)
     red = next(b for b in obs.blocks if b.color == "red")
     station.arm.home()                                      # moved by other code: the picture is out of date
     before = [o.position.copy() for o in station.world.blocks]
     result = panel.click(red.pixel)
     assert not result.ok and "out of date" in result.message and "nothing moved" in result.message
-    assert tasks.context(station).last is not obs and click_widget.view_is_current(station)
+    assert session.last is not obs and click_widget.view_is_current(session)
     for o, p in zip(station.world.blocks, before, strict=True):
         np.testing.assert_array_equal(o.position, p)        # only the arm moved (out of view)
     again = panel.click(red.pixel)                          # a click on the new picture acts
@@ -230,9 +234,10 @@ def test_a_click_on_a_stale_picture_is_refused_after_a_new_look():
 
 def test_clicks_through_the_state_machine():
     station = make_station("sim", seed=0, scene=SCENE3)
-    machine = tasks.TaskMachine(station)
-    obs = tasks.look(station)
-    panel = ClickToGrab(station, machine=machine)
+    session = tasks.start_session(station)
+    machine = tasks.TaskMachine(session)
+    obs = tasks.look(session)
+    panel = ClickToGrab(session, machine=machine)
     red = next(b for b in obs.blocks if b.color == "red")
     grab = panel.click(red.pixel)
     assert grab.ok and machine.history[-2:] == ["click-grab", "idle"]
@@ -243,5 +248,8 @@ def test_clicks_through_the_state_machine():
     machine.reset()
     drop = panel.click(station.camera.truth.project(np.array([[-200.0, 80.0, 0.0]]))[0])
     assert drop.ok and machine.history[-2:] == ["click-drop", "idle"]
-    with pytest.raises(ValueError, match="another station"):
-        ClickToGrab(make_station("sim", seed=1, scene="empty"), machine=machine)
+    other = make_station("sim", seed=1, scene="empty")
+    with pytest.raises(ValueError, match="another session"):
+        ClickToGrab(tasks.Session(other, tasks.GuardedArm(other.arm)), machine=machine)
+    with pytest.raises(ValueError, match="another session"):
+        ClickToGrab(tasks.Session(station, tasks.GuardedArm(station.arm)), machine=machine)   # same station, not it

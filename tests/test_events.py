@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 import umsgpack
 
+from armlab import tasks
 from armlab.blocks import COLORS, ObjectState, block_edge
 from armlab.sim import World
 from armlab.tasks.events import HANDOVER_XY, HandOver, Replay, columns, event_station, run_event, score_event
@@ -211,7 +212,8 @@ def test_handover_supplies_one_block_at_a_time():
 @pytest.mark.exercise("calib.tag_extrinsics", "calib.depth_plane", "detect.classify")
 def test_sort_stack_level_3_runs_to_full_marks_within_the_time_limit(tmp_path):
     station = event_station("sort_stack", 3, seed=0)
-    result = run_event(station, "sort_stack", 3)
+    session = tasks.start_session(station)
+    result = run_event(session, "sort_stack", 3)
     assert result.score.full_marks, result.score.table()
     assert result.score == score_event("sort_stack", 3, station.world.objects)   # scored from the truth
     assert 0 < result.time_s <= 180 and result.within_limit
@@ -243,7 +245,8 @@ def test_line_up_level_3_places_its_own_small_blocks_and_scores_full_marks():
     side face took the top face's edge row), was taken for a distractor blocking the yellow slot, and the line
     stopped. Every block now ends in its line, neat, within 3 mm."""
     station = event_station("line_up", 3, seed=1)
-    result = run_event(station, "line_up", 3)
+    session = tasks.start_session(station)
+    result = run_event(session, "line_up", 3)
     assert result.score.full_marks, result.score.table()
     assert result.within_limit
     assert np.abs(result.placement_errors[:, :2]).max() < 3.0                   # mm
@@ -254,7 +257,8 @@ def test_replay_shows_blocks_being_carried_in_the_viewer():
     from armlab.viz.viewer import ROOT  # meshcat path: /meshcat/<ROOT>/...
 
     station = event_station("sort_stack", 1, seed=1)
-    r = run_event(station, "sort_stack", 1, time_limit_s=25.0).replay
+    session = tasks.start_session(station)
+    r = run_event(session, "sort_stack", 1, time_limit_s=25.0).replay
     j = int(np.argmax(np.nanmax(r.object_poses[:, :, 2], axis=0)))       # the block lifted highest
     with Viewer() as viewer:
         r.to_viewer(viewer, fps=5)
@@ -273,7 +277,8 @@ def test_replay_shows_blocks_being_carried_in_the_viewer():
 
 def test_time_limit_scores_the_board_at_the_limit():
     station = event_station("sort_stack", 1, seed=1)
-    result = run_event(station, "sort_stack", 1, time_limit_s=20.0)
+    session = tasks.start_session(station)
+    result = run_event(session, "sort_stack", 1, time_limit_s=20.0)
     assert result.stopped == "time is up" and not result.within_limit
     assert result.score.points == 30                  # one block placed before 20 s; the rest came too late
 
@@ -288,7 +293,8 @@ def test_sky_tower_grows_as_high_as_the_arm_reaches_over_the_best_spot():
     assert highest_tool_z(TOWER_XY) >= max(reach.values()) - 1.0
     assert highest_tool_z(TOWER_XY, top_down=True) < 300.0          # levels above ~6 blocks come in tilted
     station = event_station("sky", seed=0)
-    result = run_event(station, "sky", record=False)
+    session = tasks.start_session(station)
+    result = run_event(session, "sky", record=False)
     tower = len(result.score.lines)
     e = block_edge("large")
     assert tower >= 12 and result.score.points == sky_points(tower)   # 11 with the default 50 mm clearance

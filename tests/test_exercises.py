@@ -286,8 +286,9 @@ def test_the_blank_release_picks_and_places_through_the_kits_reference_paths(rel
 import numpy as np
 from armlab import kinematics, make_station, tasks
 station = make_station("sim", seed=0, scene="swap")
-red = next(b for b in tasks.look(station).blocks if b.color == "red")
-assert tasks.pick(station, red) and tasks.place(station, (0.0, 300.0, 0.0))
+session = tasks.start_session(station)
+red = next(b for b in tasks.look(session).blocks if b.color == "red")
+assert tasks.pick(session, red) and tasks.place(session, (0.0, 300.0, 0.0))
 truth = next(o for o in station.world.blocks if o.color == "red")
 print("error", float(np.abs(truth.position[:2] - [0.0, 300.0]).max()))
 """

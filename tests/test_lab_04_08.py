@@ -104,6 +104,7 @@ def test_move_path_refuses_bad_input_and_plans_a_straight_descent():
 def test_a_task_machine_runs_every_command_through_its_transition():
     from armlab.station.contract import EmergencyStopped
     from armlab.tasks.machine import MachineBusy, TaskMachine, command_transition
+    from armlab.tasks.session import Session
 
     class Arm:
         def emergency_stop(self):
@@ -119,7 +120,7 @@ def test_a_task_machine_runs_every_command_through_its_transition():
         seen.append(state)
         return command_transition(machine, state, action)
 
-    machine = TaskMachine(station, transition=spy)
+    machine = TaskMachine(Session(station, station.arm), transition=spy)     # a stand-in session: no camera
     assert machine._run("detect", lambda: 5) == 5 and seen == ["detect"]
     with pytest.raises(MachineBusy):
         machine._run("execute", lambda: machine._run("detect", lambda: None))

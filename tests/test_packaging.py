@@ -93,9 +93,9 @@ assert armlab.__file__.startswith(TARGET), armlab.__file__
 station = make_station("sim", seed=0, scene="swap")
 frame = station.camera.capture()                                # a frame
 assert frame.rgb.shape == (720, 1280, 3)
-ctx = tasks.context(station)                                    # calibration from the packaged checkerboard set
-blocks = detection.detect_blocks(frame.rgb, ctx.calibration.depth_correction.apply(frame.depth),
-                                 ctx.calibration.camera, arm_q=station.arm.joint_positions())
+session = tasks.start_session(station)                         # calibration from the packaged checkerboard set
+blocks = detection.detect_blocks(frame.rgb, session.calibration.depth_correction.apply(frame.depth),
+                                 session.calibration.camera, arm_q=station.arm.joint_positions())
 q = kinematics.ik([100.0, 250.0, 19.0], np.pi / 2)[0]
 print(sorted(b.color for b in blocks), kinematics.fk(q)[:3, 3].round(1).tolist())
 """.replace("TARGET", repr(str(target)))

@@ -84,6 +84,11 @@ def station():
 
 
 @pytest.fixture(scope="module")
+def session(station):
+    return tasks.start_session(station)
+
+
+@pytest.fixture(scope="module")
 def frame(station):
     f = station.camera.capture()
     cam = station.camera.truth
@@ -201,30 +206,30 @@ def test_detect_blocks(frame, value, which):
 @given(value=st.one_of(anything, _vectors(3)), which=st.sampled_from(["position", "yaw", "clearance"]))
 @example(value=[10**400, 20, 10], which="position")
 @example(value=["0", "20", "10"], which="position")
-def test_tasks_place(station, value, which):
+def test_tasks_place(session, value, which):
     args = {"position": [0.0, 250.0, 0.0], "yaw": 0.0, "clearance": 20.0, which: value}
-    _holds(f"tasks.place({which})", lambda: tasks.place(station, **args), (which,), ("holds no block",))
+    _holds(f"tasks.place({which})", lambda: tasks.place(session, **args), (which,), ("holds no block",))
 
 
 @SETTINGS
 @given(value=anything)
 @example(value=None)
-def test_tasks_pick(station, value):
-    _holds("tasks.pick(block)", lambda: tasks.pick(station, value), ("block",))
+def test_tasks_pick(session, value):
+    _holds("tasks.pick(block)", lambda: tasks.pick(session, value), ("block",))
 
 
 @SETTINGS
 @given(value=anything)
-def test_tasks_need_a_station(value):
-    _holds("tasks.pick(station)", lambda: tasks.look(value), ("station",))
+def test_tasks_need_a_session(value):
+    _holds("tasks.look(session)", lambda: tasks.look(value), ("session",))
 
 
 @SLOW
 @given(value=st.one_of(anything, _vectors(2)), which=st.sampled_from(["grab", "drop"]))
 @example(value=(np.float64(-10.0), np.float64(5.0)), which="drop")
 @example(value=(np.float64(-10.0), np.float64(5.0)), which="grab")
-def test_clicks(station, value, which):
-    call = (lambda: tasks.click_grab(station, value)) if which == "grab" else (lambda: tasks.click_drop(station, value))
+def test_clicks(session, value, which):
+    call = (lambda: tasks.click_grab(session, value)) if which == "grab" else (lambda: tasks.click_drop(session, value))
     _holds(f"click_{which}(uv)", call, ("uv",), ("holds no block", "drop it first"))
 
 

@@ -389,21 +389,20 @@ def test_closing_while_emergency_stopped_holds_where_it_is(station):
 MACHINE_TRIALS = 200
 
 
-def machine_stop_race(station, plan: planning.Plan, physical, restore, trials: int, window_s: float,
+def machine_stop_race(session: tasks.Session, plan: planning.Plan, physical, restore, trials: int, window_s: float,
                       seed: int = 0) -> tuple[int, float, int]:
     """TaskMachine.estop() from the test thread 0-window_s into a pick (`plan`, from tasks.pick's planner, run by
     TaskMachine.execute on the guarded arm) while another thread runs it; between trials restore() puts the block
     back where it stood and the arm goes to the plan's start. physical() is where the arm physically is (5,) rad.
     Returns (trials in which the arm moved after estop() returned, the largest such motion in rad, trials stopped
     before the pick's end)."""
-    machine = tasks.TaskMachine(station)
-    ctx = tasks.context(station)
+    machine = tasks.TaskMachine(session)
     rng = np.random.default_rng(seed)
     lost, worst, stopped = 0, 0.0, 0
     for _ in range(trials):
-        station.arm.open_gripper()
+        session.station.arm.open_gripper()
         restore()
-        ctx.arm.move_to(plan.start)
+        session.arm.move_to(plan.start)
         errors: list = []
         runner = threading.Thread(target=_capture, args=(errors, machine.execute, plan))
         runner.start()
@@ -428,17 +427,17 @@ def _capture(errors: list, f, *args) -> None:
 
 def test_the_state_machines_estop_wins_during_a_pick():
     station = make_station("sim", seed=1)
-    ctx = tasks.context(station)
-    block = tasks.TaskMachine(station).detect()[0]
+    session = tasks.start_session(station)
+    block = tasks.TaskMachine(session).detect()[0]
     truth = min(station.world.blocks, key=lambda o: np.hypot(*(o.position[:2] - block.position[:2])))
     pose = (truth.position.copy(), truth.yaw)
 
     def restore():
         truth.position, truth.yaw = pose[0].copy(), pose[1]
 
-    plan = planning.plan_pick(ctx.arm.joint_positions(), block.position, float(block.yaw), truth.edge,
-                              obstacles=ctx.known)
-    lost, worst, stopped = machine_stop_race(station, plan, lambda: station.arm.q_true, restore, MACHINE_TRIALS,
+    plan = planning.plan_pick(session.arm.joint_positions(), block.position, float(block.yaw), truth.edge,
+                              obstacles=session.known)
+    lost, worst, stopped = machine_stop_race(session, plan, lambda: station.arm.q_true, restore, MACHINE_TRIALS,
                                              window_s=0.25)
     print(f"estop during a pick ({station.kind}): {lost} of {MACHINE_TRIALS} lost, {stopped} stopped mid-pick")
     assert lost == 0, f"the arm moved up to {worst:.3f} rad after estop() returned in {lost} of {MACHINE_TRIALS}"
@@ -447,20 +446,19 @@ def test_the_state_machines_estop_wins_during_a_pick():
 
 def test_the_state_machines_estop_wins_during_a_pick_on_the_real_arm(request):
     """The same race on the real arm (fake driver, simulated clock: a pick's plan runs in milliseconds, so the stop
-    comes 0-1.2 times the plan's own wall time in). The fake camera shows no board: the task context is made without
-    a calibration (what a lab without one has; the plan is given)."""
+    comes 0-1.2 times the plan's own wall time in). The fake camera shows no board: the session is built without a
+    calibration (what a lab without one has; the plan is given)."""
     fakes = request.getfixturevalue("vendors")
     station = make_station("real")
-    station._tasks_context = tasks.TaskContext(GuardedArm(station.arm))
     with station:
-        ctx = tasks.context(station)
-        plan = planning.plan_pick(ctx.arm.joint_positions(), np.array([0.0, 250.0, 38.0]), 0.3, 38.0)
-        ctx.arm.move_to(plan.start)
+        session = tasks.Session(station, GuardedArm(station.arm))
+        plan = planning.plan_pick(session.arm.joint_positions(), np.array([0.0, 250.0, 38.0]), 0.3, 38.0)
+        session.arm.move_to(plan.start)
         start = time.perf_counter()
-        tasks.TaskMachine(station).execute(plan)
+        tasks.TaskMachine(session).execute(plan)
         window = 1.2 * (time.perf_counter() - start)
         physical = lambda: np.array(fakes.world.q, float)          # noqa: E731
-        lost, worst, stopped = machine_stop_race(station, plan, physical, lambda: None, MACHINE_TRIALS, window)
+        lost, worst, stopped = machine_stop_race(session, plan, physical, lambda: None, MACHINE_TRIALS, window)
     print(f"estop during a pick ({station.kind}): {lost} of {MACHINE_TRIALS} lost, {stopped} stopped mid-pick")
     assert lost == 0, f"the arm moved up to {worst:.3f} rad after estop() returned in {lost} of {MACHINE_TRIALS}"
     assert stopped >= MACHINE_TRIALS // 4, f"only {stopped} of {MACHINE_TRIALS} stops came during the pick"

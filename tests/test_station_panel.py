@@ -35,7 +35,8 @@ def viewer():
 @pytest.fixture
 def panel(viewer):
     station = make_station("sim", seed=0, scene=SCENE)
-    p = station_panel(station, viewer=viewer)
+    session = tasks.start_session(station)
+    p = station_panel(session, viewer=viewer)
     p.widget()
     yield p
     p.close()
@@ -79,7 +80,7 @@ def test_click_grabs_the_block_under_it_then_drops_it_where_clicked(panel):
     assert blue.id in station.world.held and blue.position[2] > 30.0        # in the gripper, off the board
     assert panel.next_click == "drop" and "holding the blue small block: the next click drops it" in \
         panel.status_text()
-    assert panel.frame_is_look and sorted(b.color for b in panel.ctx.last.blocks) == ["green", "red"]
+    assert panel.frame_is_look and sorted(b.color for b in panel.session.last.blocks) == ["green", "red"]
     spot = np.array([-200.0, 80.0, 0.0])
     assert panel.click(board_pixel(station, spot[:2]))
     assert "put the blue block down" in panel.wait()
@@ -140,11 +141,11 @@ def test_every_move_leaves_a_fresh_view_and_the_next_click_looks_first(panel):
     sliders = panel._w["sliders"]
     sliders[0].value = 0.5                                  # what a released slider does
     assert "sliders: moved" in panel.wait()
-    np.testing.assert_allclose(panel.ctx.arm.joint_positions()[0], 0.5, atol=0.01)
+    np.testing.assert_allclose(panel.session.arm.joint_positions()[0], 0.5, atol=0.01)
     assert not panel.frame_is_look and panel._frame.timestamp > before   # a frame captured after the move
     assert "the next click looks again first" in panel._w["caption"].value
-    np.testing.assert_allclose([s.value for s in sliders], np.clip(panel.ctx.arm.joint_positions(), rx200().lower,
-                                                                   rx200().upper), atol=0.005)   # encoder ticks
+    q = np.clip(panel.session.arm.joint_positions(), rx200().lower, rx200().upper)
+    np.testing.assert_allclose([s.value for s in sliders], q, atol=0.005)   # encoder ticks
     looks = panel.machine.history.count("detect")
     assert panel.click(top_pixel(station, "red"))
     assert "holding the red large block" in panel.wait()
@@ -178,7 +179,7 @@ def test_teach_record_and_repeat(panel):
     station.arm.home()
     w["repeat"].click()
     assert "repeated the program" in panel.wait()
-    np.testing.assert_allclose(panel.ctx.arm.joint_positions(), panel.machine.program.q[-1], atol=0.02)
+    np.testing.assert_allclose(panel.session.arm.joint_positions(), panel.machine.program.q[-1], atol=0.02)
 
 
 def test_widget_events_reach_the_handlers(panel):
@@ -248,11 +249,14 @@ def test_depth_view_and_bad_options():
     d[0, 0] = np.nan
     rgb = depth_rgb(d)
     assert rgb.shape == (4, 6, 3) and rgb.dtype == np.uint8 and rgb[0, 0].max() == 0 and rgb[1, 1].max() > 0
-    station = make_station("sim", seed=0, scene="empty")
-    with pytest.raises(ValueError, match="another station"):
-        StationPanel(station, machine=tasks.TaskMachine(make_station("sim", seed=1, scene="empty")))
+    station, other = make_station("sim", seed=0, scene="empty"), make_station("sim", seed=1, scene="empty")
+    session = tasks.Session(station, tasks.GuardedArm(station.arm))        # uncalibrated: refused before it matters
+    with pytest.raises(ValueError, match="another session"):
+        StationPanel(session, machine=tasks.TaskMachine(tasks.Session(other, tasks.GuardedArm(other.arm))))
+    with pytest.raises(TypeError, match=r"start_session\(station\)"):
+        StationPanel(station)
     with pytest.raises(ValueError, match="live_period_s"):
-        StationPanel(station, live_period_s=0.0)
+        StationPanel(session, live_period_s=0.0)
 
 
 def test_teaching_a_real_arm_the_sliders_follow_the_hand(panel, monkeypatch):
@@ -276,10 +280,10 @@ def test_readout_and_click_use_one_pixel_to_world_rule(panel):
     station = panel.station
     for uv in (top_pixel(station, "red"), board_pixel(station, (250.0, 80.0)), board_pixel(station, (-300.0, 350.0))):
         shown = panel.world_at(uv)
-        np.testing.assert_array_equal(shown, pointed_point(panel.ctx.calibration, panel._depth, uv))
+        np.testing.assert_array_equal(shown, pointed_point(panel.session.calibration, panel._depth, uv))
         frame = station.camera.capture()                                 # what a click on that frame acts on
-        np.testing.assert_array_equal(tasks.click_world(panel.station, uv, frame), pointed_point(
-            panel.ctx.calibration, panel.ctx.calibration.depth_correction.apply(frame.depth), uv))
+        np.testing.assert_array_equal(tasks.click_world(panel.session, uv, frame), pointed_point(
+            panel.session.calibration, panel.session.calibration.depth_correction.apply(frame.depth), uv))
         _, p = readout(panel.mouse(uv))
         np.testing.assert_allclose(p, shown, atol=0.051)                 # the readout prints 0.1 mm
 
@@ -303,7 +307,7 @@ def test_status_and_slider_readouts_follow_a_real_time_move(panel):
     assert not any("state idle" in t for t in moving)
     distinct = {tuple(np.round(r, 3)) for r in readouts}
     assert len(distinct) >= 3, f"the slider readouts did not follow the motion ({len(distinct)} distinct values)"
-    np.testing.assert_allclose([s.value for s in panel._w["sliders"]], panel.ctx.arm.joint_positions(), atol=0.005)
+    np.testing.assert_allclose([s.value for s in panel._w["sliders"]], panel.session.arm.joint_positions(), atol=0.005)
 
 
 def test_sliders_go_through_the_machine(panel):

@@ -19,10 +19,10 @@ TARGETS = np.array([[-250.0, 50.0, 0.0], [-80.0, 130.0, 0.0], [100.0, 140.0, 0.0
 
 
 @pytest.fixture(scope="module")
-def station():
-    st = make_station("sim", seed=5, scene=SCENE)
-    tasks.look(st)
-    return st
+def session():
+    session = tasks.start_session(make_station("sim", seed=5, scene=SCENE))
+    tasks.look(session)
+    return session
 
 
 def _measured_sag(seed=3, noise_mm=0.0):
@@ -50,13 +50,13 @@ def test_sag_fit_predicts_the_simulators_bend_at_new_poses():
     assert comp.max() < 1.5 and comp[:, 2].mean() < 0.8  # and the fitted model takes it out
 
 
-def test_setting_up_a_task_context_touches_no_block_and_the_twin_is_the_same_arm():
+def test_starting_a_session_touches_no_block_and_the_twin_is_the_same_arm():
     from armlab.tasks.events import event_station
 
     st = event_station("line_up", 3, seed=1)        # its sag calibration poses used to shove 3 blocks and a stack
     before = [(o.position.copy(), o.yaw) for o in st.world.objects]
     t0 = st.world.time_s
-    tasks.context(st)
+    tasks.start_session(st)
     assert [(o.position.tolist(), o.yaw) for o in st.world.objects] == [(p.tolist(), y) for p, y in before]
     twin = st.arm.empty_board_twin()
     assert twin.world is not st.world and not twin.world.objects and twin.seed == st.arm.seed
@@ -92,15 +92,15 @@ def test_fit_sag_refuses_bad_input():
 
 
 @pytest.mark.exercise("calib.tag_extrinsics", "calib.depth_plane", "detect.classify")
-def test_pick_and_place_aligned_and_yawed_blocks_of_both_sizes(station):
-    ctx = tasks.context(station)
-    seen = sorted(ctx.last.blocks, key=lambda b: b.color)
+def test_pick_and_place_aligned_and_yawed_blocks_of_both_sizes(session):
+    station = session.station
+    seen = sorted(session.last.blocks, key=lambda b: b.color)
     assert [b.color for b in seen] == ["blue", "green", "red", "yellow"]
     for block, target in zip(seen, TARGETS, strict=True):
         truth = next(o for o in station.world.blocks if o.color == block.color)
-        assert tasks.pick(station, block), f"{block.color} {block.size} not grasped: {station.arm.last_grasp}"
+        assert tasks.pick(session, block), f"{block.color} {block.size} not grasped: {station.arm.last_grasp}"
         assert station.arm.holding[0] is truth
-        assert tasks.place(station, target)
+        assert tasks.place(session, target)
         bottom = truth.position - [0.0, 0.0, truth.edge / 2]
         err = np.abs(bottom - target)
         assert err[:2].max() < 3.0 and err[2] < 0.5, f"{block.color} placed {err} mm off"
@@ -109,8 +109,8 @@ def test_pick_and_place_aligned_and_yawed_blocks_of_both_sizes(station):
 
 
 @pytest.mark.exercise("calib.tag_extrinsics", "calib.depth_plane", "detect.classify")
-def test_every_command_sent_respects_the_velocity_limits(station):
-    sent = tasks.context(station).arm.sent
+def test_every_command_sent_respects_the_velocity_limits(session):
+    sent = session.arm.sent
     assert len(sent) > 50
     for q_from, q_cmd, T, _ in sent:
         if T is not None:
@@ -139,8 +139,9 @@ def test_a_stop_requested_mid_plan_sends_no_further_command(monkeypatch, after):
     # the stop flag alone (as a TaskMachine's, set from another thread) must halt a running pick: GuardedArm asks
     # should_stop() before every command, emergency-stops the arm and raises; nothing after it reaches the arm
     st = make_station("sim", seed=2, scene=SCENE)
-    obs = tasks.look(st)
-    guarded = tasks.context(st).arm
+    session = tasks.start_session(st)
+    obs = tasks.look(session)
+    guarded = session.arm
     reached = []
     real_move = st.arm.move_to
 
@@ -153,11 +154,25 @@ def test_a_stop_requested_mid_plan_sends_no_further_command(monkeypatch, after):
     guarded.should_stop = lambda: len(reached) >= after
     sent_before = len(guarded.sent)
     with pytest.raises(EmergencyStopped, match="emergency stop was requested"):
-        tasks.pick(st, obs.blocks[0])
+        tasks.pick(session, obs.blocks[0])
     assert len(reached) == after and len(guarded.sent) - sent_before == after
     assert st.arm.emergency_stopped
     np.testing.assert_allclose(st.arm.joint_positions(), reached[-1], atol=0.01)    # stopped at that command
     assert not st.arm.holding
+
+
+def test_guarded_arm_recording_lists_the_commands_the_arm_accepted():
+    st = make_station("sim", seed=0, scene="empty", realism="ideal")
+    arm = tasks.GuardedArm(st.arm)
+    arm.open_gripper()                                                  # before the block: not listed
+    with arm.recording() as log:
+        arm.move_to(st.arm.robot.home, 2.0)
+        assert arm.close_gripper() is False
+        with pytest.raises(MotionRefused):
+            arm.move_to([9.0, 0.0, 0.0, 0.0, 0.0])                     # refused: not listed
+    arm.open_gripper()                                                  # after the block: not listed
+    assert [c[0] for c in log] == ["move", "close"] and log[0][2] == 2.0 and log[1] == ("close", False)
+    np.testing.assert_array_equal(log[0][1], st.arm.robot.home)
 
 
 def test_a_stop_request_refuses_the_gripper_too():
@@ -174,15 +189,16 @@ def test_a_stop_request_refuses_the_gripper_too():
 
 def test_pick_refuses_while_holding_and_place_refuses_when_empty():
     st = make_station("sim", seed=2, scene=SCENE)
-    obs = tasks.look(st)
+    session = tasks.start_session(st)
+    obs = tasks.look(session)
     with pytest.raises(ValueError, match="holds no block"):
-        tasks.place(st, [0.0, 250.0, 0.0])
-    assert tasks.pick(st, obs.blocks[0])
+        tasks.place(session, [0.0, 250.0, 0.0])
+    assert tasks.pick(session, obs.blocks[0])
     q = st.arm.joint_positions()
     with pytest.raises(ValueError, match="already holds"):
-        tasks.pick(st, obs.blocks[1])
+        tasks.pick(session, obs.blocks[1])
     with pytest.raises(MotionRefused, match="out of the arm's reach"):        # the placement rule
-        tasks.place(st, [450.0, 400.0, 0.0])
+        tasks.place(session, [450.0, 400.0, 0.0])
     assert np.allclose(st.arm.joint_positions(), q, atol=0.005)   # nothing moved
 
 
@@ -239,12 +255,12 @@ def test_look_can_return_every_object_and_the_event_runner_sees_through_it():
                          {"color": "blue", "size": "large", "shape": DISTRACTOR_SHAPES[0],
                           "position_mm": [120.0, 220.0]}]}
     st = make_station("sim", seed=4, scene=scene)
-    ctx = tasks.context(st)
-    cubes = tasks.perception.observe(st, ctx.calibration, ctx.arm).blocks
-    everything = tasks.perception.observe(st, ctx.calibration, ctx.arm, all_objects=True).blocks
+    session = tasks.start_session(st)
+    cubes = tasks.perception.observe(st, session.calibration, session.arm).blocks
+    everything = tasks.perception.observe(st, session.calibration, session.arm, all_objects=True).blocks
     assert [b.color for b in cubes] == ["red"] and all(b.is_block for b in cubes)
     assert sorted((b.color, b.is_block) for b in everything) == [("blue", False), ("red", True)]
     far = next(b for b in everything if not b.is_block)
     assert abs(far.position[0] - 120.0) < 10 and abs(far.position[1] - 220.0) < 10
-    seen = see(st, ctx).objects                                     # the runner's look is the same look
+    seen = see(session).objects                                     # the runner's look is the same look
     assert sorted((b.color, b.is_block) for b in seen) == [("blue", False), ("red", True)]

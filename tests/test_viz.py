@@ -666,8 +666,7 @@ def test_joint_sliders_with_a_machine_go_through_it(viewer):
     from armlab import make_station, tasks
 
     station = make_station("sim", seed=0, scene="empty")
-    machine = tasks.TaskMachine(station)
-    tasks.context(station)            # the station's context (calibration, sag) is made on first use: not mid-move
+    machine = tasks.TaskMachine(tasks.start_session(station))     # calibrates and fits the sag now, not mid-move
     box = viewer.joint_sliders(machine=machine)
     start = len(machine.history)
     box.sliders[0].value = 0.3

@@ -23,13 +23,14 @@ def test_places_behind_the_waist_axis_are_done_or_refused_before_moving(seed):
     outcomes = []
     for x, y in SPOTS:
         st = make_station("sim", seed=seed)
-        obs = tasks.look(st)
+        session = tasks.start_session(st)
+        obs = tasks.look(session)
         block = next(b for b in obs.blocks if b.size == "large")
-        assert tasks.pick(st, block)
-        guarded = tasks.context(st).arm
+        assert tasks.pick(session, block)
+        guarded = session.arm
         sent, q, held = len(guarded.sent), st.arm.joint_positions(), list(st.arm.holding)
         try:
-            tasks.place(st, (x, y, 0.0), yaw=0.0)
+            tasks.place(session, (x, y, 0.0), yaw=0.0)
         except (MotionRefused, Unreachable) as e:
             # refused: nothing was sent, the arm stands where it was, the block is still held
             assert len(guarded.sent) == sent, f"({x}, {y}): refused after {len(guarded.sent) - sent} commands: {e}"
@@ -49,9 +50,10 @@ def test_the_pre_check_sees_exactly_the_commands_the_guarded_arm_sends():
     from armlab.tasks import precheck
 
     st = make_station("sim", seed=0)
-    obs = tasks.look(st)
+    session = tasks.start_session(st)
+    obs = tasks.look(session)
     block = next(b for b in obs.blocks if b.size == "large")
-    guarded = tasks.context(st).arm
+    guarded = session.arm
     from armlab import planning
 
     plan = planning.plan_pick(guarded.joint_positions(), block.position, float(block.yaw), 38.0, obstacles=obs.blocks)
@@ -69,20 +71,20 @@ def test_a_plan_that_would_carry_the_block_into_a_known_one_is_refused_naming_it
     from armlab.tasks import precheck
 
     st = make_station("sim", seed=0)
-    obs = tasks.look(st)
+    session = tasks.start_session(st)
+    obs = tasks.look(session)
     block = next(b for b in obs.blocks if b.size == "large")
-    assert tasks.pick(st, block)
-    guarded = tasks.context(st).arm
+    assert tasks.pick(session, block)
+    guarded = session.arm
     sent = len(guarded.sent)
     grid = np.array([(x, y) for x in range(-250, 300, 50) for y in range(150, 400, 50)], float)
     free = grid[np.argmax([min(np.hypot(*(g - b.position[:2])) for b in obs.blocks) for g in grid])]
     stand_in = precheck.KnownBox(float(free[0]), float(free[1]), 25.0, 12.5, 0.0)   # a small block seen there
-    ctx = tasks.context(st)
-    ctx.known = [*ctx.known, planning_obstacle(stand_in)]
+    session.known = [*session.known, planning_obstacle(stand_in)]
     where = rf"\({free[0]:.1f}, {free[1]:.1f}"
     with pytest.raises(MotionRefused, match=rf"placing at {where}, 15\.0\) mm refused before moving: step \d "
                                             rf"\(descend\).*would go .* mm into the known block at {where}\)"):
-        tasks.place(st, (free[0], free[1], 15.0))                # 10 mm into its top: impossible
+        tasks.place(session, (free[0], free[1], 15.0))           # 10 mm into its top: impossible
     assert len(guarded.sent) == sent and st.arm.holding
 
 
@@ -93,21 +95,21 @@ def planning_obstacle(box):
 
 
 def test_the_pre_check_models_the_held_block_as_the_pads_left_it():
-    """The held block's pose in the tool frame (TaskContext.held_in_tool, precheck.held_pose_at_grasp), which the
+    """The held block's pose in the tool frame (Session.held_in_tool, precheck.held_pose_at_grasp), which the
     pre-check and the place's aim use, is where the simulator's closing pads put it, not where the detection said:
     from detections turned 8 degrees and 3 mm off (a student's), the model is squared to the pads (yaw within 0.5
     degree of the true block's) and centred between them (within 1 mm across the pads, 1.5 mm along the approach).
     Along the pads the block stays where it stood, so the model keeps the detection's error that way."""
     st = make_station("sim", seed=0)
-    ctx = tasks.context(st)
-    for seen in tasks.look(st).blocks[:2]:
+    session = tasks.start_session(st)
+    for seen in tasks.look(session).blocks[:2]:
         block = dataclasses.replace(seen, yaw=seen.yaw + 0.14, position=seen.position + [3.0, -3.0, 0.0])
-        assert tasks.pick(st, block)
+        assert tasks.pick(session, block)
         (truth,) = st.arm.holding
         T_tool = kinematics.fk(st.arm.q_true)
         true_centre = T_tool[:3, :3].T @ (truth.position - T_tool[:3, 3])           # tool frame: x approach, y pads
-        R_world = T_tool[:3, :3] @ ctx.held_in_tool[:3, :3]
+        R_world = T_tool[:3, :3] @ session.held_in_tool[:3, :3]
         yaw_error = float(wrap_quarter(np.arctan2(R_world[1, 0], R_world[0, 0]) - truth.yaw))
-        error = ctx.held_in_tool[:3, 3] - true_centre
+        error = session.held_in_tool[:3, 3] - true_centre
         assert abs(np.degrees(yaw_error)) < 0.5 and abs(error[1]) < 1.0 and abs(error[0]) < 1.5, (block.color, error)
-        assert tasks.put_back(st)
+        assert tasks.put_back(session)

@@ -1,7 +1,8 @@
 """Click-to-grab and click-to-drop: a pixel (u, v) of the current camera frame -> world point -> plan -> execute.
 
-The current frame is the last look at the board (tasks.look: arm out of view; tasks.context(station).last.frame is
-what a GUI shows; both functions look again after acting). The pixel goes to the world through the calibrated camera
+Every function takes the task session (tasks.start_session(station)) first. The current frame is the last look at
+the board (tasks.look: arm out of view; session.last.frame is what a GUI shows; both functions look again after
+acting). The pixel goes to the world through the calibrated camera
 and the corrected depth (perception.pointed_point: the median depth of the surface around the pixel, the rule
 the control station's readout shows too; Camera.pixel_to_world).
 click_grab picks the detected block under the click (the nearest detected top-face centre, within one block edge);
@@ -19,10 +20,10 @@ from armlab import motion_safety
 from armlab.arguments import finite_array, finite_float, plain
 from armlab.blocks import block_edge
 from armlab.kinematics import Unreachable
-from armlab.station.contract import Station
 
 from . import perception
-from .handling import context, look, pick, place
+from .handling import look, pick, place
+from .session import Session, as_session
 
 __all__ = ["ClickRefused", "click_grab", "click_drop", "click_world", "current_view"]
 
@@ -31,16 +32,16 @@ class ClickRefused(ValueError):
     """A click that cannot be acted on (off the board, on the robot, nothing there, out of reach); nothing moved."""
 
 
-def click_world(station: Station, uv, frame=None) -> np.ndarray:
+def click_world(session: Session, uv, frame=None) -> np.ndarray:
     """World point (3,) mm of the surface at pixel uv of `frame` (default: a new capture), depth corrected; raises
     ClickRefused where the placement rule refuses the point itself (motion_safety.placement_problem: off the board,
     on the robot's base plate)."""
+    session = as_session(session, "tasks.click_world")
     uv = _pixel(uv)
-    ctx = context(station)
-    frame = frame or station.camera.capture()
-    depth = ctx.calibration.depth_correction.apply(frame.depth)
+    frame = frame or session.station.camera.capture()
+    depth = session.calibration.depth_correction.apply(frame.depth)
     try:
-        p = perception.pointed_point(ctx.calibration, depth, uv)
+        p = perception.pointed_point(session.calibration, depth, uv)
     except ValueError as e:
         raise ClickRefused(f"click at {plain(tuple(np.round(uv, 1)))}: {e}") from None
     problem = motion_safety.placement_problem(p, reach=False)      # reach: the pick's or the drop's to judge
@@ -54,21 +55,21 @@ def _pixel(uv) -> np.ndarray:
     return finite_array(uv, "uv", (2,), "the clicked pixel (u, v) of the current frame")
 
 
-def current_view(station: Station):
-    """The frame the user sees: the last look (taken now, arm out of view, when there is none yet)."""
-    ctx = context(station)
-    return ctx.last if ctx.last is not None else look(station)
+def current_view(session: Session) -> perception.Observation:
+    """The frame the user sees: the session's last look (taken now, arm out of view, when there is none yet)."""
+    session = as_session(session, "tasks.current_view")
+    return session.last if session.last is not None else look(session)
 
 
-def click_grab(station: Station, uv) -> bool:
+def click_grab(session: Session, uv) -> bool:
     """Pick the block under pixel uv = (u, v) of the current frame; True when it is held (see tasks.pick). The view
     is refreshed (tasks.look) after the pick."""
+    session = as_session(session, "tasks.click_grab")
     uv = _pixel(uv)
-    ctx = context(station)
-    if ctx.held is not None:
-        raise ClickRefused(f"the gripper already holds the {ctx.held.color} block: drop it first")
-    obs = current_view(station)
-    p = click_world(station, uv, obs.frame)
+    if session.held is not None:
+        raise ClickRefused(f"the gripper already holds the {session.held.color} block: drop it first")
+    obs = current_view(session)
+    p = click_world(session, uv, obs.frame)
     if not obs.blocks:
         raise ClickRefused(f"no block on the board to grab (click at ({p[0]:.0f}, {p[1]:.0f}) mm)")
     d = np.array([np.hypot(*(b.position[:2] - p[:2])) for b in obs.blocks])
@@ -77,31 +78,31 @@ def click_grab(station: Station, uv) -> bool:
         raise ClickRefused(f"no block at the click ({p[0]:.0f}, {p[1]:.0f}, {p[2]:.0f}) mm: the nearest, the "
                            f"{best.color} one, is {d.min():.0f} mm away")
     try:
-        held = pick(station, best)
+        held = pick(session, best)
     except Unreachable as e:
         raise ClickRefused(f"the {best.color} block at ({best.position[0]:.0f}, {best.position[1]:.0f}) mm cannot "
                            f"be picked: {e}") from None
-    look(station)
+    look(session)
     return held
 
 
-def click_drop(station: Station, uv, yaw: float = 0.0) -> bool:
+def click_drop(session: Session, uv, yaw: float = 0.0) -> bool:
     """Put the held block on the surface under pixel uv = (u, v) of the current frame (see tasks.place); a click
     where the held block itself stood puts it on what it stood on. The view is refreshed after the drop."""
+    session = as_session(session, "tasks.click_drop")
     uv, yaw = _pixel(uv), finite_float(yaw, "yaw", what="rad")
-    ctx = context(station)
-    if ctx.held is None:
+    if session.held is None:
         raise ClickRefused("the gripper holds no block: grab one first")
-    p = click_world(station, uv, current_view(station).frame)
-    held = ctx.held
+    p = click_world(session, uv, current_view(session).frame)
+    held = session.held
     if np.hypot(*(p[:2] - held.position[:2])) < held.edge_mm / 2 and p[2] > held.position[2] - held.edge_mm / 2:
         p[2] = held.position[2] - block_edge(held.size)      # the frame still shows the block the arm now holds
     problem = motion_safety.placement_problem(p, block_edge(held.size), yaw)      # the rule tasks.place applies
     if problem:
         raise ClickRefused(f"cannot drop at ({p[0]:.0f}, {p[1]:.0f}, {p[2]:.0f}) mm: {problem}")
     try:
-        done = place(station, p, yaw)
+        done = place(session, p, yaw)
     except Unreachable as e:
         raise ClickRefused(f"cannot drop at ({p[0]:.0f}, {p[1]:.0f}, {p[2]:.0f}) mm: {e}") from None
-    look(station)
+    look(session)
     return done

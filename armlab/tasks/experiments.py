@@ -15,10 +15,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from armlab import kinematics, planning
-from armlab.station.contract import Station
 
 from .click import click_world
-from .handling import context
+from .session import Session, as_session
 
 __all__ = ["LAB_LOCATIONS_MM", "LAB_TABLE_II_ACTUAL_MM", "LAB_TABLE_III_ERROR_MM", "LAB_Z_MM", "ReachRow",
            "reach_experiment", "format_table"]
@@ -44,18 +43,20 @@ class ReachRow:
         return np.abs(self.actual - self.desired)
 
 
-def reach_experiment(station: Station, arm, measure, locations=LAB_LOCATIONS_MM, z: float = LAB_Z_MM, pixels=None,
+def reach_experiment(session: Session, arm, measure, locations=LAB_LOCATIONS_MM, z: float = LAB_Z_MM, pixels=None,
                      hover_mm: float = 60.0) -> list[ReachRow]:
-    """Click, convert, reach and measure at each location (see the module notes). arm: e.g. the raw station.arm
-    (no compensation) or tasks.context(station).arm (sag-compensated); measure() -> tool point (3,) mm."""
-    ctx = context(station)
-    frame = ctx.last.frame if ctx.last is not None else station.camera.capture()
+    """Click, convert, reach and measure at each location (see the module notes), in a task session
+    (tasks.start_session(station): its calibration converts the clicks). arm: e.g. the raw session.station.arm (no
+    compensation) or session.arm (sag-compensated); measure() -> tool point (3,) mm."""
+    session = as_session(session, "reach_experiment")
+    station = session.station
+    frame = session.last.frame if session.last is not None else station.camera.capture()
     locs = np.asarray(locations, dtype=float)
     if pixels is None:
         pixels = station.camera.truth.project(np.column_stack([locs, np.zeros(len(locs))]))
     rows = []
     for xy, uv in zip(locs, np.asarray(pixels, float)):
-        clicked = click_world(station, uv, frame)
+        clicked = click_world(session, uv, frame)
         target = np.array([clicked[0], clicked[1], z])
         roll = 0.0
         above = kinematics.ik(target + [0, 0, hover_mm], np.pi / 2, roll, current=arm.joint_positions())[0]

@@ -16,13 +16,16 @@ Wraps any armlab Arm (simulated or real, armlab.station.Arm) and offers the same
   (the Interbotix driver checks from its last command, the simulator from its motors, which end exactly there; the
   reading differs from both by the encoder's quantisation and noise), with a relative margin of _SPEED_EPS so the
   stretched time passes the driver's rule exactly;
-- every command sent is recorded in `sent` (q_from, q_cmd, moving_time, accel_time) for checks and plots.
+- every command sent is recorded in `sent` (q_from, q_cmd, moving_time, accel_time) for checks and plots; within a
+  `with arm.recording() as log:` block every command the arm accepted is also listed as the caller asked for it
+  (what a GUI reports of one click).
 Units: rad, s.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 
 import numpy as np
 
@@ -48,6 +51,22 @@ class GuardedArm:
         self.should_stop = should_stop or (lambda: False)
         self.sent: list[tuple[np.ndarray, np.ndarray, float, float]] = []
         self._last_cmd: np.ndarray | None = None     # the last command sent, while the arm may still sit there
+        self._logs: list[list] = []                  # the open recording() blocks' lists
+
+    @contextmanager
+    def recording(self) -> Iterator[list]:
+        """Within the block, every command the arm accepted is appended to the list yielded, in order: ("move", q (5,)
+        rad as asked, moving_time s as asked or None), ("open",), ("close", held)."""
+        log: list = []
+        self._logs.append(log)
+        try:
+            yield log
+        finally:
+            self._logs.remove(log)
+
+    def _note(self, entry: tuple) -> None:
+        for log in self._logs:
+            log.append(entry)
 
     def _check(self, what: str) -> None:
         if self.should_stop():
@@ -78,11 +97,13 @@ class GuardedArm:
         starts = [q_read]
         if self._last_cmd is not None and np.abs(q_read - self._last_cmd).max() <= _AT_COMMAND_RAD:
             starts.append(self._last_cmd)
+        asked = moving_time
         q_cmd, moving_time, accel_time = self.command_for(q, starts, moving_time, accel_time)
         self.sent.append((q_read, q_cmd, moving_time, accel_time))
         self._last_cmd = None
         self.arm.move_to(q_cmd, moving_time=moving_time, accel_time=accel_time, blocking=blocking)
         self._last_cmd = q_cmd
+        self._note(("move", q.copy(), asked))
 
     def command_for(self, q, starts, moving_time: float | None = None,
                     accel_time: float | None = None) -> tuple[np.ndarray, float | None, float | None]:
@@ -120,10 +141,13 @@ class GuardedArm:
     def open_gripper(self) -> None:
         self._check("opening the gripper")
         self.arm.open_gripper()
+        self._note(("open",))
 
     def close_gripper(self) -> bool:
         self._check("closing the gripper")
-        return self.arm.close_gripper()
+        held = self.arm.close_gripper()
+        self._note(("close", bool(held)))
+        return held
 
     def is_moving(self) -> bool:
         return self.arm.is_moving()

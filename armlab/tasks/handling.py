@@ -1,15 +1,9 @@
 """Handling blocks on a station: look (tasks.look), pick and place a detected block -> plan (armlab.planning's
 pick/place plans) -> execute on the station's arm. (armlab.planning.pickplace plans; this module runs them.)
 
-Works the same on the simulated and the real station: it uses only the Arm protocol (through a GuardedArm, which
-compensates sag) and station.camera. Each station gets a TaskContext on first use (kept on the station object):
-- calibration: the camera calibration (perception.calibrate_camera, done once, or set by the caller);
-- sag: the sag model (tasks.sag). When the station offers a sag reference (Capabilities.sag_reference: the
-  simulator's empty-board twin with its ground truth, a stand-in for a student's touch-off measurements) it is
-  fitted on first use from 24 poses; otherwise (the real arm) it stays zero until the caller sets one
-  (calibrate_sag with a measuring function, or a saved model);
-- known: what stands on the board (detections from the last look, updated by picks and places), the obstacles plans
-  avoid; held: the block in the gripper.
+Works the same on the simulated and the real station: it uses only the Arm protocol (through the session's
+GuardedArm, which compensates sag) and station.camera. Every function takes a Session (tasks.start_session(station):
+the camera calibration, the sag model, the known blocks, the held block; see tasks.session) as its first argument.
 place() releases the block RELEASE_GAP_MM above the requested bottom height, so a residual arm error never pushes
 it into what it is put on (the block drops that little and settles); the release is aimed with the held block's pose
 in the tool frame as planned at its grasp (planning.plan_place's held_in_tool): its centre over the spot and its
@@ -21,91 +15,32 @@ the known blocks): an impossible one raises MotionRefused with nothing sent. Uni
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from dataclasses import dataclass, field
-
 import numpy as np
 
 from armlab import motion_safety, planning
-from armlab.arguments import finite_array, finite_float, instance_of, plain
+from armlab.arguments import finite_array, finite_float, plain
 from armlab.blocks import SIZES, block_edge
-from armlab.calibration import Calibration
 from armlab.gripper_geometry import GRIPPER
-from armlab.planning import Obstacle
-from armlab.station import Station
-from armlab.station.contract import MotionRefused
+from armlab.station.contract import MotionRefused, Station
 
 from . import perception, precheck
-from .guard import GuardedArm
-from .sag import SagModel, calibration_poses, fit_sag, hover_pose
+from .session import Session, as_session
 
-__all__ = ["TaskContext", "context", "calibrate_sag", "pick", "place", "put_back", "look", "RELEASE_GAP_MM"]
+__all__ = ["pick", "place", "put_back", "look", "check_block", "RELEASE_GAP_MM"]
 
 RELEASE_GAP_MM = 2.0
 
 
-@dataclass
-class TaskContext:
-    """Per-station state of the task layer (see the module notes)."""
-
-    arm: GuardedArm
-    calibration: Calibration | None = None
-    held: object | None = None              # the picked detection Block while it is in the gripper
-    known: list = field(default_factory=list)
-    last: perception.Observation | None = None
-    held_in_tool: np.ndarray | None = None  # T_tool_block (4, 4) mm of the held block as planned at its grasp
-    picked_down: object | None = None       # the held block's pick descent (its straight line down), for put_back
-
-    @property
-    def held_edge(self) -> float:
-        if self.held is None:
-            raise ValueError("the gripper holds no block: pick one first")
-        return block_edge(self.held.size)
-
-
-def calibrate_sag(arm, measure: Callable[[], np.ndarray], poses=None) -> SagModel:
-    """Fit a SagModel: move the raw arm (no compensation) to each pose (default sag.calibration_poses), passing
-    above it first, and call measure() -> tool point (3,) world mm there. Returns the fitted model."""
-    poses = calibration_poses(arm.robot) if poses is None else np.asarray(poses, dtype=float)
-    q_cmd, measured = [], []
-    for q in poses:
-        above = hover_pose(q, arm.robot)
-        if above is not None:
-            arm.move_to(above)
-        arm.move_to(q)
-        q_cmd.append(np.asarray(arm.joint_positions(), dtype=float))
-        measured.append(np.asarray(measure(), dtype=float))
-        if above is not None:
-            arm.move_to(above)
-    return fit_sag(np.array(q_cmd), np.array(measured), arm.robot)
-
-
-def context(station, intrinsics="checkerboard") -> TaskContext:
-    """The station's TaskContext, created (camera calibrated, sag fitted) on first use.
-
-    The sag is fitted when the station offers a reference to fit it on (Capabilities.sag_reference: in simulation
-    the same arm over an empty board, measured with the ground truth); otherwise it stays zero until set."""
-    ctx = getattr(station, "_tasks_context", None)
-    if ctx is None:
-        instance_of(station, "station", Station, "what make_station('sim') or make_station('real') returns")
-        arm = GuardedArm(station.arm)
-        if station.capabilities.sag_reference is not None:
-            reference = station.capabilities.sag_reference()
-            arm.sag = calibrate_sag(reference.arm, reference.measure)
-        ctx = TaskContext(arm)
-        ctx.calibration = perception.calibrate_camera(station, intrinsics, arm=arm)
-        station._tasks_context = ctx
-    return ctx
-
-
-def look(station) -> perception.Observation:
-    """Move the arm out of view (carrying a held block), capture and detect; the blocks seen become the known
-    obstacles."""
-    ctx = context(station)
-    held_below = 0.0 if ctx.held is None else ctx.held_edge - planning.default_grasp_depth(ctx.held_edge)
-    obs = perception.observe(station, ctx.calibration, ctx.arm, obstacles=ctx.known, held_below=held_below)
-    ctx.last = obs
-    ctx.known = list(obs.blocks)
+def look(session: Session) -> perception.Observation:
+    """Move the arm out of view (carrying a held block), capture and detect; the blocks seen become the session's
+    known obstacles and the observation its last look."""
+    session = as_session(session, "tasks.look")
+    edge = None if session.held is None else session.held_edge
+    held_below = 0.0 if edge is None else edge - planning.default_grasp_depth(edge)
+    obs = perception.observe(session.station, session.calibration, session.arm, obstacles=session.known,
+                             held_below=held_below)
+    session.last = obs
+    session.known = list(obs.blocks)
     return obs
 
 
@@ -121,13 +56,7 @@ def check_block(block, name: str = "block") -> None:
         raise ValueError(f"{name}.size must be one of {SIZES}, got {plain(block.size)}")
 
 
-def _same(a, b) -> bool:
-    pa, pb = np.asarray(a.position if not isinstance(a, Obstacle) else (a.x, a.y, a.top), float), \
-        np.asarray(b.position if not isinstance(b, Obstacle) else (b.x, b.y, b.top), float)
-    return bool(np.abs(pa - pb).max() < 1.0)
-
-
-def pick(station, block, obstacles=None) -> bool:
+def pick(session: Session, block, obstacles=None) -> bool:
     """Pick a detected block (detection.Block: .position top-face centre world mm, .yaw rad, .size).
 
     Plans with planning.plan_pick around `obstacles` (default: the known blocks) and runs the plan on the guarded arm.
@@ -135,63 +64,59 @@ def pick(station, block, obstacles=None) -> bool:
     block, kinematics.Unreachable (a ValueError) when the block cannot be reached and MotionRefused when the whole
     plan fails the pre-check (nothing moves then), and lets the arm's EmergencyStopped through.
     """
+    session = as_session(session, "tasks.pick")
     check_block(block)
-    ctx = context(station)
-    if ctx.held is not None:
-        raise ValueError(f"the gripper already holds the {ctx.held.color} block: place it first")
+    if session.held is not None:
+        raise ValueError(f"the gripper already holds the {session.held.color} block: place it first")
     edge = block_edge(block.size)
-    obs = ctx.known if obstacles is None else list(obstacles)
-    plan = planning.plan_pick(ctx.arm.joint_positions(), block.position, float(block.yaw), edge, obstacles=obs)
+    obs = session.known if obstacles is None else list(obstacles)
+    plan = planning.plan_pick(session.arm.joint_positions(), block.position, float(block.yaw), edge, obstacles=obs)
     q_grasp = next(s.trajectory for s in plan.steps if s.label == "descend").end
     grasped = motion_safety.HeldBlock(edge, precheck.held_pose_at_grasp(q_grasp, block.position, float(block.yaw),
                                                                         edge), f"picked {block.color} block")
-    precheck.check_whole_plan(plan, ctx.arm, _opening(station), grasped=grasped,
+    precheck.check_whole_plan(plan, session.arm, _opening(session.station), grasped=grasped,
                               known=precheck.known_boxes(obs, np.asarray(block.position, float)[:2], edge / 2),
                               what=f"picking the {block.color} block")
-    held = bool(planning.execute(plan, ctx.arm).holding)
-    ctx.known = [k for k in ctx.known if not _same(k, block)]
-    if held:
-        ctx.held, ctx.held_in_tool = block, grasped.T_tool_block
-        ctx.picked_down = next(s.trajectory for s in plan.steps if s.label == "descend")
+    held = bool(planning.execute(plan, session.arm).holding)
+    session.picked(block, held, grasped.T_tool_block, next(s.trajectory for s in plan.steps if s.label == "descend"))
     return held
 
 
-def put_back(station) -> bool:
+def put_back(session: Session) -> bool:
     """Put the held block back where it was picked from (after a place that could not be done): a joint move to the
     top of the pick's own straight descent (where the pick's lift ended), down that line (the path the block came up
     in the gripper, checked whole with it then) to RELEASE_GAP_MM above the grasp, open, and up again. Checked
     whole before the first command like every plan (the held block's own column, the stack it came from, is not an
     obstacle to it); raises ValueError when nothing picked is held and MotionRefused with nothing sent when even
     this is refused. True when done."""
-    ctx = context(station)
-    if ctx.held is None or ctx.picked_down is None:
+    session = as_session(session, "tasks.put_back")
+    if session.held is None or session.picked_down is None:
         raise ValueError("put_back needs a block picked with tasks.pick in the gripper")
-    picked, block, edge = ctx.picked_down, ctx.held, ctx.held_edge
+    picked, block, edge = session.picked_down, session.held, session.held_edge
     # the same straight line, stopping RELEASE_GAP_MM short of the grasp (the block drops that little, as in place)
     down = planning.cartesian_line(picked.p0, picked.p1 + [0.0, 0.0, RELEASE_GAP_MM], picked.pitch, picked.roll,
-                                   current=picked.start, robot=ctx.arm.robot)
-    q = ctx.arm.joint_positions()
+                                   current=picked.start, robot=session.arm.robot)
+    q = session.arm.joint_positions()
     plan = planning.Plan((planning.MoveStep(planning.joint_move(q, down.start), "back over the pick spot"),
                           planning.MoveStep(down, "descend"), planning.GripperStep("open", "release"),
                           planning.MoveStep(planning.reverse(down), "lift")))
-    held = () if ctx.held_in_tool is None else (
-        motion_safety.HeldBlock(edge, ctx.held_in_tool, f"held {block.color} block"),)
+    held = () if session.held_in_tool is None else (
+        motion_safety.HeldBlock(edge, session.held_in_tool, f"held {block.color} block"),)
     top = np.asarray(block.position, float)
-    precheck.check_whole_plan(plan, ctx.arm, edge, held=held,
-                              known=precheck.known_boxes(ctx.known, top[:2], edge / 2),
+    precheck.check_whole_plan(plan, session.arm, edge, held=held,
+                              known=precheck.known_boxes(session.known, top[:2], edge / 2),
                               what=f"putting the {block.color} block back at ({top[0]:.1f}, {top[1]:.1f}) mm")
-    planning.execute(plan, ctx.arm)
-    ctx.held, ctx.held_in_tool, ctx.picked_down = None, None, None
-    ctx.known = [*ctx.known, Obstacle(float(top[0]), float(top[1]), float(top[2]), edge / np.sqrt(2))]
+    planning.execute(plan, session.arm)
+    session.released(top)
     return True
 
 
-def _opening(station) -> float:
+def _opening(station: Station) -> float:
     """The pads' opening (mm) now: the arm's own reading where it offers one, else fully open."""
     return float(getattr(station.arm, "gripper_opening_mm", GRIPPER.max_opening_mm))
 
 
-def place(station, position, yaw: float = 0.0, obstacles=None,
+def place(session: Session, position, yaw: float = 0.0, obstacles=None,
           clearance: float = planning.DEFAULT_CLEARANCE_MM) -> bool:
     """Put the held block's bottom-face centre at `position` (3,) world mm with yaw (rad); True when the plan ran
     through (the gripper opened there). clearance: how far (mm) the held block's bottom passes above the obstacles'
@@ -203,19 +128,18 @@ def place(station, position, yaw: float = 0.0, obstacles=None,
     p = finite_array(position, "position", (3,), "x, y, z of the block's bottom-face centre in world mm")
     yaw = finite_float(yaw, "yaw", what="rad")
     clearance = finite_float(clearance, "clearance", minimum=0.0, what="mm")
-    ctx = context(station)
-    edge = ctx.held_edge
+    session = as_session(session, "tasks.place")
+    edge = session.held_edge
     problem = motion_safety.placement_problem(p, edge, float(yaw))
     if problem:
         raise MotionRefused(f"placing at ({p[0]:.1f}, {p[1]:.1f}, {p[2]:.1f}) mm refused before moving: {problem}")
-    obs = ctx.known if obstacles is None else list(obstacles)
-    plan = planning.plan_place(ctx.arm.joint_positions(), p + [0.0, 0.0, RELEASE_GAP_MM], edge, float(yaw),
-                               obstacles=obs, clearance=clearance, held_in_tool=ctx.held_in_tool)
-    held = () if ctx.held_in_tool is None else (
-        motion_safety.HeldBlock(edge, ctx.held_in_tool, f"held {ctx.held.color} block"),)
-    precheck.check_whole_plan(plan, ctx.arm, edge, held=held, known=precheck.known_boxes(obs),
+    obs = session.known if obstacles is None else list(obstacles)
+    plan = planning.plan_place(session.arm.joint_positions(), p + [0.0, 0.0, RELEASE_GAP_MM], edge, float(yaw),
+                               obstacles=obs, clearance=clearance, held_in_tool=session.held_in_tool)
+    held = () if session.held_in_tool is None else (
+        motion_safety.HeldBlock(edge, session.held_in_tool, f"held {session.held.color} block"),)
+    precheck.check_whole_plan(plan, session.arm, edge, held=held, known=precheck.known_boxes(obs),
                               what=f"placing at ({p[0]:.1f}, {p[1]:.1f}, {p[2]:.1f}) mm")
-    planning.execute(plan, ctx.arm)
-    ctx.held, ctx.held_in_tool, ctx.picked_down = None, None, None
-    ctx.known = [*ctx.known, Obstacle(float(p[0]), float(p[1]), float(p[2] + edge), edge / np.sqrt(2))]
+    planning.execute(plan, session.arm)
+    session.released(p + [0.0, 0.0, edge])
     return True

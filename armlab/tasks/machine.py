@@ -7,7 +7,8 @@ runs) halts the arm at once (arm.emergency_stop()), and the guarded arm the comm
 (tasks.GuardedArm) refuses every further command, so the running command ends with EmergencyStopped and the machine
 stays in "estop". An EmergencyStopped raised by the arm itself (a hardware stop) has the same effect. In "estop" every
 command is refused (EmergencyStopped) until reset(). Any other error returns the machine to "idle" and propagates.
-`history` lists the states entered, in order.
+`history` lists the states entered, in order. The machine drives a task session (tasks.start_session(station)):
+its commands move the session's guarded arm, whose stop request is the machine's.
 """
 
 from __future__ import annotations
@@ -18,9 +19,10 @@ from typing import Any
 import numpy as np
 
 from armlab import planning
-from armlab.station.contract import EmergencyStopped, Station
+from armlab.station.contract import EmergencyStopped
 
 from . import click, handling, perception, teach
+from .session import Session, as_session
 
 __all__ = ["STATES", "TaskMachine", "MachineBusy", "Transition", "command_transition"]
 
@@ -64,11 +66,13 @@ def command_transition(machine: TaskMachine, state: str, action: Callable[[], An
 
 
 class TaskMachine:
-    """The lab's state machine over a station (sim or real). `transition` runs each command through the states
-    (module notes); replace it on an instance with your own function of the same signature."""
+    """The lab's state machine over a task session (tasks.start_session(station), sim or real). `transition` runs
+    each command through the states (module notes); replace it on an instance with your own function of the same
+    signature. `session` is the session driven, `station` its station."""
 
-    def __init__(self, station: Station, transition: Transition = command_transition):
-        self.station = station
+    def __init__(self, session: Session, transition: Transition = command_transition):
+        self.session = as_session(session, "TaskMachine")
+        self.station = self.session.station
         self.state = "idle"
         self.history: list[str] = ["idle"]
         self.program: teach.TeachProgram | None = None
@@ -91,10 +95,10 @@ class TaskMachine:
         """True from estop() until reset()."""
         return self._stop
 
-    def _context(self) -> handling.TaskContext:
-        ctx = handling.context(self.station)
-        ctx.arm.should_stop = lambda: self._stop
-        return ctx
+    def _guarded(self) -> Session:
+        """The session, its guarded arm stopping at this machine's stop request."""
+        self.session.arm.should_stop = lambda: self._stop
+        return self.session
 
     def _run(self, state: str, action: Callable[[], Any]) -> Any:
         return self.transition(self, state, action)
@@ -116,39 +120,40 @@ class TaskMachine:
 
     # -- commands -------------------------------------------------------------------------------------------
     def calibrate(self, intrinsics="checkerboard"):
-        """Calibrate the camera (tasks.perception.calibrate_camera); returns the Calibration."""
+        """Calibrate the camera again (tasks.perception.calibrate_camera); the session's calibration becomes the new
+        one, which is returned."""
         def action():
-            ctx = self._context()
-            ctx.calibration = perception.calibrate_camera(self.station, intrinsics, arm=ctx.arm)
-            return ctx.calibration
+            session = self._guarded()
+            session.calibration = perception.calibrate_camera(self.station, intrinsics, arm=session.arm)
+            return session.calibration
         return self._run("calibrate", action)
 
     def detect(self) -> list:
         """Look at the board (arm out of view) and return the detected blocks."""
-        return self._run("detect", lambda: (self._context(), handling.look(self.station))[1].blocks)
+        return self._run("detect", lambda: handling.look(self._guarded()).blocks)
 
     def execute(self, work) -> Any:
         """Run a planning.Plan (returns planning.ExecutionResult) or a list of (block, place position) pairs: pick
         each block and place it (returns the list of pick answers)."""
         def action():
-            ctx = self._context()
+            session = self._guarded()
             if isinstance(work, planning.Plan):
-                return planning.execute(work, ctx.arm)
+                return planning.execute(work, session.arm)
             out = []
             for block, position in work:
-                out.append(handling.pick(self.station, block))
+                out.append(handling.pick(session, block))
                 if out[-1]:
-                    handling.place(self.station, np.asarray(position, float))
+                    handling.place(session, np.asarray(position, float))
             return out
         return self._run("execute", action)
 
     def click_grab(self, uv) -> bool:
         """Pick the block under pixel uv of the current frame (tasks.click_grab)."""
-        return self._run("click-grab", lambda: (self._context(), click.click_grab(self.station, uv))[1])
+        return self._run("click-grab", lambda: click.click_grab(self._guarded(), uv))
 
     def click_drop(self, uv) -> bool:
         """Drop the held block on the surface under pixel uv of the current frame (tasks.click_drop)."""
-        return self._run("click-drop", lambda: (self._context(), click.click_drop(self.station, uv))[1])
+        return self._run("click-drop", lambda: click.click_drop(self._guarded(), uv))
 
     def teach_start(self, name: str = "") -> None:
         """Enter "teach": torque off; pose the arm by hand and call teach_record() at each waypoint."""
@@ -181,4 +186,4 @@ class TaskMachine:
         program = program or self.program
         if program is None:
             raise ValueError("nothing to repeat: teach a program or pass one")
-        return self._run("repeat", lambda: teach.repeat(self._context().arm, program))
+        return self._run("repeat", lambda: teach.repeat(self._guarded().arm, program))

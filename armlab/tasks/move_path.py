@@ -2,11 +2,12 @@
 whole and runs (notebook 05 teaches it; notebook 06 swaps two blocks with it).
 
 `move_path` is the exercise grab.move_path: from the arm's joints it returns a planning.Plan that grasps a cube at a
-point or releases the held cube at a point. `grab_with` and `drop_with` run such a plan on a station the way
-tasks.pick and tasks.place run the kit's own (planning.plan_pick / plan_place): the whole plan is checked first
-(tasks.precheck: joint limits, speeds, the board and the known blocks, the pads and the held block), so a plan that
-would hit something raises MotionRefused with nothing sent; then it runs on the station's guarded arm (sag
-compensated). Units: mm, rad, s; world (board) frame; tool point = the manufacturer's ee_gripper_link.
+point or releases the held cube at a point. `grab_with` and `drop_with` run such a plan in a task session
+(tasks.start_session(station)) the way tasks.pick and tasks.place run the kit's own (planning.plan_pick / plan_place):
+the whole plan is checked first (tasks.precheck: joint limits, speeds, the board and the session's known blocks, the
+pads and the held block), so a plan that would hit something raises MotionRefused with nothing sent; then it runs on the
+session's guarded arm (sag compensated). Units: mm, rad, s; world (board) frame; tool point = the manufacturer's
+ee_gripper_link.
 """
 
 from __future__ import annotations
@@ -19,11 +20,10 @@ from armlab import motion_safety, planning
 from armlab.blocks import block_edge
 from armlab.gripper_geometry import GRIPPER
 from armlab.kinematics import Unreachable
-from armlab.planning import Obstacle
 from armlab.robot import RobotModel, rx200
-from armlab.station.contract import Station
 
 from . import handling, precheck
+from .session import Session, as_session
 
 __all__ = ["move_path", "kit_move_path", "grab_with", "drop_with", "MovePath", "PATH_ACTIONS", "TIP_MARGIN_MM"]
 
@@ -112,40 +112,37 @@ def _checked_plan(path: MovePath, q, target, yaw: float, edge: float, action: st
     return plan
 
 
-def grab_with(station: Station, block, path: MovePath = move_path) -> bool:
+def grab_with(session: Session, block, path: MovePath = move_path) -> bool:
     """Pick a detected block (detection.Block) with the plan `path` makes for it (action "grasp"): checked whole,
-    then run on the station's guarded arm; True when the block is held. Raises ValueError when a block is held
+    then run on the session's guarded arm; True when the block is held. Raises ValueError when a block is held
     already and MotionRefused (nothing sent) when the plan would hit something or break a limit."""
-    ctx = handling.context(station)
-    if ctx.held is not None:
-        raise ValueError(f"the gripper already holds the {ctx.held.color} block: drop it first")
+    session = as_session(session, "grab_with")
+    if session.held is not None:
+        raise ValueError(f"the gripper already holds the {session.held.color} block: drop it first")
     edge, top, yaw = block_edge(block.size), np.asarray(block.position, float), float(block.yaw)
-    plan = _checked_plan(path, ctx.arm.joint_positions(), top, yaw, edge, "grasp")
+    plan = _checked_plan(path, session.arm.joint_positions(), top, yaw, edge, "grasp")
     grasped = motion_safety.HeldBlock(edge, precheck.held_pose_at_grasp(_pose_at(plan, "close"), top, yaw, edge),
                                       f"picked {block.color} block")
-    precheck.check_whole_plan(plan, ctx.arm, GRIPPER.max_opening_mm, grasped=grasped,
-                              known=precheck.known_boxes(ctx.known, top[:2], edge / 2),
+    precheck.check_whole_plan(plan, session.arm, GRIPPER.max_opening_mm, grasped=grasped,
+                              known=precheck.known_boxes(session.known, top[:2], edge / 2),
                               what=f"move_path grasping the {block.color} block")
-    held = bool(planning.execute(plan, ctx.arm).holding)
-    ctx.known = [k for k in ctx.known if not handling._same(k, block)]
-    if held:
-        ctx.held, ctx.held_in_tool = block, grasped.T_tool_block
+    held = bool(planning.execute(plan, session.arm).holding)
+    session.picked(block, held, grasped.T_tool_block)
     return held
 
 
-def drop_with(station: Station, position, yaw: float = 0.0, path: MovePath = move_path) -> bool:
+def drop_with(session: Session, position, yaw: float = 0.0, path: MovePath = move_path) -> bool:
     """Put the held block's bottom-face centre at `position` (3,) world mm with the plan `path` makes (action
     "release"), checked whole first (MotionRefused, nothing sent); True when the plan ran through."""
-    ctx = handling.context(station)
-    edge = ctx.held_edge
+    session = as_session(session, "drop_with")
+    edge = session.held_edge
     p = np.asarray(position, float)
-    plan = _checked_plan(path, ctx.arm.joint_positions(), p + [0.0, 0.0, handling.RELEASE_GAP_MM], float(yaw), edge,
-                         "release")
-    held = () if ctx.held_in_tool is None else (
-        motion_safety.HeldBlock(edge, ctx.held_in_tool, f"held {ctx.held.color} block"),)
-    precheck.check_whole_plan(plan, ctx.arm, edge, held=held, known=precheck.known_boxes(ctx.known),
+    plan = _checked_plan(path, session.arm.joint_positions(), p + [0.0, 0.0, handling.RELEASE_GAP_MM], float(yaw),
+                         edge, "release")
+    held = () if session.held_in_tool is None else (
+        motion_safety.HeldBlock(edge, session.held_in_tool, f"held {session.held.color} block"),)
+    precheck.check_whole_plan(plan, session.arm, edge, held=held, known=precheck.known_boxes(session.known),
                               what=f"move_path releasing at ({p[0]:.1f}, {p[1]:.1f}, {p[2]:.1f}) mm")
-    planning.execute(plan, ctx.arm)
-    ctx.held, ctx.held_in_tool, ctx.picked_down = None, None, None
-    ctx.known = [*ctx.known, Obstacle(float(p[0]), float(p[1]), float(p[2] + edge), edge / np.sqrt(2))]
+    planning.execute(plan, session.arm)
+    session.released(p + [0.0, 0.0, edge])
     return True

@@ -6,10 +6,11 @@ state is the state after arriving there: replaying moves to each waypoint in tur
 armlab.planning.timing.moving_time, the lab's pi/4 rad/s rule within the velocity limits) and then opens or closes
 the gripper when its state changes. The whole program becomes an armlab.planning.Plan (TeachProgram.to_plan), so it
 is executed by planning.execute and plotted (joint angles against time, as the lab report's figure 10) by
-planning.plot_plan. Taught readings are torque-off positions (no sag): replay through the station's GuardedArm
-(tasks.context(station).arm) to return to them despite the sag. Files: JSON {"format": "armlab-teach/1", "name",
-"joint_names", "waypoints": [{"q": [5 rad], "gripper": "open" | "closed"}, ...]}, written atomically, validated on
-load (TeachFileError names the file and the waypoint). Units: rad, s; world mm for the swap spots.
+planning.plot_plan. Taught readings are torque-off positions (no sag): replay through the session's GuardedArm
+(session.arm, session = tasks.start_session(station)) to return to them despite the sag. Files: JSON {"format":
+"armlab-teach/1", "name", "joint_names", "waypoints": [{"q": [5 rad], "gripper": "open" | "closed"}, ...]}, written
+atomically, validated on load (TeachFileError names the file and the waypoint). Units: rad, s; world mm for the swap
+spots.
 """
 
 from __future__ import annotations

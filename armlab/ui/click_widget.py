@@ -1,7 +1,8 @@
 """Click on the camera image to grab a block (first click) and drop it (second click): the live notebook panel.
 
-The panel shows the current camera frame (tasks.context(station).last.frame, the last look at the board) as an
-ipywidgets.Image, downscaled by `scale` and JPEG-encoded, and listens to its clicks with ipyevents.Event. A click
+The panel works in a task session (tasks.start_session(station)) and shows its current camera frame
+(session.last.frame, the last look at the board) as an ipywidgets.Image, downscaled by `scale` and JPEG-encoded,
+and listens to its clicks with ipyevents.Event. A click
 event is turned into a camera pixel (event_pixel: ipyevents reports the click in the image's own pixels, dataX/dataY,
 whatever size the browser draws it at; relativeX/relativeY over the drawn size is the fallback) and handed to
 ClickToGrab.click((u, v)) -- the same call a headless notebook or a test makes. A click grabs when the gripper is
@@ -27,10 +28,11 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
-from armlab.station.contract import EmergencyStopped, MotionRefused, Station
+from armlab.station.contract import EmergencyStopped, MotionRefused
 from armlab.tasks.click import ClickRefused, click_drop, click_grab, click_world, current_view
-from armlab.tasks.handling import context, look
+from armlab.tasks.handling import look
 from armlab.tasks.machine import MachineBusy
+from armlab.tasks.session import Session, as_session
 
 __all__ = ["ClickResult", "ClickToGrab", "event_pixel", "encode_view", "scaled_size", "view_is_current",
            "holding_text", "STALE_VIEW_RAD"]
@@ -39,19 +41,19 @@ MARKER_RGB = (255, 0, 255)     # the last click, drawn on the shown frame
 STALE_VIEW_RAD = 0.02          # a look is out of date once any joint has moved more than this since it was taken
 
 
-def view_is_current(station: Station) -> bool:
-    """True when the station has a last look (tasks.context(station).last) and the arm has not moved since it was
-    taken (every joint within STALE_VIEW_RAD of the look's reading): the frame then shows the board as it is."""
-    ctx = context(station)
-    if ctx.last is None:
+def view_is_current(session: Session) -> bool:
+    """True when the session has a last look (session.last) and the arm has not moved since it was taken (every
+    joint within STALE_VIEW_RAD of the look's reading): the frame then shows the board as it is."""
+    session = as_session(session, "view_is_current")
+    if session.last is None:
         return False
-    moved = np.abs(np.asarray(ctx.arm.joint_positions(), float) - np.asarray(ctx.last.arm_q, float)).max()
+    moved = np.abs(np.asarray(session.arm.joint_positions(), float) - np.asarray(session.last.arm_q, float)).max()
     return bool(moved <= STALE_VIEW_RAD)
 
 
-def holding_text(station: Station) -> str:
+def holding_text(session: Session) -> str:
     """What the gripper holds and what the next click does, in one line."""
-    held = context(station).held
+    held = as_session(session, "holding_text").held
     if held is None:
         return "holding nothing: the next click grabs the block under it"
     return f"holding the {held.color} {held.size} block: the next click drops it where you click"
@@ -132,37 +134,6 @@ class ClickResult:
         return bool(self.commands)
 
 
-class _Recorder:
-    """Stands in for the task context's arm during one click: forwards everything, records the commands."""
-
-    def __init__(self, arm):
-        self._arm, self.log = arm, []
-
-    def move_to(self, q, moving_time=None, accel_time=None, blocking=True):
-        self._arm.move_to(q, moving_time, accel_time, blocking)
-        self.log.append(("move", np.asarray(q, float).copy(), moving_time))
-
-    def open_gripper(self):
-        self._arm.open_gripper()
-        self.log.append(("open",))
-
-    def close_gripper(self):
-        held = self._arm.close_gripper()
-        self.log.append(("close", bool(held)))
-        return held
-
-    @property
-    def should_stop(self):          # a TaskMachine sets its stop flag on the context's arm: pass it through
-        return self._arm.should_stop
-
-    @should_stop.setter
-    def should_stop(self, value):
-        self._arm.should_stop = value
-
-    def __getattr__(self, name):
-        return getattr(self._arm, name)
-
-
 def _num(x: float) -> str:
     return str(int(round(float(x))))           # whole numbers, no "-0"
 
@@ -183,22 +154,24 @@ class ClickToGrab:
     """Grab on the first click, drop on the next, from pixels of the current camera frame.
 
     Args:
-        station: a make_station(...) station (sim or real); its task context is created on first use.
+        session: the task session (tasks.start_session(station), sim or real) whose arm the clicks move.
         scale: the shown image is the camera frame downscaled by this factor (clicks are mapped back).
         yaw: the yaw (rad) the dropped block is put down with.
         display_width: CSS width of the shown image in px (default: its encoded width); the browser may draw it at
             any size, the click mapping does not depend on it.
-        machine: a tasks.TaskMachine over the same station: clicks then run as its click-grab / click-drop commands
+        machine: a tasks.TaskMachine over the same session: clicks then run as its click-grab / click-drop commands
             (refused while it is busy or emergency-stopped); default: tasks.click_grab / click_drop directly.
     """
 
-    def __init__(self, station: Station, scale: float = 0.5, yaw: float = 0.0, display_width: int | None = None,
+    def __init__(self, session: Session, scale: float = 0.5, yaw: float = 0.0, display_width: int | None = None,
                  machine=None):
+        session = as_session(session, "ClickToGrab")
         if not 0.05 <= scale <= 1.0:
             raise ValueError(f"scale must lie in [0.05, 1], got {scale}")
-        if machine is not None and machine.station is not station:
-            raise ValueError("the TaskMachine given drives another station")
-        self.station, self.scale, self.yaw = station, float(scale), float(yaw)
+        if machine is not None and machine.session is not session:
+            raise ValueError("the TaskMachine given drives another session")
+        self.session, self.station = session, session.station
+        self.scale, self.yaw = float(scale), float(yaw)
         self.display_width = display_width
         self.machine = machine
         self.history: list[ClickResult] = []
@@ -208,7 +181,7 @@ class ClickToGrab:
     @property
     def holding(self):
         """The detected Block in the gripper, or None."""
-        return context(self.station).held
+        return self.session.held
 
     @property
     def marker(self) -> tuple[float, float] | None:
@@ -222,7 +195,7 @@ class ClickToGrab:
 
     def frame_size(self) -> tuple[int, int]:
         """(W, H) px of the camera frame the clicks refer to."""
-        H, W = current_view(self.station).frame.rgb.shape[:2]
+        H, W = current_view(self.session).frame.rgb.shape[:2]
         return W, H
 
     def image_size(self) -> tuple[int, int]:
@@ -231,7 +204,7 @@ class ClickToGrab:
 
     def view(self) -> tuple[bytes, tuple[int, int]]:
         """The shown image: (JPEG bytes, (w, h) px) of the current frame with the last click marked."""
-        return encode_view(current_view(self.station).frame.rgb, self.scale, self._marker)
+        return encode_view(current_view(self.session).frame.rgb, self.scale, self._marker)
 
     def click(self, uv, check_view: bool = True) -> ClickResult:
         """Act on a click at camera pixel uv = (u, v): grab when the gripper is empty, else drop. Never raises for
@@ -243,40 +216,41 @@ class ClickToGrab:
         panel does, after looking again itself)."""
         uv = tuple(float(c) for c in np.asarray(uv, dtype=float).reshape(-1))
         action = self.next_action
-        ctx = context(self.station)
-        recorder = _Recorder(ctx.arm)
+        session = self.session
         world, ok = None, False
         valid = len(uv) == 2 and bool(np.all(np.isfinite(uv)))
         where = f"{action} at pixel {_fmt(uv)}" if valid else f"{action} at {uv}"
-        try:
-            if not valid:
-                raise ClickRefused(f"a click is a pixel (u, v) of 2 finite numbers, got {uv}")
-            if check_view and not view_is_current(self.station):
-                self._look()
-                raise ClickRefused("the picture was out of date (the arm had moved since it was taken): the camera "
-                                   "looked again, click on the new picture")
-            world = click_world(self.station, uv, current_view(self.station).frame)
-            where += f" -> world {_fmt(world)} mm"
-            ctx.arm = recorder
+        with session.arm.recording() as log:
             try:
+                if not valid:
+                    raise ClickRefused(f"a click is a pixel (u, v) of 2 finite numbers, got {uv}")
+                if check_view and not view_is_current(session):
+                    self._look()
+                    raise ClickRefused("the picture was out of date (the arm had moved since it was taken): the "
+                                       "camera looked again, click on the new picture")
+                world = click_world(session, uv, current_view(session).frame)
+                where += f" -> world {_fmt(world)} mm"
+                del log[:]                      # what the click did, not the look that may have come before
                 if action == "grab":
                     ok = self._grab(uv)
-                    block = ctx.held
+                    block = session.held
                     did = (f"holding the {block.color} {block.size} block (top face {_fmt(block.position)} mm, "
                            f"yaw {_num(np.degrees(block.yaw))} deg)" if ok else "the gripper closed empty (missed)")
                 else:
-                    held = ctx.held
+                    held = session.held
                     ok = self._drop(uv)
                     did = f"put the {held.color} block down there"
-            finally:
-                ctx.arm = recorder._arm
-            message = f"{where}: {did}; {_summary(recorder.log)}"
-        except (ClickRefused, MachineBusy) as e:
-            message = f"{where}: refused, nothing moved: {e}"
-        except (MotionRefused, EmergencyStopped) as e:
-            message = (f"{where}: stopped by the arm after {_summary(recorder.log)}: "
-                       f"{type(e).__name__}: {str(e).splitlines()[0]}")
-        result = ClickResult(action, uv[:2], bool(ok), world, message, tuple(recorder.log))
+                message = f"{where}: {did}; {_summary(log)}"
+            except (ClickRefused, MachineBusy) as e:
+                if world is None:
+                    del log[:]                  # refused before the click's action: a look is not what it did
+                message = f"{where}: refused, nothing moved: {e}"
+            except (MotionRefused, EmergencyStopped) as e:
+                if world is None:
+                    del log[:]
+                message = (f"{where}: stopped by the arm after {_summary(log)}: "
+                           f"{type(e).__name__}: {str(e).splitlines()[0]}")
+        result = ClickResult(action, uv[:2], bool(ok), world, message, tuple(log))
         self.history.append(result)
         if valid:
             self._marker = uv
@@ -286,18 +260,18 @@ class ClickToGrab:
     def _grab(self, uv) -> bool:
         if self.machine is not None:
             return self.machine.click_grab(uv)
-        return click_grab(self.station, uv)
+        return click_grab(self.session, uv)
 
     def _drop(self, uv) -> bool:
         if self.machine is not None:
             return self.machine.click_drop(uv)
-        return click_drop(self.station, uv, self.yaw)
+        return click_drop(self.session, uv, self.yaw)
 
     def _look(self) -> None:
         if self.machine is not None:
             self.machine.detect()
         else:
-            look(self.station)
+            look(self.session)
 
     def handle_event(self, event: Mapping) -> ClickResult | None:
         """The ipyevents callback: a "click" event dict -> click(pixel); other event types are ignored (None).
@@ -324,7 +298,7 @@ class ClickToGrab:
     def _title_html(self) -> str:
         W, H = self.frame_size()
         iw, ih = self.image_size()
-        return (f"<b>click-to-grab</b> ({W}x{H} frame shown at {iw}x{ih} px): <b>{holding_text(self.station)}</b>")
+        return (f"<b>click-to-grab</b> ({W}x{H} frame shown at {iw}x{ih} px): <b>{holding_text(self.session)}</b>")
 
     def widget(self, fresh: bool = True):
         """The live panel: a title saying what is held and what the next click does, the clickable image and an
@@ -338,7 +312,7 @@ class ClickToGrab:
         except ImportError as e:
             raise ImportError(f"the click panel needs ipywidgets and ipyevents (pip install -r requirements.txt): "
                               f"{e}") from e
-        if fresh and not view_is_current(self.station):
+        if fresh and not view_is_current(self.session):
             self._look()
         data, (iw, ih) = self.view()
         width = self.display_width or iw

@@ -1,7 +1,9 @@
 """The lab's control station in a notebook: one ipywidgets panel over the station's state machine.
 
+    from armlab import tasks
     from armlab.ui import station_panel
-    panel = station_panel(station, viewer=viewer)   # viewer: an armlab.viz.Viewer (optional)
+    session = tasks.start_session(station)          # calibrates the camera, fits the sag model
+    panel = station_panel(session, viewer=viewer)   # viewer: an armlab.viz.Viewer (optional)
     panel.widget()                                  # display it (last line of a cell)
 
 The panel shows the camera (colour, depth, or colour with the last look's detections), a mouse-over readout of the
@@ -47,11 +49,10 @@ import numpy as np
 from armlab import planning
 from armlab.blocks import LAB_RGB, ObjectState
 from armlab.lab import lab_config
-from armlab.station.contract import Station
 from armlab.tasks.click import ClickRefused
-from armlab.tasks.handling import context
 from armlab.tasks.machine import TaskMachine
 from armlab.tasks.perception import pointed_point
+from armlab.tasks.session import Session, as_session
 from armlab.ui.click_widget import ClickToGrab, encode_view, event_pixel, holding_text, scaled_size, view_is_current
 
 __all__ = ["StationPanel", "station_panel", "VIEW_MODES", "depth_rgb", "depth_scale_html"]
@@ -119,10 +120,9 @@ class StationPanel:
     """The control station over a station (sim or real); see the module notes.
 
     Args:
-        station: a make_station(...) station; its task context (camera calibration, sag model) is made now if it
-            does not exist yet (a few seconds on the simulator).
+        session: the task session (tasks.start_session(station): camera calibration, sag model) to drive.
         viewer: an armlab.viz.Viewer to draw into and show inline (optional).
-        machine: the tasks.TaskMachine to drive (default: a new one over the station).
+        machine: the tasks.TaskMachine to drive (default: a new one over the session).
         scale: the camera image is shown downscaled by this factor (clicks and the mouse map back to full pixels).
         live_period_s: the live camera's refresh period (the "live" toggle; off at start).
         follow_hz: how often the 3D view follows the arm during motions that take real time.
@@ -130,21 +130,22 @@ class StationPanel:
             the last look is still current; False: start from a new capture wherever the arm is.
     """
 
-    def __init__(self, station: Station, viewer=None, machine: TaskMachine | None = None, scale: float = 0.5,
+    def __init__(self, session: Session, viewer=None, machine: TaskMachine | None = None, scale: float = 0.5,
                  live_period_s: float = 0.5, follow_hz: float = 10.0, look: bool = True):
-        if machine is not None and machine.station is not station:
-            raise ValueError("the TaskMachine given drives another station")
+        session = as_session(session, "station_panel")
+        if machine is not None and machine.session is not session:
+            raise ValueError("the TaskMachine given drives another session")
         if not 0.02 <= float(live_period_s) <= 60.0:
             raise ValueError(f"live_period_s must lie in [0.02, 60] s, got {live_period_s}")
         if not 0.5 <= float(follow_hz) <= 60.0:
             raise ValueError(f"follow_hz must lie in [0.5, 60] Hz, got {follow_hz}")
-        self.station = station
-        self.machine = machine or TaskMachine(station)
+        self.session, self.station = session, session.station
+        station = session.station
+        self.machine = machine or TaskMachine(session)
         self.viewer = viewer
         self.scale = float(scale)
         self.live_period_s, self.follow_hz = float(live_period_s), float(follow_hz)
-        self.clicker = ClickToGrab(station, scale=scale, machine=self.machine)
-        self.ctx = context(station)
+        self.clicker = ClickToGrab(session, scale=scale, machine=self.machine)
         self.robot = station.arm.robot
         self.view_mode = "detections"
         self.messages: list[str] = []
@@ -166,9 +167,9 @@ class StationPanel:
         self._frame = None
         self._depth = None                 # corrected depth of the shown frame
         self._frame_is_look = False
-        if look and not view_is_current(station):
+        if look and not view_is_current(session):
             self.machine.detect()          # start from a fresh look: the arm moves out of view, the blocks are found
-        if view_is_current(station):
+        if view_is_current(session):
             self._show_look()
         else:
             self._set_frame(station.camera.capture(), is_look=False)
@@ -188,7 +189,7 @@ class StationPanel:
     @property
     def holding(self):
         """The detected Block in the gripper, or None."""
-        return self.ctx.held
+        return self.session.held
 
     @property
     def next_click(self) -> str:
@@ -206,9 +207,9 @@ class StationPanel:
         state = self.machine.state
         if self.busy:
             return (f"running: {self._job_name} (machine: {state if state != 'idle' else 'starting'}; E-STOP stops "
-                    f"it) | {holding_text(self.station)}")
+                    f"it) | {holding_text(self.session)}")
         doing = "EMERGENCY-STOPPED: press reset" if state == "estop" else "ready"
-        return f"state {state} | {holding_text(self.station)} | {doing}"
+        return f"state {state} | {holding_text(self.session)} | {doing}"
 
     def offers_real_time(self) -> bool:
         """True when the station can switch its clock (Capabilities.pacing: a simulated station offers it)."""
@@ -234,14 +235,14 @@ class StationPanel:
     # -- the shown frame ----------------------------------------------------------------------------------------
     def _set_frame(self, frame, is_look: bool, depth=None) -> None:
         if depth is None:
-            depth = self.ctx.calibration.depth_correction.apply(frame.depth)
+            depth = self.session.calibration.depth_correction.apply(frame.depth)
         with self._lock:
             self._frame, self._depth, self._frame_is_look = frame, depth, bool(is_look)
             self.refreshes += 1
         self._update_image()
 
     def _show_look(self) -> None:
-        obs = self.ctx.last
+        obs = self.session.last
         self._set_frame(obs.frame, is_look=True, depth=obs.depth)
 
     def frame_size(self) -> tuple[int, int]:
@@ -263,8 +264,8 @@ class StationPanel:
         full = depth_rgb(self._depth) if mode == "depth" else self._frame.rgb
         w, h = self.image_size()
         small = cv2.resize(np.ascontiguousarray(full), (w, h), interpolation=cv2.INTER_AREA)
-        if mode == "detections" and self.ctx.last is not None:
-            small = _draw_blocks(small, self.ctx.last.blocks, w / full.shape[1])
+        if mode == "detections" and self.session.last is not None:
+            small = _draw_blocks(small, self.session.last.blocks, w / full.shape[1])
         return small
 
     def view(self) -> tuple[bytes, tuple[int, int]]:
@@ -289,7 +290,7 @@ class StationPanel:
         readout shows): the rule a click acts by (tasks.perception.pointed_point: the median corrected depth of the
         surface around the pixel, through the calibrated camera), so the point shown under the pointer is the point a
         click acts on. Raises ValueError outside the image or where the camera saw nothing."""
-        return pointed_point(self.ctx.calibration, self._depth, np.asarray(uv, dtype=float).reshape(2))
+        return pointed_point(self.session.calibration, self._depth, np.asarray(uv, dtype=float).reshape(2))
 
     def mouse(self, uv) -> str:
         """The readout for the pointer at camera pixel uv = (u, v) of the shown frame: world_at(uv) in mm, or why
@@ -315,7 +316,7 @@ class StationPanel:
         uv = tuple(float(c) for c in np.asarray(uv, dtype=float).reshape(-1))
 
         def act():
-            if not (self._frame_is_look and view_is_current(self.station)):
+            if not (self._frame_is_look and view_is_current(self.session)):
                 self.machine.detect()          # the shown frame is live: look (arm out of view) before acting
             result = self.clicker.click(uv, check_view=False)
             return result.message
@@ -358,7 +359,7 @@ class StationPanel:
             self._update_widgets()
             return False
         def act():
-            here = np.clip(np.asarray(self.ctx.arm.joint_positions(), float), self.robot.lower, self.robot.upper)
+            here = np.clip(np.asarray(self.session.arm.joint_positions(), float), self.robot.lower, self.robot.upper)
             if np.abs(here - q).max() < 1e-4:
                 return f"{name}: already there"
             plan = planning.Plan((planning.MoveStep(planning.joint_move(here, q, robot=self.robot), name),))
@@ -488,7 +489,7 @@ class StationPanel:
         """Show a fresh view: the last look when it is current (the arm has not moved since), else a new capture;
         then redraw the 3D view (and, with update, the sliders and the status)."""
         try:
-            if self.ctx.last is not None and view_is_current(self.station):
+            if self.session.last is not None and view_is_current(self.session):
                 self._show_look()
             else:
                 self._set_frame(self.station.camera.capture(), is_look=False)
@@ -530,7 +531,7 @@ class StationPanel:
         world = getattr(self.station, "world", None)
         if world is not None:                     # the simulator's truth
             return list(world.objects)
-        seen = [] if self.ctx.last is None else self.ctx.last.blocks
+        seen = [] if self.session.last is None else self.session.last.blocks
         return [ObjectState(b.color, b.size, float(b.edge_mm), np.asarray(b.position) - [0, 0, b.edge_mm / 2],
                             float(b.yaw), id=i + 1) for i, b in enumerate(seen) if b.shape == "cube"]
 
@@ -542,7 +543,7 @@ class StationPanel:
         viewer.show(self._arm_pose(), None if opening is None else float(np.clip(opening, 0.0, 74.0)))
         viewer.draw_objects(self._objects())
         if cloud and self._frame is not None:
-            viewer.draw_rgbd(self._frame.rgb, self._depth, self.ctx.calibration.camera, stride=8)
+            viewer.draw_rgbd(self._frame.rgb, self._depth, self.session.calibration.camera, stride=8)
 
     # -- messages -------------------------------------------------------------------------------------------------
     def _log(self, text: str) -> str:
@@ -606,7 +607,7 @@ class StationPanel:
         if w is None:
             return
         teaching = self.machine.state == "teach"
-        q = self.station.arm.joint_positions() if teaching else self.ctx.arm.joint_positions()
+        q = self.station.arm.joint_positions() if teaching else self.session.arm.joint_positions()
         q = np.clip(np.asarray(q, float), self.robot.lower, self.robot.upper)
         locked = self.busy or self.machine.state not in ("idle", "teach") or (teaching and self._hand() is None)
         for s, v in zip(w["sliders"], q):
@@ -792,6 +793,7 @@ class StationPanel:
             self._update_widgets()
 
 
-def station_panel(station: Station, viewer=None, **options) -> StationPanel:
-    """The control station over `station` (see StationPanel); display panel.widget() in a notebook."""
-    return StationPanel(station, viewer=viewer, **options)
+def station_panel(session: Session, viewer=None, **options) -> StationPanel:
+    """The control station over a task session (tasks.start_session(station); see StationPanel); display
+    panel.widget() in a notebook."""
+    return StationPanel(session, viewer=viewer, **options)

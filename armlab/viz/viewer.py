@@ -402,17 +402,16 @@ class Viewer:
         """ipywidgets sliders, one per joint (rad, within the joint limits), that start from the viewer's pose and
         follow it (every later show() or animate() moves them too, without moving anything back).
 
-        Without an arm they move the drawn arm (and a "gripper mm" slider opens the drawn fingers). With an arm
-        (e.g. station.arm) the viewer first shows the arm's reading, each released slider moves the ARM there
-        (arm.move_to; a refused move, e.g. into the board, is reported under the sliders and they return to the
-        arm's pose) and the viewer then shows where the arm is; the gripper is an open/close toggle. With a machine
-        (an armlab.tasks.TaskMachine) the arm is machine.station.arm and each move goes through the machine: refused
-        (said under the sliders) unless it is idle, so never during another command or after an emergency stop,
-        and stopped by machine.estop() (make the station's task context first, tasks.context(station): its first use
-        calibrates and moves the arm). Blocking moves run in the kernel: for an emergency stop during motions, use
-        the station panel (armlab.ui.station_panel), whose sliders always go through its machine. After close()
-        the sliders are disabled with a note. Returns a VBox (attributes sliders, gripper, note); display it in a
-        live notebook."""
+        Without an arm they move the drawn arm (and a "gripper mm" slider opens the drawn fingers). With an arm (e.g.
+        station.arm) the viewer first shows the arm's reading, each released slider moves the ARM there (arm.move_to; a
+        refused move, e.g. into the board, is reported under the sliders and they return to the arm's pose) and the
+        viewer then shows where the arm is; the gripper is an open/close toggle. With a machine (an
+        armlab.tasks.TaskMachine) the arm is machine.station.arm and each move goes through the machine: refused (said
+        under the sliders) unless it is idle, so never during another command or after an emergency stop, and stopped by
+        machine.estop() (the machine drives a task session, tasks.start_session(station), which calibrated and moved the
+        arm when it was started). Blocking moves run in the kernel: for an emergency stop during motions, use the
+        station panel (armlab.ui.station_panel), whose sliders always go through its machine. After close() the sliders
+        are disabled with a note. Returns a VBox (attributes sliders, gripper, note); display it in a live notebook."""
         import ipywidgets as widgets
 
         robot = rx200()

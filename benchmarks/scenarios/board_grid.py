@@ -24,11 +24,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from armlab import tasks
 from armlab.blocks import ObjectState, block_edge
 from armlab.kinematics import Unreachable
 from armlab.lab import lab_config
 from armlab.station.contract import MotionRefused
-from armlab.tasks import handling
 
 __all__ = ["GridSpot", "GRID", "REGIONS", "OUTCOMES", "Outcome", "random_spots", "grid_pairs", "run_trial"]
 
@@ -156,28 +156,28 @@ def run_trial(pick: GridSpot, place: GridSpot, seed: int) -> tuple[Outcome, Outc
 
     objects, yaw = trial_scene(pick, place, seed)
     st = make_station("sim", seed=seed, scene=scene_to_dict(objects))
-    ctx = handling.context(st)
+    session = tasks.start_session(st)
     truth = max((o for o in st.world.blocks if np.hypot(o.position[0] - pick.x, o.position[1] - pick.y) < 1.0),
                 key=lambda o: o.position[2])
-    seen = [b for b in handling.look(st).blocks if np.hypot(b.position[0] - pick.x, b.position[1] - pick.y) < 25.0]
+    seen = [b for b in tasks.look(session).blocks if np.hypot(b.position[0] - pick.x, b.position[1] - pick.y) < 25.0]
     if not seen:
         return Outcome(pick, "pick", "not grasped", message="the block at the pick spot is not seen"), None
     block = max(seen, key=lambda b: b.position[2])
-    sent = len(ctx.arm.sent)
+    sent = len(session.arm.sent)
     try:
-        held = handling.pick(st, block)
+        held = tasks.pick(session, block)
     except (MotionRefused, Unreachable) as e:
-        return Outcome(pick, "pick", _refusal(sent, ctx.arm), message=str(e)), None
+        return Outcome(pick, "pick", _refusal(sent, session.arm), message=str(e)), None
     if not held or truth not in st.arm.holding:
         return Outcome(pick, "pick", "not grasped", message=str(getattr(st.arm, "last_grasp", ""))), None
     T_tool_block = np.linalg.inv(st.arm.tool_pose_true()) @ np.r_[truth.position, 1.0]
-    grasp_error = T_tool_block[:3] - ctx.held_in_tool[:3, 3]
+    grasp_error = T_tool_block[:3] - session.held_in_tool[:3, 3]
     picked = Outcome(pick, "pick", "done", grasp_error)
     target = np.array([place.x, place.y, block_edge("large") if place.stack else 0.0])
-    sent = len(ctx.arm.sent)
+    sent = len(session.arm.sent)
     try:
-        handling.place(st, target, yaw)
+        tasks.place(session, target, yaw)
     except (MotionRefused, Unreachable) as e:
-        return picked, Outcome(place, "place", _refusal(sent, ctx.arm), message=str(e))
+        return picked, Outcome(place, "place", _refusal(sent, session.arm), message=str(e))
     bottom = truth.position - [0.0, 0.0, truth.edge / 2]
     return picked, Outcome(place, "place", "done", bottom - target)

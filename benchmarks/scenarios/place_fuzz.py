@@ -14,11 +14,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from armlab import motion_safety
+from armlab import motion_safety, tasks
 from armlab.blocks import block_edge
 from armlab.kinematics import Unreachable
 from armlab.station.contract import MotionRefused
-from armlab.tasks import handling
 
 from .board_grid import GridSpot, Outcome
 
@@ -51,13 +50,14 @@ def _outcome(spot: np.ndarray, action: str, sent_before: int, arm, error: Except
     return Outcome(GridSpot(REGION, float(spot[0]), float(spot[1])), action, kind, message=str(error))
 
 
-def _recover(station, ctx) -> None:
+def _recover(session: tasks.Session) -> None:
     """After a refusal mid-plan or a failed pick: open, forget the held block, look again (arm out of view)."""
+    station = session.station
     if station.arm.emergency_stopped:
         station.arm.reset()
     station.arm.open_gripper()
-    ctx.held = ctx.held_in_tool = ctx.picked_down = None
-    handling.look(station)
+    session.held = session.held_in_tool = session.picked_down = None
+    tasks.look(session)
 
 
 def run_station(seed: int, places: int) -> list[Outcome]:
@@ -69,48 +69,48 @@ def run_station(seed: int, places: int) -> list[Outcome]:
     # the simulator: imported when the trials run
     from armlab import make_station
 
-    station = make_station("sim", seed=seed)
-    ctx = handling.context(station)
+    session = tasks.start_session(make_station("sim", seed=seed))
     rng = np.random.default_rng([seed, 24])
     out: list[Outcome] = []
     idle = 0                                      # rounds in a row that tried no place
     while len(out) < places and idle < _IDLE_ROUNDS:
-        blocks = [b for b in handling.look(station).blocks
+        blocks = [b for b in tasks.look(session).blocks
                   if b.is_block and np.hypot(*b.position[:2]) >= PICK_MIN_REACH_MM]
         before = len(out)
         for k in rng.permutation(len(blocks)):
-            if len(out) >= places or not _trial(station, ctx, blocks[k], rng, out):
+            if len(out) >= places or not _trial(session, blocks[k], rng, out):
                 break
         idle = 0 if len(out) > before else idle + 1
     return out
 
 
-def _trial(station, ctx, block, rng: np.random.Generator, out: list[Outcome]) -> bool:
+def _trial(session: tasks.Session, block, rng: np.random.Generator, out: list[Outcome]) -> bool:
     """Pick `block` and place it at a random free spot, appending the place's Outcome to `out`; False when the round
     must look again (a pick that failed, a refusal)."""
+    station = session.station
     seen_off = min(float(np.hypot(*(o.position[:2] - block.position[:2]))) for o in station.world.blocks)
     try:
-        held = handling.pick(station, block)
+        held = tasks.pick(session, block)
     except (MotionRefused, Unreachable):
         held = False
     if not held:
-        _recover(station, ctx)
+        _recover(session)
         return False
     truth = station.arm.holding[0]
     edge, yaw = block_edge(block.size), float(rng.uniform(-np.pi / 4, np.pi / 4))
     spot = random_place_spot(rng, [o for o in station.world.objects if o is not truth], edge, yaw)
-    sent = len(ctx.arm.sent)
+    sent = len(session.arm.sent)
     try:
-        handling.place(station, spot, yaw)
+        tasks.place(session, spot, yaw)
     except (MotionRefused, Unreachable) as e:
-        out.append(_outcome(spot, "place", sent, ctx.arm, e))
+        out.append(_outcome(spot, "place", sent, session.arm, e))
         if out[-1].outcome == "refused before":
             try:
-                handling.put_back(station)
+                tasks.put_back(session)
                 return False
             except (MotionRefused, Unreachable):
                 pass
-        _recover(station, ctx)
+        _recover(session)
         return False
     bottom = truth.position - [0.0, 0.0, truth.edge / 2]
     note = f"picked from a detection {seen_off:.1f} mm off its block" if seen_off > DETECTION_OFF_MM else ""

@@ -10,7 +10,9 @@
 #
 # Units: millimetres and radians; world (board) frame: origin on the board below the waist axis, +y away from the
 # robot, +z up. Everything runs on the simulator (`make_station("sim")`); `make_station("real")` runs the same code on
-# the lab's arm.
+# the lab's arm. The kit's tasks work in a **session**: `session = tasks.start_session(station)` calibrates the camera
+# and fits the sag model once, there (the arm moves out of the camera's view), and every task (`tasks.look`,
+# `tasks.pick`, the clicks) takes that session.
 #
 # | exercise | points | kind | how it is graded |
 # |---|---|---|---|
@@ -46,9 +48,9 @@ SCENE = {"objects": [
     {"color": "green", "size": "large", "position_mm": [60.0, 300.0], "yaw_rad": -0.5},
 ]}
 station = make_station("sim", seed=0, scene=SCENE)
-ctx = tasks.context(station)          # calibrates the camera (checkerboard, tags, depth plane) and fits the sag model
-obs = tasks.look(station)             # arm out of view, capture, detect
-print(ctx.calibration.notes)
+session = tasks.start_session(station)  # calibrates the camera (checkerboard, tags, depth plane), fits the sag model
+obs = tasks.look(session)               # arm out of view, capture, detect
+print(session.calibration.notes)
 for b in obs.blocks:
     print(f"{b.color:6s} {b.size:5s} top-face centre {b.position} mm, yaw {np.degrees(b.yaw):5.1f} deg, "
           f"pixel ({b.pixel[0]:.0f}, {b.pixel[1]:.0f})")
@@ -62,7 +64,7 @@ for b in obs.blocks:
 
 # %%
 red = next(b for b in obs.blocks if b.color == "red")
-p = tasks.surface_point(ctx.calibration, obs.depth, red.pixel)
+p = tasks.surface_point(session.calibration, obs.depth, red.pixel)
 truth = next(o for o in station.world.blocks if o.color == "red")
 print("clicked the red block at pixel", np.round(red.pixel, 1), "-> world", p, "mm; true top-face centre",
       truth.position + [0, 0, truth.edge / 2])
@@ -210,7 +212,7 @@ print(f"OK: every face centre, the four corners of the turned green face and the
 # your move_path; while it is blank the kit's own planners stand in (it says so once)
 path = with_reference(move_path, "grab.move_path", kit_move_path,
                       "the kit's planning.plan_pick / plan_place plan the motion")
-plan = path(ctx.arm.joint_positions(), red.position, float(red.yaw), 38.0, "grasp")
+plan = path(session.arm.joint_positions(), red.position, float(red.yaw), 38.0, "grasp")
 print(plan.describe())
 sampled = planning.sample_plan(plan, 0.05)
 tool_z = kinematics.fk(sampled.q)[:, 2, 3]
@@ -234,13 +236,14 @@ fig.tight_layout()
 # CHECK grab.move_path
 require_written("grab.move_path")
 check_station = make_station("sim", seed=1, scene=SCENE)
+check_session = tasks.start_session(check_station)
 spots = {"red": [-250.0, 80.0, 0.0], "blue": [250.0, 60.0, 0.0], "green": [0.0, 220.0, 0.0]}
 landed = {}
-for block in tasks.look(check_station).blocks:
+for block in tasks.look(check_session).blocks:
     block_truth = next(o for o in check_station.world.blocks if o.color == block.color)
-    assert grab_with(check_station, block, path=move_path) and block_truth.id in check_station.world.held, \
+    assert grab_with(check_session, block, path=move_path) and block_truth.id in check_station.world.held, \
         f"your plan did not grasp the {block.color} block (the gripper closed on nothing)"
-    drop_with(check_station, np.array(spots[block.color]), 0.0, path=move_path)
+    drop_with(check_session, np.array(spots[block.color]), 0.0, path=move_path)
     assert not check_station.world.held, f"the {block.color} block is still held after your release plan"
     bottom = block_truth.position - [0, 0, block_truth.edge / 2]
     landed[block.color] = np.abs(bottom - spots[block.color]).max()
@@ -322,8 +325,7 @@ fig.tight_layout()
 #
 # **Demonstration.** For each of the report's six locations the simulated student clicks the grid point in the image;
 # the click becomes a world point; the tool goes top-down to 37 mm above it; we measure where the tool really is.
-# Once with the raw arm, once through the station's guarded arm (`tasks.context(station).arm`, which applies the
-# fitted sag model).
+# Once with the raw arm, once through the session's guarded arm (`session.arm`, which applies the fitted sag model).
 #
 # What is compared: the **simulated** arm (its sag and its camera are the simulator's, with the kit's calibration) with
 # the **real** arm of the lab report (Table III: 7.5 / 9.2 / 2.5 mm mean error in x / y / z, after the report's flat
@@ -332,8 +334,8 @@ fig.tight_layout()
 
 # %%
 measure = lambda: station.arm.tool_pose_true()[:3, 3]  # noqa: E731
-raw = reach_experiment(station, station.arm, measure)
-comp = reach_experiment(station, ctx.arm, measure)
+raw = reach_experiment(session, station.arm, measure)
+comp = reach_experiment(session, session.arm, measure)
 rows = [[f"{i + 1}", *r.desired, *c.actual, *LAB_TABLE_III_ERROR_MM[i], *r.error, *c.error]
         for i, (r, c) in enumerate(zip(raw, comp))]
 avg = lambda rr: np.mean([r.error for r in rr], axis=0)  # noqa: E731
@@ -352,16 +354,16 @@ print(f"simulated arm, sag compensated: mean error {avg(comp).round(1)} mm; raw:
 # block's detected yaw (section 2) closes the fingers flat on two faces.
 
 # %%
-green = next(b for b in tasks.look(station).blocks if b.color == "green")
+green = next(b for b in tasks.look(session).blocks if b.color == "green")
 green_truth = next(o for o in station.world.blocks if o.color == "green")
 yaw_before = green_truth.yaw
-held_unturned = tasks.pick(station, type(green)(**{**green.__dict__, "yaw": 0.0}))   # pretend it is not turned
+held_unturned = tasks.pick(session, type(green)(**{**green.__dict__, "yaw": 0.0}))   # pretend it is not turned
 print(f"roll 0: held = {held_unturned} ({station.arm.last_grasp}); block yaw {np.degrees(yaw_before):.1f} -> "
       f"{np.degrees(green_truth.yaw):.1f} deg")
 if held_unturned:
-    tasks.place(station, green_truth.position - [0, 0, green_truth.edge / 2])
-green = next(b for b in tasks.look(station).blocks if b.color == "green")
-held_turned = tasks.pick(station, green)
+    tasks.place(session, green_truth.position - [0, 0, green_truth.edge / 2])
+green = next(b for b in tasks.look(session).blocks if b.color == "green")
+held_turned = tasks.pick(session, green)
 print(f"roll from the yaw ({np.degrees(green.yaw):.1f} deg): held = {held_turned}")
 
 # %%
@@ -374,11 +376,11 @@ print("OK: misaligned wrist: roll 0 fails or shoves the block; the roll from the
 # ## 6 · Click to grab, click to drop
 #
 # **Demonstration** of the kit's click-to-grab panel (it plans with the kit's planners, not your `move_path`).
-# `tasks.click_grab(station, (u, v))` and `tasks.click_drop(station, (u, v))` do all of the above from a pixel of the
-# current frame (`tasks.context(station).last.frame`). Clicks off the board, on the robot, on bare board or out of
+# `tasks.click_grab(session, (u, v))` and `tasks.click_drop(session, (u, v))` do all of the above from a pixel of the
+# current frame (`session.last.frame`). Clicks off the board, on the robot, on bare board or out of
 # reach raise `tasks.ClickRefused` and nothing moves.
 #
-# In a live notebook you click the image itself: `ClickToGrab(station).widget()` shows the current frame
+# In a live notebook you click the image itself: `ClickToGrab(session).widget()` shows the current frame
 # (downscaled to $w \times h = 640 \times 360$ px to keep it light) and listens to its clicks with `ipyevents`. The
 # browser reports a click at $(x, y)$ pixels of the *shown* image, measured from its top-left corner, whatever size
 # the page draws it at; the camera pixel (OpenCV: integer = pixel centre) of a $W \times H = 1280 \times 720$ frame is
@@ -390,12 +392,12 @@ print("OK: misaligned wrist: roll 0 fails or shoves the block; the roll from the
 # %%
 from armlab.tasks import ClickToGrab
 
-panel = ClickToGrab(station)
+panel = ClickToGrab(session)
 panel.widget()
 
 # %%
 target_uv = station.camera.truth.project(np.array([[-200.0, 80.0, 0.0]]))[0]     # a free spot on the board
-print("the gripper holds the", tasks.context(station).held.color, "block; the next click will", panel.next_action)
+print("the gripper holds the", session.held.color, "block; the next click will", panel.next_action)
 drop = panel.click(target_uv)
 print(drop.message)
 refused = panel.click(station.camera.truth.project(np.array([[0.0, 20.0, 0.0]]))[0])
@@ -406,7 +408,7 @@ print(refused.message)
 # together with where it fell on the page. Here we click the red block's centre, then a spot next to the green one.
 
 # %%
-red = next(b for b in tasks.look(station).blocks if b.color == "red")
+red = next(b for b in tasks.look(session).blocks if b.color == "red")
 (W, H), (w, h) = panel.frame_size(), panel.image_size()
 x, y = (np.asarray(red.pixel) + 0.5) * [w / W, h / H]
 event = {"type": "click", "dataX": int(round(x)), "dataY": int(round(y)), "relativeX": round(float(x), 1),

@@ -120,8 +120,10 @@ print("OK: save/load: the program round-trips (to 1e-6 rad) and a bad gripper va
 # Replaying moves to each waypoint in turn with the lab's timing rule (the largest joint change at $\pi/4$ rad/s, at
 # least 0.4 s, ramps a third of the move, never above a joint's velocity limit) and opens or closes the gripper when
 # the recorded state changes. The taught poses were held by hand, with no load on the motors; under torque the arm
-# sags a few millimetres, so we replay through the station's guarded arm, which commands the arm so that it ends
-# where the hand held it (notebook 05). The whole replay is a `planning.Plan`, so we can plot it before running it.
+# sags a few millimetres, so we replay through the guarded arm of a task session (`tasks.start_session(station)`: it
+# calibrates the camera and fits the sag model once, moving the arm out of the camera's view), which commands the arm
+# so that it ends where the hand held it (notebook 05). The whole replay is a `planning.Plan`, so we can plot it
+# before running it.
 
 # %%
 fig, ax = plt.subplots(figsize=(8.5, 3.6))
@@ -132,7 +134,8 @@ plan = loaded.to_plan()
 print(f"replay: {len(plan.steps)} steps, {plan.duration:.1f} s")
 
 # %%
-arm = tasks.context(station).arm      # sag-compensated (fitted once for this station)
+session = tasks.start_session(station)   # calibrates the camera and fits the sag model, once, here
+arm = session.arm                        # sag-compensated
 red, blue = (next(o for o in station.world.blocks if o.color == c) for c in ("red", "blue"))
 a, b = red.position.copy(), blue.position.copy()
 result = tasks.repeat(arm, loaded)
@@ -166,14 +169,15 @@ print(f"OK: swap: red is {np.abs(red.position - b).max():.1f} mm from B's spot, 
 path = with_reference(move_path, "grab.move_path", kit_move_path,
                       "the kit's planning.plan_pick / plan_place plan the motion")
 path_station = make_station("sim", seed=0, scene="swap")
+path_session = tasks.start_session(path_station)
 path_red, path_blue = (next(o for o in path_station.world.blocks if o.color == c) for c in ("red", "blue"))
 spot_a, spot_b, middle = path_red.position.copy(), path_blue.position.copy(), np.array([250.0, 75.0, 19.0])
 t0 = path_station.world.time_s
 for block, to in ((path_red, middle), (path_blue, spot_a), (path_red, spot_b)):
     top = block.position + [0, 0, block.edge / 2]
     known = Block(block.color, block.size, top, float(wrap_quarter(block.yaw)), (0.0, 0.0), block.edge)
-    grab_with(path_station, known, path=path)
-    drop_with(path_station, to - [0, 0, block.edge / 2], path=path)
+    grab_with(path_session, known, path=path)
+    drop_with(path_session, to - [0, 0, block.edge / 2], path=path)
 path_time = path_station.world.time_s - t0
 print(f"swap by move_path: {path_time:.0f} s simulated; the taught replay: {plan.duration:.0f} s of plan")
 print(f"red now at {path_red.position.round(1)} mm, blue at {path_blue.position.round(1)} mm")
@@ -256,7 +260,7 @@ durations = with_reference(scaled_durations, "teach.replay", references.scaled_d
 replay_plan = with_reference(scaled_plan, "teach.replay", lambda program, durations: program.to_plan(),
                              "the replay is the program at the lab's pace (TeachProgram.to_plan)")
 fast_station = make_station("sim", seed=0, scene="swap")
-fast_arm = tasks.context(fast_station).arm
+fast_arm = tasks.start_session(fast_station).arm
 fast_arm.move_to(loaded.q[0])
 fast = replay_plan(loaded, durations(loaded, 1.5))
 fast_result = planning.execute(fast, fast_arm)

@@ -37,6 +37,7 @@ from IPython import get_ipython
 
 from armlab.blocks import COLORS, LAB_RGB, block_edge
 from armlab.robot import JOINT_NAMES
+from armlab.tasks import start_session
 from armlab.tasks.events import columns, event_station, run_event, score_event
 from armlab.tasks.events.layout import Move, covered, free_spot, is_stacked
 from armlab.tasks.events.replay import objects_from_snapshot
@@ -123,7 +124,8 @@ print("swapped:", score_event("sort_stack", 3, board).points, "points")
 # A strategy is an object with `next_move(seen)`: given the detections of a fresh look (`detection.Block`s: `color`,
 # `size`, `position` = top-face centre in world mm, `is_block` — False for a distractor), it returns the next
 # `Move(block, to, yaw, why)` — `to` is where the block's *bottom-face* centre goes (world mm), `why` a word for the
-# log — or `None` when it is done. `run_event` picks, places, looks again and calls it again; it calls
+# log — or `None` when it is done. `run_event` runs in a task session (`start_session(station)` calibrates the camera
+# and fits the sag model, before the event's clock starts): it picks, places, looks again and calls it again; it calls
 # `placed(move)` after each place that ran through. A pick that fails is simply seen again on the next look.
 #
 # The goal at levels 2 and 3: one stack per size at `STACK_XY[size]`, in rainbow order from the bottom (`COLORS` is
@@ -190,7 +192,7 @@ def strategy_for(level):
 
 
 station = event_station("sort_stack", 3, seed=0)
-sort3 = run_event(station, "sort_stack", 3, strategy=strategy_for(3))
+sort3 = run_event(start_session(station), "sort_stack", 3, strategy=strategy_for(3))
 for m in sort3.moves:
     print(f"{m.t_start:6.1f} s  {m.move}")
 print(sort3.score.table())
@@ -206,7 +208,7 @@ before_after(sort3, side=True)
 # CHECK events.sort_stack
 for level, seed in ((2, 3), (3, 4)):
     st = event_station("sort_stack", level, seed=seed)
-    res = run_event(st, "sort_stack", level, strategy=SortStackStrategy(level), record=False)
+    res = run_event(start_session(st), "sort_stack", level, strategy=SortStackStrategy(level), record=False)
     lost = [f"{line.what}: {line.why}" for line in res.score.lines if line.points == 0]
     assert res.score.full_marks, (f"level {level}, seed {seed}: your strategy scored {res.score.points:g}/"
                                   f"{res.score.max_points} ({res.stopped}); lost: {lost}")
@@ -243,7 +245,7 @@ fig.tight_layout()
 
 # %%
 station = event_station("line_up", 3, seed=0)
-line3 = run_event(station, "line_up", 3)
+line3 = run_event(start_session(station), "line_up", 3)
 print(line3.summary())
 print(line3.score.table())
 before_after(line3)
@@ -273,7 +275,7 @@ print("highest tool point at the tower spot: "
 
 # %%
 station = event_station("sky", seed=0)
-sky = run_event(station, "sky")
+sky = run_event(start_session(station), "sky")
 tower = len(sky.score.lines)
 print(sky.summary())
 heights = [o.top_z for o in max(columns(station.world.objects), key=len)]

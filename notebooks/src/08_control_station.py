@@ -31,6 +31,9 @@
 #    block in the middle of the board.
 # 7. **End.** *sleep*, then `station.close()`; power off with the arm resting.
 #
+# The panel works in a task session: `tasks.start_session(station)` calibrates the camera (the arm moves out of its
+# view) and fits the sag model once, before the panel opens; its *calibrate* button calibrates again.
+#
 # The kit enforces what software can (joint limits, speeds, board and block clearance are checked before anything is
 # sent; a stop always wins); the checklist covers what it cannot see.
 
@@ -52,7 +55,8 @@ station = make_station("sim", seed=0, scene={"objects": [
     {"color": "green", "size": "large", "position_mm": [60.0, 300.0], "yaw_rad": -0.5},
 ]})
 viewer = Viewer()
-panel = station_panel(station, viewer=viewer)   # calibrates the camera and fits the sag model on first use
+session = tasks.start_session(station)          # calibrates the camera and fits the sag model, here
+panel = station_panel(session, viewer=viewer)
 print("state:", panel.machine.state, "| the panel's states:", ", ".join(tasks.STATES))
 
 # %% [markdown]
@@ -74,7 +78,7 @@ print("state:", panel.machine.state, "| the panel's states:", ", ".join(tasks.ST
 # `machine.enter(state)` enters a state (and adds it to `machine.history`); `machine.state` is the current one.
 #
 # **Exercise `station.transition`:** write `run_command(machine, state, action)`, returning what `action()` returns.
-# `TaskMachine(station, transition=run_command)` then runs every command through it.
+# `TaskMachine(session, transition=run_command)` then runs every command through it.
 
 # %%
 from armlab.station.contract import EmergencyStopped
@@ -125,7 +129,7 @@ mine = make_station("sim", seed=0, scene={"objects": [
     {"color": "red", "size": "large", "position_mm": [-150.0, 200.0], "yaw_rad": 0.0},
     {"color": "blue", "size": "small", "position_mm": [200.0, 150.0], "yaw_rad": 0.3},
 ]})
-machine = TaskMachine(mine, transition=run_command)
+machine = TaskMachine(tasks.start_session(mine), transition=run_command)
 seen = machine.detect()
 red = next(b for b in seen if b.color == "red")
 red_truth = next(o for o in mine.world.blocks if o.color == "red")
@@ -202,7 +206,7 @@ panel.widget()
 # detected blue block's centre, as you would with the mouse.
 
 # %%
-blue = next(b for b in panel.ctx.last.blocks if b.color == "blue")
+blue = next(b for b in session.last.blocks if b.color == "blue")
 panel.click(blue.pixel)
 panel.wait()
 print(panel.status_text())
@@ -280,7 +284,7 @@ panel.repeat()
 print(panel.wait())
 
 # %%
-end = panel.ctx.arm.joint_positions()
+end = session.arm.joint_positions()
 gap = np.abs(end - panel.machine.program.q[-1]).max()
 assert len(panel.machine.program) == 3, f"the program has {len(panel.machine.program)} waypoints, expected 3"
 assert gap < 0.02, f"the repeat ended {gap:.3f} rad from the last taught waypoint"

@@ -15,10 +15,11 @@ def _sort_stack_seeds(rng):
 def _call_sort_stack(function, level, seed):
     """The student's strategy class, SortStackStrategy(level), runs the event on a fresh seeded station: [full marks,
     within the time limit] (1.0 / 0.0), scored from the simulator's ground truth."""
+    from armlab.tasks import start_session
     from armlab.tasks.events import event_station, run_event
 
-    station = event_station("sort_stack", int(level), seed=int(seed))
-    result = run_event(station, "sort_stack", int(level), strategy=function(int(level)), record=False)
+    session = start_session(event_station("sort_stack", int(level), seed=int(seed)))
+    result = run_event(session, "sort_stack", int(level), strategy=function(int(level)), record=False)
     return [float(result.score.full_marks), float(result.within_limit)]
 
 

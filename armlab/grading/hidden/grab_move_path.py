@@ -38,13 +38,14 @@ def _call_move_path(function, seed, blocks, spots):
 
     station = make_station("sim", seed=int(seed), scene={"objects": [
         {"color": c, "size": s, "position_mm": xy, "yaw_rad": yaw} for c, s, xy, yaw in blocks]})
-    seen = {b.color: b for b in tasks.look(station).blocks}
+    session = tasks.start_session(station)
+    seen = {b.color: b for b in tasks.look(session).blocks}
     out = []
     for (color, *_), spot in zip(blocks, spots, strict=True):
         truth = next(o for o in station.world.blocks if o.color == color)
         try:
-            held = grab_with(station, seen[color], path=function) and truth.id in station.world.held
-            drop_with(station, np.asarray(spot, float), 0.0, path=function)
+            held = grab_with(session, seen[color], path=function) and truth.id in station.world.held
+            drop_with(session, np.asarray(spot, float), 0.0, path=function)
             bottom = truth.position - [0.0, 0.0, truth.edge / 2]
             landed = not station.world.held and float(np.abs(bottom - spot).max()) < 3.0
         except Exception:           # refused, unreachable or broken: this block and the rest score 0

@@ -50,8 +50,10 @@ def _call_transition(function, script):
     3 ValueError, 4 anything else or a wrong result), the state after (index in STATES)], then the history (indices)."""
     from armlab.station.contract import EmergencyStopped
     from armlab.tasks.machine import STATES, MachineBusy, TaskMachine
+    from armlab.tasks.session import Session
 
-    machine = TaskMachine(_Station(), transition=function)
+    station = _Station()
+    machine = TaskMachine(Session(station, station.arm), transition=function)   # a stand-in session: no calibration
 
     def command(state, work):
         return machine.transition(machine, state, work)

@@ -1,13 +1,13 @@
 """Run an autonomous event on a station: look, choose a move, pick, place, look again (verify, retry), score.
 
-run_event(station, event, level) runs any registered event (registry.py: "sort_stack", "line_up", "sky", ...); it
-sets the station up through the task layer
-(armlab.tasks.handling.context: camera calibration and, in simulation, the sag fit; not timed), then loops within the
-event's time limit (simulated seconds): look with the arm out of view (detect_objects: blocks AND distractors, which
-the plans avoid), ask the strategy for the next move, pick (a failed pick is retried after a new look, up to
-MAX_PICK_TRIES times per block), place, and record. The robot acts only on what it sees; the score comes from the
-simulator's ground truth (scoring.py) at the end, or at the time limit if the run overran it. For the evaluation
-tables the truth is also read after each place (the placement error of the block that was held), never fed back.
+run_event(session, event, level) runs any registered event (registry.py: "sort_stack", "line_up", "sky", ...) in a task
+session the caller started (tasks.start_session(station): camera calibration and, in simulation, the sag fit; not
+timed), then loops within the event's time limit (simulated seconds): look with the arm out of view (detect_objects:
+blocks AND distractors, which the plans avoid), ask the strategy for the next move, pick (a failed pick is retried after
+a new look, up to MAX_PICK_TRIES times per block), place, and record. The robot acts only on what it sees; the score
+comes from the simulator's ground truth (scoring.py) at the end, or at the time limit if the run overran it. For the
+evaluation tables the truth is also read after each place (the placement error of the block that was held), never fed
+back.
 Units: mm, rad, s; world (board) frame.
 """
 
@@ -23,8 +23,8 @@ from armlab.detection import DetectionSettings
 from armlab.kinematics import Unreachable
 from armlab.planning import Obstacle
 from armlab.station import MotionRefused
-from armlab.station.contract import Station
 from armlab.tasks import handling, perception
+from armlab.tasks.session import Session, as_session
 
 from .layout import Move, footprint_radius
 from .registry import Strategy, score_event
@@ -97,10 +97,12 @@ class Look:
     objects: list
 
 
-def see(station: Station, ctx, obstacles=(), settings: DetectionSettings | None = None) -> Look:
+def see(session: Session, obstacles=(), settings: DetectionSettings | None = None) -> Look:
     """Arm out of the camera's view, one frame, corrected depth, every object's top face (tasks.perception.observe with
-    all_objects: distractors included, which the plans avoid)."""
-    obs = perception.observe(station, ctx.calibration, ctx.arm, obstacles, all_objects=True, settings=settings)
+    all_objects: distractors included, which the plans avoid), with the session's calibration and guarded arm."""
+    session = as_session(session, "see")
+    obs = perception.observe(session.station, session.calibration, session.arm, obstacles, all_objects=True,
+                             settings=settings)
     return Look(obs.frame, obs.depth, obs.blocks)
 
 
@@ -150,15 +152,18 @@ def _with_protocol_defaults(strategy) -> Strategy:
     return _WithDefaults(strategy)
 
 
-def run_event(station: Station, event: str, level: int = 1, time_limit_s: float | None = None, seed: int = 0,
+def run_event(session: Session, event: str, level: int = 1, time_limit_s: float | None = None, seed: int = 0,
               max_moves: int = 60, record: bool = True, strategy=None) -> EventResult:
-    """Run one event autonomously on a simulated station and score it (see the module notes).
+    """Run one event autonomously in a session on a simulated station (tasks.start_session(event_station(...)))
+    and score it (see the module notes).
 
     time_limit_s: default the event's (the rules': 180 s sort 'n stack, 600 s the others). seed: the supply's
     jitter (to the sky's hand-over). strategy: default the event's own for the level (make_strategy); yours needs
     next_move(seen) -> Move or None (seen: the detections of a fresh look) and placed(move), called after each
     successful place; what it lacks of the Strategy protocol (stopped, cannot_place, obstacles) takes the defaults.
     """
+    session = as_session(session, "run_event")
+    station = session.station
     if station.world is None:
         raise ValueError("run_event scores from the simulator's ground truth: it needs a simulated station")
     spec = event_spec(event)
@@ -166,7 +171,6 @@ def run_event(station: Station, event: str, level: int = 1, time_limit_s: float 
     limit = spec.time_limit_s if time_limit_s is None else float(time_limit_s)
     if not limit > 0:
         raise ValueError(f"time_limit_s must be positive, got {time_limit_s}")
-    ctx = handling.context(station)
     world = station.world
     supply = spec.supply(world, seed) if spec.supply is not None else None
     if supply is not None:
@@ -181,7 +185,7 @@ def run_event(station: Station, event: str, level: int = 1, time_limit_s: float 
             stopped = "time is up"
             break
         extra = list(strategy.obstacles())
-        seen = see(station, ctx, [*board, *extra], spec.detection).objects
+        seen = see(session, [*board, *extra], spec.detection).objects
         board = list(seen)
         looks += 1
         move = strategy.next_move(seen)
@@ -195,7 +199,7 @@ def run_event(station: Station, event: str, level: int = 1, time_limit_s: float 
         obstacles = _obstacles(seen, move, extra)
         t_start = world.time_s - t0
         try:
-            held = handling.pick(station, move.block, obstacles=obstacles)
+            held = handling.pick(session, move.block, obstacles=obstacles)
         except Unreachable as e:
             stopped = f"cannot reach the {key[0]} {key[1]} block: {e}"
             break
@@ -206,11 +210,11 @@ def run_event(station: Station, event: str, level: int = 1, time_limit_s: float 
             continue
         truth = list(station.arm.holding)[:1]
         try:
-            handling.place(station, move.to, move.yaw, obstacles=obstacles, clearance=move.clearance)
+            handling.place(session, move.to, move.yaw, obstacles=obstacles, clearance=move.clearance)
         except (Unreachable, MotionRefused) as e:   # e.g. the tower is as high as the arm can stack: put it back
             why = f"cannot place the {key[0]} {key[1]} block ({e})"
             try:       # back down the pick's own line (checked whole first: refused, nothing moves)
-                handling.put_back(station)
+                handling.put_back(session)
             except MotionRefused as refused:
                 stopped = f"{why}; cannot put it back either ({refused}): the arm holds it where it stopped"
                 break
