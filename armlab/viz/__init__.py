@@ -5,7 +5,7 @@
         print(viewer.url)              # open it in a browser, or in a notebook:
         viewer.widget()                # the live scene inline, over the kernel's connection; `viewer` alone too
         viewer.show(q, gripper_opening_mm=30)
-        viewer.joint_sliders(arm=station.arm)   # sliders from the viewer's pose that move the arm
+        viewer.joint_sliders(machine=machine)   # sliders that move the arm through a tasks.TaskMachine
         viewer.save_html("scene.html")
 
 World (board) frame, millimetres and radians everywhere.

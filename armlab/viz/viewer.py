@@ -5,9 +5,10 @@ node scaled by 1/1000, so meshcat sees metres (its camera, grid and lights assum
 scale with the node -- a point cloud's point size -- are given to meshcat in metres.
 
 In a notebook: `viewer.widget()` (or `viewer` as a cell's last line) shows the live scene inline (meshcat's viewer in an
-anywidget, fed over the kernel's connection: armlab.viz.widget); `viewer.joint_sliders(arm=station.arm)` gives sliders
-that start from the viewer's pose, follow every later show()/animate(), and (with an arm) move the arm within its joint
-limits. close() tells what is still open that the viewer is gone: inline views say so, sliders are disabled with a note,
+anywidget, fed over the kernel's connection: armlab.viz.widget); `viewer.joint_sliders(machine=machine)` gives sliders
+that start from the viewer's pose, follow every later show()/animate(), and move the arm within its joint limits through
+the station's state machine (a tasks.TaskMachine: refused while busy or stopped, stopped by its e-stop). close() tells
+what is still open that the viewer is gone: inline views say so, sliders are disabled with a note,
 and a browser tab on the server gets a grey background and a "viewer closed" sign before the server stops. Every method
 is thread-safe (one lock around the server connection), so a control panel may redraw from a worker thread.
 """

@@ -228,11 +228,17 @@ except MotionRefused as refusal:
 print("still at home:", bool(np.allclose(station.arm.joint_positions(), robot.home, atol=0.01)))
 
 # %% [markdown]
-# These sliders move the station's arm (within its joint limits; a move the arm refuses is reported and they return
-# to its pose).
+# These sliders move the station's arm, and they go through the station's state machine (notebook 08), as every
+# command does: a move is refused while another command runs or after an emergency stop, and `machine.estop()`
+# stops it. The machine drives a task session; this one is built without calibrating the camera (nothing moves
+# until you drag a slider), which is all that moving joints needs. A move the arm refuses is reported under the
+# sliders and they return to the arm's pose.
 
 # %%
-arm_sliders = viewer.joint_sliders(arm=station.arm)
+from armlab import tasks
+
+machine = tasks.TaskMachine(tasks.Session(station, tasks.GuardedArm(station.arm)))
+arm_sliders = viewer.joint_sliders(machine=machine)
 arm_sliders
 
 # %% [markdown]
