@@ -14,6 +14,7 @@ import json
 import os
 import shutil
 import subprocess
+import sys
 import textwrap
 import time
 from pathlib import Path
@@ -350,7 +351,7 @@ def test_run_autograder_in_a_gradescope_layout_with_student_code_unprivileged(tm
     import zipfile
 
     from armlab.grading.autograder import build_bundle
-    from armlab.grading.sandbox import USER_UIDS
+    from armlab.grading.sandbox import USER_UIDS, uids_in_use
 
     if os.getuid() != 0:
         pytest.skip("the unprivileged-user sandbox needs the grader to be root (as on Gradescope)")
@@ -388,7 +389,10 @@ def test_run_autograder_in_a_gradescope_layout_with_student_code_unprivileged(tm
         assert package["score"] == 0 and "symbolic link" in package["output"], package
         after = hashlib.sha256(b"".join(p.read_bytes() for p in sorted((root / "source").rglob("*.py")))).hexdigest()
         assert after == before
+        busy = set(uids_in_use())          # uids another grader on this machine holds now (another test run's)
         left = [e.name for e in Path("/proc").iterdir() if e.name.isdigit() and _owner(e) in USER_UIDS]
+        busy |= set(uids_in_use())
+        left = [pid for pid in left if _owner(Path("/proc") / pid) not in busy]
         assert left == [], f"processes of the run's users are left: {left}"
         env["ARMLAB_GRADE_EXERCISES"] = "fk.no_such_exercise"
         done = subprocess.run([str(root / "run_autograder")], env=env, capture_output=True, text=True, timeout=300)
@@ -438,3 +442,28 @@ def test_a_fork_bomb_stops_at_the_process_cap(tmp_path):
     forked, failed = (int(x.split("=")[1]) for x in out.strip().splitlines()[-1].split())
     assert done and forked < 32 and failed > 0, out
     assert _survivors() == []
+
+
+def test_two_grader_processes_never_share_a_run_user():
+    """The "user" backend's uids are held across processes (a lock per uid): while another process holds one, this
+    one gets another, and uids_in_use() names the held one; released, it is free again."""
+    from armlab.grading.sandbox import RUN_USERS, uids_in_use
+
+    holder = subprocess.Popen([sys.executable, "-c", textwrap.dedent("""
+        import sys, time
+        from armlab.grading.sandbox import RUN_USERS
+        print(RUN_USERS.take(), flush=True)
+        sys.stdin.readline()
+    """)], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True, cwd=ROOT)
+    try:
+        theirs = int(holder.stdout.readline())
+        assert theirs in uids_in_use()
+        mine = RUN_USERS.take()
+        try:
+            assert mine != theirs and mine in uids_in_use()
+        finally:
+            RUN_USERS.give(mine)
+        assert mine not in uids_in_use()
+    finally:
+        holder.communicate("\n", timeout=60)
+    assert theirs not in uids_in_use()

@@ -19,10 +19,12 @@ Backends, chosen by `detect()` once per process (or by ARMLAB_SANDBOX=bwrap|user
 
 from __future__ import annotations
 
+import fcntl
 import itertools
 import os
 import shutil
 import signal
+import stat
 import subprocess
 import sys
 import sysconfig
@@ -32,7 +34,8 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
-__all__ = ["GRADER", "HOME", "WORK", "USER_UIDS", "Limits", "Sandbox", "SandboxUnavailable", "detect", "lock_down"]
+__all__ = ["GRADER", "HOME", "WORK", "USER_UIDS", "Limits", "Sandbox", "SandboxUnavailable", "detect", "lock_down",
+           "RUN_USERS", "uid_lock_dir", "uids_in_use"]
 
 @dataclass(frozen=True)
 class Limits:
@@ -166,8 +169,9 @@ class Sandbox:
                 Path(self.home(worktree)).mkdir(exist_ok=True)
             yield None
             return
-        uid = _USERS.take()
+        uid = RUN_USERS.take()
         try:
+            _kill_user(uid)                                # a crashed grader's leftovers (its lock died with it)
             run_dir = worktree.parent                      # the run's own folder: the work tree and a home
             Path(self.home(worktree)).mkdir(exist_ok=True)
             _chown_tree(run_dir, uid)
@@ -181,27 +185,75 @@ class Sandbox:
             yield uid
         finally:
             _kill_user(uid)
-            _USERS.give(uid)
+            RUN_USERS.give(uid)
 
 
 class _UidPool:
+    """The USER_UIDS, each held by one run at a time across every grader process on the machine: a run holds an
+    exclusive lock (flock) on its uid's file in a root-only folder (uid_lock_dir) for as long as it runs, so two
+    graders (two `grade` commands, two autograders, two test runs) never give one uid to two runs, and one run's
+    clean-up never kills another's processes. Within a process, threads wait on a condition for a uid to be free."""
+
     def __init__(self) -> None:
-        self._free = list(USER_UIDS)
+        self._held: dict[int, int] = {}                 # uid -> the open lock file's descriptor
         self._cond = threading.Condition()
+
+    def _try(self, uid: int) -> bool:
+        fd = os.open(uid_lock_dir() / f"uid-{uid}.lock", os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW, 0o600)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            os.close(fd)
+            return False
+        self._held[uid] = fd
+        return True
 
     def take(self) -> int:
         with self._cond:
-            while not self._free:
-                self._cond.wait()
-            return self._free.pop(0)
+            while True:
+                for uid in USER_UIDS:
+                    if uid not in self._held and self._try(uid):
+                        return uid
+                self._cond.wait(timeout=0.5)            # another process may free one meanwhile
 
     def give(self, uid: int) -> None:
         with self._cond:
-            self._free.append(uid)
+            os.close(self._held.pop(uid))               # closing the descriptor releases the lock
             self._cond.notify()
 
 
-_USERS = _UidPool()
+def uid_lock_dir() -> Path:
+    """The root-only folder of the uid locks (/run/armlab-grading, or one under the temporary folder): created with
+    mode 0700; refused (SandboxUnavailable) if it is a symlink, not ours, or open to others."""
+    import tempfile
+
+    base = Path("/run") if os.access("/run", os.W_OK) else Path(tempfile.gettempdir())
+    folder = base / "armlab-grading-uids"
+    try:
+        folder.mkdir(mode=0o700)
+    except FileExistsError:
+        pass
+    info = folder.lstat()
+    if not stat.S_ISDIR(info.st_mode) or info.st_uid != os.getuid() or info.st_mode & 0o077:
+        raise SandboxUnavailable(f"{folder} (the grader's uid locks) must be a folder of the grader's own, mode 0700")
+    return folder
+
+
+def uids_in_use() -> list[int]:
+    """The USER_UIDS some run (of any grader process) holds now."""
+    busy = []
+    for uid in USER_UIDS:
+        fd = os.open(uid_lock_dir() / f"uid-{uid}.lock", os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW, 0o600)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            busy.append(uid)
+        finally:
+            os.close(fd)
+    return busy
+
+
+RUN_USERS = _UidPool()    # the "user" backend's uids: take() one for a run, give() it back
 
 
 def _chown_tree(path: Path, uid: int) -> None:
