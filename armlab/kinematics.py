@@ -266,11 +266,12 @@ _ELBOW_DOWN = np.array([e == "elbow down" for _, e in _BRANCHES], float)
 _NUMERICAL_ITERATIONS = 40     # Gauss-Newton steps of the reference IK (quadratic convergence: ~6 from a seed)
 _APPROACH_WEIGHT_MM = 100.0    # the approach direction's error counts as this many mm per unit
 _NUMERICAL_SEEDS = ((0.0, 1.0), (-0.6, 2.2), (0.8, 0.3))     # (shoulder, elbow bend) rad of the reference IK's seeds
+_NUDGE = 1e-7                  # rad: the joint step of the reference IK's forward differences
 
 
 def _numerical_candidates(P: np.ndarray, pitch: np.ndarray, roll: np.ndarray, robot: RobotModel) -> _Candidates:
     """The reference path while the exercise ik.candidates is blank: every branch solved numerically on the
-    manufacturer's PoX model (link_frames, jacobian). The waist faces the target or turns away from it, the wrist
+    manufacturer's PoX model (link_frames). The waist faces the target or turns away from it, the wrist
     rotates by `roll`; shoulder, elbow and wrist_angle follow by damped Gauss-Newton on the tool point and the
     approach direction, from a seed with the elbow on the branch's side. A branch counts where it converges onto the
     target (1e-6 mm) and stays on its elbow's side. Slower than the closed form (about 40 batched PoX evaluations)."""
@@ -302,11 +303,14 @@ def _numerical_candidates(P: np.ndarray, pitch: np.ndarray, roll: np.ndarray, ro
             if not idx.size:
                 break
             T = link_frames(q[idx], robot, check_limits=False)[:, 6]
-            J = jacobian(q[idx], robot)[:, :, 1:4]                                       # (M, 6, 3)
             e = np.concatenate([target[todo[idx]] - T[:, :3, 3],
                                 _APPROACH_WEIGHT_MM * (aim[todo[idx]] - T[:, :3, 0])], axis=1)
-            d_aim = np.swapaxes(np.cross(np.swapaxes(J[:, 3:], 1, 2), T[:, None, :3, 0]), 1, 2)  # omega x approach
-            A = np.concatenate([J[:, :3], _APPROACH_WEIGHT_MM * d_aim], axis=1)
+            # how the tool point and the approach move with shoulder, elbow and wrist_angle: forward differences
+            nudged = q[idx, None, :] + _NUDGE * np.eye(5)[1:4]                                 # (M, 3, 5)
+            T_n = link_frames(nudged.reshape(-1, 5), robot, check_limits=False)[:, 6].reshape(len(idx), 3, 4, 4)
+            d_point = (T_n[..., :3, 3] - T[:, None, :3, 3]) / _NUDGE                           # (M, 3 joints, 3)
+            d_aim = (T_n[..., :3, 0] - T[:, None, :3, 0]) / _NUDGE
+            A = np.swapaxes(np.concatenate([d_point, _APPROACH_WEIGHT_MM * d_aim], axis=2), 1, 2)   # (M, 6, 3)
             At = np.swapaxes(A, 1, 2)
             step = np.linalg.solve(At @ A + 1e-9 * np.eye(3), At @ e[..., None])[..., 0]
             q[idx, 1:4] += step / np.maximum(1.0, np.abs(step).max(axis=1, keepdims=True) / 0.5)
