@@ -21,7 +21,6 @@ __all__ = [
     "log_so3",
     "exp_se3",
     "rotvec_to_matrix",
-    "euler_zyz_from_matrix",
     "matrix_from_euler_zyz",
     "rpy_from_matrix",
     "matrix_from_rpy",
@@ -149,24 +148,6 @@ def exp_se3(screw, theta) -> np.ndarray:
     R = np.eye(3) + np.sin(th) * W + (1.0 - np.cos(th)) * (W @ W)
     G = np.eye(3) * th + (1.0 - np.cos(th)) * W + (th - np.sin(th)) * (W @ W)
     return homogeneous(R, np.einsum("...ij,...j->...i", G, v))
-
-
-def euler_zyz_from_matrix(R) -> np.ndarray:
-    """ZYZ Euler angles (phi, theta, psi) (..., 3) with R = Rz(phi) Ry(theta) Rz(psi), theta in [0, pi].
-
-    At the singularities theta = 0 or pi only phi +/- psi is defined: psi is set to 0 and phi carries the rotation.
-    """
-    R = np.asarray(R, dtype=float)
-    sin_theta = np.hypot(R[..., 0, 2], R[..., 1, 2])
-    theta = np.arctan2(sin_theta, R[..., 2, 2])
-    regular = sin_theta > _SINGULAR_EPS
-    phi = np.where(regular, np.arctan2(R[..., 1, 2], R[..., 0, 2]), 0.0)
-    psi = np.where(regular, np.arctan2(R[..., 2, 1], -R[..., 2, 0]), 0.0)
-    # theta = 0: R = Rz(phi + psi); theta = pi: R = Rz(phi - psi) Ry(pi).
-    phi_singular = np.where(R[..., 2, 2] > 0, np.arctan2(R[..., 1, 0], R[..., 0, 0]),
-                            np.arctan2(-R[..., 1, 0], -R[..., 0, 0]))
-    phi = np.where(regular, phi, phi_singular)
-    return np.stack([phi, theta, psi], axis=-1)
 
 
 def matrix_from_euler_zyz(angles) -> np.ndarray:

@@ -124,7 +124,7 @@ PATCH_ALLCLOSE = _body('''
 ''')
 BUILT_UP_NAME = _body('''
     from armlab import transforms as tf
-    return getattr(tf, "euler_zyz" + "_from" + "_matrix")(np.asarray(T, float)[:3, :3])
+    return getattr(tf, "rpy_from" + "_matrix")(np.asarray(T, float)[:3, :3])
 ''')
 TELL_HIDDEN = _body('''
     import sys
@@ -251,7 +251,7 @@ def test_switching_the_checks_off_does_not_pass_them(attacked, student):
 def test_a_forbidden_call_by_a_built_up_name_is_caught_at_run_time(attacked):
     result = attacked["results"]["built_up_name"][DH]
     forbidden = [c for c in result.checks if c.name.startswith("static")]
-    assert forbidden and not forbidden[0].passed and "euler_zyz_from_matrix" in forbidden[0].message
+    assert forbidden and not forbidden[0].passed and "rpy_from_matrix" in forbidden[0].message
     assert result.score < exercise(DH).points
 
 

@@ -106,28 +106,12 @@ def test_exp_se3_rotates_about_an_axis_through_a_point():
 
 
 @SETTINGS
-@given(angles, st.floats(1e-6, np.pi - 1e-6), angles)
-def test_euler_zyz_round_trip_regular(phi, theta, psi):
+@given(angles, angles, angles)
+def test_matrix_from_euler_zyz(phi, theta, psi):
+    """(ZYZ Euler angles from a matrix are exercise fk.euler's: notebook 02, not the kit's.)"""
     R = tf.matrix_from_euler_zyz([phi, theta, psi])
     np.testing.assert_allclose(R, tf.rot_z(phi) @ tf.rot_y(theta) @ tf.rot_z(psi), atol=1e-15)
-    got = tf.euler_zyz_from_matrix(R)
-    assert 0 <= got[1] <= np.pi
-    np.testing.assert_allclose(tf.matrix_from_euler_zyz(got), R, atol=1e-9)
-    if 1e-4 < theta < np.pi - 1e-4:  # away from gimbal lock the angles themselves come back
-        np.testing.assert_allclose(np.angle(np.exp(1j * (got - [phi, theta, psi]))), 0, atol=1e-8)
-
-
-@pytest.mark.parametrize("theta", [0.0, np.pi])
-def test_euler_zyz_singularities(theta):
-    """At theta = 0 or pi only phi +/- psi is defined: psi comes back 0 and the rotation is rebuilt exactly."""
-    for phi, psi in [(0.3, 0.5), (-2.0, 1.0), (3.0, 3.0), (0.0, 0.0)]:
-        R = tf.matrix_from_euler_zyz([phi, theta, psi])
-        got = tf.euler_zyz_from_matrix(R)
-        assert got[2] == 0.0
-        np.testing.assert_allclose(got[1], theta, atol=1e-12)
-        np.testing.assert_allclose(tf.matrix_from_euler_zyz(got), R, atol=1e-12)
-        combined = phi + psi if theta == 0 else phi - psi
-        np.testing.assert_allclose(np.angle(np.exp(1j * (got[0] - combined))), 0, atol=1e-12)
+    assert tf.matrix_from_euler_zyz(np.zeros((4, 2, 3))).shape == (4, 2, 3, 3)
 
 
 @SETTINGS
@@ -153,8 +137,7 @@ def test_rpy_singularities(pitch):
 
 def test_euler_conversions_are_vectorised():
     R = random_rotations(1000, seed=3)
-    for to_angles, from_angles in ((tf.euler_zyz_from_matrix, tf.matrix_from_euler_zyz),
-                                   (tf.rpy_from_matrix, tf.matrix_from_rpy)):
+    for to_angles, from_angles in ((tf.rpy_from_matrix, tf.matrix_from_rpy),):
         a = to_angles(R.reshape(10, 100, 3, 3))
         assert a.shape == (10, 100, 3)
         np.testing.assert_allclose(from_angles(a).reshape(-1, 3, 3), R, atol=1e-9)

@@ -43,5 +43,5 @@ def _call_euler(function, T):
 SPECS: tuple[HiddenSpec, ...] = (HiddenSpec("euler_angles_from_T", _rotations, atol=1e-7, adapter="_call_euler",
                                             prelude="definitions"),)
 FORBIDDEN: tuple[str, ...] = (
-    "transforms.euler_zyz_from_matrix", "transforms.rpy_from_matrix", "scipy.spatial.transform.Rotation",
+    "transforms.rpy_from_matrix", "scipy.spatial.transform.Rotation",
 )
