@@ -98,3 +98,56 @@ def test_backends_import_the_contract_and_nothing_that_builds_stations(backend):
             todo.extend(graph[m])
     assert "armlab.station.contract" in reach
     assert not reach & {"armlab.station", "armlab.station.registry", "armlab"}, sorted(reach)
+
+
+def private_uses(path: Path, modules: dict[str, Path]) -> list[str]:
+    """`from armlab.x import _name` and `x._name` (x an armlab module imported under that name) in `path`: another
+    module's private names. A module's own privates, dunders and the grading harness's hidden checks (which test the
+    kit from outside) are not counted."""
+    tree = ast.parse(path.read_text(), str(path))
+    parts = path.relative_to(ROOT).with_suffix("").parts
+    package = parts[:-1]                       # the package a relative import starts from
+    aliases, found = {}, []
+    for node in ast.walk(tree):
+        if not isinstance(node, ast.ImportFrom):
+            continue
+        source = node.module or ""
+        if node.level:
+            base = package[:len(package) - (node.level - 1)]
+            source = ".".join(base + ((node.module,) if node.module else ()))
+        if source.startswith("armlab"):
+            for alias in node.names:
+                full = f"{source}.{alias.name}"
+                if full in modules:
+                    aliases[alias.asname or alias.name] = full
+                elif alias.name.startswith("_") and not alias.name.startswith("__"):
+                    found.append(f"{path.relative_to(ROOT)}:{node.lineno}: from {source} import {alias.name}")
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            for alias in node.names:
+                if alias.name.startswith("armlab") and alias.asname:
+                    aliases[alias.asname] = alias.name
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name) and node.value.id in aliases \
+                and node.attr.startswith("_") and not node.attr.startswith("__"):
+            found.append(f"{path.relative_to(ROOT)}:{node.lineno}: {node.value.id}.{node.attr}")
+    return found
+
+
+def test_no_module_reads_another_modules_private_names():
+    modules = module_names()
+    found = [use for name, path in modules.items() if not name.startswith("armlab.grading.hidden")
+             for use in private_uses(path, modules)]
+    assert not found, "private names read across modules:\n" + "\n".join(found)
+
+
+def test_private_uses_finds_both_forms(tmp_path):
+    probe = PACKAGE / "_probe_private_uses.py"
+    try:
+        probe.write_text("from armlab.calibration.intrinsics import _SUBPIX_CRITERIA\n"
+                         "from .calibration.intrinsics import _SUBPIX_CRITERIA as c\n"
+                         "from armlab import kinematics\nx = kinematics._wrap(1.0)\n")
+        found = private_uses(probe, module_names())
+        assert len(found) == 3 and "_SUBPIX_CRITERIA" in found[0] + found[1] and "kinematics._wrap" in found[2], found
+    finally:
+        probe.unlink()

@@ -16,7 +16,7 @@ from armlab.images import check_gray_or_rgb
 from armlab.repeatable import opencv_single_thread
 
 __all__ = ["IntrinsicsResult", "calibrate_intrinsics", "find_checkerboard", "checkerboard_points",
-           "compare_intrinsics", "DUPLICATE_VIEW_PX"]
+           "compare_intrinsics", "check_pattern", "DUPLICATE_VIEW_PX"]
 
 _SUBPIX_CRITERIA = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 50, 1e-4)
 DUPLICATE_VIEW_PX = 3.0      # two views whose corners agree to this RMS (px) show the board in one pose
@@ -45,8 +45,9 @@ class IntrinsicsResult:
                 f"over {len(self.used_views)} views ({len(self.rejected_views)} rejected)")
 
 
-def _check_pattern(pattern_size, square_mm) -> tuple[tuple[int, int], float]:
-    """Validate (inner-corner columns, rows) and the square edge (mm)."""
+def check_pattern(pattern_size, square_mm) -> tuple[tuple[int, int], float]:
+    """((columns, rows), square_mm) checked: the checkerboard's inner corners (2-1000 each way, integers) and its
+    square edge (mm, positive and finite); ValueError naming the one that is wrong."""
     try:
         cols, rows = (int(n) for n in pattern_size)
         ok = (cols, rows) == tuple(pattern_size) and 2 <= cols <= 1000 and 2 <= rows <= 1000
@@ -60,7 +61,7 @@ def _check_pattern(pattern_size, square_mm) -> tuple[tuple[int, int], float]:
 
 def checkerboard_points(pattern_size: tuple[int, int], square_mm: float) -> np.ndarray:
     """Board-frame coordinates (N, 3) mm of the inner corners, row by row as OpenCV returns them (z = 0)."""
-    (cols, rows), square_mm = _check_pattern(pattern_size, square_mm)
+    (cols, rows), square_mm = check_pattern(pattern_size, square_mm)
     grid = np.mgrid[0:cols, 0:rows].T.reshape(-1, 2) * float(square_mm)
     return np.column_stack([grid, np.zeros(len(grid))]).astype(np.float32)
 
@@ -69,7 +70,7 @@ def find_checkerboard(image, pattern_size: tuple[int, int] = (9, 6)) -> np.ndarr
     """Sub-pixel inner-corner positions (N, 2) px of a checkerboard in a uint8 gray or RGB image, or None.
     """
     gray = check_gray_or_rgb(image)
-    pattern_size, _ = _check_pattern(pattern_size, 1.0)
+    pattern_size, _ = check_pattern(pattern_size, 1.0)
     found, corners = cv2.findChessboardCorners(
         gray, pattern_size, flags=cv2.CALIB_CB_ADAPTIVE_THRESH | cv2.CALIB_CB_NORMALIZE_IMAGE)
     if not found:
@@ -94,7 +95,7 @@ def calibrate_intrinsics(images, pattern_size: tuple[int, int] = (9, 6), square_
     rejected_views): they add no information, and copies of one view make the fit absurd.
     Raises ValueError for bad images, mixed sizes, or too few distinct views with a board.
     """
-    pattern_size, square_mm = _check_pattern(pattern_size, square_mm)
+    pattern_size, square_mm = check_pattern(pattern_size, square_mm)
     if isinstance(images, np.ndarray) and (images.ndim == 2 or (images.ndim == 3 and images.shape[2] == 3)):
         raise ValueError(f"images must be a list of images, got one array of shape {images.shape}")
     try:

@@ -22,7 +22,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from armlab.calibration.intrinsics import _check_pattern
+from armlab.calibration.intrinsics import check_pattern
 from armlab.camera import MAX_IMAGE_SIDE_PX
 from armlab.files import read_json, write_bytes_atomic, write_json_atomic
 from armlab.images import check_gray_or_rgb, to_gray
@@ -40,7 +40,7 @@ def save_checkerboard_set(images, folder, pattern_size: tuple[int, int] = (9, 6)
     checkerboard.json in `folder` (created if needed). Every file is written atomically, the metadata last, so a
     failed save never leaves a set that loads with missing views. `notes`: extra JSON fields (e.g. the camera's
     serial number, the simulated truth). Returns the folder. Raises ValueError for bad images (nothing written)."""
-    pattern_size, square_mm = _check_pattern(pattern_size, square_mm)
+    pattern_size, square_mm = check_pattern(pattern_size, square_mm)
     if isinstance(images, np.ndarray) and (images.ndim == 2 or (images.ndim == 3 and images.shape[2] == 3)):
         raise ValueError(f"images must be a list of images, got one array of shape {images.shape}")
     grays = [to_gray(check_gray_or_rgb(img, f"images[{i}]")) for i, img in enumerate(images)]
@@ -87,7 +87,7 @@ def load_checkerboard_set(folder) -> tuple[list[np.ndarray], dict]:
         raise ValueError(f"{folder}: no checkerboard set here (folder not found)")
     meta = read_json(meta_path, "checkerboard metadata", schema=SCHEMA)
     names = [str(n) for n in meta["images"]]
-    pattern_size, square_mm = _check_pattern(tuple(meta["pattern_size"]), float(meta["square_mm"]))
+    pattern_size, square_mm = check_pattern(tuple(meta["pattern_size"]), float(meta["square_mm"]))
     width, height = (int(n) for n in meta["image_size"])
     images = []
     for name in names:

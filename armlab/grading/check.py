@@ -17,8 +17,7 @@ from pathlib import Path
 
 from armlab.exercises.registry import EXERCISES, Exercise
 
-from .grade import _score
-from .results import CheckResult, ExerciseResult
+from .results import CheckResult, ExerciseResult, score_exercise
 from .run import DEFAULT_LIMITS, Limits, Runner, check_cells
 from .sandbox import detect
 from .splice import build_worktree
@@ -91,7 +90,7 @@ def self_check(checkout: Path | str = ".", limits: Limits = DEFAULT_LIMITS, unsa
         checks = [CheckResult(f"{ex.notebook} cell {i}", i in run.cells and run.cells[i].passed,
                               run.cells[i].message if i in run.cells else run.problem or "the cell did not run")
                   for i, ids in tags.items() if ex.id in ids]
-        results[ex.id] = _score(ex.id, checks, run.problem)
+        results[ex.id] = score_exercise(ex.id, checks, run.problem)
     blocked: dict[str, tuple[str, str]] = {}
     failing = [e for e in written if results[e.id].score < results[e.id].max_score]
     for ex in failing:

@@ -33,7 +33,7 @@ from pathlib import Path
 from armlab.exercises.registry import EXERCISES, exercise
 
 from . import report as _report  # noqa: F401  (imported now: nothing of the grader is loaded after student code)
-from .results import CheckResult, ExerciseResult
+from .results import CheckResult, ExerciseResult, score_exercise
 from .run import DEFAULT_LIMITS, Limits, NotebookRun, Runner, check_cells
 from .sandbox import WORK, Sandbox, detect
 from .splice import RegionRejected, build_worktree, check_body, splice_into
@@ -77,14 +77,6 @@ def check_reference(reference: Path) -> Path:
         raise ValueError(f"--reference {reference}: it has no hidden checks (armlab/grading/hidden.py): a student "
                          f"release cannot grade")
     return reference.resolve()
-
-
-def _score(exercise_id: str, checks: list[CheckResult], reason: str = "") -> ExerciseResult:
-    points = exercise(exercise_id).points
-    if not checks:
-        return ExerciseResult(exercise_id, 0.0, points, [], reason or "no check ran")
-    passed = sum(c.passed for c in checks)
-    return ExerciseResult(exercise_id, round(points * passed / len(checks), 2), points, checks, reason)
 
 
 def _hidden_source() -> Path | None:
@@ -298,14 +290,15 @@ class Grader:
                 check_body(body, exercise_id)
             tree = self._spliced({exercise_id: bodies})
         except RegionRejected as e:
-            return _score(exercise_id, [], str(e))
+            return score_exercise(exercise_id, [], str(e))
         try:
             ex = exercise(exercise_id)
             if not any(exercise_id in ids for ids in check_cells(tree / f"notebooks/{ex.notebook}.ipynb").values()):
-                return _score(exercise_id, [], f"notebooks/{ex.notebook}.ipynb has no '# CHECK {exercise_id}' cell")
+                return score_exercise(exercise_id, [],
+                                      f"notebooks/{ex.notebook}.ipynb has no '# CHECK {exercise_id}' cell")
             runs, hidden = self._run_all(tree, [ex.notebook], [exercise_id])
             run = runs[ex.notebook]
-            return _score(exercise_id, self._checks(exercise_id, bodies, run, tree, hidden), run.problem)
+            return score_exercise(exercise_id, self._checks(exercise_id, bodies, run, tree, hidden), run.problem)
         finally:
             self._discard(tree)
 
@@ -369,7 +362,7 @@ class Grader:
                                                          for e in others_fail):
                     # every check passed, or each other exercise that failed is the reference itself: the pass
                     # was already this exercise alone as far as a failure can tell
-                    results[exercise_id] = _score(exercise_id, checks, problem)
+                    results[exercise_id] = score_exercise(exercise_id, checks, problem)
                 else:
                     results[exercise_id] = self.grade_exercise(exercise_id, written[exercise_id])
         return {e: results[e] for e in self.exercise_ids}

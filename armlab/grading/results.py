@@ -4,7 +4,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-__all__ = ["CheckResult", "ExerciseResult"]
+from armlab.exercises.registry import exercise
+
+__all__ = ["CheckResult", "ExerciseResult", "score_exercise"]
 
 
 @dataclass(frozen=True)
@@ -32,3 +34,13 @@ class ExerciseResult:
         from armlab.exercises.registry import exercise
 
         return exercise(self.exercise_id).kind == "written"
+
+
+def score_exercise(exercise_id: str, checks: list[CheckResult], reason: str = "") -> ExerciseResult:
+    """The grading rule: points x (passed checks / all checks), rounded to 0.01; 0 with `reason` (or "no check ran")
+    when no check ran."""
+    points = exercise(exercise_id).points
+    if not checks:
+        return ExerciseResult(exercise_id, 0.0, points, [], reason or "no check ran")
+    passed = sum(c.passed for c in checks)
+    return ExerciseResult(exercise_id, round(points * passed / len(checks), 2), points, checks, reason)
