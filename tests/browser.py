@@ -8,12 +8,25 @@ from __future__ import annotations
 import shutil
 import subprocess
 import tempfile
+import time
 from pathlib import Path
 
 import cv2
 import numpy as np
 
 CANDIDATES = ("chromium", "chromium-browser", "google-chrome")
+
+
+def poll(what, condition, timeout_s=60.0, period_s=0.1):
+    """Call condition() until it returns something truthy; AssertionError naming `what` after timeout_s."""
+    deadline = time.monotonic() + timeout_s
+    while True:
+        value = condition()
+        if value:
+            return value
+        if time.monotonic() > deadline:
+            raise AssertionError(f"timed out after {timeout_s:g} s waiting for {what}")
+        time.sleep(period_s)
 
 
 def find_chromium() -> str | None:

@@ -28,6 +28,7 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).parent))
 import browser  # noqa: E402
+from browser import poll  # noqa: E402
 
 WHY_NOT = browser.playwright_missing() or browser.OnePort.why_not()
 pytestmark = pytest.mark.skipif(WHY_NOT is not None, reason=WHY_NOT or "")
@@ -51,18 +52,6 @@ ALL_RUN = """(n) => { const p = [...document.querySelectorAll('.jp-Notebook .jp-
                       return p.length === n && p.every(t => /\\[\\d+\\]/.test(t)); }"""
 IDLE = """() => { const k = window.jupyterapp.shell.currentWidget?.sessionContext?.session?.kernel;
                   return k ? k.status : 'none'; }"""
-
-
-def poll(what, condition, timeout_s=60.0, period_s=0.1):
-    """Call condition() until it returns something truthy; AssertionError naming `what` after timeout_s."""
-    deadline = time.monotonic() + timeout_s
-    while True:
-        value = condition()
-        if value:
-            return value
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out after {timeout_s:g} s waiting for {what}")
-        time.sleep(period_s)
 
 
 def board_pixels(picture: np.ndarray) -> int:

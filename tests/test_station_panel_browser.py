@@ -29,6 +29,7 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).parent))
 import browser  # noqa: E402
+from browser import poll  # noqa: E402
 
 REPO = Path(__file__).resolve().parent.parent
 NOTEBOOK = REPO / "notebooks" / "08_control_station.ipynb"
@@ -37,18 +38,6 @@ pytestmark = pytest.mark.skipif(WHY_NOT is not None, reason=WHY_NOT or "")
 VIEWPORT = {"width": 1366, "height": 768}          # a student's laptop
 BASE_URL = "/user/alice/"                          # as a JupyterHub serves a student's server
 READOUT = re.compile(r"pixel \((-?[\d.]+), (-?[\d.]+)\): world x (-?[\d.]+), y (-?[\d.]+), z (-?[\d.]+) mm")
-
-
-def poll(what, condition, timeout_s=60.0, period_s=0.1):
-    """Call condition() until it returns something truthy; AssertionError naming `what` after timeout_s."""
-    deadline = time.monotonic() + timeout_s
-    while True:
-        value = condition()
-        if value:
-            return value
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out after {timeout_s:g} s waiting for {what}")
-        time.sleep(period_s)
 
 
 class Station:
