@@ -28,8 +28,11 @@ CONTAINED = {   # region prefixes that break the run before the (correct) soluti
     "memory_hog": "    hog = bytearray(12 * 2**30)   # past the 8 GB cap, within the RAM: only the cap stops it\n",
     "huge_output": "    print('x' * (200 * 2**20))\n",
 }
-LIBRARY_EULER = ("    from scipy.spatial.transform import Rotation\n"     # right values, scipy's work
-                 "    return Rotation.from_matrix(np.asarray(T, dtype=float)[:3, :3]).as_euler('ZYZ')")
+LIBRARY_EULER = ("    import warnings\n"                                  # right values, scipy's work (it warns
+                 "    from scipy.spatial.transform import Rotation\n"     # at gimbal lock: the student hushes it)
+                 "    with warnings.catch_warnings():\n"
+                 "        warnings.simplefilter('ignore')\n"
+                 "        return Rotation.from_matrix(np.asarray(T, dtype=float)[:3, :3]).as_euler('ZYZ')")
 
 
 
