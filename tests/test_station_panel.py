@@ -339,8 +339,35 @@ def test_sliders_go_through_the_machine(panel):
         assert "sliders stopped: EmergencyStopped" in panel.wait(60)
         assert abs(station.arm.joint_positions()[0] - 0.4) > 0.02
     finally:
+        panel.estop()                        # whatever failed above, leave no motion running
+        panel.wait(60)
         panel.reset()
         panel.set_real_time(False)
+
+
+def test_a_change_made_while_another_thread_writes_readouts_still_acts(panel, monkeypatch):
+    """The follow thread writes slider readouts (which must not act) while the user may move a slider: a readout
+    being written on one thread must not swallow the user's change on another (a CI run lost 'sliders refused'
+    this way). Here a readout is held half-written while the user's change comes."""
+    writing, release = threading.Event(), threading.Event()
+    set_controls = panel._set_controls
+
+    def slow_set_controls(*args):
+        writing.set()
+        release.wait(10)
+        set_controls(*args)
+
+    monkeypatch.setattr(panel, "_set_controls", slow_set_controls)
+    readout = threading.Thread(target=panel._update_widgets)
+    readout.start()
+    assert writing.wait(10)
+    threading.Timer(0.3, release.set).start()      # the readout finishes a moment after the user's change came
+    n = len(panel.messages)
+    panel._w["sliders"][0].value = 0.25
+    readout.join(10)
+    monkeypatch.undo()
+    assert panel.wait(60).startswith("sliders: moved to"), panel.messages[n:]
+    np.testing.assert_allclose(panel.station.arm.joint_positions()[0], 0.25, atol=0.005)
 
 
 def test_the_depth_view_has_a_colour_scale(panel):

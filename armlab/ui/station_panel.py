@@ -163,8 +163,8 @@ class StationPanel:
         self._live = False
         self._live_thread: threading.Thread | None = None
         self._w = None                     # the widgets, once widget() built them
-        self._syncing = False
-        self._frame = None
+        self._sync = threading.local()     # .on: this thread writes readouts, which must not act (per thread: the
+        self._frame = None                 # follow thread's readouts must not swallow a change made meanwhile)
         self._depth = None                 # corrected depth of the shown frame
         self._frame_is_look = False
         if look and not view_is_current(session):
@@ -578,11 +578,11 @@ class StationPanel:
             return
         with self._lock:
             busy, state = self.busy, self.machine.state
-            self._syncing = True      # programmatic values below must not act
+            self._sync.on = True      # programmatic values below must not act
             try:
                 self._set_controls(w, busy, state)
             finally:
-                self._syncing = False
+                self._sync.on = False
 
     def _set_controls(self, w, busy: bool, state: str) -> None:
         colour = "#c62828" if state == "estop" else ("#1565c0" if busy else "#2e7d32")
@@ -614,8 +614,12 @@ class StationPanel:
             s.value = float(v)
             s.disabled = locked
 
+    def _syncing(self) -> bool:
+        """Whether this thread is writing readouts into the widgets (a change it makes is not the user's)."""
+        return getattr(self._sync, "on", False)
+
     def _on_slider(self, _change) -> None:
-        if self._syncing:
+        if self._syncing():
             return
         q = np.array([s.value for s in self._w["sliders"]])
         if self.machine.state == "teach":
@@ -783,7 +787,7 @@ class StationPanel:
         return box
 
     def _on_real_time(self, change) -> None:
-        if self._syncing:
+        if self._syncing():
             return
         try:
             self.set_real_time(bool(change["new"]))
