@@ -6,8 +6,9 @@ RELEASE := $(wildcard .student-release)
 STAMP   := .venv/.installed
 NBVAL   := --nbval --nbval-sanitize-with tests/nbval_sanitize.cfg --nbval-cell-timeout=600
 # Test files run in parallel, one process per core (at most 4); the tests of one file, and the cells of one notebook
-# (one kernel), stay together in one process (pytest-xdist's loadfile).
-PAR     := -n auto --maxprocesses 4 --dist loadfile
+# (one kernel), stay together in one process (pytest-xdist's loadfile), the longest files first (conftest.py's
+# START_FIRST, in place of xdist's order by number of tests, which handed the longest file out last).
+PAR     := -n auto --maxprocesses 4 --dist loadfile --no-loadscope-reorder
 
 .PHONY: demo test lint unit notebooks lab bench browser camera sandbox student autograder docs clean
 
