@@ -192,3 +192,13 @@ def test_the_users_data_folder_sits_between_the_lab_folder_and_the_package(tmp_p
     (lab / "lab.json").write_text("{}")
     monkeypatch.setenv(_paths.DATA_ENV, str(lab))
     assert _paths.data_path("lab.json") == lab / "lab.json"
+
+
+def test_the_version_is_the_same_everywhere():
+    """pyproject.toml, armlab.__version__ and the CHANGELOG's newest section name the same version."""
+    import armlab
+
+    declared = tomllib.loads((REPO / "pyproject.toml").read_text())["project"]["version"]
+    newest = re.search(r"^## \[(\d+\.\d+\.\d+)\]", (REPO / "CHANGELOG.md").read_text(), re.MULTILINE)
+    assert newest, "CHANGELOG.md has no '## [X.Y.Z]' section"
+    assert declared == armlab.__version__ == newest[1], (declared, armlab.__version__, newest[1])
