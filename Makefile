@@ -34,7 +34,7 @@ else
 endif
 
 lint: $(STAMP)
-	$(PY) -m ruff check armlab tests notebooks $(wildcard benchmarks tools/build-notebook tools/student-release tools/api-docs)
+	$(PY) -m ruff check armlab armlab_course tests notebooks $(wildcard benchmarks tools/build-notebook tools/student-release tools/api-docs)
 
 unit: $(STAMP) camera sandbox
 	MPLBACKEND=Agg $(PY) -m pytest -q $(PAR) tests
@@ -75,7 +75,7 @@ student: $(STAMP)
 ## dist/autograder and dist/autograder.zip, the file to upload
 autograder: $(STAMP)
 	rm -rf dist/autograder dist/autograder.zip
-	$(PY) -m armlab.grading.autograder build dist/autograder
+	$(PY) -m armlab_course.grading.autograder build dist/autograder
 
 clean:
 	rm -rf .venv out dist

@@ -21,9 +21,9 @@ from pathlib import Path
 
 import pytest
 
-from armlab.exercises import exercise
-from armlab.exercises.markers import is_blank
-from armlab.exercises.release import RELEASE_MARKER
+from armlab_course.exercises import exercise
+from armlab_course.exercises.markers import is_blank
+from armlab_course.exercises.release import RELEASE_MARKER
 from armlab.viz.server import ZMQ_ENV, ServerProcess, start_server
 
 ROOT = Path(__file__).resolve().parent
@@ -53,7 +53,7 @@ def _ensure_shared_server() -> str:
 
 
 def pytest_configure(config: pytest.Config) -> None:
-    config.addinivalue_line("markers", "exercise(*ids): the test needs these exercises (armlab.exercises) written")
+    config.addinivalue_line("markers", "exercise(*ids): the test needs these exercises (armlab_course.exercises) written")
 
 
 def _blank(exercise_id: str) -> bool:

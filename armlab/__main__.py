@@ -54,7 +54,7 @@ def _run(parser: argparse.ArgumentParser, argv: list[str] | None) -> int:
     colors_fit.add_argument("--out", default=None,
                             help="where to write the model (default: color_model.json in $ARMLAB_DATA when set, "
                                  "else the package's data folder)")
-    from armlab.grading.cli import add_parsers as add_grading_parsers
+    from armlab_course.grading.cli import add_parsers as add_grading_parsers
 
     add_grading_parsers(sub)
     sub.add_parser("record", add_help=False,
@@ -67,7 +67,7 @@ def _run(parser: argparse.ArgumentParser, argv: list[str] | None) -> int:
     if rest:
         parser.error(f"unrecognized arguments: {' '.join(rest)}")
     if args.command == "exercises":
-        from armlab.exercises import exercises_json, exercises_table
+        from armlab_course.exercises import exercises_json, exercises_table
 
         print(json.dumps(exercises_json(), indent=1) if args.json else exercises_table())
         return 0
@@ -79,7 +79,7 @@ def _run(parser: argparse.ArgumentParser, argv: list[str] | None) -> int:
             raise CommandError("colors fit", str(e)) from None
         return _fit_colors(frames, out)
     if args.command in ("grade", "check"):
-        from armlab.grading.cli import main as grading_main
+        from armlab_course.grading.cli import main as grading_main
 
         return grading_main(args)
     if args.command == "demo":

@@ -21,11 +21,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from armlab.arguments import finite_array, finite_float
-from armlab.exercises import registry as course
-from armlab.exercises.fallback import reference_fallback
-from armlab.exercises.registry import ExerciseNotWritten
 from armlab.robot import DH_TOOL_ROTATION, RobotModel, rx200
 from armlab.transforms import exp_se3, homogeneous, rot_x, rot_y, rot_z
+from armlab_course.exercises import registry as course
+from armlab_course.exercises.fallback import reference_fallback
+from armlab_course.exercises.registry import ExerciseNotWritten
 
 __all__ = [
     "Unreachable",

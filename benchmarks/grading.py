@@ -24,11 +24,11 @@ import tempfile
 import time
 from pathlib import Path
 
-from armlab.exercises import make_student_release
-from armlab.exercises.registry import EXERCISES, exercise
-from armlab.grading.grade import Grader, grade_class
-from armlab.grading.splice import write_regions
-from armlab.grading.submission import exercise_file, read_submission, regions_of, source_texts
+from armlab_course.exercises import make_student_release
+from armlab_course.exercises.registry import EXERCISES, exercise
+from armlab_course.grading.grade import Grader, grade_class
+from armlab_course.grading.splice import write_regions
+from armlab_course.grading.submission import exercise_file, read_submission, regions_of, source_texts
 
 ROOT = Path(__file__).resolve().parents[1]
 

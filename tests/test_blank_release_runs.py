@@ -19,7 +19,7 @@ import nbformat
 import pytest
 from nbclient import NotebookClient
 
-from armlab.exercises import EXERCISES, exercise, find_regions, make_student_release
+from armlab_course.exercises import EXERCISES, exercise, find_regions, make_student_release
 
 REPO = Path(__file__).resolve().parents[1]
 CHECK_TAG = re.compile(r"^# CHECK (?P<ids>.+)$", re.M)

@@ -1,4 +1,5 @@
-"""Exercises (armlab.exercises): the registry, the solution markers, and the student release (tools/student-release).
+"""Exercises (armlab_course.exercises): the registry, the solution markers, and the student release
+(tools/student-release).
 
 The registry is the one place an exercise is declared; the markers in the package and the notebooks must agree with
 it; the release must be a student's repository: stubs naming their exercise, student-facing files only, no solution
@@ -16,7 +17,7 @@ from pathlib import Path
 
 import pytest
 
-from armlab.exercises import (
+from armlab_course.exercises import (
     EXERCISES,
     ExerciseMarkerError,
     ExerciseNotWritten,
@@ -232,10 +233,10 @@ except NotImplementedError as e:
 
 def test_a_reference_path_stands_in_only_for_its_own_blank_stub(caplog):
     """The kit's function runs the student's code when written; the reference only for that exercise's blank stub,
-    with one warning of the armlab.exercises logger (once per exercise and process)."""
-    from armlab.exercises import ExerciseNotWritten, fallback, registry
-    from armlab.exercises import exercise as registered
-    from armlab.exercises.fallback import reference_fallback
+    with one warning of the armlab_course.exercises logger (once per exercise and process)."""
+    from armlab_course.exercises import ExerciseNotWritten, fallback, registry
+    from armlab_course.exercises import exercise as registered
+    from armlab_course.exercises.fallback import reference_fallback
 
     blank = registered("fk.dh_link_transform").message()
 
@@ -247,10 +248,10 @@ def test_a_reference_path_stands_in_only_for_its_own_blank_stub(caplog):
 
     fallback._announced.discard("fk.dh_link_transform")          # as in a fresh process
     assert kit(1) == ("student", 1)                                   # written: the reference never runs
-    with caplog.at_level("WARNING", logger="armlab.exercises"):
+    with caplog.at_level("WARNING", logger="armlab_course.exercises"):
         assert kit(2, ExerciseNotWritten("fk.dh_link_transform")) == ("reference", 2)
         assert kit(3, ExerciseNotWritten("fk.dh_link_transform")) == ("reference", 3)
-    notes = [r for r in caplog.records if r.name == "armlab.exercises"]
+    notes = [r for r in caplog.records if r.name == "armlab_course.exercises"]
     assert [r.getMessage() for r in notes] == ["note: exercise fk.dh_link_transform (notebook 02) is not written "
                                                "yet: the reference is used"]            # one line, once
     # another exercise's stub, a student's own NotImplementedError (even with the message's text), anything else
@@ -349,7 +350,7 @@ def test_a_package_exercises_check_cells_refuse_to_pass_on_its_reference_path(gi
 
 
 def test_require_written_names_the_blank_exercise(monkeypatch):
-    from armlab.exercises import fallback, require_written
+    from armlab_course.exercises import fallback, require_written
 
     require_written("fk.dh_link_transform")                # written in the instructor's checkout: no error
     monkeypatch.setattr(fallback, "_standing_in", {"teach.replay"})
@@ -409,7 +410,7 @@ def test_the_library_names_no_exercise_id():
     ids = {e.id for e in EXERCISES}
     for path in tracked(".py"):
         name = path.relative_to(REPO).as_posix()
-        if not name.startswith("armlab/") or name.startswith(("armlab/exercises/", "armlab/grading/")):
+        if not name.startswith("armlab/") or name.startswith(("armlab_course/exercises/", "armlab_course/grading/")):
             continue
         code = "\n".join(line.split("#")[0] for line in path.read_text().splitlines()
                          if not line.strip().startswith(("# BEGIN SOLUTION", "Exercise ")))
@@ -418,7 +419,7 @@ def test_the_library_names_no_exercise_id():
 
 
 def test_written_answers_are_found_blanked_and_refused_when_damaged():
-    from armlab.exercises.markers import answer_prompt, blank_answers, is_blank_answer
+    from armlab_course.exercises.markers import answer_prompt, blank_answers, is_blank_answer
 
     cell = "Question.\n\n<!-- BEGIN ANSWER fk.q_frames -->\nFrame 4 turns z.\n<!-- END ANSWER -->\nAfter."
     assert find_answers(["no answer here", cell]) == {"fk.q_frames": "Frame 4 turns z."}
@@ -438,7 +439,7 @@ def test_written_answers_are_found_blanked_and_refused_when_damaged():
 
 def test_the_release_blanks_every_written_answer(release):
     out, stubbed = release
-    from armlab.exercises.markers import is_blank_answer
+    from armlab_course.exercises.markers import is_blank_answer
 
     written = [e for e in EXERCISES if e.kind == "written"]
     assert written
@@ -450,8 +451,8 @@ def test_the_release_blanks_every_written_answer(release):
 
 
 def test_the_rubric_is_the_students_own_table(release, capsys):
-    from armlab.exercises import rubric
-    from armlab.exercises.rubric import exercise_state, solution_lines
+    from armlab_course.exercises import rubric
+    from armlab_course.exercises.rubric import exercise_state, solution_lines
 
     out, _ = release
     for e in EXERCISES:

@@ -14,11 +14,11 @@ from pathlib import Path
 import pytest
 from wrong_answers import DEPENDS, HIDDEN_WRONG, WRONG_DH, reference_bodies, wrong_euler
 
-from armlab.exercises import make_student_release
-from armlab.exercises.registry import exercise
-from armlab.grading import grade_class, read_submission
-from armlab.grading.run import Limits
-from armlab.grading.splice import write_regions
+from armlab_course.exercises import make_student_release
+from armlab_course.exercises.registry import exercise
+from armlab_course.grading import grade_class, read_submission
+from armlab_course.grading.run import Limits
+from armlab_course.grading.splice import write_regions
 
 ROOT = Path(__file__).resolve().parents[1]
 GRADED = ["fk.dh_table", "fk.euler", "ik.candidates", "fk.dh_link_transform", "ik.numerical"]
@@ -150,9 +150,9 @@ def test_calling_the_kits_reference_function_fails_the_hidden_checks(graded):
 
 def test_the_release_lacks_the_hidden_checks(tmp_path):
     make_student_release(ROOT, tmp_path / "s")
-    assert (ROOT / "armlab/grading/hidden/__init__.py").is_file()
-    assert not (tmp_path / "s/armlab/grading/hidden").exists()
-    assert (tmp_path / "s/armlab/grading/harness.py").is_file()
+    assert (ROOT / "armlab_course/grading/hidden/__init__.py").is_file()
+    assert not (tmp_path / "s/armlab_course/grading/hidden").exists()
+    assert (tmp_path / "s/armlab_course/grading/harness.py").is_file()
     assert not list((tmp_path / "s/tests").glob("test_grading*.py"))
 
 
@@ -225,7 +225,7 @@ def test_submission_reading_reports_damaged_markers(tmp_path):
 def test_grade_command_on_a_blank_class(tmp_path, monkeypatch):
     """Nothing runs for a class that wrote nothing: not even the reference's expected values (none is needed)."""
     from armlab.__main__ import main
-    from armlab.grading.run import Runner
+    from armlab_course.grading.run import Runner
 
     def ran(*args, **kwargs):
         raise AssertionError("a blank class ran something")
@@ -235,7 +235,7 @@ def test_grade_command_on_a_blank_class(tmp_path, monkeypatch):
     make_student_release(ROOT, tmp_path / "subs" / "alice")
     assert main(["grade", str(tmp_path / "subs"), "--out", str(tmp_path / "out"), "--reference", str(ROOT)]) == 0
     rows = list(csv.DictReader((tmp_path / "out" / "grades.csv").open()))
-    from armlab.exercises.registry import EXERCISES
+    from armlab_course.exercises.registry import EXERCISES
 
     assert rows[0]["student"] == "alice" and rows[0]["total"] == "0"
     assert float(rows[0]["max"]) == sum(e.points for e in EXERCISES if e.kind != "written")   # those by hand
@@ -244,7 +244,7 @@ def test_grade_command_on_a_blank_class(tmp_path, monkeypatch):
 
 def test_regrading_gives_the_same_scores(graded):
     """A fresh Grader (no shared cache) on the class's tampered submission: the same scores and checks."""
-    from armlab.grading.grade import Grader
+    from armlab_course.grading.grade import Grader
 
     results, out = graded
     grader = Grader(ROOT, Limits(timeout_s=240, cpu_s=25), GRADED)
@@ -259,7 +259,7 @@ def test_regrading_gives_the_same_scores(graded):
 
 def test_a_hard_coded_answer_fails_the_hidden_checks():
     """fk.euler as the public check's one singular case, hard-coded: the hidden checks' other poses fail it."""
-    from armlab.grading.grade import Grader
+    from armlab_course.grading.grade import Grader
 
     lookup = "    return np.array([0.7, 0.0, 0.0])"
     with Grader(ROOT, Limits(timeout_s=240, cpu_s=60), ["fk.euler"]) as grader:
@@ -271,8 +271,8 @@ def test_a_hard_coded_answer_fails_the_hidden_checks():
 def test_a_grader_told_an_exercise_is_not_written_refuses_to_grade_it_unprepared():
     """Expected values are computed only for exercises some submission writes (grade_class reads every submission
     first); a submission writing another one is refused, never graded against values computed after it ran."""
-    from armlab.grading.grade import Grader
-    from armlab.grading.submission import Submission
+    from armlab_course.grading.grade import Grader
+    from armlab_course.grading.submission import Submission
 
     with Grader(ROOT, exercises=["fk.euler"], written=[]) as grader:
         with pytest.raises(ValueError, match="bob wrote fk.euler, which this Grader was told no submission writes"):
@@ -280,7 +280,7 @@ def test_a_grader_told_an_exercise_is_not_written_refuses_to_grade_it_unprepared
 
 
 def test_a_grader_needs_at_least_one_run_at_a_time():
-    from armlab.grading.grade import Grader
+    from armlab_course.grading.grade import Grader
 
     with pytest.raises(ValueError, match="parallel must be at least 1, got 0"):
         Grader(ROOT, exercises=["fk.euler"], written=[], parallel=0)

@@ -21,13 +21,13 @@ from pathlib import Path
 
 import pytest
 
-from armlab.exercises import make_student_release
-from armlab.exercises.registry import exercise
-from armlab.grading import grade_class
-from armlab.grading.run import Limits
-from armlab.grading.sandbox import SandboxUnavailable, detect
-from armlab.grading.splice import check_body, write_regions
-from armlab.grading.submission import exercise_file, read_submission, regions_of, source_texts
+from armlab_course.exercises import make_student_release
+from armlab_course.exercises.registry import exercise
+from armlab_course.grading import grade_class
+from armlab_course.grading.run import Limits
+from armlab_course.grading.sandbox import SandboxUnavailable, detect
+from armlab_course.grading.splice import check_body, write_regions
+from armlab_course.grading.submission import exercise_file, read_submission, regions_of, source_texts
 
 ROOT = Path(__file__).resolve().parents[1]
 DH, CHAIN = "fk.euler", "fk.dh_table"
@@ -286,7 +286,7 @@ def test_symlinked_submission_files_are_refused_when_read(tmp_path):
 def test_the_sandbox_sees_no_checkout_and_no_network(tmp_path):
     """What a sandboxed process sees: its work tree read-write, the Python environment read-only, not the checkout's
     notebooks, not the grader's temporary trees, no network."""
-    from armlab.grading.run import Runner
+    from armlab_course.grading.run import Runner
 
     sandbox = detect()
     runner = Runner(sandbox, Limits(timeout_s=60, cpu_s=30))
@@ -350,8 +350,8 @@ def test_run_autograder_in_a_gradescope_layout_with_student_code_unprivileged(tm
     import tempfile
     import zipfile
 
-    from armlab.grading.autograder import build_bundle
-    from armlab.grading.sandbox import USER_UIDS, uids_in_use
+    from armlab_course.grading.autograder import build_bundle
+    from armlab_course.grading.sandbox import USER_UIDS, uids_in_use
 
     if os.getuid() != 0:
         pytest.skip("the unprivileged-user sandbox needs the grader to be root (as on Gradescope)")
@@ -411,8 +411,8 @@ def _owner(entry: Path) -> int:
 def test_a_fork_bomb_stops_at_the_process_cap(tmp_path):
     """A run may have at most Limits.max_procs processes (a pids cgroup; the run's own user's RLIMIT_NPROC in the
     unprivileged-user sandbox): forks past it fail, and the sleeping children die with the run."""
-    from armlab.grading.run import Runner
-    from armlab.grading.sandbox import PidsGroup
+    from armlab_course.grading.run import Runner
+    from armlab_course.grading.sandbox import PidsGroup
 
     sandbox = detect()
     if not PidsGroup.available() and sandbox.kind != "user":
@@ -447,11 +447,11 @@ def test_a_fork_bomb_stops_at_the_process_cap(tmp_path):
 def test_two_grader_processes_never_share_a_run_user():
     """The "user" backend's uids are held across processes (a lock per uid): while another process holds one, this
     one gets another, and uids_in_use() names the held one; released, it is free again."""
-    from armlab.grading.sandbox import RUN_USERS, uids_in_use
+    from armlab_course.grading.sandbox import RUN_USERS, uids_in_use
 
     holder = subprocess.Popen([sys.executable, "-c", textwrap.dedent("""
         import sys, time
-        from armlab.grading.sandbox import RUN_USERS
+        from armlab_course.grading.sandbox import RUN_USERS
         print(RUN_USERS.take(), flush=True)
         sys.stdin.readline()
     """)], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True, cwd=ROOT)

@@ -11,8 +11,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from armlab.exercises.markers import stub_lines
-from armlab.grading.run import Limits
+from armlab_course.exercises.markers import stub_lines
+from armlab_course.grading.run import Limits
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
@@ -21,7 +21,7 @@ CHEAP = ("calib.zhang", "calib.pinhole")          # notebook 01's exercises whos
 
 @pytest.fixture(scope="module")
 def grader():
-    from armlab.grading.grade import Grader
+    from armlab_course.grading.grade import Grader
 
     g = Grader(ROOT, Limits(timeout_s=300, cpu_s=200), list(CHEAP))
     yield g
@@ -46,7 +46,7 @@ def test_a_wrong_answer_loses_its_own_exercise_only(grader, round_):
 
 
 def _camera_and_views(n_views=4, seed=3):
-    from armlab.grading.hidden.calib_zhang import _rotation
+    from armlab_course.grading.hidden.calib_zhang import _rotation
 
     rng = np.random.default_rng(seed)
     K = np.array([[900.0, 0.0, 650.0], [0.0, 880.0, 350.0], [0.0, 0.0, 1.0]])
@@ -63,7 +63,7 @@ def test_the_reference_recovers_K_and_refuses_bad_input():
     camera, or in parallel planes)."""
     from wrong_answers import reference_bodies
 
-    from armlab.grading.hidden.calib_zhang import _rotation
+    from armlab_course.grading.hidden.calib_zhang import _rotation
 
     body = reference_bodies("calib.zhang")[0]
     scope = {"np": np}
@@ -88,7 +88,7 @@ def test_the_reference_recovers_K_and_refuses_bad_input():
 def test_the_blank_stand_in_is_opencvs_initial_guess():
     """references.intrinsics_by_opencv (what the notebook's table and figure use while calib.zhang is blank): the
     principal point at the image centre, focal lengths near the camera's, and not the exercise's answer."""
-    from armlab.exercises import references
+    from armlab_course.exercises import references
 
     K, Hs = _camera_and_views(6)
     guess = references.intrinsics_by_opencv(Hs, (1280, 720))

@@ -11,10 +11,10 @@ from pathlib import Path
 
 import pytest
 
-from armlab.exercises import make_student_release
-from armlab.exercises.registry import exercise
-from armlab.grading.splice import write_regions
-from armlab.grading.submission import exercise_file, regions_of, source_texts
+from armlab_course.exercises import make_student_release
+from armlab_course.exercises.registry import exercise
+from armlab_course.grading.splice import write_regions
+from armlab_course.grading.submission import exercise_file, regions_of, source_texts
 
 ROOT = Path(__file__).resolve().parents[1]
 HOMOGRAPHY, POSE = "calib.tag_homography", "calib.tag_extrinsics"   # the pose calls the homography
@@ -136,8 +136,8 @@ def test_written_answers_reach_the_feedback_and_the_instructors_csv(tmp_path):
     import csv
     import json
 
-    from armlab.exercises.registry import EXERCISES
-    from armlab.grading import grade_class
+    from armlab_course.exercises.registry import EXERCISES
+    from armlab_course.grading import grade_class
 
     written = next(e for e in EXERCISES if e.kind == "written")
     subs = tmp_path / "subs"

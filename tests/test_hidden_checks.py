@@ -9,8 +9,8 @@ from wrong_answers import HIDDEN_WRONG, OPEN_TASKS, check_wrong_answers, referen
 
 
 def test_every_exercise_has_hidden_checks_and_wrong_answers():
-    from armlab.exercises.registry import EXERCISES
-    from armlab.grading import hidden
+    from armlab_course.exercises.registry import EXERCISES
+    from armlab_course.grading import hidden
 
     graded_by_code = sorted(e.id for e in EXERCISES if e.kind != "written")
     assert sorted(hidden.SPECS) == graded_by_code == sorted(HIDDEN_WRONG)
@@ -25,9 +25,9 @@ def test_hidden_checks_pass_the_reference_and_fail_wrong_answers():
 def test_static_check_names_the_forbidden_call():
     """Every reference region passes; each exercise's forbidden names and the kit's reference module, called,
     imported, aliased or named in a string, fail the check with the name; the region's own names do not count."""
-    from armlab.exercises.registry import EXERCISES
-    from armlab.grading.hidden import FORBIDDEN
-    from armlab.grading.static import forbidden_uses, static_check
+    from armlab_course.exercises.registry import EXERCISES
+    from armlab_course.grading.hidden import FORBIDDEN
+    from armlab_course.grading.static import forbidden_uses, static_check
 
     for ex in (e for e in EXERCISES if e.kind != "written"):
         assert static_check(ex.id, reference_bodies(ex.id)).passed, ex.id
@@ -39,9 +39,9 @@ def test_static_check_names_the_forbidden_call():
             for body in uses:
                 result = static_check(ex.id, [body])
                 assert not result.passed and name in result.message, (ex.id, body, result)
-    ref = static_check("teach.replay", ["    from armlab.exercises import references\n"
+    ref = static_check("teach.replay", ["    from armlab_course.exercises import references\n"
                                              "    return references.scaled_durations_by_search(program, speed)"])
-    assert not ref.passed and "armlab.exercises.references" in ref.message
+    assert not ref.passed and "armlab_course.exercises.references" in ref.message
     assert forbidden_uses("    fk = 1.0\n    return fk * 2", ("kinematics.fk",)) == []      # its own variable
     assert forbidden_uses("    return sky_points(n - 1) + 30", ("scoring.sky_points",), ("sky_points",)) == []
     assert forbidden_uses("    if x:\n        pass\n    H = cv2.findHomography(a, b)",
@@ -53,7 +53,7 @@ def test_static_check_names_the_forbidden_call():
 def test_an_open_tasks_outcome_passes_only_when_every_criterion_is_met(value, passed):
     """An outcome spec has no reference run: a result passes when every number of it is 1.0 (a criterion met), and
     an empty one (no criterion at all) fails."""
-    from armlab.grading.hidden import compare, specs_of
+    from armlab_course.grading.hidden import compare, specs_of
 
     spec = specs_of("events.sort_stack")[0]
     assert spec.outcome

@@ -1,4 +1,5 @@
-"""Every name the static check forbids (armlab.grading.hidden: FORBIDDEN, FORBIDDEN_EVERYWHERE) is a real object: a
+"""Every name the static check forbids (armlab_course.grading.hidden: FORBIDDEN, FORBIDDEN_EVERYWHERE) is a real
+object: a
 module, or an attribute path in the kit or a library the students have. A misspelt name would forbid nothing."""
 
 from __future__ import annotations
@@ -13,12 +14,13 @@ from types import ModuleType
 import pytest
 
 import armlab
-from armlab.exercises import EXERCISES, exercise
-from armlab.grading import hidden
+import armlab_course
+from armlab_course.exercises import EXERCISES, exercise
+from armlab_course.grading import hidden
 
 LIBRARIES = ("cv2", "numpy", "numpy.polynomial", "scipy", "scipy.optimize", "scipy.stats", "scipy.ndimage",
              "scipy.spatial.transform", "modern_robotics")
-SKIP = ("armlab.hardware", "armlab.__main__", "armlab.grading", "armlab.viz", "armlab.demo")   # side effects or
+SKIP = ("armlab.hardware", "armlab.__main__", "armlab_course.grading", "armlab.viz", "armlab.demo")   # side effects or
 # hardware on import; none of them holds a forbidden name
 
 
@@ -32,7 +34,9 @@ def _modules() -> dict[str, ModuleType]:
             found[name] = importlib.import_module(name)
         except ImportError:
             continue
-    for info in pkgutil.walk_packages(armlab.__path__, "armlab."):
+    walked = [*pkgutil.walk_packages(armlab.__path__, "armlab."),
+              *pkgutil.walk_packages(armlab_course.__path__, "armlab_course.")]
+    for info in walked:
         if info.name.startswith(SKIP):
             continue
         try:
@@ -100,5 +104,5 @@ def test_every_exercise_but_a_written_one_has_its_hidden_module():
         if e.kind == "written":
             assert not hidden.specs_of(e.id)
         else:
-            assert hidden.module_of(e.id) is not None, f"{e.id}: no module armlab.grading.hidden.{e.hidden}"
+            assert hidden.module_of(e.id) is not None, f"{e.id}: no module armlab_course.grading.hidden.{e.hidden}"
             assert hidden.specs_of(e.id), f"{e.id}: its hidden module declares no SPECS"

@@ -10,8 +10,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from armlab.exercises.markers import stub_lines
-from armlab.grading.run import Limits
+from armlab_course.exercises.markers import stub_lines
+from armlab_course.grading.run import Limits
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
@@ -21,7 +21,7 @@ CHEAP = ("ik.candidates", "ik.numerical")        # notebook 03's exercises grade
 
 @pytest.fixture(scope="module")
 def grader():
-    from armlab.grading.grade import Grader
+    from armlab_course.grading.grade import Grader
 
     return Grader(ROOT, Limits(timeout_s=600, cpu_s=400), list(CHEAP))
 
@@ -45,8 +45,8 @@ def test_a_wrong_answer_loses_its_own_exercise_only(grader, round_):
 
 def test_the_reference_paths_agree_with_the_kit():
     from armlab import kinematics
-    from armlab.exercises import references
     from armlab.robot import rx200
+    from armlab_course.exercises import references
 
     robot = rx200()
     rng = np.random.default_rng(27)

@@ -136,7 +136,7 @@ def private_uses(path: Path, modules: dict[str, Path]) -> list[str]:
 
 def test_no_module_reads_another_modules_private_names():
     modules = module_names()
-    found = [use for name, path in modules.items() if not name.startswith("armlab.grading.hidden")
+    found = [use for name, path in modules.items() if not name.startswith("armlab_course.grading.hidden")
              for use in private_uses(path, modules)]
     assert not found, "private names read across modules:\n" + "\n".join(found)
 

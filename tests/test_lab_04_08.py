@@ -10,8 +10,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from armlab.exercises.markers import stub_lines
-from armlab.grading.run import Limits
+from armlab_course.exercises.markers import stub_lines
+from armlab_course.grading.run import Limits
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
@@ -21,7 +21,7 @@ CHEAP = ("detect.face", "grab.click_target", "station.transition")      # hidden
 
 
 def _grader(ids):
-    from armlab.grading.grade import Grader
+    from armlab_course.grading.grade import Grader
 
     return Grader(ROOT, Limits(timeout_s=600, cpu_s=400), list(ids))
 
@@ -69,7 +69,7 @@ def test_the_stack_renderer_of_the_hidden_checks_sees_the_stack():
     """The hidden checks' ray-cast stack: the mask's highest returns are the top face at the cubes' summed edges,
     the sides reach down towards the board, and the lost returns are NaN or 0."""
     from armlab.camera import Camera
-    from armlab.grading.hidden import detect_stacks
+    from armlab_course.grading.hidden import detect_stacks
 
     K, T, blocks, _, lost, seed = detect_stacks._stacks(np.random.default_rng(3))[0][0]
     depth, mask = detect_stacks.render_stack(K, T, blocks, 0.0, lost, seed)

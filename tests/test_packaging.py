@@ -41,7 +41,7 @@ def wheel(tmp_path_factory) -> Path:
 @pytest.fixture(scope="module")
 def student_wheel(tmp_path_factory) -> Path:
     """The wheel to publish: built from the student release (make student), as docs/release.md says."""
-    from armlab.exercises import make_student_release
+    from armlab_course.exercises import make_student_release
 
     release = tmp_path_factory.mktemp("release") / "student"
     make_student_release(REPO, release)
@@ -51,11 +51,12 @@ def student_wheel(tmp_path_factory) -> Path:
 def test_the_student_wheel_holds_no_hidden_checks_and_no_solution(student_wheel):
     """Every module of the published wheel is the instructor's with each exercise region stubbed (so no solution
     line is left, whatever it is), and the grader's hidden checks are not in it; data, licence and py.typed are."""
-    from armlab.exercises.markers import find_regions, stub_regions
+    from armlab_course.exercises.markers import find_regions, stub_regions
 
     wheel = zipfile.ZipFile(student_wheel)
     names = set(wheel.namelist())
-    assert not any(n.startswith("armlab/grading/hidden") for n in names), sorted(n for n in names if "hidden" in n)
+    assert not any(n.startswith("armlab_course/grading/hidden") for n in names), \
+        sorted(n for n in names if "hidden" in n)
     assert "armlab/py.typed" in names and "armlab/data/lab.json" in names
     assert any(n.endswith(".dist-info/licenses/LICENSE") for n in names), "the licence travels with the wheel"
     modules = sorted(n for n in names if n.startswith("armlab/") and n.endswith(".py"))
@@ -122,7 +123,7 @@ def test_every_imported_package_has_a_declared_version_range():
     extras = {name: _by_name(specs) for name, specs in project["optional-dependencies"].items()}
     for spec in [*declared.values(), *(s for e in extras.values() for s in e.values())]:
         assert "<" in spec and ">=" in spec, f"{spec!r}: give a compatible range (>= tested, < next major)"
-    extra_of = {"grading": "grading"}          # armlab/grading/ may import what [grading] declares
+    extra_of = {"grading": "grading"}          # armlab_course/grading/ may import what [grading] declares
     imported_as = {"numpy": "numpy", "cv2": "opencv-python-headless", "pupil_apriltags": "pupil-apriltags",
                    "meshcat": "meshcat", "zmq": "pyzmq", "matplotlib": "matplotlib", "ipywidgets": "ipywidgets",
                    "ipyevents": "ipyevents", "IPython": "ipython", "scipy": "scipy", "jsonschema": "jsonschema",
@@ -130,10 +131,10 @@ def test_every_imported_package_has_a_declared_version_range():
                    "anywidget": "anywidget", "traitlets": "traitlets", "umsgpack": "u-msgpack-python",
                    "pytest": "pytest"}
     third_party: dict[str, set] = {}            # module -> the extras of the files importing it (None: the core)
-    for path in (REPO / "armlab").rglob("*.py"):
+    for path in [*(REPO / "armlab").rglob("*.py"), *(REPO / "armlab_course").rglob("*.py")]:
         if "hardware" in path.parts:            # vendor modules, imported lazily (HardwareUnavailable if missing)
             continue
-        extra = next((extra_of[p] for p in path.relative_to(REPO / "armlab").parts[:-1] if p in extra_of), None)
+        extra = next((extra_of[p] for p in path.relative_to(REPO).parts[1:-1] if p in extra_of), None)
         for node in ast.walk(ast.parse(path.read_text())):
             if isinstance(node, ast.Import):
                 names = [a.name for a in node.names]
@@ -141,7 +142,7 @@ def test_every_imported_package_has_a_declared_version_range():
                 names = [node.module]
             else:
                 continue
-            for top in {n.split(".")[0] for n in names} - set(sys.stdlib_module_names) - {"armlab"}:
+            for top in {n.split(".")[0] for n in names} - set(sys.stdlib_module_names) - {"armlab", "armlab_course"}:
                 third_party.setdefault(top, set()).add(extra)
     unknown = set(third_party) - set(imported_as)
     assert not unknown, f"armlab imports {sorted(unknown)}: declare them in pyproject.toml and in this table"

@@ -7,7 +7,7 @@ from __future__ import annotations
 import subprocess
 import sys
 
-from armlab.exercises.release import RELEASE_MARKER, released
+from armlab_course.exercises.release import RELEASE_MARKER, released
 from conftest import ROOT, START_FIRST
 
 

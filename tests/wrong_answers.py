@@ -7,9 +7,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from armlab.exercises.registry import exercise
-from armlab.grading.run import Limits
-from armlab.grading.submission import exercise_file, regions_of, source_texts
+from armlab_course.exercises.registry import exercise
+from armlab_course.grading.run import Limits
+from armlab_course.grading.submission import exercise_file, regions_of, source_texts
 
 ROOT = Path(__file__).resolve().parents[1]
 WRONG_DH = ("    return np.array([[np.pi / 2, h0, 0.0, np.pi / 2], [-(np.pi / 2 - beta), 0.0, L1, 0.0],\n"
@@ -180,7 +180,7 @@ def check_wrong_answers(ids: list[str]) -> None:
     in turn), each wrong answer fails at least one of its exercise's checks (a hard-coded one every check), and every
     exercise at its reference passes all of its checks unless it calls (DEPENDS) an exercise that is wrong in that
     run: a wrong answer costs its own exercise only. Each declared dependency is seen failing once (DEPENDS is true)."""
-    from armlab.grading.grade import Grader
+    from armlab_course.grading.grade import Grader
 
     grader = Grader(ROOT, Limits(timeout_s=300, cpu_s=200), ids)
     try:

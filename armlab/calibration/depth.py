@@ -14,10 +14,10 @@ import numpy as np
 
 from armlab.arguments import finite_float, instance_of, int_in_range
 from armlab.camera import Camera
-from armlab.exercises import registry as course
-from armlab.exercises.fallback import reference_fallback
 from armlab.images import check_depth, check_mask
 from armlab.lab import lab_config
+from armlab_course.exercises import registry as course
+from armlab_course.exercises.fallback import reference_fallback
 
 __all__ = ["DepthCorrection", "fit_depth_correction", "board_depth", "board_samples"]
 

@@ -12,11 +12,11 @@ import numpy as np
 
 from armlab.calibration.tags import TagDetection, detect_tags
 from armlab.camera import check_intrinsics, look_at
-from armlab.exercises import registry as course
-from armlab.exercises.fallback import reference_fallback
 from armlab.images import check_rgb
 from armlab.lab import TagLayout, lab_config
 from armlab.transforms import homogeneous, invert_transform, log_so3
+from armlab_course.exercises import registry as course
+from armlab_course.exercises.fallback import reference_fallback
 
 __all__ = ["ExtrinsicsResult", "calibrate_extrinsics", "extrinsics_from_detections", "hand_measured_extrinsic",
            "compare_extrinsics"]

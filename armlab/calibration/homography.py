@@ -11,10 +11,10 @@ import numpy as np
 
 from armlab.calibration.tags import TagDetection
 from armlab.camera import Camera
-from armlab.exercises import registry as course
-from armlab.exercises.fallback import reference_fallback
 from armlab.images import check_rgb
 from armlab.lab import TagLayout, lab_config
+from armlab_course.exercises import registry as course
+from armlab_course.exercises.fallback import reference_fallback
 
 __all__ = ["BoardView", "tag_homography", "dlt_homography"]
 

@@ -19,10 +19,10 @@ import numpy as np
 
 from armlab._paths import data_path
 from armlab.blocks import COLORS, LAB_RGB
-from armlab.exercises import registry as course
-from armlab.exercises.fallback import reference_fallback
 from armlab.files import read_json, write_json_atomic
 from armlab.schemas import comment, field_error, number, strict_object, vector
+from armlab_course.exercises import registry as course
+from armlab_course.exercises.fallback import reference_fallback
 
 __all__ = ["ColorModel", "color_features", "white_balance_gains", "default_color_model", "COLOR_MODEL_FILE",
            "LAB_HSV_TABLE", "hsv_table_classify"]

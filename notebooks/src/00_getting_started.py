@@ -301,6 +301,6 @@ print(f"OK: {len(tops)} block tops seen where they are: error {err.min():.0f}-{e
 # Next: **01 · camera calibration**.
 
 # %%
-from armlab.exercises import rubric
+from armlab_course.exercises import rubric
 
 rubric("00")

@@ -49,7 +49,7 @@ from IPython import get_ipython
 from IPython.display import display
 
 from armlab import calibration as cal
-from armlab.exercises import references, require_written, rubric, with_reference
+from armlab_course.exercises import references, require_written, rubric, with_reference
 from armlab import make_station
 from armlab.camera import Camera
 from armlab.lab import lab_config

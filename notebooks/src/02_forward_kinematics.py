@@ -34,7 +34,7 @@ from IPython import get_ipython
 from armlab import kinematics
 from dataclasses import replace
 
-from armlab.exercises import ExerciseNotWritten, require_written, rubric, with_reference
+from armlab_course.exercises import ExerciseNotWritten, require_written, rubric, with_reference
 from armlab.robot import rx200
 from armlab.transforms import exp_se3, homogeneous, matrix_from_euler_zyz, rot_x, rot_y, rot_z
 

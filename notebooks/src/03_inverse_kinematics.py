@@ -34,7 +34,7 @@ import matplotlib.pyplot as plt
 from IPython import get_ipython
 
 from armlab import kinematics
-from armlab.exercises import references, require_written, rubric, with_reference
+from armlab_course.exercises import references, require_written, rubric, with_reference
 from armlab.lab import lab_config
 from armlab.robot import rx200
 

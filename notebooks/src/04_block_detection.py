@@ -38,7 +38,7 @@ from armlab.blocks import COLORS, LAB_RGB
 from armlab.detection import default_color_model, detect_objects, draw_detections, height_from_depth
 from armlab.detection import hsv_table_classify
 from armlab.detection.color import LAB_HSV_TABLE
-from armlab.exercises import references, require_written, with_reference
+from armlab_course.exercises import references, require_written, with_reference
 from armlab.sim.detection_eval import (DetectionScore, balanced_frame, corrected_depth, score_frame,
                                        score_segmentation, sim_case)
 
@@ -564,6 +564,6 @@ print(f"OK: {m['blocks']} blocks in {len(cases)} frames: recall {m['recall']:.1%
 # whether you have written it (from the saved files: save the notebook first). The grader decides the score.
 
 # %%
-from armlab.exercises.rubric import rubric
+from armlab_course.exercises.rubric import rubric
 
 rubric("04_block_detection")

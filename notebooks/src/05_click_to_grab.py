@@ -32,7 +32,7 @@ import matplotlib.pyplot as plt
 from IPython import get_ipython
 
 from armlab import kinematics, make_station, planning, tasks
-from armlab.exercises import require_written, with_reference
+from armlab_course.exercises import require_written, with_reference
 from armlab.tasks.experiments import LAB_TABLE_III_ERROR_MM, format_table, reach_experiment
 from armlab.tasks.move_path import drop_with, grab_with, kit_move_path, move_path
 from armlab.tasks.sag import LAB_BASELINE, calibration_poses, hover_pose
@@ -125,7 +125,7 @@ def click_target(click, tops, yaws, edges, margin_mm=3.0):
 # the turned green block, at 0.47 of its edge along its diagonals, and on bare board 6 mm beside each block.
 
 # %%
-from armlab.exercises import references
+from armlab_course.exercises import references
 
 my_click_target = with_reference(click_target, "grab.click_target", references.click_target_by_kit,
                                  "the kit's nearest-centre rule stands in for your click_target")
@@ -439,6 +439,6 @@ print(f"OK: click to grab/drop: the blocks landed {green_err.max():.1f} and {red
 # whether you have written it (from the saved files: save the notebook first). The grader decides the score.
 
 # %%
-from armlab.exercises.rubric import rubric
+from armlab_course.exercises.rubric import rubric
 
 rubric("05_click_to_grab")

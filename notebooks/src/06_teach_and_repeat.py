@@ -29,7 +29,7 @@ from IPython import get_ipython
 
 from armlab import kinematics, make_station, planning, tasks
 from armlab._paths import data_path
-from armlab.exercises import references, require_written, with_reference
+from armlab_course.exercises import references, require_written, with_reference
 from armlab.tasks import teach
 from armlab.detection import Block
 from armlab.tasks.move_path import drop_with, grab_with, kit_move_path, move_path
@@ -303,6 +303,6 @@ print(f"OK: time-scaled replay: 1.5x takes {mine[1.5].sum():.1f} s of moves inst
 # whether you have written it (from the saved files: save the notebook first). The grader decides the score.
 
 # %%
-from armlab.exercises.rubric import rubric
+from armlab_course.exercises.rubric import rubric
 
 rubric("06_teach_and_repeat")

@@ -46,7 +46,7 @@ from armlab.tasks.events import scoring
 from armlab.tasks.events.sky import TOWER_XY, highest_tool_z
 
 get_ipython().run_line_magic("matplotlib", "inline")
-from armlab.exercises import with_reference
+from armlab_course.exercises import with_reference
 from armlab.viz.figures import readable
 
 readable()                                             # figure size and fonts readable at 100 % zoom
@@ -329,6 +329,6 @@ print(f"OK: to the sky: a stable tower of {tower} blocks ({sky.score.points:g} p
 # whether you have written it (from the saved files: save the notebook first). The grader decides the score.
 
 # %%
-from armlab.exercises.rubric import rubric
+from armlab_course.exercises.rubric import rubric
 
 rubric("07_autonomous_tasks")

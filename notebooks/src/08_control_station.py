@@ -347,6 +347,6 @@ print("OK: the emergency stop halted the arm halfway to the sleep pose; it staye
 # whether you have written it (from the saved files: save the notebook first). The grader decides the score.
 
 # %%
-from armlab.exercises.rubric import rubric
+from armlab_course.exercises.rubric import rubric
 
 rubric("08_control_station")

@@ -1,0 +1,444 @@
+"""Score submissions: every exercise in one pass, an exercise isolated only when one of its checks fails.
+
+Score of an exercise: 0 when blank (nothing runs) or when its regions cannot be read or spliced; otherwise
+points x (passed checks / all checks), its checks being the notebook's code cells tagged `# CHECK <id>` (the public
+checks, run by the instructor's copy of the notebook) and its hidden checks (armlab_course.grading.hidden), each
+counting
+one; a region calling a forbidden library or kit function -- found in its text (armlab_course.grading.static) or seen
+called while the hidden checks ran (armlab_course.grading.harness) -- gets one more check, failed.
+
+One pass: the student's regions of every written exercise go into one copy of the instructor's tree (the reference
+stays in place for the blank ones), each notebook that checks a written exercise runs once, and the hidden checks
+of every written exercise run in one harness process. An exercise whose checks all pass there is scored from that
+run. An exercise with a failing check is run again alone -- its regions in the reference, the reference in place for
+every other exercise -- and scored from that run, so that one mistake costs one exercise. Results of identical
+regions are shared within one Grader (the work tree, so the outcome, is the same). A submission's runs (each notebook,
+the hidden checks) are independent: with `parallel` > 1 they go side by side.
+
+Everything of the grader is imported, the instructor's tree copied and every expected value computed when the
+Grader is made, before any student code runs; student code runs only in the sandbox (armlab_course.grading.sandbox),
+each
+run in a fresh copy of its tree, and the grader's own sources are checked against the hashes taken at the start
+before any report is written.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import shutil
+import tempfile
+import threading
+from collections.abc import Callable, Iterable
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+from armlab_course.exercises.registry import EXERCISES, exercise
+
+from . import report as _report  # noqa: F401  (imported now: nothing of the grader is loaded after student code)
+from .results import CheckResult, ExerciseResult, score_exercise
+from .run import DEFAULT_LIMITS, Limits, NotebookRun, Runner, check_cells
+from .sandbox import WORK, Sandbox, detect
+from .splice import RegionRejected, build_worktree, check_body, splice_into
+from .static import STATIC_CHECK, static_check
+from .submission import Submission, exercise_file, read_submission, regions_of, source_texts
+
+try:
+    from . import hidden as _hidden
+except ImportError:                    # a student release: public checks only
+    _hidden = None
+
+__all__ = ["CheckResult", "ExerciseResult", "Grader", "GraderChanged", "grade_submission", "grade_class",
+           "check_reference", "source_hashes"]
+
+_OWN_SOURCES = (Path(__file__).parent, Path(__file__).parents[1] / "exercises")
+
+
+class GraderChanged(RuntimeError):
+    """The grader's own files changed while it ran: no report is written."""
+
+
+def source_hashes() -> dict[str, str]:
+    """SHA-256 of every file of the grader's own packages (armlab_course.grading, armlab_course.exercises) as
+    installed."""
+    out = {}
+    for folder in _OWN_SOURCES:
+        for path in sorted(folder.rglob("*.py")):
+            out[str(path)] = hashlib.sha256(path.read_bytes()).hexdigest()
+    return out
+
+
+def check_reference(reference: Path) -> Path:
+    """The instructor's checkout `reference`, resolved; ValueError in one line when it is not one (missing, not a
+    folder, no notebooks, no hidden checks)."""
+    reference = Path(reference)
+    if not reference.is_dir():
+        raise ValueError(f"--reference {reference}: no such folder (the instructor's checkout)")
+    if not (reference / "notebooks").is_dir() or not (reference / "armlab").is_dir():
+        raise ValueError(f"--reference {reference}: not the kit's checkout (no notebooks/ or armlab/)")
+    hidden = reference / "armlab_course" / "grading"
+    if not (hidden / "hidden.py").is_file() and not (hidden / "hidden").is_dir():
+        raise ValueError(f"--reference {reference}: it has no hidden checks (armlab_course/grading/hidden/): "
+                         f"a student release cannot grade")
+    return reference.resolve()
+
+
+def _hidden_source() -> Path | None:
+    if _hidden is None:
+        return None
+    path = Path(_hidden.__file__)
+    return path.parent if path.name == "__init__.py" else path
+
+
+class Grader:
+    """Grades submissions against the instructor's checkout `reference` in `sandbox` (default: detect(unsafe));
+    results of identical regions are shared (thread-safe). close() removes its temporary trees."""
+
+    def __init__(self, reference: Path | str, limits: Limits = DEFAULT_LIMITS, exercises: Iterable[str] | None = None,
+                 unsafe: bool = False, sandbox: Sandbox | None = None, written: Iterable[str] | None = None,
+                 parallel: int = 1):
+        """exercises: those graded (default every one); written: those some submission to grade has written (default
+        every graded one): only their expected values are computed, and grading another written one raises
+        ValueError; parallel: how many runs of one submission (its notebooks, its hidden checks) go at once."""
+        if parallel < 1:
+            raise ValueError(f"parallel must be at least 1, got {parallel}")
+        self.parallel = int(parallel)
+        self.reference = check_reference(Path(reference))
+        self.limits = limits
+        self.exercise_ids = list(exercises) if exercises is not None else [e.id for e in EXERCISES]
+        for exercise_id in self.exercise_ids:
+            exercise(exercise_id)
+        written = None if written is None else set(written)
+        self._computed = [e for e in self.exercise_ids if written is None or e in written]
+        self.sandbox = sandbox or detect(unsafe)
+        self._sources = source_hashes()
+        self._tmp = tempfile.TemporaryDirectory(prefix="armlab-grade-")
+        self._root = Path(self._tmp.name)
+        self._pristine = build_worktree(self.reference, self._root / "reference")
+        self._pristine.chmod(0o700)            # never entered by a run's user (the "user" sandbox)
+        (self._root / "runs").mkdir(mode=0o711)
+        self.runner = Runner(self.sandbox, limits, _hidden_source())
+        self._cache: dict[tuple, object] = {}
+        self._locks: dict[tuple, threading.Lock] = {}
+        self._guard = threading.Lock()
+        self.runs = 0
+        self._expected = self._compute_expected()
+
+    def close(self) -> None:
+        self.runner.close()
+        self._tmp.cleanup()
+
+    def __enter__(self) -> Grader:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def verify_sources(self) -> None:
+        """GraderChanged when a file of the grader's own packages differs from its hash at the start."""
+        now = source_hashes()
+        changed = sorted(p for p in set(now) | set(self._sources) if now.get(p) != self._sources.get(p))
+        if changed:
+            raise GraderChanged(f"the grader's own files changed while it ran: {', '.join(changed[:3])}: no grade "
+                                f"is written")
+
+    # -- trees and runs ---------------------------------------------------------------------------------------
+    def _fresh(self, tree: Path) -> Path:
+        """A new private copy of `tree` for one run."""
+        dest = Path(tempfile.mkdtemp(dir=self._root / "runs")) / "work"
+        shutil.copytree(tree, dest, symlinks=True)
+        return dest
+
+    def _spliced(self, bodies: dict[str, list[str]]) -> Path:
+        """A copy of the reference with these exercises' regions replaced (bodies already checked)."""
+        tree = self._fresh(self._pristine)
+        for exercise_id, exercise_bodies in bodies.items():
+            splice_into(tree, exercise_id, exercise_bodies)
+        return tree
+
+    def _discard(self, tree: Path) -> None:
+        shutil.rmtree(tree.parent, ignore_errors=True)
+
+    def _notebook(self, tree: Path, name: str) -> NotebookRun:
+        run_tree = self._fresh(tree)
+        try:
+            with self._guard:
+                self.runs += 1
+            return self.runner.notebook(run_tree, f"notebooks/{name}.ipynb")
+        finally:
+            self._discard(run_tree)
+
+    def _jobs(self, exercise_id: str, tree_inside: str, compared_only: bool = False) -> list[dict | None]:
+        """The harness jobs of the exercise's hidden specs: one per spec, every call of its checks, with the
+        exercise's forbidden names; with compared_only, None in place of an outcome spec's (nothing to compute)."""
+        from .static import forbidden_of
+
+        ex = exercise(exercise_id)
+        notebook = None if ex.in_package else f"{tree_inside}/notebooks/{ex.notebook}.ipynb"
+        forbidden = list(forbidden_of(exercise_id))
+        return [None if compared_only and spec.outcome else
+                {"notebook": notebook, "function": spec.function, "adapter": spec.adapter, "prelude": spec.prelude,
+                 "cases": [args for check in checks for args in check], "forbidden": forbidden}
+                for spec, checks in zip(_hidden.specs_of(exercise_id), _hidden.cases_of(exercise_id), strict=True)]
+
+    def _with_specs(self, exercise_ids: Iterable[str]) -> list[str]:
+        return [e for e in exercise_ids if _hidden is not None and _hidden.specs_of(e)]
+
+    def _harness(self, tree: Path, exercise_ids: list[str], compared_only: bool = False
+                 ) -> tuple[dict[str, list[dict | None]] | None, str]:
+        """Per exercise, its jobs' outputs (None for a job not run: see _jobs) from one harness run on a fresh copy
+        of `tree`; or None and why."""
+        run_tree = self._fresh(tree)
+        try:
+            inside = self.runner.sandbox.inside(run_tree)
+            jobs = {e: self._jobs(e, inside, compared_only) for e in exercise_ids}
+            wanted = [job for e in exercise_ids for job in jobs[e] if job is not None]
+            got, problem = self.runner.harness(run_tree, wanted, exercises=len(exercise_ids)) if wanted else ([], "")
+        finally:
+            self._discard(run_tree)
+        if got is None:
+            return None, problem
+        if len(got) != len(wanted):
+            return None, f"the hidden checks gave {len(got)} results for {len(wanted)} jobs"
+        outputs = iter(got)
+        return {e: [None if job is None else next(outputs) for job in jobs[e]] for e in exercise_ids}, ""
+
+    def _compute_expected(self) -> dict[str, list[list[dict] | None]]:
+        """Per exercise with hidden checks, per spec, the reference's results (None for an outcome spec: all ones),
+        from one harness run before any student code runs; RuntimeError when the reference fails its own."""
+        ids = self._with_specs(self._computed)
+        if not ids:
+            return {}
+        got, problem = self._harness(self._pristine, ids, compared_only=True)
+        if got is None:
+            raise RuntimeError(f"the reference's hidden checks gave no results: {problem}")
+        expected = {}
+        for e in ids:
+            errors = [r["error"] for job in got[e] if job is not None for r in job["results"] if "error" in r]
+            if errors:
+                raise RuntimeError(f"the reference fails its own hidden checks of {e}: {errors[0]}")
+            expected[e] = [None if job is None else job["results"] for job in got[e]]
+        return expected
+
+    # -- checks -----------------------------------------------------------------------------------------------
+    def _hidden_results(self, exercise_id: str, outputs: list[dict] | None, problem: str
+                        ) -> tuple[list[CheckResult], list[str]]:
+        """The exercise's hidden checks from its jobs' outputs, and the forbidden calls seen."""
+        checks: list[CheckResult] = []
+        seen: list[str] = []
+        first = 1
+        for k, (spec, cases) in enumerate(zip(_hidden.specs_of(exercise_id), _hidden.cases_of(exercise_id),
+                                              strict=True)):
+            names = [f"hidden check {first + i}" for i in range(len(cases))]
+            if outputs is None:
+                checks += [CheckResult(n, False, problem) for n in names]
+            else:
+                verdicts = _hidden.compare(spec, outputs[k]["results"], self._expected[exercise_id][k],
+                                           [len(c) for c in cases], first)
+                checks += [CheckResult(n, ok, msg) for n, (ok, msg) in zip(names, verdicts, strict=True)]
+                seen += outputs[k]["forbidden"]
+            first += len(cases)
+        return checks, sorted(set(seen))
+
+    def _checks(self, exercise_id: str, bodies: list[str], run: NotebookRun, tree: Path,
+                hidden: tuple[dict | None, str]) -> list[CheckResult]:
+        """Every check of the exercise: its public CHECK cells in `run`, its hidden checks, and a failed check for a
+        forbidden call (in the region's text or seen at run time)."""
+        ex = exercise(exercise_id)
+        tags = [i for i, ids in check_cells(tree / f"notebooks/{ex.notebook}.ipynb").items() if exercise_id in ids]
+        checks = [CheckResult(f"{ex.notebook} cell {i}", i in run.cells and run.cells[i].passed,
+                              self._redact(run.cells[i].message if i in run.cells else
+                                           run.problem or "the cell did not run")) for i in tags]
+        seen: list[str] = []
+        if exercise_id in self._expected:
+            outputs, problem = hidden
+            hidden_checks, seen = self._hidden_results(exercise_id, None if outputs is None else
+                                                       outputs[exercise_id], problem)
+            checks += [CheckResult(c.name, c.passed, self._redact(c.message)) for c in hidden_checks]
+        static = static_check(exercise_id, bodies)
+        if static is not None and not static.passed:
+            checks.append(static)
+        elif seen:
+            checks.append(CheckResult(STATIC_CHECK, False, f"the region called {seen[0]} while the hidden checks "
+                                                           f"ran: the exercise is to write it, not to call it"))
+        return checks
+
+    def _redact(self, message: str) -> str:
+        """A message without the grader's own paths."""
+        for path, name in ((str(self._root), "<grader>"), (str(self.reference), "<reference>"), (WORK, "<work>")):
+            message = message.replace(path, name)
+        return message
+
+    # -- grading ----------------------------------------------------------------------------------------------
+    def _once(self, key: tuple, compute: Callable[[], object]) -> object:
+        with self._guard:
+            lock = self._locks.setdefault(key, threading.Lock())
+        with lock:
+            if key not in self._cache:
+                self._cache[key] = compute()
+            return self._cache[key]
+
+    @staticmethod
+    def _digest(bodies: dict[str, list[str]]) -> str:
+        text = "\0\0".join(f"{e}\0" + "\0".join(b) for e, b in sorted(bodies.items()))
+        return hashlib.sha256(text.encode()).hexdigest()
+
+    def grade_exercise(self, exercise_id: str, bodies: list[str]) -> ExerciseResult:
+        """The exercise alone: `bodies` spliced into the reference, its notebook and its hidden checks run."""
+        return self._once(("alone", exercise_id, self._digest({exercise_id: bodies})),
+                          lambda: self._alone(exercise_id, bodies))
+
+    def _alone(self, exercise_id: str, bodies: list[str]) -> ExerciseResult:
+        try:
+            for body in bodies:
+                check_body(body, exercise_id)
+            tree = self._spliced({exercise_id: bodies})
+        except RegionRejected as e:
+            return score_exercise(exercise_id, [], str(e))
+        try:
+            ex = exercise(exercise_id)
+            if not any(exercise_id in ids for ids in check_cells(tree / f"notebooks/{ex.notebook}.ipynb").values()):
+                return score_exercise(exercise_id, [],
+                                      f"notebooks/{ex.notebook}.ipynb has no '# CHECK {exercise_id}' cell")
+            runs, hidden = self._run_all(tree, [ex.notebook], [exercise_id])
+            run = runs[ex.notebook]
+            return score_exercise(exercise_id, self._checks(exercise_id, bodies, run, tree, hidden), run.problem)
+        finally:
+            self._discard(tree)
+
+    def _together(self, written: dict[str, list[str]]) -> dict[str, tuple[list[CheckResult], str]]:
+        """Every written exercise's checks from one pass (each notebook once, the hidden checks in one run), with
+        its notebook run's problem ('' when none)."""
+        tree = self._spliced(written)
+        try:
+            runs, hidden = self._run_all(tree, sorted({exercise(e).notebook for e in written}), list(written))
+            out = {}
+            for e, b in written.items():
+                run = runs[exercise(e).notebook]
+                out[e] = (self._checks(e, b, run, tree, hidden), run.problem)
+            return out
+        finally:
+            self._discard(tree)
+
+    def _run_all(self, tree: Path, notebooks: list[str], exercise_ids: list[str]
+                 ) -> tuple[dict[str, NotebookRun], tuple[dict | None, str]]:
+        """The notebooks' runs and the exercises' hidden checks on `tree`, `parallel` runs at a time (the hidden
+        checks, the longest, first)."""
+        with ThreadPoolExecutor(max_workers=self.parallel) as pool:
+            hidden = pool.submit(self._harness, tree, self._with_specs(exercise_ids))
+            runs = dict(zip(notebooks, pool.map(lambda name: self._notebook(tree, name), notebooks), strict=True))
+            return runs, hidden.result()
+
+    def _reference_bodies(self, exercise_id: str) -> list[str]:
+        """The reference's region bodies of the exercise (from the grader's private copy)."""
+        name = exercise_file(exercise(exercise_id))
+        return self._once(("reference", exercise_id),
+                          lambda: regions_of(source_texts(self._pristine / name), exercise_id, name))
+
+    def grade(self, submission: Submission) -> dict[str, ExerciseResult]:
+        results: dict[str, ExerciseResult] = {}
+        written: dict[str, list[str]] = {}
+        for exercise_id in self.exercise_ids:
+            points = exercise(exercise_id).points
+            if exercise_id in submission.problems:
+                results[exercise_id] = ExerciseResult(exercise_id, 0.0, points, [], submission.problems[exercise_id])
+            elif exercise_id in submission.blank:
+                results[exercise_id] = ExerciseResult(exercise_id, 0.0, points, [], "not written (blank region)")
+            elif exercise_id in submission.answers:
+                results[exercise_id] = ExerciseResult(exercise_id, 0.0, points, [], "graded by hand",
+                                                      submission.answers[exercise_id])
+            else:
+                if exercise_id not in self._computed:
+                    raise ValueError(f"{submission.name} wrote {exercise_id}, which this Grader was told no "
+                                     f"submission writes (its expected values were not computed)")
+                try:
+                    for body in submission.bodies[exercise_id]:
+                        check_body(body, exercise_id)
+                    written[exercise_id] = submission.bodies[exercise_id]
+                except RegionRejected as e:
+                    results[exercise_id] = ExerciseResult(exercise_id, 0.0, points, [], str(e))
+        if written:
+            together = self._once(("together", self._digest(written)), lambda: self._together(written))
+            failing = {e for e, (checks, _) in together.items() if not checks or not all(c.passed for c in checks)}
+            for exercise_id, (checks, problem) in together.items():
+                others_fail = failing - {exercise_id}
+                if exercise_id not in failing or not any(written[e] != self._reference_bodies(e)
+                                                         for e in others_fail):
+                    # every check passed, or each other exercise that failed is the reference itself: the pass
+                    # was already this exercise alone as far as a failure can tell
+                    results[exercise_id] = score_exercise(exercise_id, checks, problem)
+                else:
+                    results[exercise_id] = self.grade_exercise(exercise_id, written[exercise_id])
+        return {e: results[e] for e in self.exercise_ids}
+
+    # -- for instructors trying hidden specs ----------------------------------------------------------------
+    def hidden_checks(self, exercise_id: str, bodies: list[str]) -> list[CheckResult]:
+        """Only the hidden checks of `bodies` spliced into the reference (no notebook run): for instructors trying a
+        new HiddenSpec against wrong answers. RegionRejected for a body holding markers."""
+        return self.hidden_checks_together({exercise_id: bodies})[exercise_id]
+
+    def hidden_checks_together(self, bodies: dict[str, list[str]]) -> dict[str, list[CheckResult]]:
+        """The hidden checks of several exercises' bodies spliced into one work tree, run in one harness process (so
+        one exercise's body is in place while another's is checked: for trying specs on exercises that do not call
+        each other, not for grading). RegionRejected for a body holding markers."""
+        for exercise_id, exercise_bodies in bodies.items():
+            for body in exercise_bodies:
+                check_body(body, exercise_id)
+        tree = self._spliced(bodies)
+        try:
+            ids = self._with_specs(bodies)
+            outputs, problem = self._harness(tree, ids)
+        finally:
+            self._discard(tree)
+        out: dict[str, list[CheckResult]] = {e: [] for e in bodies}
+        for e in ids:
+            checks, seen = self._hidden_results(e, None if outputs is None else outputs[e], problem)
+            out[e] = checks + ([CheckResult(STATIC_CHECK, False, f"called {seen[0]} at run time")] if seen else [])
+        return out
+
+
+def grade_submission(folder: Path | str, reference: Path | str, limits: Limits = DEFAULT_LIMITS,
+                     exercises: Iterable[str] | None = None, grader: Grader | None = None, unsafe: bool = False
+                     ) -> dict[str, ExerciseResult]:
+    """The results of one submission folder (a student release copy or only the edited files)."""
+    if grader is not None:
+        return grader.grade(read_submission(folder, grader.reference))
+    submission = read_submission(folder, check_reference(Path(reference)))
+    with Grader(reference, limits, exercises, unsafe=unsafe, written=submission.bodies) as own:
+        return own.grade(submission)
+
+
+def grade_class(submissions: Path | str, out: Path | str, reference: Path | str, jobs: int = 1,
+                limits: Limits = DEFAULT_LIMITS, exercises: Iterable[str] | None = None, unsafe: bool = False,
+                progress: Callable[[str, dict[str, ExerciseResult]], None] | None = None) -> dict[str, dict]:
+    """Grade every student folder of `submissions` (in parallel on `jobs` threads, each run its own sandboxed
+    process), calling progress(student, results) as each is done, and write OUT/grades.csv,
+    OUT/<student>/results.json and OUT/<student>/feedback.md."""
+    from .report import write_reports
+
+    submissions = Path(submissions)
+    if not submissions.is_dir():
+        raise NotADirectoryError(f"{submissions}: no such folder of submissions")
+    if submissions.is_symlink():
+        raise ValueError(f"{submissions} is a symbolic link: give the folder itself")
+    students = sorted(p for p in submissions.iterdir() if p.is_dir() and not p.name.startswith("."))
+    if not students:
+        raise ValueError(f"{submissions} holds no student folder")
+    if jobs < 1:
+        raise ValueError(f"--jobs must be at least 1, got {jobs}")
+    reference = check_reference(Path(reference))
+    read = {p: read_submission(p, reference) for p in students}       # read only: nothing runs yet
+    written = {e for submission in read.values() for e in submission.bodies}
+    # a class smaller than the jobs: the spare ones run a submission's notebooks and hidden checks side by side
+    parallel = max(1, jobs // len(students))
+    with Grader(reference, limits, exercises, unsafe=unsafe, written=written, parallel=parallel) as grader:
+        def one(path: Path) -> dict[str, ExerciseResult]:
+            results = grader.grade(read[path])
+            if progress is not None:
+                progress(path.name, results)
+            return results
+
+        with ThreadPoolExecutor(max_workers=jobs) as pool:
+            graded = dict(zip((p.name for p in students), pool.map(one, students), strict=True))
+        grader.verify_sources()
+    write_reports(graded, Path(out))
+    return graded

@@ -1,0 +1,145 @@
+"""The hidden checks (instructor only: not in the student release, see RELEASE_EXCLUDES): per exercise, fresh inputs
+drawn from the grader's own seed. The student's function runs in a bounded subprocess of the grading work tree
+(armlab_course.grading.harness) and writes its results as JSON; the expected values come from the same harness run on
+the
+reference work tree; the comparison happens here, in the grader's process, so nothing the student's code patches
+can change it.
+
+Each exercise's hidden checks live in a module of their own, named by its declaration (Exercise.hidden, by default
+its id with the dot as an underscore: `fk_dh_transform`): SPECS (a tuple of HiddenSpec) and FORBIDDEN (the library
+and kit functions that would do the exercise for the student; armlab_course.grading.static reads the region's text for
+them, nothing is run). An exercise without such a module is graded by its public checks only.
+
+The adapters (`_call_*` functions of those modules) run in the child, never here: they build what the student's
+function takes (a Camera, a colour model, a sim arm, detections) from JSON arguments and turn its result into
+numbers. They reach the library only through its public parameters. `armlab_course.grading.hidden.<adapter name>` finds
+an adapter in whichever exercise module defines it.
+"""
+
+from __future__ import annotations
+
+import functools
+import importlib
+import json
+from collections.abc import Callable
+from dataclasses import dataclass
+from types import ModuleType
+
+import numpy as np
+
+from armlab_course.exercises.registry import EXERCISES, exercise
+
+__all__ = ["HiddenSpec", "SPECS", "FORBIDDEN", "FORBIDDEN_EVERYWHERE", "specs_of", "cases_of", "compare",
+           "module_of"]
+
+SEED = 20261101
+
+
+@dataclass(frozen=True)
+class HiddenSpec:
+    """function: the name in the exercise's notebook, or the dotted path of a package exercise's function (or class);
+    cases: from a numpy Generator, a list of hidden checks, each a list of argument lists (JSON-able: floats, bools,
+    lists); atol: the tolerance of the comparison (in the function's units); adapter: the name of a `_call_*`
+    function of this module the child calls as adapter(function, *args) instead of function(*args) ('' for none);
+    prelude: how the child reaches a notebook function ('cells': every code cell before it runs; 'definitions':
+    only their imports, definitions and literal constants, no simulator run); agree: the fraction of a result's
+    numbers that must match the expected ones within atol (1.0: all); outcome: an open task graded on outcomes,
+    each number of a result a criterion met (1.0) or not (0.0), so the expected value is all ones and the reference
+    does not run for it (the kit's tests hold the reference to full marks)."""
+
+    function: str
+    cases: Callable[[np.random.Generator], list[list[list]]]
+    atol: float = 1e-6
+    adapter: str = ""
+    prelude: str = "cells"
+    agree: float = 1.0
+    outcome: bool = False
+
+
+# Calls that would do an exercise for the student: a name matches any reference to it in the region (a call, an
+# attribute, an import, a string naming it), its last dotted part compared. FORBIDDEN_EVERYWHERE applies to every
+# exercise: the kit's reference paths (armlab_course.exercises.references) are never a solution.
+FORBIDDEN_EVERYWHERE: tuple[str, ...] = ("armlab_course.exercises.references", "with_reference")
+
+
+def module_of(exercise_id: str) -> ModuleType | None:
+    """The module holding the exercise's hidden checks, None when it has none (a written answer, or no module)."""
+    name = exercise(exercise_id).hidden
+    if not name:
+        return None
+    try:
+        return importlib.import_module(f"{__name__}.{name}")
+    except ModuleNotFoundError as e:
+        if e.name != f"{__name__}.{name}":
+            raise
+        return None
+
+
+def specs_of(exercise_id: str) -> tuple[HiddenSpec, ...]:
+    """The exercise's hidden specs (none: an empty tuple)."""
+    module = module_of(exercise_id)
+    return tuple(module.SPECS) if module is not None else ()
+
+
+def _all(attribute: str) -> dict:
+    out = {}
+    for e in EXERCISES:
+        module = module_of(e.id)
+        if module is not None:
+            out[e.id] = getattr(module, attribute)
+    return out
+
+
+def __getattr__(name: str):
+    """SPECS and FORBIDDEN (dicts by exercise id, gathered from the exercise modules), or an adapter by name."""
+    if name == "SPECS":
+        return _all("SPECS")
+    if name == "FORBIDDEN":
+        return _all("FORBIDDEN")
+    if name.startswith("_call_"):
+        for e in EXERCISES:
+            module = module_of(e.id)
+            if module is not None and hasattr(module, name):
+                return getattr(module, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+@functools.cache
+def cases_of(exercise_id: str) -> list[list[list[list]]] | None:
+    """Per spec of the exercise, its hidden checks (each a list of argument lists), or None when it has none (drawn
+    once per process; do not modify)."""
+    specs = specs_of(exercise_id)
+    if not specs:
+        return None
+    rng = np.random.default_rng([SEED, sum(map(ord, exercise_id))])
+    return [json.loads(json.dumps(spec.cases(rng), default=float)) for spec in specs]
+
+
+def compare(spec: HiddenSpec, student: list[dict], expected: list[dict] | None, sizes: list[int], first: int = 1
+            ) -> list[tuple[bool, str]]:
+    """Per hidden check of `spec` (`sizes` calls each, numbered from `first`): passed, and a message naming the
+    first call that differs. `expected`: the reference's results, None for an outcome spec (every number 1.0)."""
+    out, k = [], 0
+    for i, n in enumerate(sizes, start=first):
+        message = ""
+        for j in range(k, k + n):
+            got = student[j] if j < len(student) else {"error": "no result"}
+            if "error" in got:
+                message = f"hidden check {i}, call {j - k + 1}: raised {got['error']}"
+                break
+            try:
+                a = np.asarray(got["value"], dtype=float)
+                b = np.ones_like(a) if expected is None else np.asarray(expected[j]["value"], dtype=float)
+                comparable = a.shape == b.shape and (a.size > 0 or expected is not None)   # an outcome: some
+                close = np.isclose(a, b, rtol=0, atol=spec.atol, equal_nan=True) if comparable else None
+                same = close is not None and (close.all() if spec.agree >= 1 else close.mean() >= spec.agree)
+            except (ValueError, TypeError):
+                same = False
+            if not same:
+                message = f"hidden check {i}, call {j - k + 1}: the result differs from the expected value"
+                if spec.agree < 1:
+                    message += f" (fewer than {spec.agree:.0%} of it agrees)"
+                break
+        out.append((not message, message))
+        k += n
+    return out

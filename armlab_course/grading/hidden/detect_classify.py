@@ -1,0 +1,34 @@
+"""Hidden checks of exercise detect.classify: fresh inputs from the grader's seed, compared with the reference's
+results (armlab_course.grading.hidden)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from . import HiddenSpec
+
+
+def _colour_models(rng):
+    # six classes whose spreads differ tenfold between classes and axes: the nearest mean alone is often wrong
+    from armlab.detection.color import COLORS, color_features
+
+    cases = []
+    for _ in range(4):
+        means = color_features(rng.uniform(20, 235, (6, 3)))
+        stds = rng.uniform(0.005, 0.08, (6, 3))
+        cases.append([[list(COLORS), means.tolist(), stds.tolist(), rng.uniform(0, 255, (25, 3)).tolist()]])
+    return cases
+
+
+def _call_classify(function, names, means, stds, rgb):
+    """ColorModel(names, means, stds).classify(rgb): the class indices and the margins."""
+    model = function(tuple(str(n) for n in names), np.asarray(means, float), np.asarray(stds, float))
+    best, margin = model.classify(np.asarray(rgb, float))
+    return [[float(model.names.index(b)) for b in best], np.asarray(margin, float).tolist()]
+
+
+SPECS: tuple[HiddenSpec, ...] = (HiddenSpec("armlab.detection.color.ColorModel", _colour_models, atol=1e-9,
+                                  adapter="_call_classify"),)
+FORBIDDEN: tuple[str, ...] = (
+    "ColorModel._nearest_mean",
+)

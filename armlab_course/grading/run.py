@@ -1,0 +1,243 @@
+"""Run student code for grading: a notebook of a grading work tree under `pytest --nbval`, or the hidden checks'
+harness, each in the sandbox (armlab_course.grading.sandbox) under the run's limits, and read what it reports.
+
+The child-side files (the nbval plugin, the harness, the kernel's start-up file, the hidden checks' adapters) are
+copied once, when the Runner is made, into a folder of the grader's that every run sees read-only, with a kernelspec
+of its own (so neither the instructor's nor the student's IPython or Jupyter settings enter). A run's results come
+back in a file signed with a key the run's main process reads from its standard input before any student code
+starts (HMAC-SHA256): a process of the run that rewrites the file cannot forge the signature. The run's console
+output goes to a file of which only the end is read; when the run ends or times out, the sandbox's PID namespace
+(or, for the unprivileged-user sandbox, a kill of every process of the run's user) ends everything it started.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import hmac
+import json
+import os
+import re
+import secrets
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+from .sandbox import Limits, PidsGroup, Sandbox
+
+__all__ = ["DEFAULT_LIMITS", "Limits", "CellResult", "NotebookRun", "Runner", "check_cells", "verify_signed",
+           "CHILD_FILES"]
+
+_CHECK = re.compile(r"^\s*# CHECK[ \t]+(?P<ids>.+?)\s*$", re.MULTILINE)
+OUTPUT_TAIL = 20_000               # bytes of a run's console output kept (its end)
+_MAX_RESULTS_BYTES = 64 * 2**20     # a result file larger than this is refused unread
+_CONFIG = "[pytest]\naddopts =\nfilterwarnings =\n    ignore::DeprecationWarning\n"
+KERNEL_NAME = "armlab-grader"
+# the grader's files that run in the child, copied into the run's read-only folder (package armlab_grader)
+CHILD_FILES = ("nbval_guard.py", "harness.py", "kernel_startup.py", "child_common.py")
+# the environment a run inherits from the grader: locale and the numerics settings, nothing else
+_KEEP_ENV = ("PATH", "LANG", "LANGUAGE", "TZ", "PYTHONHASHSEED", "TERM")
+_KEEP_PREFIXES = ("LC_", "OPENBLAS", "NPY_", "OPENCV_", "OMP_", "MKL_")
+
+
+DEFAULT_LIMITS = Limits()
+
+
+@dataclass(frozen=True)
+class CellResult:
+    passed: bool
+    message: str = ""
+
+
+@dataclass
+class NotebookRun:
+    """cells: per code-cell index (nbval's 'Cell N'), the result; problem: why the run gave no results (timeout,
+    crash, tampered results) or the cell in which the kernel died, '' otherwise."""
+
+    cells: dict[int, CellResult]
+    problem: str = ""
+
+
+def check_cells(notebook: Path) -> dict[int, tuple[str, ...]]:
+    """The notebook's CHECK-tagged code cells: code-cell index -> the exercise ids its '# CHECK' line names."""
+    nb = json.loads(notebook.read_text(encoding="utf-8"))
+    code = [c for c in nb["cells"] if c["cell_type"] == "code"]
+    tags = {}
+    for i, cell in enumerate(code):
+        found = _CHECK.search("".join(cell["source"]))
+        if found:
+            tags[i] = tuple(found["ids"].split())
+    return tags
+
+
+def verify_signed(path: Path, key: bytes) -> object:
+    """The payload of a signed result file (ValueError when it is missing, too large, malformed or its signature is
+    not the run's)."""
+    if not path.is_file() or path.is_symlink():
+        raise ValueError("no result file")
+    if path.stat().st_size > _MAX_RESULTS_BYTES:
+        raise ValueError(f"more than {_MAX_RESULTS_BYTES // 2**20} MB of results")
+    signed = json.loads(path.read_text(encoding="utf-8"))
+    if not isinstance(signed, dict) or not isinstance(signed.get("payload"), str) or \
+            not isinstance(signed.get("hmac"), str):
+        raise ValueError("not a signed result file")
+    want = hmac.new(key, signed["payload"].encode(), hashlib.sha256).hexdigest()
+    if not hmac.compare_digest(want, signed["hmac"]):
+        raise ValueError("the results were changed after the run wrote them (the signature does not match)")
+    return json.loads(signed["payload"])
+
+
+def _ended(returncode: int) -> str:
+    """How a finished process ended, in words."""
+    if returncode < 0:
+        try:
+            name = signal.Signals(-returncode).name
+        except ValueError:
+            name = f"signal {-returncode}"
+        why = {signal.SIGXCPU: " (the CPU limit)", signal.SIGKILL: " (the CPU limit's hard end, or a kill)"}
+        return f"killed by {name}{why.get(-returncode, '')}"
+    return f"exit code {returncode}"
+
+
+class Runner:
+    """Runs notebooks and the hidden checks of grading work trees in `sandbox` under `limits`. Owns the read-only
+    folder of child-side files (made now, from the grader's own sources: nothing of the grader is read after student
+    code starts); close() removes it."""
+
+    def __init__(self, sandbox: Sandbox, limits: Limits = DEFAULT_LIMITS, hidden_source: Path | None = None):
+        self.sandbox, self.limits = sandbox, limits
+        self._tmp = tempfile.TemporaryDirectory(prefix="armlab-grader-")
+        self.files = Path(self._tmp.name) / "grader"
+        self._write_child_files(hidden_source)
+
+    def close(self) -> None:
+        self._tmp.cleanup()
+
+    def _write_child_files(self, hidden_source: Path | None) -> None:
+        lib = self.files / "lib" / "armlab_grader"
+        lib.mkdir(parents=True)
+        (lib / "__init__.py").write_text('"""The grader\'s child-side files (a read-only copy for the runs)."""\n')
+        here = Path(__file__).parent
+        for name in CHILD_FILES:
+            shutil.copy2(here / name, lib / name)
+        if hidden_source is not None:
+            if hidden_source.is_dir():
+                shutil.copytree(hidden_source, lib / "hidden", ignore=shutil.ignore_patterns("__pycache__"))
+            else:
+                shutil.copy2(hidden_source, lib / "hidden.py")
+        inside = self.sandbox.grader_inside(self.files)
+        startup = f"{inside}/lib/armlab_grader/kernel_startup.py"
+        spec = {"argv": [sys.executable, "-m", "ipykernel_launcher", "-f", "{connection_file}",
+                         f"--IPKernelApp.exec_files={json.dumps([startup])}", "--HistoryManager.enabled=False"],
+                "display_name": "armlab grader", "language": "python"}
+        kernel = self.files / "share" / "jupyter" / "kernels" / KERNEL_NAME
+        kernel.mkdir(parents=True)
+        (kernel / "kernel.json").write_text(json.dumps(spec))
+
+    def _environment(self, worktree: Path) -> dict[str, str]:
+        home = self.sandbox.home(worktree)
+        work, grader = self.sandbox.inside(worktree), self.sandbox.grader_inside(self.files)
+        env = {k: v for k, v in os.environ.items() if k in _KEEP_ENV or k.startswith(_KEEP_PREFIXES)}
+        env.update(HOME=home, PYTHONPATH=f"{work}{os.pathsep}{grader}/lib", MPLBACKEND="Agg",
+                   PYTHONDONTWRITEBYTECODE="1", JUPYTER_PATH=f"{grader}/share/jupyter", IPYTHONDIR=f"{home}/.ipython",
+                   MPLCONFIGDIR=f"{home}/.matplotlib", JUPYTER_CONFIG_DIR=f"{home}/.jupyter",
+                   JUPYTER_DATA_DIR=f"{home}/.local/share/jupyter", JUPYTER_RUNTIME_DIR=f"{home}/.jupyter-runtime",
+                   JUPYTER_PLATFORM_DIRS="1", PYDEVD_DISABLE_FILE_VALIDATION="1", TMPDIR="/tmp")
+        env.setdefault("PATH", "/usr/bin:/bin")
+        return env
+
+    def run(self, cmd: list[str], worktree: Path, stdin: bytes, limits: Limits | None = None
+            ) -> tuple[bool, str, int]:
+        """Run `cmd` (paths as seen inside) in the work tree in the sandbox with `stdin` under `limits` (default: the
+        runner's); (finished in time, the last OUTPUT_TAIL bytes of its output, its return code). Everything the run
+        started is gone when this returns."""
+        limits = limits or self.limits
+        with self.sandbox.slot(worktree, self.files) as uid:
+            argv = self.sandbox.argv(cmd, worktree, self.files, limits, uid)
+            group = PidsGroup(limits.max_procs) if PidsGroup.available() else None
+            if group is not None:
+                argv = group.wrap(argv)
+            with tempfile.TemporaryFile() as log:
+                proc = subprocess.Popen(argv, cwd=worktree, env=self._environment(worktree), stdout=log,
+                                        stderr=subprocess.STDOUT, stdin=subprocess.PIPE, start_new_session=True)
+                try:
+                    proc.stdin.write(stdin)
+                    proc.stdin.close()
+                except (BrokenPipeError, OSError):
+                    pass
+                try:
+                    proc.wait(timeout=limits.timeout_s)
+                    done = True
+                except subprocess.TimeoutExpired:
+                    done = False
+                finally:
+                    try:
+                        os.killpg(proc.pid, signal.SIGKILL)
+                    except ProcessLookupError:
+                        pass
+                    proc.wait()
+                    if group is not None:
+                        group.close()
+                size = log.seek(0, os.SEEK_END)
+                log.seek(max(0, size - OUTPUT_TAIL))
+                out = log.read().decode(errors="replace")
+        return done, out, proc.returncode
+
+    def notebook(self, worktree: Path, notebook: str, lax: bool = False) -> NotebookRun:
+        """Run `notebook` (relative to `worktree`) under nbval with the instructor's sanitize file; per-cell results.
+        lax: --nbval-lax (a cell fails only by raising; for a student's own notebooks, which hold no stored
+        outputs)."""
+        work = self.sandbox.inside(worktree)
+        private = worktree / ".grader"
+        private.mkdir(exist_ok=True)
+        (private / "pytest.ini").write_text(_CONFIG)
+        results = private / "results.json"
+        cmd = [sys.executable, "-m", "pytest", "-q", "-c", f"{work}/.grader/pytest.ini", "--rootdir", work,
+               "-p", "no:cacheprovider", notebook, "--nbval-lax" if lax else "--nbval",
+               "-p", "armlab_grader.nbval_guard", "--nbval-sanitize-with", "tests/nbval_sanitize.cfg",
+               f"--nbval-cell-timeout={int(self.limits.timeout_s)}", f"--nbval-kernel-name={KERNEL_NAME}",
+               "--nbval-kernel-startup-timeout=300", f"--armlab-results={work}/.grader/results.json"]
+        key = secrets.token_bytes(32)
+        done, out, code = self.run(cmd, worktree, key.hex().encode() + b"\n")
+        if not done:
+            return NotebookRun({}, f"the notebook did not finish within {self.limits.timeout_s:g} s (wall clock)")
+        try:
+            payload = verify_signed(results, key)
+            cells = {int(i): CellResult(bool(ok), str(msg)) for i, (ok, msg) in payload["cells"].items()}
+        except (OSError, ValueError, KeyError, TypeError) as e:
+            tail = " | ".join(out.strip().splitlines()[-3:])
+            return NotebookRun({}, f"the notebook run ended without results ({_ended(code)}; {e}): {tail}"[:600])
+        died = next((f"cell {i}: {c.message}" for i, c in sorted(cells.items()) if "the kernel died" in c.message), "")
+        return NotebookRun(cells, died)
+
+    def harness(self, worktree: Path, jobs: list[dict], exercises: int = 1) -> tuple[list | None, str]:
+        """The hidden checks' jobs run in one sandboxed harness process of `worktree` (armlab_grader.harness): per job
+        {"results": per call {"value": ...} or {"error": ...}, "forbidden": forbidden calls seen}; or None and
+        why. The run's wall-clock and CPU limits are the runner's times `exercises` (the hidden checks of that many
+        exercises run in this one process)."""
+        limits = replace(self.limits, timeout_s=self.limits.timeout_s * max(1, exercises),
+                         cpu_s=self.limits.cpu_s * max(1, exercises))
+        work = self.sandbox.inside(worktree)
+        private = worktree / ".grader"
+        private.mkdir(exist_ok=True)
+        results = private / "hidden-results.json"
+        key = secrets.token_bytes(32)
+        request = json.dumps({"out": f"{work}/.grader/hidden-results.json", "jobs": jobs}).encode()
+        done, out, code = self.run([sys.executable, "-m", "armlab_grader.harness"], worktree,
+                                   key.hex().encode() + b"\n" + request, limits)
+        if not done:
+            return None, f"the hidden checks did not finish within {limits.timeout_s:g} s (wall clock)"
+        try:
+            got = verify_signed(results, key)
+            if not isinstance(got, list) or len(got) != len(jobs) or not all(
+                    isinstance(job, dict) and isinstance(job.get("results"), list) and
+                    all(isinstance(r, dict) for r in job["results"]) and isinstance(job.get("forbidden"), list)
+                    for job in got):
+                raise ValueError("not a list of results per job")
+            return got, ""
+        except (OSError, ValueError) as e:
+            tail = " | ".join(out.strip().splitlines()[-2:])
+            return None, f"the hidden checks gave no results ({_ended(code)}; {e}): {tail}"[:600]

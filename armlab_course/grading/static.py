@@ -1,0 +1,108 @@
+"""The static check: does a student's region call the library or kit function that would do the exercise for them?
+
+The region's text is parsed with `ast` in the grader's process; nothing is imported or run. The lists live next to
+the hidden checks (armlab_course.grading.hidden.FORBIDDEN, FORBIDDEN_EVERYWHERE). A forbidden name counts when the
+region
+refers to it: a call or attribute (`cv2.findHomography(...)`, `camera.project`), a free name (`fk_pox` after a
+`from ... import`), an import of it, or a string naming it (`getattr(cv2, "findHomography")`); the last dotted part
+of each listed name is what is compared. Names the region binds itself (its variables, its own functions) and the
+exercise's own function names do not count.
+"""
+
+from __future__ import annotations
+
+import ast
+import textwrap
+
+from armlab_course.exercises.registry import exercise
+
+from .results import CheckResult
+
+__all__ = ["STATIC_CHECK", "forbidden_of", "forbidden_uses", "static_check"]
+
+STATIC_CHECK = "static check: no forbidden call"
+
+
+def forbidden_of(exercise_id: str) -> tuple[str, ...]:
+    """The names forbidden in the exercise's regions (its own list and the ones forbidden everywhere), or () when the
+    grader's hidden module is not there (a student release)."""
+    try:
+        from .hidden import FORBIDDEN, FORBIDDEN_EVERYWHERE
+    except ImportError:
+        return ()
+    return tuple(FORBIDDEN.get(exercise_id, ())) + FORBIDDEN_EVERYWHERE
+
+
+def _parse(body: str) -> tuple[ast.Module | None, int]:
+    """The region's statements, dedented (a region sits inside a function or a loop), and how many lines were put
+    before them; None when it does not parse (the notebook run reports that)."""
+    text = textwrap.dedent(body)
+    for offset, attempt in ((0, text), (1, "def _region():\n" + textwrap.indent(text, "    "))):
+        try:
+            return ast.parse(attempt), offset
+        except SyntaxError:
+            continue
+    return None, 0
+
+
+def _bound(tree: ast.Module) -> set[str]:
+    """Names the region binds itself: assignment targets, loop variables, its own functions, classes, arguments."""
+    names = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Name) and isinstance(node.ctx, (ast.Store, ast.Del)):
+            names.add(node.id)
+        elif isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+            names.add(node.name)
+        elif isinstance(node, ast.arg):
+            names.add(node.arg)
+    return names
+
+
+def forbidden_uses(body: str, names: tuple[str, ...], own: tuple[str, ...] = ()) -> list[tuple[str, int]]:
+    """The forbidden `names` (dotted; the last part is compared) the region `body` refers to, each with the line (1 =
+    the region's first) of its first use, in the order of `names`."""
+    tree, offset = _parse(body)
+    if tree is None:
+        return []
+    wanted = {n.rsplit(".", 1)[-1]: n for n in names}
+    skip = _bound(tree) | {o.rsplit(".", 1)[-1] for o in own}
+    found: dict[str, int] = {}
+
+    def hit(part: str, node: ast.AST) -> None:
+        if part in wanted and wanted[part] not in found:
+            found[wanted[part]] = getattr(node, "lineno", 1) - offset
+
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Attribute):
+            hit(node.attr, node)
+        elif isinstance(node, ast.Name) and isinstance(node.ctx, ast.Load) and node.id not in skip:
+            hit(node.id, node)
+        elif isinstance(node, ast.Import):
+            for alias in node.names:
+                for part in alias.name.split("."):
+                    hit(part, node)
+        elif isinstance(node, ast.ImportFrom):
+            for part in (node.module or "").split("."):
+                hit(part, node)
+            for alias in node.names:
+                hit(alias.name, node)
+        elif isinstance(node, ast.Constant) and isinstance(node.value, str):
+            hit(node.value.rsplit(".", 1)[-1], node)
+    return sorted(found.items(), key=lambda item: names.index(item[0]))
+
+
+def static_check(exercise_id: str, bodies: list[str]) -> CheckResult | None:
+    """One check for the exercise's regions: passed when none refers to a forbidden name, else failed with a message
+    naming the first; None when the exercise has no list (a student release)."""
+    names = forbidden_of(exercise_id)
+    if not names:
+        return None
+    own = exercise(exercise_id).functions
+    for k, body in enumerate(bodies, start=1):
+        uses = forbidden_uses(body, names, own)
+        if uses:
+            name, line = uses[0]
+            where = f"region {k}, line {line}" if len(bodies) > 1 else f"line {line} of the region"
+            return CheckResult(STATIC_CHECK, False, f"the region uses {name} ({where}): the exercise is to write "
+                                                    f"it, not to call the library's or the kit's version")
+    return CheckResult(STATIC_CHECK, True)
