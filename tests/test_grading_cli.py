@@ -166,3 +166,18 @@ def test_written_answers_reach_the_feedback_and_the_instructors_csv(tmp_path):
     answers = {r["student"]: r[written.id] for r in csv.DictReader((tmp_path / "out/answers.csv").open())}
     assert answers == {"ada": answer, "bob": ""}
     assert "not written" in (tmp_path / "out/bob/feedback.md").read_text()
+
+
+def test_csv_cells_that_read_as_formulas_are_neutralised():
+    """A written answer or a folder name starting like a spreadsheet formula lands as text (a leading apostrophe);
+    the grader's own numbers, negative ones included, stay numbers."""
+    import csv
+    import io
+
+    from armlab_course.grading.csv_cells import csv_text
+
+    text = csv_text(["student", "answer", "score"],
+                    [["=HYPERLINK(\"http://x\")", "+1", -2.5], ["@SUM(A1)", "-x", 3], ["bob", "plain, text", 0.0]])
+    rows = list(csv.reader(io.StringIO(text)))
+    assert rows[1] == ["'=HYPERLINK(\"http://x\")", "'+1", "-2.5"], rows
+    assert rows[2] == ["'@SUM(A1)", "'-x", "3"] and rows[3] == ["bob", "plain, text", "0"], rows

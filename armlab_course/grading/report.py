@@ -4,8 +4,6 @@ autograder format (score; tests with name, score, max_score, output, visibility)
 
 from __future__ import annotations
 
-import csv
-import io
 import json
 import os
 import tempfile
@@ -13,6 +11,7 @@ from pathlib import Path
 
 from armlab_course.exercises.registry import exercise
 
+from .csv_cells import csv_text
 from .results import ExerciseResult
 
 __all__ = ["atomic_write", "results_json", "feedback_md", "grades_csv", "answers_csv", "table",
@@ -126,26 +125,18 @@ def grades_csv(graded: dict[str, dict[str, ExerciseResult]]) -> str:
     first = next(iter(graded.values()))
     auto = [i for i, r in first.items() if not r.by_hand]
     by_hand = [i for i, r in first.items() if r.by_hand]
-    buf = io.StringIO()
-    writer = csv.writer(buf, lineterminator="\n")
-    writer.writerow(["student", *auto, "total", "max", *(f"{i} (by hand, /{first[i].max_score})" for i in by_hand)])
-    for student, results in graded.items():
-        writer.writerow([student, *(f"{results[i].score:g}" for i in auto),
-                         f"{sum(results[i].score for i in auto):g}", sum(results[i].max_score for i in auto),
-                         *("" for _ in by_hand)])
-    return buf.getvalue()
+    header = ["student", *auto, "total", "max", *(f"{i} (by hand, /{first[i].max_score})" for i in by_hand)]
+    return csv_text(header, ([student, *(float(results[i].score) for i in auto),
+                              float(sum(results[i].score for i in auto)), sum(results[i].max_score for i in auto),
+                              *("" for _ in by_hand)] for student, results in graded.items()))
 
 
 def answers_csv(graded: dict[str, dict[str, ExerciseResult]]) -> str:
     """The written answers to grade by hand: one row per student, one column per written exercise."""
     first = next(iter(graded.values()))
     by_hand = [i for i, r in first.items() if r.by_hand]
-    buf = io.StringIO()
-    writer = csv.writer(buf, lineterminator="\n")
-    writer.writerow(["student", *by_hand])
-    for student, results in graded.items():
-        writer.writerow([student, *(results[i].answer or "" for i in by_hand)])
-    return buf.getvalue()
+    return csv_text(["student", *by_hand],
+                    ([student, *(results[i].answer or "" for i in by_hand)] for student, results in graded.items()))
 
 
 def write_reports(graded: dict[str, dict[str, ExerciseResult]], out: Path) -> None:
