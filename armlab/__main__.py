@@ -31,6 +31,10 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _run(parser: argparse.ArgumentParser, argv: list[str] | None) -> int:
+    from armlab import __version__
+
+    parser.add_argument("--version", action="version", version=f"armlab {__version__}",
+                        help="print the kit's version and exit")
     sub = parser.add_subparsers(dest="command", required=True)
     demo = sub.add_parser("demo", help="run the end-to-end demo headless on the simulator")
     demo.add_argument("--out", default="out", help="folder for the demo's images and replay (default: out/)")

@@ -87,3 +87,12 @@ def test_output_folder_refuses_before_any_work(tmp_path):
     with pytest.raises(ValueError, match="is a file"):
         output_folder(str(tmp_path / "f"))
     assert output_folder(str(tmp_path / "new" / "deeper")).is_dir()
+
+
+def test_version_prints_the_package_version(tmp_path):
+    """`python -m armlab --version` prints the version the package and the CHANGELOG hold (issue 34: only
+    `grade --version` did), exit 0, nothing on stderr."""
+    import armlab
+
+    run = _run(("--version",), tmp_path)
+    assert (run.returncode, run.stdout.strip(), run.stderr) == (0, f"armlab {armlab.__version__}", ""), run
