@@ -7,9 +7,10 @@ import ast
 import textwrap
 
 
-def disguised(body: str, prefix: str = "my") -> str:
-    """`body` with every variable it assigns renamed (`prefix`_0, ...), every number changed, its layout reflowed by
-    ast.unparse (parentheses, spacing, line breaks) and a comment added: the same code to a reader, not to diff."""
+def disguised(body: str, prefix: str = "my", runnable: bool = False) -> str:
+    """`body` with every variable it assigns renamed (`prefix`_0, ...), every number changed (with `runnable`, only
+    the tolerances, below 1e-6, so that it computes what `body` does), its layout reflowed by ast.unparse
+    (parentheses, spacing, line breaks) and a comment added: the same code to a reader, not to diff."""
     tree = ast.parse(textwrap.dedent(body))
     stored = sorted({n.id for n in ast.walk(tree) if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Store)})
     renamed = {name: f"{prefix}_{i}" for i, name in enumerate(stored)}
@@ -17,8 +18,11 @@ def disguised(body: str, prefix: str = "my") -> str:
         if isinstance(node, ast.Name) and node.id in renamed:
             node.id = renamed[node.id]
         elif isinstance(node, ast.Constant) and type(node.value) in (int, float):
-            node.value = node.value * 2 + 1
-    text = f"# {prefix}'s own work\n" + ast.unparse(tree)
+            if not runnable:
+                node.value = node.value * 2 + 1
+            elif 0 < abs(node.value) < 1e-6:
+                node.value = node.value * 10
+    text = f"# {prefix}: my own work\n" + ast.unparse(tree)
     assert text.count("\n") >= 1 and text != textwrap.dedent(body)
     return textwrap.indent(text, "    ")
 

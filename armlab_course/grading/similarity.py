@@ -28,7 +28,7 @@ import tokenize
 from collections.abc import Iterable
 from pathlib import Path
 
-from armlab_course.exercises.markers import is_blank
+from armlab_course.exercises.markers import stub_lines
 from armlab_course.exercises.registry import exercise
 
 from .csv_cells import csv_text
@@ -140,7 +140,8 @@ def score(a: frozenset[int], b: frozenset[int]) -> float:
 def _comparable(bodies: list[str], exercise_id: str) -> frozenset[int] | None:
     """The fingerprints of an exercise's written regions; None when there is nothing to compare (every region blank,
     or too short)."""
-    written = [b for b in bodies if not is_blank(f"# BEGIN SOLUTION {exercise_id}\n{b}\n# END SOLUTION\n", exercise_id)]
+    stub = stub_lines(exercise_id)
+    written = [b for b in bodies if [line.strip() for line in b.splitlines() if line.strip()] != stub]
     prints = fingerprints(written)
     return prints if len(prints) >= MIN_FINGERPRINTS else None
 
