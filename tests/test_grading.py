@@ -12,6 +12,7 @@ import json
 from pathlib import Path
 
 import pytest
+from copies import disguised
 from wrong_answers import DEPENDS, HIDDEN_WRONG, WRONG_DH, reference_bodies, wrong_euler
 
 from armlab_course.exercises import make_student_release
@@ -94,6 +95,7 @@ def graded(tmp_path_factory) -> tuple[dict, Path]:
         write_regions(student(name), "fk.euler", [prefix + reference_bodies("fk.euler")[0]])   # called 300 times
         write_regions(subs / name, "fk.dh_table", reference_bodies("fk.dh_table"))
     write_regions(student("library_call"), "fk.euler", [LIBRARY_EULER])
+    write_regions(student("renamed_copy"), "fk.euler", [disguised(reference_bodies("fk.euler")[0], runnable=True)])
     kit = student("kit_call")            # the notebook's stand-in (the kit's table with the lengths put in)
     write_regions(kit, "fk.dh_table", ["    return kit_table(h0, L1, beta, L2, Lt)"])
     out = base / "out"
@@ -211,6 +213,33 @@ def test_reports(graded):
     feedback = (out / "wrong_dh" / "feedback.md").read_text()
     assert "fk.dh_table" in feedback and "FAILED" in feedback and "first failing check" in \
         gradescope["tests"][0]["output"]
+
+
+def test_similarity_report(graded):
+    """OUT/similarity.csv scores every written region against the reference's and the classmates'; the reference
+    pasted with renamed variables and a reflowed layout scores full marks and is flagged in OUT/similarity.md, which
+    no student's folder holds."""
+    from armlab_course.grading.similarity import FLAG_AT
+
+    results, out = graded
+    rows = list(csv.reader((out / "similarity.csv").open()))
+    assert rows[0] == ["student", "exercise", "matched", "score"] and rows[1:] == sorted(
+        rows[1:], key=lambda r: (r[0], r[1], r[2] != "reference", r[2]))
+    score = {(s, e, m): float(v) for s, e, m, v in rows[1:]}
+    assert _score(graded, "renamed_copy", "fk.euler") == exercise("fk.euler").points
+    assert score["renamed_copy", "fk.euler", "reference"] >= FLAG_AT
+    assert score["renamed_copy", "fk.euler", "full"] == score["full", "fk.euler", "renamed_copy"] >= FLAG_AT
+    assert score["full", "fk.euler", "reference"] == 1.0
+    assert score["full", "ik.candidates", "edited_only"] == 1.0           # the same file, handed in twice
+    assert not any(s == "blank" or m == "blank" for s, _, m in score)      # blank regions: never compared
+    assert {s for s, _, _ in score} < set(results)
+    notes = (out / "similarity.md").read_text()
+    section = notes.split("## renamed_copy\n", 1)[1].split("##", 1)[0]
+    assert f"- fk.euler: {score['renamed_copy', 'fk.euler', 'reference']:.3f} against the reference" in section
+    for student in results:                  # what students receive says nothing of it
+        for name in ("feedback.md", "results.json"):
+            assert "similarity" not in (out / student / name).read_text().lower(), (student, name)
+        assert sorted(p.name for p in (out / student).iterdir()) == ["feedback.md", "results.json"]
 
 
 def test_submission_reading_reports_damaged_markers(tmp_path):

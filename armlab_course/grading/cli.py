@@ -28,7 +28,9 @@ def add_parsers(sub) -> None:
     """The `grade` and `check` subcommands."""
     grade = sub.add_parser("grade", help="grade a folder of submissions (one folder per student) into OUT")
     grade.add_argument("submissions")
-    grade.add_argument("--out", required=True, help="folder for grades.csv and <student>/results.json, feedback.md")
+    grade.add_argument("--out", required=True,
+                       help="folder for grades.csv, <student>/results.json, feedback.md and, for you only, "
+                            "similarity.csv and similarity.md")
     grade.add_argument("--jobs", type=int_at_least(1, 512), default=1,
                        help="submissions graded in parallel (default: 1)")
     grade.add_argument("--timeout", type=positive_seconds, default=300.0,
@@ -91,5 +93,6 @@ def main(args: argparse.Namespace) -> int:
         return 2
     for student, results in graded.items():
         print(f"{student}: {sum(r.score for r in results.values()):g} / {sum(r.max_score for r in results.values())}")
-    print(f"wrote {Path(args.out) / 'grades.csv'}")
+    print(f"wrote {Path(args.out) / 'grades.csv'}; similar regions, for your eyes only: "
+          f"{Path(args.out) / 'similarity.md'}")
     return 0

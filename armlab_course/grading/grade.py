@@ -35,6 +35,7 @@ from pathlib import Path
 from armlab_course.exercises.registry import EXERCISES, exercise
 
 from . import report as _report  # noqa: F401  (imported now: nothing of the grader is loaded after student code)
+from . import similarity as _similarity
 from .results import CheckResult, ExerciseResult, score_exercise
 from .run import DEFAULT_LIMITS, Limits, NotebookRun, Runner, check_cells
 from .sandbox import WORK, Sandbox, detect
@@ -412,7 +413,8 @@ def grade_class(submissions: Path | str, out: Path | str, reference: Path | str,
                 progress: Callable[[str, dict[str, ExerciseResult]], None] | None = None) -> dict[str, dict]:
     """Grade every student folder of `submissions` (in parallel on `jobs` threads, each run its own sandboxed
     process), calling progress(student, results) as each is done, and write OUT/grades.csv,
-    OUT/<student>/results.json and OUT/<student>/feedback.md."""
+    OUT/<student>/results.json and OUT/<student>/feedback.md, and the regions' similarity for the instructor:
+    OUT/similarity.csv and OUT/similarity.md (armlab_course.grading.similarity)."""
     from .report import write_reports
 
     submissions = Path(submissions)
@@ -441,4 +443,5 @@ def grade_class(submissions: Path | str, out: Path | str, reference: Path | str,
             graded = dict(zip((p.name for p in students), pool.map(one, students), strict=True))
         grader.verify_sources()
     write_reports(graded, Path(out))
+    _similarity.write_similarity(read.values(), reference, Path(out), next(iter(graded.values())))
     return graded
