@@ -24,8 +24,10 @@ before any report is written.
 
 from __future__ import annotations
 
+import contextlib
 import copy
 import hashlib
+import re
 import shutil
 import tempfile
 import threading
@@ -40,7 +42,7 @@ from armlab_course.exercises.registry import EXERCISES, exercise
 from . import report as _report  # noqa: F401  (imported now: nothing of the grader is loaded after student code)
 from .results import CheckResult, ExerciseResult, score_exercise
 from .run import DEFAULT_LIMITS, Limits, NotebookRun, Runner, check_cells
-from .sandbox import WORK, Sandbox, detect
+from .sandbox import WORK, Sandbox, detect, owner_only, python_outside, refuse_shared_network
 from .splice import RegionRejected, build_worktree, check_body, splice_into
 from .static import STATIC_CHECK, static_check
 from .submission import Submission, exercise_file, read_submission, regions_of, source_texts
@@ -79,6 +81,19 @@ _OWN_SOURCES = (Path(__file__).parent, Path(__file__).parents[1] / "exercises")
 
 # what reading a run's results of the wrong shape raises: the run's exercises fail, naming it; the class goes on
 _MALFORMED = (KeyError, TypeError, ValueError, AttributeError, IndexError, RecursionError)
+
+
+_RAISED = re.compile(r"(raised )([A-Za-z_][\w.]*)(?::.*)?$", re.DOTALL)
+_TAIL = re.compile(r"^(the hidden checks gave no results \(.*?\)):.*$", re.DOTALL)
+
+
+def student_side(message: str) -> str:
+    """A hidden check's message as the student may see it: which check and call failed and how (the exception's
+    type, 'the result differs', the property), never what the region put into its exception's text or printed
+    while the hidden checks ran (it holds the hidden inputs it was called with, or whatever it read of the run)."""
+    message = _RAISED.sub(lambda m: f"{m[1]}{m[2]} (its message is not shown: the hidden checks' inputs stay hidden)",
+                          message)
+    return _TAIL.sub(lambda m: f"{m[1]} (the run's output is not shown)", message)
 
 
 class GraderChanged(RuntimeError):
@@ -123,10 +138,13 @@ class Grader:
 
     def __init__(self, reference: Path | str, limits: Limits = DEFAULT_LIMITS, exercises: Iterable[str] | None = None,
                  unsafe: bool = False, sandbox: Sandbox | None = None, written: Iterable[str] | None = None,
-                 parallel: int = 1):
+                 parallel: int = 1, shared_network: bool = False, private: Iterable[Path] = ()):
         """exercises: those graded (default every one); written: those some submission to grade has written (default
         every graded one): only their expected values are computed, and grading another written one raises
-        ValueError; parallel: how many runs of one submission (its notebooks, its hidden checks) go at once."""
+        ValueError; parallel: how many runs of one submission (its notebooks, its hidden checks) go at once;
+        shared_network: grade in the uid fallback although it cannot take the network away (see
+        refuse_shared_network); private: folders besides the reference that the fallback's uids may not read (the
+        submissions, the output), made owner-only until close()."""
         if parallel < 1:
             raise ValueError(f"parallel must be at least 1, got {parallel}")
         self.parallel = int(parallel)
@@ -138,6 +156,11 @@ class Grader:
         written = None if written is None else set(written)
         self._computed = [e for e in self.exercise_ids if written is None or e in written]
         self.sandbox = sandbox or detect(unsafe)
+        refuse_shared_network(self.sandbox, shared_network)
+        self._private = contextlib.ExitStack()
+        if self.sandbox.kind == "user":         # every instructor path owner-only while student code runs
+            python_outside([self.reference, *private])
+            self._private.enter_context(owner_only(self.reference, *private))
         self._sources = source_hashes()
         self._tmp = tempfile.TemporaryDirectory(prefix="armlab-grade-")
         self._root = Path(self._tmp.name)
@@ -154,6 +177,7 @@ class Grader:
     def close(self) -> None:
         self.runner.close()
         self._tmp.cleanup()
+        self._private.close()
 
     def __enter__(self) -> Grader:
         return self
@@ -283,12 +307,13 @@ class Grader:
                                               strict=True)):
             names = [f"hidden check {first + i}" for i in range(len(cases))]
             if outputs is None:
-                checks += [CheckResult(n, False, problem) for n in names]
+                checks += [CheckResult(n, False, student_side(problem)) for n in names]
             else:
                 verdicts = _hidden.compare(spec, outputs[k]["results"], self._expected[exercise_id][k],
                                            [len(c) for c in cases], first)
-                checks += [CheckResult(n, ok, msg) for n, (ok, msg) in zip(names, verdicts, strict=True)]
-                seen += outputs[k]["forbidden"]
+                checks += [CheckResult(n, ok, student_side(msg)) for n, (ok, msg) in zip(names, verdicts,
+                                                                                           strict=True)]
+                seen += [str(name) for name in outputs[k]["forbidden"]]
             first += len(cases)
         return checks, sorted(set(seen))
 
@@ -477,10 +502,11 @@ def grade_submission(folder: Path | str, reference: Path | str, limits: Limits =
 
 def grade_class(submissions: Path | str, out: Path | str, reference: Path | str, jobs: int = 1,
                 limits: Limits = DEFAULT_LIMITS, exercises: Iterable[str] | None = None, unsafe: bool = False,
-                progress: Callable[[str, dict[str, ExerciseResult]], None] | None = None) -> dict[str, dict]:
+                progress: Callable[[str, dict[str, ExerciseResult]], None] | None = None,
+                shared_network: bool = False) -> dict[str, dict]:
     """Grade every student folder of `submissions` (in parallel on `jobs` threads, each run its own sandboxed
     process), calling progress(student, results) as each is done, and write OUT/grades.csv,
-    OUT/<student>/results.json and OUT/<student>/feedback.md."""
+    OUT/<student folder>/results.json and feedback.md (report.student_folder). shared_network: see Grader."""
     from .report import write_reports
 
     submissions = Path(submissions)
@@ -499,7 +525,10 @@ def grade_class(submissions: Path | str, out: Path | str, reference: Path | str,
     written = {e for submission in read.values() for e in submission.bodies}
     # a class smaller than the jobs: the spare ones run a submission's notebooks and hidden checks side by side
     parallel = max(1, jobs // len(students))
-    with Grader(reference, limits, exercises, unsafe=unsafe, written=written, parallel=parallel) as grader:
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    with Grader(reference, limits, exercises, unsafe=unsafe, written=written, parallel=parallel,
+                shared_network=shared_network, private=[submissions.resolve(), out.resolve()]) as grader:
         def one(path: Path, name: str) -> dict[str, ExerciseResult]:
             try:
                 results = grader.grade(read[path])
@@ -513,7 +542,7 @@ def grade_class(submissions: Path | str, out: Path | str, reference: Path | str,
         with ThreadPoolExecutor(max_workers=jobs) as pool:
             graded = dict(zip(names, pool.map(one, students, names), strict=True))
         grader.verify_sources()
-    write_reports(graded, Path(out))
+    write_reports(graded, out)
     return graded
 
 

@@ -36,7 +36,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 __all__ = ["GRADER", "HOME", "WORK", "USER_UIDS", "Limits", "Sandbox", "SandboxUnavailable", "detect", "lock_down",
-           "RUN_USERS", "uid_lock_dir", "uids_in_use", "remove_owned", "SHARED_TMP"]
+           "RUN_USERS", "uid_lock_dir", "uids_in_use", "remove_owned", "SHARED_TMP", "owner_only",
+           "refuse_shared_network", "python_outside"]
 
 @dataclass(frozen=True)
 class Limits:
@@ -393,6 +394,47 @@ def remove_owned(uid: int, folders: tuple[str, ...]) -> list[str]:
             except OSError:
                 continue
     return gone
+
+
+@contextmanager
+def owner_only(*paths: Path):
+    """Make each existing folder of `paths` owner-only (mode & 0o700) while the block runs, then give each its mode
+    back: what the "user" backend's uids must not read (the instructor's checkout, the submissions, the output)."""
+    modes = {}
+    try:
+        for path in paths:
+            if path.is_dir() and not path.is_symlink():
+                modes[path] = path.stat().st_mode & 0o7777
+                path.chmod(modes[path] & 0o700)
+        yield
+    finally:
+        for path, mode in modes.items():
+            try:
+                path.chmod(mode)
+            except OSError:
+                pass
+
+
+def refuse_shared_network(sandbox: Sandbox, allowed: bool) -> None:
+    """SandboxUnavailable, saying why, for the "user" backend unless the instructor allowed it: without namespaces
+    student code shares the machine's network (127.0.0.1 included, which the notebook's kernel itself needs, so no
+    filter can tell the two apart)."""
+    if sandbox.kind == "user" and not allowed:
+        raise SandboxUnavailable("student code would run in the uid fallback (root without namespaces), which cannot "
+                                 "take the network away: a region could send the hidden checks out or reach a "
+                                 "service on 127.0.0.1. Grade where bubblewrap runs, or pass --allow-shared-network "
+                                 "(Gradescope: ARMLAB_ALLOW_SHARED_NETWORK=1) to grade anyway")
+
+
+def python_outside(paths: list[Path]) -> None:
+    """SandboxUnavailable when the grader's Python lives inside one of `paths` (which the "user" backend makes
+    owner-only: the run's uid could not start it)."""
+    here = [Path(os.path.realpath(p)) for p in (sys.prefix, sys.executable)]
+    for path in paths:
+        inside = [h for h in here if h == path.resolve() or path.resolve() in h.parents]
+        if inside:
+            raise SandboxUnavailable(f"the grader's Python ({inside[0]}) lives inside {path}, which the uid fallback "
+                                     f"makes owner-only: run the grader with a Python outside it")
 
 
 def lock_down(*paths: Path) -> None:
