@@ -45,6 +45,16 @@ ROOT = Path(__file__).resolve().parents[1]
 SMALL = Limits(timeout_s=60, cpu_s=30, memory_mb=1200, max_procs=48, disk_mb=96, scratch_mb=48, max_files=2000)
 
 
+@pytest.fixture(scope="module")
+def grader():
+    """One Grader of two notebook-02 exercises for the tests that stand in for its runs (its start computes the
+    expected values once)."""
+    from armlab_course.grading.grade import Grader
+
+    with Grader(ROOT, exercises=["fk.euler", "fk.dh_table"], written=["fk.euler", "fk.dh_table"]) as made:
+        yield made
+
+
 @pytest.fixture
 def no_cgroup(monkeypatch):
     """The runs of this test see no pids cgroup, as on a machine without one."""
@@ -240,12 +250,12 @@ def test_the_uid_fallback_run_leaves_nothing_in_tmp_and_no_process(no_cgroup):
     assert left == [], left
 
 
-def test_a_submission_ends_within_its_time_budget(monkeypatch):
+def test_a_submission_ends_within_its_time_budget(monkeypatch, grader):
     """Every run sleeps until its limit ends it (the issue's three sleeping regions): no run is given time past the
     submission's deadline, the runs' time adds up to at most TIME_BUDGET x the timeout, and the failing exercises
     are not rerun alone once it has passed."""
     from armlab_course.grading import grade as grade_module
-    from armlab_course.grading.grade import TIME_BUDGET, Grader
+    from armlab_course.grading.grade import TIME_BUDGET
     from armlab_course.grading.submission import Submission
 
     ids = ["fk.euler", "fk.dh_table"]
@@ -262,22 +272,21 @@ def test_a_submission_ends_within_its_time_budget(monkeypatch):
         time.sleep(self.limits.timeout_s * exercises)
         return None, "the hidden checks did not finish"
 
-    with Grader(ROOT, exercises=ids, written=ids) as grader:
-        monkeypatch.setattr(Runner, "notebook", sleeping_notebook)
-        monkeypatch.setattr(Runner, "harness", sleeping_harness)
-        grader.limits = Limits(timeout_s=timeout, cpu_s=10)
-        grader.runner.limits = grader.limits
-        deadlines = []
-        real = grade_module.Deadline
+    monkeypatch.setattr(Runner, "notebook", sleeping_notebook)
+    monkeypatch.setattr(Runner, "harness", sleeping_harness)
+    monkeypatch.setattr(grader, "limits", Limits(timeout_s=timeout, cpu_s=10))
+    monkeypatch.setattr(grader.runner, "limits", grader.limits)
+    deadlines = []
+    real = grade_module.Deadline
 
-        class Recorded(real):
-            def __init__(self, seconds):
-                super().__init__(seconds)
-                deadlines.append(self)
+    class Recorded(real):
+        def __init__(self, seconds):
+            super().__init__(seconds)
+            deadlines.append(self)
 
-        monkeypatch.setattr(grade_module, "Deadline", Recorded)
-        bodies = {e: ["    import time\n    time.sleep(1e9)"] * len(grader._reference_bodies(e)) for e in ids}
-        results = grader.grade(Submission("sleeper", bodies=bodies))
+    monkeypatch.setattr(grade_module, "Deadline", Recorded)
+    bodies = {e: ["    import time\n    time.sleep(1e9)"] * len(grader._reference_bodies(e)) for e in ids}
+    results = grader.grade(Submission("sleeper", bodies=bodies))
     (deadline,) = deadlines
     assert deadline.seconds == TIME_BUDGET * timeout
     assert granted and all(start + limit <= deadline.at + 0.05 for start, limit in granted), granted
@@ -286,15 +295,54 @@ def test_a_submission_ends_within_its_time_budget(monkeypatch):
     assert any("time" in (r.reason + " ".join(c.message for c in r.checks)) for r in results.values())
 
 
-def test_a_hidden_check_error_shows_its_type_not_the_inputs():
+def test_a_hidden_check_error_shows_its_type_not_the_inputs(grader):
     """A region that puts its arguments into its exception's message: the feedback names the exception only."""
-    from armlab_course.grading.grade import Grader
-
     euler = "fk.euler"
     body = "    raise ValueError('inputs: ' + repr(T) + ' end')"
-    with Grader(ROOT, exercises=[euler], written=[euler]) as grader:
-        checks = grader.hidden_checks(euler, [body] * len(grader._reference_bodies(euler)))
+    checks = grader.hidden_checks(euler, [body] * len(grader._reference_bodies(euler)))
     failed = [c for c in checks if not c.passed]
     assert failed and all("ValueError" in c.message for c in failed), checks
     assert not any("inputs:" in c.message or "array(" in c.message for c in checks), checks
     assert exercise(euler).points > 0
+
+
+NOTEBOOK_PAYLOADS = {"not a dict": [1, 2], "cells not a mapping": {"cells": [[0, True]]},
+                     "a cell not a pair": {"cells": {"0": 5}}}
+HIDDEN_PAYLOADS = {"results not dicts": [{"results": [["not", "a", "dict"]], "forbidden": []}],
+                   "forbidden unhashable": [{"results": [{"value": 1}], "forbidden": [[1], {"a": 1}]}],
+                   "a result without a value": [{"results": [{"other": 1}], "forbidden": []}]}
+
+
+@pytest.mark.parametrize("shape", [*NOTEBOOK_PAYLOADS, *HIDDEN_PAYLOADS])
+def test_results_of_the_wrong_shape_fail_that_submission_only(monkeypatch, grader, shape):
+    """The signed results a run gives back are of the wrong shape (the issue's results file that stopped the class):
+    the real Runner reads them (no process runs: run() and the signature check are stood in for), that exercise's
+    checks fail with a reason, and grading goes on."""
+    from armlab_course.grading import run as run_module
+    from armlab_course.grading.submission import Submission
+
+    euler = "fk.euler"
+
+    def payload(path, key):
+        if path.name == "hidden-results.json":
+            jobs = HIDDEN_PAYLOADS.get(shape, [{"results": [], "forbidden": []}])
+            return jobs * len(asked[-1])
+        return NOTEBOOK_PAYLOADS.get(shape, {"cells": {}})
+
+    asked: list[list] = []
+    real_harness = Runner.harness
+
+    def harness(self, worktree, jobs, exercises=1):
+        asked.append(jobs)
+        return real_harness(self, worktree, jobs, exercises)
+
+    monkeypatch.setattr(Runner, "run", lambda self, cmd, worktree, stdin, limits=None: (True, "", 0))
+    monkeypatch.setattr(Runner, "harness", harness)
+    monkeypatch.setattr(run_module, "verify_signed", payload)
+    body = ["    return np.zeros(3)  # " + shape] * len(grader._reference_bodies(euler))     # not a cached result
+    results = grader.grade(Submission("odd", bodies={euler: body}, blank={"fk.dh_table"}))
+    result = results[euler]
+    assert result.score < result.max_score
+    messages = result.reason + " ".join(c.message for c in result.checks)
+    reasons = ("could not be read", "without results", "gave no results", "differs")
+    assert any(words in messages for words in reasons), result

@@ -313,7 +313,7 @@ class Grader:
                                            [len(c) for c in cases], first)
                 checks += [CheckResult(n, ok, student_side(msg)) for n, (ok, msg) in zip(names, verdicts,
                                                                                            strict=True)]
-                seen += [str(name) for name in outputs[k]["forbidden"]]
+                seen += [name for name in outputs[k]["forbidden"] if isinstance(name, str)]
             first += len(cases)
         return checks, sorted(set(seen))
 

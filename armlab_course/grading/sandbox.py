@@ -448,6 +448,13 @@ def lock_down(*paths: Path) -> None:
 def _bwrap_works() -> tuple[bool, str]:
     if shutil.which("bwrap") is None:
         return False, "bubblewrap is not installed (Debian: apt-get install bubblewrap)"
+    try:
+        usage = subprocess.run(["bwrap", "--help"], capture_output=True, text=True, timeout=30).stdout
+    except (OSError, subprocess.TimeoutExpired) as e:
+        return False, f"bubblewrap did not start ({e})"
+    if "--size" not in usage:
+        return False, ("this bubblewrap cannot size a tmpfs (--size, bubblewrap 0.8 and later): the sandbox's /tmp "
+                       "would be unbounded memory; install a newer bubblewrap")
     probe = Sandbox("bwrap")
     import tempfile
 
