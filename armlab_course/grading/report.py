@@ -159,8 +159,14 @@ def student_folder(student: str) -> str:
 def write_reports(graded: dict[str, dict[str, ExerciseResult]], out: Path) -> None:
     """OUT/<student folder>/results.json and feedback.md for each student (see student_folder), then
     OUT/grades.csv and, when the course has written answers, OUT/answers.csv."""
+    taken: set[str] = set()
     for student, results in graded.items():
-        folder = out / student_folder(student)
+        name, k = student_folder(student), 1
+        while name.lower() in taken:          # a plain name that reads like another's hashed one
+            k += 1
+            name = f"{student_folder(student)}-{k}"
+        taken.add(name.lower())
+        folder = out / name
         atomic_write(folder / "results.json", results_json(results))
         atomic_write(folder / "feedback.md", feedback_md(student, results))
     atomic_write(out / "grades.csv", grades_csv(graded))
