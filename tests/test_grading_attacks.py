@@ -377,6 +377,7 @@ def test_run_autograder_in_a_gradescope_layout_with_student_code_unprivileged(tm
         (root / "submission/armlab").symlink_to(root / "source/armlab", target_is_directory=True)
         before = hashlib.sha256(b"".join(p.read_bytes() for p in sorted((root / "source").rglob("*.py")))).hexdigest()
         env = dict(os.environ, ARMLAB_AUTOGRADER_ROOT=str(root), ARMLAB_PYTHON=python, ARMLAB_SANDBOX="user",
+                   ARMLAB_ALLOW_SHARED_NETWORK="1",
                    ARMLAB_GRADE_EXERCISES=f"{DH},{CHAIN},fk.dh_link_transform", ARMLAB_GRADE_TIMEOUT="300")
         env.pop("PYTHONPATH", None)
         done = subprocess.run([str(root / "run_autograder")], env=env, capture_output=True, text=True, timeout=1200)

@@ -4,6 +4,7 @@ wrong homography to the camera pose that calls it, and exits non-zero when anyth
 
 from __future__ import annotations
 
+import json
 import os
 import subprocess
 import sys
@@ -181,3 +182,21 @@ def test_csv_cells_that_read_as_formulas_are_neutralised():
     rows = list(csv.reader(io.StringIO(text)))
     assert rows[1] == ["'=HYPERLINK(\"http://x\")", "'+1", "-2.5"], rows
     assert rows[2] == ["'@SUM(A1)", "'-x", "3"] and rows[3] == ["bob", "plain, text", "0"], rows
+
+
+def test_odd_student_names_get_folders_of_their_own(tmp_path):
+    """A student folder named grades.csv, one whose name reads like another's hashed folder, and two names that
+    differ in case each get their own results folder; grades.csv stays the class's file."""
+    from armlab_course.grading.report import student_folder, write_reports
+    from armlab_course.grading.results import ExerciseResult
+
+    def result(score: float) -> dict:
+        return {"fk.euler": ExerciseResult("fk.euler", score, exercise("fk.euler").points, [], "")}
+
+    names = ["grades.csv", student_folder("grades.csv"), "Alice", "alice", "answers.csv"]
+    write_reports({name: result(k) for k, name in enumerate(names)}, tmp_path)
+    assert (tmp_path / "grades.csv").is_file()
+    folders = [p for p in tmp_path.iterdir() if p.is_dir()]
+    assert len(folders) == len(names)
+    scores = sorted(json.loads((f / "results.json").read_text())["score"] for f in folders)
+    assert scores == list(range(len(names)))

@@ -6,7 +6,8 @@
 The bundle holds the instructor's tracked files (hidden checks included) with setup.sh and run_autograder
 (tools/autograder/) at its top; Gradescope unpacks it into ROOT/source, puts the student's upload in
 ROOT/submission and reads ROOT/results/results.json. Environment: ARMLAB_GRADE_EXERCISES (comma-separated exercise
-ids; default every exercise) and ARMLAB_GRADE_TIMEOUT (wall-clock seconds per notebook run; default 300).
+ids; default every exercise), ARMLAB_GRADE_TIMEOUT (wall-clock seconds per notebook run; default 300) and
+ARMLAB_ALLOW_SHARED_NETWORK=1 (grade in the uid fallback, where student code shares the container's network).
 """
 
 from __future__ import annotations
@@ -80,8 +81,10 @@ def run(root: Path | str) -> Path:
     lock_down(root / "source", root / "results")
     submission = read_submission(root / "submission", check_reference(root / "source"))    # read only: nothing runs
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+    shared_network = os.environ.get("ARMLAB_ALLOW_SHARED_NETWORK", "") == "1"
     with Grader(root / "source", limits_from_env(), exercises_from_env(), written=submission.bodies,
-                parallel=max(1, min(cores, 4))) as grader:         # one submission: its runs side by side
+                parallel=max(1, min(cores, 4)), shared_network=shared_network,
+                private=[root / "submission"]) as grader:         # one submission: its runs side by side
         results = grader.grade(submission)
         grader.verify_sources()
     path = root / "results" / "results.json"

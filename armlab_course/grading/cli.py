@@ -38,6 +38,9 @@ def add_parsers(sub) -> None:
     grade.add_argument("--reference", default=".", help="the instructor's checkout (default: .)")
     grade.add_argument("--unsafe-no-sandbox", action="store_true",
                        help="grade without a sandbox where none can run (student code then sees all you see)")
+    grade.add_argument("--allow-shared-network", action="store_true",
+                       help="where only the uid fallback can sandbox (root without namespaces), grade although "
+                            "student code then shares this machine's network")
     grade.add_argument("--version", action="version", version=_version())
     check = sub.add_parser("check", help="run the public checks of each exercise in this checkout (students)")
     check.add_argument("--timeout", type=positive_seconds, default=300.0,
@@ -87,7 +90,8 @@ def main(args: argparse.Namespace) -> int:
 
     try:
         graded = grade_class(args.submissions, args.out, args.reference, jobs=args.jobs, limits=_limits(args.timeout),
-                             unsafe=args.unsafe_no_sandbox, progress=progress)
+                             unsafe=args.unsafe_no_sandbox, progress=progress,
+                             shared_network=args.allow_shared_network)
     except (NotADirectoryError, ValueError, SandboxUnavailable, GraderChanged, RuntimeError) as e:
         print(f"armlab grade: {e}", file=sys.stderr)
         return 2
