@@ -207,7 +207,8 @@ class Runner:
                 done = True
             except subprocess.TimeoutExpired:
                 done = False
-        return done, tail_of(log), proc.returncode
+            out = tail_of(log)
+        return done, out, proc.returncode
 
     def notebook(self, worktree: Path, notebook: str, lax: bool = False) -> NotebookRun:
         """Run `notebook` (relative to `worktree`) under nbval with the instructor's sanitize file; per-cell results.
