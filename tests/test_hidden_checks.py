@@ -60,3 +60,27 @@ def test_an_open_tasks_outcome_passes_only_when_every_criterion_is_met(value, pa
     (ok, message), = compare(spec, [{"value": [1.0, 1.0]}, {"value": value}], None, [2])
     assert ok == passed, message
     assert passed or message == "hidden check 1, call 2: the result differs from the expected value"
+
+
+def test_the_wire_carries_plain_data_only():
+    """Arrays cross the judge's pipe as bytes with a dtype and a shape, and come back equal; a message naming a
+    dtype outside the list (an object array: pickle), a byte count that does not fit the shape, or a line that is no
+    JSON object is refused."""
+    import base64
+
+    import numpy as np
+
+    from armlab_course.grading.wire import WireError, decode, dumps, encode, loads
+
+    image = np.arange(720 * 1280, dtype=np.uint16).reshape(720, 1280) % 977
+    sent = loads(dumps({"value": encode([image, np.float32(2.5), (1, "large", None)])}))
+    got = decode(sent["value"])
+    assert isinstance(sent["value"][0], dict) and got[0].dtype == np.uint16 and np.array_equal(got[0], image)
+    assert got[1:] == [2.5, [1, "large", None]]
+    raw = base64.b64encode(b"\x80\x04N.").decode()
+    for bad in ({"ndarray": raw, "dtype": "object", "shape": [1]}, {"ndarray": raw, "dtype": "float64", "shape": [9]}):
+        with pytest.raises(WireError):
+            decode(bad)
+    for line in (b"[1, 2]", b"not json", b"{" * 100_000):
+        with pytest.raises(WireError):
+            loads(line)

@@ -126,13 +126,6 @@ def check_reference(reference: Path) -> Path:
     return reference.resolve()
 
 
-def _hidden_source() -> Path | None:
-    if _hidden is None:
-        return None
-    path = Path(_hidden.__file__)
-    return path.parent if path.name == "__init__.py" else path
-
-
 class Grader:
     """Grades submissions against the instructor's checkout `reference` in `sandbox` (default: detect(unsafe));
     results of identical regions are shared (thread-safe). close() removes its temporary trees."""
@@ -168,7 +161,7 @@ class Grader:
         self._pristine = build_worktree(self.reference, self._root / "reference")
         self._pristine.chmod(0o700)            # never entered by a run's user (the "user" sandbox)
         (self._root / "runs").mkdir(mode=0o711)
-        self.runner = Runner(self.sandbox, limits, _hidden_source())
+        self.runner = Runner(self.sandbox, limits)
         self._cache: dict[tuple, object] = {}
         self._locks: dict[tuple, threading.Lock] = {}
         self._guard = threading.Lock()
@@ -250,7 +243,7 @@ class Grader:
         forbidden = list(forbidden_of(exercise_id))
         return [None if compared_only and spec.outcome else
                 {"notebook": notebook, "function": spec.function, "adapter": spec.adapter, "prelude": spec.prelude,
-                 "cases": [args for check in checks for args in check], "forbidden": forbidden}
+                 "cases": [args for check in checks for args in check], "forbidden": forbidden, "judge": spec.judge}
                 for spec, checks in zip(_hidden.specs_of(exercise_id), _hidden.cases_of(exercise_id), strict=True)]
 
     def _with_specs(self, exercise_ids: Iterable[str]) -> list[str]:
