@@ -41,6 +41,7 @@ __all__ = [
     "ik_branches",
     "BRANCHES",
     "ik_batch",
+    "ik_pox",
     "IKResult",
     "IKBatchResult",
     "steepest_pitch",
@@ -582,12 +583,21 @@ def ik_branches(position, pitch, roll: float = 0.0, robot: RobotModel | None = N
     return _ik_candidates(P, pitch_a, roll_a, robot).q[0]
 
 
-def _ik_general(position, pitch, roll, current, robot: RobotModel) -> np.ndarray:
-    """ik() through the batch machinery (_prepare, _ik_candidates, _rank) for one target."""
+def ik_pox(position, pitch, roll: float = 0.0, current=None, robot: RobotModel | None = None) -> np.ndarray:
+    """The kit's own inverse kinematics, never the student's: what ik() returns (the same arguments, branches,
+    joint limits, order and Unreachable reasons), solved numerically on the manufacturer's PoX model (damped
+    Gauss-Newton per branch) instead of by the closed form of exercise ik.candidates. For the kit's truths (a
+    simulated scene's arm pose, a kit recording), where a student's IK must change nothing; slower than ik()."""
+    return _ik_general(position, pitch, roll, current, robot or rx200(), _numerical_candidates)
+
+
+def _ik_general(position, pitch, roll, current, robot: RobotModel, candidates=None) -> np.ndarray:
+    """ik() through the batch machinery (_prepare, the branch candidates, _rank) for one target; candidates: the
+    solver of every branch (default _ik_candidates: the closed form, exercise ik.candidates)."""
     P, pitch_a, roll_a, cur, single = _prepare(position, pitch, roll, current, robot)
     if not single:
         raise ValueError("ik takes one position (3,); use ik_batch for (N, 3)")
-    c = _ik_candidates(P, pitch_a, roll_a, robot)
+    c = (candidates or _ik_candidates)(P, pitch_a, roll_a, robot)
     branches = np.flatnonzero(c.valid[0])
     if branches.size == 0:
         raise Unreachable(_explain(c, 0, robot, P[0], pitch_a[0]))
