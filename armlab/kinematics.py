@@ -4,9 +4,10 @@ Units: millimetres and radians. Frames: poses are in the world (board) frame; th
 `ee_gripper_link` (x = approach direction out of the gripper, y = finger opening direction, z completes the frame).
 Joint vectors are (5,) or (N, 5) in the order waist, shoulder, elbow, wrist_angle, wrist_rotate.
 
-Two models of one arm: the DH chain (dh_link_transform, dh_frames, fk_dh and fk: the course's method and the
-students' exercise) and the product of exponentials (link_frames, fk_pox, joint_positions: the manufacturer's model,
-which the simulator and the viewer use as the physical arm). They agree to 1e-9 mm.
+Two models of one arm: the DH chain (dh_link_transform, dh_frames, fk_dh: the course's method, built on the students'
+slot fk.dh_link_transform and used only where notebook 02 shows it) and the product of exponentials (link_frames,
+fk_pox, fk, joint_positions, jacobian: the manufacturer's model, the kit's truth, which safety checks, planning, the
+simulator and every reference use as the physical arm). They agree to 1e-9 mm.
 """
 
 from __future__ import annotations
@@ -22,10 +23,8 @@ import numpy as np
 
 from armlab.arguments import finite_array, finite_float
 from armlab.robot import DH_TOOL_ROTATION, RobotModel, rx200
+from armlab.slots import SlotNotWritten, standin
 from armlab.transforms import exp_se3, homogeneous, rot_x, rot_y, rot_z
-from armlab_course.exercises import registry as course
-from armlab_course.exercises.fallback import reference_fallback
-from armlab_course.exercises.registry import ExerciseNotWritten
 
 __all__ = [
     "Unreachable",
@@ -42,6 +41,7 @@ __all__ = [
     "ik_branches",
     "BRANCHES",
     "ik_batch",
+    "ik_pox",
     "IKResult",
     "IKBatchResult",
     "steepest_pitch",
@@ -98,7 +98,7 @@ def _dh_by_elementary_motions(theta, d, a, alpha) -> np.ndarray:
             @ homogeneous(None, np.stack([a, zero, zero], -1)) @ homogeneous(rot_x(alpha)))
 
 
-@reference_fallback(course.DH_LINK, _dh_by_elementary_motions, "DH link transforms are products of the "
+@standin("fk.dh_link_transform", _dh_by_elementary_motions, "DH link transforms are products of the "
                                                                        "four elementary motions' matrices")
 def dh_link_transform(theta, d, a, alpha) -> np.ndarray:
     """Standard DH link transform(s) (..., 4, 4) = Rz(theta) Tz(d) Tx(a) Rx(alpha); lengths in mm, angles in rad.
@@ -170,12 +170,13 @@ def fk_pox(q, robot: RobotModel | None = None, check_limits: bool = True) -> np.
 
 
 def fk(q, robot: RobotModel | None = None, check_limits: bool = True) -> np.ndarray:
-    """Tool pose in the world: (4, 4) for q (5,) rad, (N, 4, 4) for q (N, 5); translation in mm. By the DH table
-    (fk_dh).
+    """Tool pose in the world: (4, 4) for q (5,) rad, (N, 4, 4) for q (N, 5); translation in mm. By the
+    manufacturer's model (fk_pox): the kit's truth, which safety checks, planning, the simulator and every reference
+    use, so it never runs the DH exercise (fk_dh is the DH chain notebook 02 builds on it).
 
     Raises ValueError for a wrong shape, NaN, or (with check_limits) a joint outside its limits.
     """
-    return fk_dh(q, robot, check_limits)
+    return fk_pox(q, robot, check_limits)
 
 
 def joint_positions(q, robot: RobotModel | None = None) -> np.ndarray:
@@ -414,7 +415,7 @@ def _ik_geometry(robot: RobotModel) -> tuple[float, ...]:
     return geometry
 
 
-@reference_fallback(course.IK_BRANCHES, _numerical_candidates, "inverse kinematics is solved numerically on the PoX "
+@standin("ik.candidates", _numerical_candidates, "inverse kinematics is solved numerically on the PoX "
                                                             "model (slower)")
 def _ik_candidates(P: np.ndarray, pitch: np.ndarray, roll: np.ndarray, robot: RobotModel) -> _Candidates:
     """Every IK branch for targets P (N, 3) with pitch (N,) and roll (N,), vectorised over targets and branches
@@ -481,8 +482,8 @@ def _ik_one(position, pitch, roll, current, robot: RobotModel) -> np.ndarray | N
     for flipped, delta_sign, elbow_down in _BRANCH_SIGNS:
         try:
             q1, q2, q3, q4, ok, _ = _branch_joints(heading, r, z, pitch, flipped, delta_sign, geometry, _SCALAR_MATH)
-        except ExerciseNotWritten as e:
-            if e.exercise_id == course.IK_BRANCHES.id:
+        except SlotNotWritten as e:
+            if e.slot_id == "ik.candidates":
                 return None
             raise
         if not ok:
@@ -582,12 +583,21 @@ def ik_branches(position, pitch, roll: float = 0.0, robot: RobotModel | None = N
     return _ik_candidates(P, pitch_a, roll_a, robot).q[0]
 
 
-def _ik_general(position, pitch, roll, current, robot: RobotModel) -> np.ndarray:
-    """ik() through the batch machinery (_prepare, _ik_candidates, _rank) for one target."""
+def ik_pox(position, pitch, roll: float = 0.0, current=None, robot: RobotModel | None = None) -> np.ndarray:
+    """The kit's own inverse kinematics, never the student's: what ik() returns (the same arguments, branches,
+    joint limits, order and Unreachable reasons), solved numerically on the manufacturer's PoX model (damped
+    Gauss-Newton per branch) instead of by the closed form of exercise ik.candidates. For the kit's truths (a
+    simulated scene's arm pose, a kit recording), where a student's IK must change nothing; slower than ik()."""
+    return _ik_general(position, pitch, roll, current, robot or rx200(), _numerical_candidates)
+
+
+def _ik_general(position, pitch, roll, current, robot: RobotModel, candidates=None) -> np.ndarray:
+    """ik() through the batch machinery (_prepare, the branch candidates, _rank) for one target; candidates: the
+    solver of every branch (default _ik_candidates: the closed form, exercise ik.candidates)."""
     P, pitch_a, roll_a, cur, single = _prepare(position, pitch, roll, current, robot)
     if not single:
         raise ValueError("ik takes one position (3,); use ik_batch for (N, 3)")
-    c = _ik_candidates(P, pitch_a, roll_a, robot)
+    c = (candidates or _ik_candidates)(P, pitch_a, roll_a, robot)
     branches = np.flatnonzero(c.valid[0])
     if branches.size == 0:
         raise Unreachable(_explain(c, 0, robot, P[0], pitch_a[0]))

@@ -29,6 +29,7 @@ from armlab_course.exercises import (
     released,
     stub_regions,
 )
+from armlab_course.exercises.markers import stub_lines
 
 REPO = Path(__file__).resolve().parents[1]
 CHECK_TAG = re.compile(r"^# CHECK (?P<ids>.+)$", re.M)
@@ -217,7 +218,8 @@ assert frame.rgb.shape == (720, 1280, 3) and np.isfinite(frame.depth).mean() > 0
 station.arm.open_gripper()
 assert station.arm.close_gripper() in (True, False)
 assert arm_part_poses(station.arm.joint_positions()) is not None
-assert np.allclose(kinematics.fk(np.zeros(5))[:3, 3], [0.0, 408.575, 304.57])     # by the reference DH links
+assert np.allclose(kinematics.fk(np.zeros(5))[:3, 3], [0.0, 408.575, 304.57])     # the kit's truth: PoX
+assert np.allclose(kinematics.fk_dh(np.zeros(5))[:3, 3], [0.0, 408.575, 304.57])  # notebook 02's chain, stood in
 try:
     kinematics.dh_link_transform.__wrapped__(0.0, 1.0, 2.0, 0.5)                     # the blank stub itself
 except NotImplementedError as e:
@@ -232,11 +234,14 @@ except NotImplementedError as e:
 
 
 def test_a_reference_path_stands_in_only_for_its_own_blank_stub(caplog):
-    """The kit's function runs the student's code when written; the reference only for that exercise's blank stub,
-    with one warning of the armlab_course.exercises logger (once per exercise and process)."""
-    from armlab_course.exercises import ExerciseNotWritten, fallback, registry
+    """The kit's function runs the student's code when written; the reference only for that exercise's blank stub
+    (the course's ExerciseNotWritten in a notebook, the engine's SlotNotWritten a package file's stub raises), with
+    one warning of the armlab.slots logger (once per exercise and process)."""
+    from armlab import slots
+    from armlab_course.exercises import ExerciseNotWritten, registry
     from armlab_course.exercises import exercise as registered
     from armlab_course.exercises.fallback import reference_fallback
+    from armlab_course.exercises.markers import stub_lines
 
     blank = registered("fk.dh_link_transform").message()
 
@@ -246,17 +251,27 @@ def test_a_reference_path_stands_in_only_for_its_own_blank_stub(caplog):
             raise error
         return ("student", x)
 
-    fallback._announced.discard("fk.dh_link_transform")          # as in a fresh process
+    scope: dict = {}
+    package_stub = "def stub():\n" + "".join(f"    {line}\n" for line in stub_lines("fk.dh_link_transform",
+                                                                                   "armlab/kinematics.py"))
+    exec(compile(package_stub, "armlab/kinematics.py", "exec"), scope)
+    try:
+        scope["stub"]()
+    except NotImplementedError as e:
+        released_stub = e
+    assert type(released_stub) is slots.SlotNotWritten and str(released_stub) == blank
+
+    slots._announced.discard("fk.dh_link_transform")          # as in a fresh process
     assert kit(1) == ("student", 1)                                   # written: the reference never runs
-    with caplog.at_level("WARNING", logger="armlab_course.exercises"):
+    with caplog.at_level("WARNING", logger="armlab.slots"):
         assert kit(2, ExerciseNotWritten("fk.dh_link_transform")) == ("reference", 2)
-        assert kit(3, ExerciseNotWritten("fk.dh_link_transform")) == ("reference", 3)
-    notes = [r for r in caplog.records if r.name == "armlab_course.exercises"]
+        assert kit(3, released_stub) == ("reference", 3)
+    notes = [r for r in caplog.records if r.name == "armlab.slots"]
     assert [r.getMessage() for r in notes] == ["note: exercise fk.dh_link_transform (notebook 02) is not written "
                                                "yet: the reference is used"]            # one line, once
     # another exercise's stub, a student's own NotImplementedError (even with the message's text), anything else
-    for other in (ExerciseNotWritten("ik.candidates"), NotImplementedError(blank), NotImplementedError("todo"),
-                  ValueError(blank)):
+    for other in (ExerciseNotWritten("ik.candidates"), slots.SlotNotWritten("ik.candidates", blank),
+                  NotImplementedError(blank), NotImplementedError("todo"), ValueError(blank)):
         with pytest.raises(type(other)):                             # anything else propagates
             kit(4, other)
 
@@ -297,8 +312,9 @@ print("error", float(np.abs(truth.position[:2] - [0.0, 300.0]).max()))
     run = subprocess.run([sys.executable, "-c", code], cwd=out, env=env, capture_output=True, text=True, timeout=600)
     assert run.returncode == 0, run.stderr[-2000:]
     notes = [line for line in run.stderr.splitlines() if line.startswith("note: exercise ")]
-    assert {n.split()[2] for n in notes} == {"fk.dh_link_transform", "ik.candidates", "calib.tag_extrinsics",
-                                             "calib.depth_plane", "detect.classify"}, run.stderr
+    # the DH chain is not among them: the kit's truth (fk, safety, the simulator) is the PoX model
+    assert {n.split()[2] for n in notes} == {"ik.candidates", "calib.tag_extrinsics", "calib.depth_plane",
+                                             "detect.classify"}, run.stderr
     assert float(run.stdout.split("error")[-1]) < 3.0, run.stdout
 
 
@@ -317,8 +333,8 @@ def test_in_the_release_a_test_of_a_blank_exercise_skips_until_it_is_written(rel
         assert "1 skipped" in blank.stdout and "needs exercise calib.depth_plane, still blank here" in blank.stdout
         source = out / "armlab/calibration/depth.py"
         text = source.read_text()
-        stub = "raise ExerciseNotWritten('calib.depth_plane')"
-        assert stub in text
+        stub = stub_lines("calib.depth_plane", "armlab/calibration/depth.py")[1]
+        assert stub.startswith("raise SlotNotWritten('calib.depth_plane', ") and stub in text
         source.write_text(text.replace(stub, "coef = np.zeros(3)"))          # a student's (poor) answer
         written = run()
         assert "1 passed" in written.stdout, written.stdout
@@ -350,10 +366,12 @@ def test_a_package_exercises_check_cells_refuse_to_pass_on_its_reference_path(gi
 
 
 def test_require_written_names_the_blank_exercise(monkeypatch):
-    from armlab_course.exercises import fallback, require_written
+    from armlab_course.exercises import require_written
 
     require_written("fk.dh_link_transform")                # written in the instructor's checkout: no error
-    monkeypatch.setattr(fallback, "_standing_in", {"teach.replay"})
+    from armlab import slots
+
+    monkeypatch.setattr(slots, "_standing_in", {"teach.replay"})
     with pytest.raises(NotImplementedError, match=r"exercise teach\.replay \(notebook 06\): write "
                                                   r"teach_program, scaled_durations and scaled_plan"):
         require_written("teach.replay")
@@ -405,17 +423,29 @@ def test_a_blank_stub_raises_the_typed_exception_carrying_its_id():
         ExerciseNotWritten("fk.nope")
 
 
-def test_the_library_names_no_exercise_id():
-    """The library reaches the course layer through the declarations (registry.DH_LINK, ...), never an id string."""
-    ids = {e.id for e in EXERCISES}
+def test_the_librarys_slots_are_the_course_package_exercises():
+    """The engine names its slots by plain ids (it imports nothing of the course, tests/test_import_graph.py): every
+    slot a kit function stands in for is a registered package exercise whose region is in that function's file, and
+    every package exercise with a stand-in is one."""
+    import importlib
+    import inspect
+
+    from armlab import slots
+
+    found = {}
     for path in tracked(".py"):
         name = path.relative_to(REPO).as_posix()
-        if not name.startswith("armlab/") or name.startswith(("armlab_course/exercises/", "armlab_course/grading/")):
+        if not name.startswith("armlab/") or "standin(" not in path.read_text():
             continue
-        code = "\n".join(line.split("#")[0] for line in path.read_text().splitlines()
-                         if not line.strip().startswith(("# BEGIN SOLUTION", "Exercise ")))
-        for exercise_id in ids:
-            assert f'"{exercise_id}"' not in code and f"'{exercise_id}'" not in code, f"{name} names {exercise_id}"
+        module = importlib.import_module(name[:-3].replace("/", "."))
+        for _, obj in inspect.getmembers(module):
+            for f in [obj] + [v for v in vars(obj).values() if callable(v)] if inspect.isclass(obj) else [obj]:
+                if callable(f) and slots.is_standin_for(f):
+                    found[slots.is_standin_for(f)] = name
+    assert found, "no stand-in found"
+    for slot_id, where in found.items():
+        e = exercise(slot_id)
+        assert e.in_package and e.where == where, f"{where} stands in for {slot_id}, whose region is in {e.where}"
 
 
 def test_written_answers_are_found_blanked_and_refused_when_damaged():

@@ -21,8 +21,7 @@ from armlab._paths import data_path
 from armlab.blocks import COLORS, LAB_RGB
 from armlab.files import read_json, write_json_atomic
 from armlab.schemas import comment, field_error, number, strict_object, vector
-from armlab_course.exercises import registry as course
-from armlab_course.exercises.fallback import reference_fallback
+from armlab.slots import standin
 
 __all__ = ["ColorModel", "color_features", "white_balance_gains", "default_color_model", "COLOR_MODEL_FILE",
            "LAB_HSV_TABLE", "hsv_table_classify"]
@@ -100,7 +99,7 @@ class ColorModel:
         margin = ranked[:, 1] - ranked[:, 0] if len(self.names) > 1 else np.full(len(d), np.inf)
         return [self.names[i] for i in d.argmin(axis=1)], margin
 
-    @reference_fallback(course.CLASSIFY, _nearest_mean, "colours are the nearest class mean, with one spread "
+    @standin("detect.classify", _nearest_mean, "colours are the nearest class mean, with one spread "
                                                           "for every class")
     def classify(self, rgb_means) -> tuple[list[str], np.ndarray]:
         """Nearest class name per mean colour (N, 3), and the margin (N,): second-best minus best distance.

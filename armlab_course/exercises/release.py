@@ -48,6 +48,7 @@ RELEASE_EXCLUDES = (
     "tests/test_hidden_checks*.py",
     "tests/test_lab_04_08.py",
     "tests/test_ik_numerical.py",
+    "tests/test_slots.py",         # plugs the wrong answers into the engine's slots
 )
 
 
