@@ -36,11 +36,11 @@ from .report import atomic_write
 from .submission import Submission, exercise_file, regions_of, source_texts
 
 __all__ = ["K", "W", "MIN_FINGERPRINTS", "FLAG_AT", "REFERENCE", "tokens", "fingerprints", "score",
-           "similarity_rows", "similarity_csv", "flagged_md", "write_similarity"]
+           "similarity_rows", "similarity_csv", "flagged_md", "reference_bodies", "write_similarity"]
 
 K = 8                   # tokens per k-gram: shorter shared runs are noise (`N = N . N ( N , N )` is 8 tokens)
 W = 4                   # winnowing window: every shared run of K + W - 1 = 11 tokens is found
-MIN_FINGERPRINTS = 3    # a region with fewer fingerprints (about 10 tokens, one short line) is not compared
+MIN_FINGERPRINTS = 3    # a region with fewer (under about a dozen tokens: `return np.zeros(3)` is 7) is not compared
 FLAG_AT = 0.8           # a score from here on is a line in OUT/similarity.md
 REFERENCE = "reference"  # the `matched` cell of a comparison with the instructor's reference
 
