@@ -24,16 +24,17 @@ import itertools
 import json
 import os
 import shutil
-import signal
 import stat
 import subprocess
 import sys
 import sysconfig
 import threading
-import time
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
+
+from .watch import entries
+from .watch import kill_until_gone as _kill_until_gone
 
 __all__ = ["GRADER", "HOME", "WORK", "USER_UIDS", "Limits", "Sandbox", "SandboxUnavailable", "detect", "lock_down",
            "RUN_USERS", "uid_lock_dir", "uids_in_use", "remove_owned", "SHARED_TMP", "owner_only",
@@ -353,21 +354,6 @@ def _pids_of(uid: int) -> list[int]:
     return pids
 
 
-def _kill_until_gone(members) -> None:
-    """SIGKILL every pid members() lists, again until it lists none (a process may fork while it is being killed;
-    at most 100 rounds)."""
-    for _ in range(100):
-        pids = members()
-        if not pids:
-            return
-        for pid in pids:
-            try:
-                os.kill(pid, signal.SIGKILL)
-            except ProcessLookupError:
-                pass
-        time.sleep(0.02)
-
-
 def _kill_user(uid: int) -> None:
     """Kill every process of `uid` until none is left."""
     _kill_until_gone(lambda: _pids_of(uid))
@@ -378,14 +364,8 @@ def remove_owned(uid: int, folders: tuple[str, ...]) -> list[str]:
     have made entries at their top or inside its own) that `uid` owns; the paths removed."""
     gone = []
     for folder in folders:
-        try:
-            entries = list(os.scandir(folder))
-        except OSError:
-            continue
-        for entry in entries:
+        for entry, _info in entries(folder, uid):
             try:
-                if entry.stat(follow_symlinks=False).st_uid != uid:
-                    continue
                 if entry.is_dir(follow_symlinks=False):
                     shutil.rmtree(entry.path, ignore_errors=True)
                 else:

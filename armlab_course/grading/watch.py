@@ -67,6 +67,24 @@ def resident_bytes(pids: list[int]) -> int:
     return total
 
 
+def entries(folder: str, owner: int | None = None) -> list[tuple[os.DirEntry, os.stat_result]]:
+    """The entries of `folder` with their own status (symbolic links not followed), only those `owner` owns if
+    given; [] when the folder cannot be read."""
+    try:
+        found = list(os.scandir(folder))
+    except OSError:
+        return []
+    out = []
+    for entry in found:
+        try:
+            info = entry.stat(follow_symlinks=False)
+        except OSError:
+            continue
+        if owner is None or info.st_uid == owner:
+            out.append((entry, info))
+    return out
+
+
 def tree_usage(paths: list[str], stop_files: int, owner: int | None = None) -> tuple[int, int]:
     """(bytes allocated, entries) under `paths` (not following symbolic links); with `owner`, only the top entries
     of each path that uid owns. Stops counting past `stop_files` entries."""
@@ -75,17 +93,7 @@ def tree_usage(paths: list[str], stop_files: int, owner: int | None = None) -> t
     top = set(paths) if owner is not None else set()
     while todo and files <= stop_files:
         folder = todo.pop()
-        try:
-            entries = list(os.scandir(folder))
-        except OSError:
-            continue
-        for entry in entries:
-            try:
-                info = entry.stat(follow_symlinks=False)
-            except OSError:
-                continue
-            if folder in top and info.st_uid != owner:
-                continue
+        for entry, info in entries(folder, owner if folder in top else None):
             files += 1
             size += info.st_blocks * 512
             if entry.is_dir(follow_symlinks=False):
@@ -110,10 +118,11 @@ def over(caps: dict, pids: list[int], base: tuple[int, int]) -> str:
     return ""
 
 
-def _kill_all(me: int, keep: int) -> None:
-    """SIGKILL every process below the watch until none is left but `keep` (the command, waited for by Popen)."""
+def kill_until_gone(members, between=lambda: None) -> None:
+    """SIGKILL every pid members() lists, again until it lists none (a process may fork while it is being killed;
+    at most 100 rounds), calling between() after each round."""
     for _ in range(100):
-        pids = [p for p in descendants(me) if p != keep]
+        pids = members()
         if not pids:
             return
         for pid in pids:
@@ -122,7 +131,12 @@ def _kill_all(me: int, keep: int) -> None:
             except ProcessLookupError:
                 pass
         time.sleep(0.02)
-        _reap(me, keep)
+        between()
+
+
+def _kill_all(me: int, keep: int) -> None:
+    """SIGKILL every process below the watch until none is left but `keep` (the command, waited for by Popen)."""
+    kill_until_gone(lambda: [p for p in descendants(me) if p != keep], lambda: _reap(me, keep))
 
 
 def _reap(me: int, keep: int) -> None:
