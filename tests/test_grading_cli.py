@@ -82,16 +82,26 @@ def test_check_names_the_first_failing_check_and_does_not_charge_the_caller(stud
     assert "2 written exercise(s) not yet passing" in done.stdout and "not written yet" in done.stdout
 
 
-def test_check_passes_with_exit_0_when_everything_written_passes(tmp_path):
-    """The homography and the pose written as the reference: every check of theirs passes, except the pose's check
-    cell shared with the depth plane, which waits for it (not written yet): that is no failure (exit 0)."""
+def test_check_exits_0_only_when_nothing_is_blank_or_failing(tmp_path):
+    """The homography and the pose written as the reference pass every check of theirs, except the pose's check cell
+    shared with the depth plane, which waits for it: with blank exercises left the whole self-check exits 1 and
+    says what is not written, each exercise on a progress line; `check EXERCISE` on the homography alone exits 0,
+    an unknown id exits 2 naming the known ones."""
     folder = tmp_path / "student"
     make_student_release(ROOT, folder)
     for exercise_id in (HOMOGRAPHY, POSE):
         write_regions(folder, exercise_id, _reference(exercise_id))
     done = _armlab("check", cwd=folder)
-    assert done.returncode == 0, done.stdout + done.stderr
+    assert done.returncode == 1, done.stdout + done.stderr
     assert "1 written" not in done.stdout and "not written yet" in done.stdout, done.stdout
+    lines = done.stdout.splitlines()
+    assert any(ln.startswith("[") and f"] {HOMOGRAPHY}: written, 6 / 6" in ln for ln in lines), done.stdout
+    assert any(ln.startswith("[") and "] fk.euler: blank, 0 / 5" in ln for ln in lines), done.stdout
+    one = _armlab("check", HOMOGRAPHY, cwd=folder)
+    assert one.returncode == 0 and f"{HOMOGRAPHY}: written" in one.stdout and "fk.euler" not in one.stdout, \
+        one.stdout + one.stderr
+    unknown = _armlab("check", "fk.nothing", cwd=folder)
+    assert unknown.returncode == 2 and "fk.euler" in unknown.stderr and "Traceback" not in unknown.stderr
 
 
 def test_check_says_what_is_missing_when_it_cannot_run(tmp_path):

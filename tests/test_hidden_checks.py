@@ -84,3 +84,62 @@ def test_the_wire_carries_plain_data_only():
     for line in (b"[1, 2]", b"not json", b"{" * 100_000):
         with pytest.raises(WireError):
             loads(line)
+
+
+_CHILD = '''
+import json, sys, time
+first = json.loads(sys.stdin.readline())
+nonce, mode = first["nonce"], sys.argv[1]
+print(json.dumps({"nonce": nonce, "ready": len(first["jobs"])}), flush=True)
+for line in sys.stdin:
+    request = json.loads(line)
+    if request.get("end"):
+        break
+    answer = {"nonce": nonce, "seq": request["seq"], "value": sum(request["args"]), "forbidden": []}
+    if request["seq"] == 2:
+        if mode == "other nonce":
+            answer["nonce"] = "0" * 32
+        elif mode == "out of turn":
+            answer["seq"] = 1
+        elif mode == "garbage":
+            print("not json", flush=True)
+            continue
+        elif mode == "silent":
+            time.sleep(30)
+        elif mode == "ends":
+            sys.exit(0)
+        elif mode == "raises":
+            answer = {"nonce": nonce, "seq": 2, "error": "ValueError: the student's", "forbidden": ["cv2.x"]}
+    print(json.dumps(answer), flush=True)
+'''
+
+
+@pytest.mark.parametrize("mode", ["honest", "raises", "other nonce", "out of turn", "garbage", "silent", "ends"])
+def test_the_judge_takes_only_this_runs_answers_in_turn(mode):
+    """A child (a plain process speaking the protocol) that answers the second call with another run's nonce, out of
+    turn, with no JSON, not at all before the deadline, or not at all since it ended: the first call keeps its
+    value, the second and every later one fail with the reason, and the judge returns; a student's error fails its
+    call alone and its forbidden calls are kept."""
+    import subprocess
+    import sys
+    import time
+
+    from armlab_course.grading.judge import run_jobs
+
+    proc = subprocess.Popen([sys.executable, "-c", _CHILD, mode], stdin=subprocess.PIPE, stdout=subprocess.PIPE)
+    try:
+        jobs = [{"function": "f", "forbidden": [], "cases": [[1, 2], [3, 4]]},
+                {"function": "g", "forbidden": [], "cases": [[5, 6]]}]
+        out, problem = run_jobs(proc, jobs, time.monotonic() + 3.0)
+    finally:
+        proc.kill()
+        proc.wait()
+    first, second, third = out[0]["results"][0], out[0]["results"][1], out[1]["results"][0]
+    assert first == {"value": 3}
+    if mode == "honest":
+        assert (second, third, problem) == ({"value": 7}, {"value": 11}, "")
+    elif mode == "raises":
+        assert second == {"error": "ValueError: the student's"} and third == {"value": 11} and not problem
+        assert out[0]["forbidden"] == ["cv2.x"]
+    else:
+        assert problem and second == third == {"error": problem}, (mode, out, problem)
