@@ -82,20 +82,38 @@ def scaled_durations_by_search(program, speed: float, robot: RobotModel | None =
     return np.array(out)
 
 
-def segment_by_colour_model(rgb_balanced, max_distance: float = 8.0) -> np.ndarray:
-    """detect.segment's reference: every pixel of a white-balanced RGB image (H, W, 3) uint8 labelled by the kit's
-    colour model (nearest class mean in chromaticity, one spread common to every class), -1 where even the nearest
-    class is more than `max_distance` spreads away (the board, shadows); else the colour's index in
-    armlab.blocks.COLORS."""
+_LOOKUP_BITS = 6          # bits per channel of segment_by_colour_model's lookup table (64 levels: 262144 colours)
+_LOOKUPS: dict[tuple, np.ndarray] = {}
+
+
+def _colour_lookup(max_distance: float) -> np.ndarray:
+    """The kit's colour model's label (an index in armlab.blocks.COLORS, -1 for none) of every colour quantised to
+    _LOOKUP_BITS per channel (taken at its bin's centre), indexed r << 2b | g << b | b: computed once per model."""
     from armlab.blocks import COLORS
     from armlab.detection import default_color_model
 
-    rgb = np.asarray(rgb_balanced)
     model = default_color_model()
-    d = model.common_distances(rgb.reshape(-1, 3).astype(float))
-    labels = np.array([COLORS.index(n) for n in model.names])[d.argmin(axis=1)]
-    labels[d.min(axis=1) > max_distance] = -1
-    return labels.reshape(rgb.shape[:2])
+    key = (model.names, model.means.tobytes(), model.stds.tobytes(), float(max_distance))
+    if key not in _LOOKUPS:
+        step = 1 << (8 - _LOOKUP_BITS)
+        levels = np.arange(0, 256, step) + (step - 1) / 2
+        grid = np.stack(np.meshgrid(levels, levels, levels, indexing="ij"), -1).reshape(-1, 3)
+        d = model.common_distances(grid)
+        labels = np.array([COLORS.index(n) for n in model.names])[d.argmin(axis=1)]
+        labels[d.min(axis=1) > max_distance] = -1
+        _LOOKUPS.clear()
+        _LOOKUPS[key] = labels.astype(np.int64)
+    return _LOOKUPS[key]
+
+
+def segment_by_colour_model(rgb_balanced, max_distance: float = 8.0) -> np.ndarray:
+    """detect.segment's reference: every pixel of a white-balanced RGB image (H, W, 3) uint8 labelled by the kit's
+    colour model (nearest class mean in chromaticity, one spread common to every class) through a lookup table of
+    colours quantised to 64 levels per channel; -1 where even the nearest class is more than `max_distance` spreads
+    away (the board, shadows); else the colour's index in armlab.blocks.COLORS."""
+    rgb = np.asarray(rgb_balanced).astype(np.int64) >> (8 - _LOOKUP_BITS)
+    index = (rgb[..., 0] << (2 * _LOOKUP_BITS)) | (rgb[..., 1] << _LOOKUP_BITS) | rgb[..., 2]
+    return _colour_lookup(max_distance)[index]
 
 
 def stack_by_kit(depth_mm, mask, camera, edges_mm=(38.0, 25.0)) -> tuple[float, int, np.ndarray]:
