@@ -83,6 +83,12 @@ for q0, q1 in zip(Q[:8], Q[8:]):
 out["board verdicts"] = verdicts
 out["placements"] = [motion_safety.placement_problem(p, 38.0) or "ok" for p in ([0.0, 250.0, 0.0], [450.0, 0.0, 0.0],
                                                                               [0.0, 30.0, 0.0])]
+# the kit's own inputs: the swap's waypoints (teach.replay's), a detection case with the arm over the board
+from armlab.sim.detection_eval import sim_case
+from armlab.tasks.teach import swap_waypoints
+out["teach: swap waypoints"] = swap_waypoints()[0]
+case = sim_case("stacks", 5, arm_over_board=True)
+out["detection case: arm"] = case.arm_q
 # the simulator
 from armlab import make_station
 station = make_station("sim", seed=3, scene="swap")

@@ -109,8 +109,8 @@ HIDDEN_WRONG = {   # per exercise: wrong answers its hidden checks must catch (a
     },
     "detect.classify": {
         "per-class spreads ignored": _replaced(
-            "detect.classify", "d = self.distances(rgb_means)",
-            "d = np.linalg.norm(color_features(rgb_means)[:, None, :] - self.means[None], axis=-1)"),
+            "detect.classify", "d = np.sqrt((((X[:, None, :] - self.means[None]) / self.stds[None]) ** 2).sum(-1))",
+            "d = np.linalg.norm(X[:, None, :] - self.means[None], axis=-1)"),
         "margin to the farthest class": _replaced("detect.classify", "d[rows, order[:, 1]] - d[rows, order[:, 0]]",
                                                   "d[rows, order[:, -1]] - d[rows, order[:, 0]]"),
     },

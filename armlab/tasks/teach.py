@@ -179,7 +179,7 @@ def swap_waypoints(hover_mm: float = 100.0, release_gap_mm: float = 6.0) -> tupl
     def at(spot, z, state):
         x, y = SWAP_SPOTS_MM[spot]
         roll = planning.face_roll(np.arctan2(y, x), 0.0)
-        poses.append(kinematics.ik([x, y, z], np.pi / 2, roll)[0])
+        poses.append(kinematics.ik_pox([x, y, z], np.pi / 2, roll)[0])      # the kit's IK: never a student's
         grip.append(state)
 
     for src, dst in moves:
