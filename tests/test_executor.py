@@ -54,11 +54,15 @@ def holding(request):
         yield SimpleNamespace(session=session, station=station, physical=physical)
 
 
-def hover_then_into_board(session) -> np.ndarray:
-    """Joint poses (2, 5) rad: over the board with the held block 100 mm up, then straight down until the held block's
-    bottom is HELD_BELOW_MM under the board (the pads' and the tool point's lowest points stay above their floors)."""
+SPOT = np.array([150.0, 220.0])   # where the motions go down (world mm)
+
+
+def hover_then_into_board(session, bottom: float = -HELD_BELOW_MM) -> np.ndarray:
+    """Joint poses (2, 5) rad: over SPOT with the held block 100 mm up, then straight down until the held block's
+    bottom is at `bottom` mm (default HELD_BELOW_MM under the board: the pads' and the tool point's lowest points stay
+    above their floors)."""
     T_tool_block = np.asarray(session.held_in_tool, float)
-    xy = np.array([150.0, 220.0])
+    xy = SPOT
     def pose(bottom_z, current):
         # top-down tool: the block's centre is T_tool_block's offset turned by the tool's rotation
         q = kinematics.ik([*xy, 100.0], np.pi / 2, 0.0, current=current)[0]
@@ -68,7 +72,7 @@ def hover_then_into_board(session) -> np.ndarray:
         return kinematics.ik([*xy, tool_z], np.pi / 2, 0.0, current=q)[0]
     here = session.arm.joint_positions()
     hover = pose(100.0, here)
-    return np.array([hover, pose(-HELD_BELOW_MM, hover)])
+    return np.array([hover, pose(bottom, hover)])
 
 
 def lowest_parts(session, q) -> tuple[float, float, float]:
@@ -110,6 +114,16 @@ def test_task_machine_execute_refuses_before_the_first_command(holding):
     message = assert_refused_before_moving(holding, lambda: machine.execute(plan), "TaskMachine.execute")
     assert "held red block" in message and "step 1 (down)" in message, message
     assert machine.state == "idle"
+
+
+def test_task_machine_execute_refuses_the_held_block_into_a_known_block(holding):
+    s = holding.session
+    s.known = [*s.known, detected([*SPOT, 38.0], color="blue")]
+    hover, down = hover_then_into_board(s, bottom=20.0)             # 18 mm down into the blue block, above the board
+    plan = planning.Plan((planning.MoveStep(planning.joint_move(s.arm.joint_positions(), hover), "hover"),
+                          planning.MoveStep(planning.joint_move(hover, down), "down")))
+    message = assert_refused_before_moving(holding, lambda: tasks.TaskMachine(s).execute(plan), "into a known block")
+    assert "held red block" in message and "known block at (150.0, 220.0) mm" in message, message
 
 
 @pytest.mark.parametrize("mover", ["session", "arm"])
