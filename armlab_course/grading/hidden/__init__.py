@@ -38,8 +38,9 @@ SEED = 20261101
 class HiddenSpec:
     """function: the name in the exercise's notebook, or the dotted path of a package exercise's function (or class);
     cases: from a numpy Generator, a list of hidden checks, each a list of argument lists (JSON-able: floats, bools,
-    lists); atol: the tolerance of the comparison (in the function's units); adapter: the name of a `_call_*`
-    function of this module the child calls as adapter(function, *args) instead of function(*args) ('' for none);
+    lists); atol: the tolerance of the comparison (in the function's units); adapter: the name of a function of
+    armlab_course.grading.adapters the child calls as adapter(function, *args) instead of function(*args) ('' for
+    none);
     prelude: how the child reaches a notebook function ('cells': every code cell before it runs; 'definitions':
     only their imports, definitions and literal constants, no simulator run); agree: the fraction of a result's
     numbers that must match the expected ones within atol (1.0: all); outcome: an open task graded on outcomes,
