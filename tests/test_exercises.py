@@ -336,8 +336,8 @@ def test_in_the_release_a_test_of_a_blank_exercise_skips_until_it_is_written(rel
         assert "1 skipped" in blank.stdout and "needs exercise calib.depth_plane, still blank here" in blank.stdout
         source = out / "armlab/calibration/depth.py"
         text = source.read_text()
-        stub = stub_lines("calib.depth_plane", "armlab/calibration/depth.py")[1]
-        assert stub.startswith("raise SlotNotWritten('calib.depth_plane', ") and stub in text
+        stub = "\n".join("    " + line for line in stub_lines("calib.depth_plane", "armlab/calibration/depth.py"))
+        assert "raise SlotNotWritten('calib.depth_plane'," in stub and stub in text
         source.write_text(text.replace(stub, "coef = np.zeros(3)"))          # a student's (poor) answer
         written = run()
         assert "1 passed" in written.stdout, written.stdout

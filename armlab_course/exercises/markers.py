@@ -77,15 +77,15 @@ def stub_lines(exercise_id: str, where: str = "") -> list[str]:
     ExerciseNotWritten."""
     e = exercise(exercise_id)                               # KeyError for an unregistered id
     if where.startswith("armlab/"):
-        return ["from armlab.slots import SlotNotWritten",
-                f"raise SlotNotWritten({e.id!r}, {e.message()!r}, {e.label()!r})"]
+        return ["from armlab.slots import SlotNotWritten", f"raise SlotNotWritten({e.id!r},",
+                f"                     {e.message()!r},", f"                     {e.label()!r})"]
     return ["from armlab_course.exercises import ExerciseNotWritten", f"raise ExerciseNotWritten({e.id!r})"]
 
 
 def is_blank(text: str, exercise_id: str, where: str = "<text>") -> bool:
     """True when every region of exercise `exercise_id` in a source text still holds only a stub (either kind, see
     stub_lines) or the text has no region of it: the student has not written it yet."""
-    stubs = (stub_lines(exercise_id), stub_lines(exercise_id, "armlab/"))
+    stubs = [[line.strip() for line in stub_lines(exercise_id, where)] for where in ("", "armlab/")]
     lines = text.splitlines()
     bodies = [[line.strip() for line in lines[r.begin + 1:r.end] if line.strip()]
               for r in find_regions(text, where) if r.exercise_id == exercise_id]

@@ -44,5 +44,5 @@ SPECS: tuple[HiddenSpec, ...] = (HiddenSpec("dh_table", _geometries, atol=1e-6, 
                                             prelude="definitions"),)
 FORBIDDEN: tuple[str, ...] = (
     "kinematics.fk_pox", "kinematics.fk", "kinematics.fk_dh", "kinematics.link_frames", "kinematics.dh_frames",
-    "RobotModel.dh", "kit_table",
+    "RobotModel.dh", "pox_of_lengths",
 )
