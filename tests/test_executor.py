@@ -205,3 +205,24 @@ def test_the_task_layer_calls_planning_execute_only_in_the_executor():
 def test_the_executor_refuses_what_is_not_a_plan(holding):
     with pytest.raises(TypeError, match="planning.Plan"):
         executor.run(holding.session, [np.zeros(5)], "a list")
+
+
+def test_the_safety_checks_never_use_the_dh_chain(holding, monkeypatch):
+    """One model: with the DH chain (the student's exercise) broken, the executor's checks, the placement rule at
+    the release, the sag model and both backends still work: they use the manufacturer's PoX model only."""
+    s = holding.session
+    s.known = [*s.known, detected([-200.0, 150.0, 38.0], color="blue")]       # checked against, out of the way
+    hover, _ = hover_then_into_board(s)
+    spot = np.array([120.0, 200.0, 0.0])
+    plan = planning.plan_place(s.arm.joint_positions(), spot + [0.0, 0.0, tasks.RELEASE_GAP_MM], s.held_edge,
+                               obstacles=s.known, held_in_tool=s.held_in_tool)   # planning may use the DH chain
+
+    def broken(*_args, **_kwargs):
+        raise AssertionError("a safety check used the DH chain")
+    for name in ("fk", "fk_dh", "dh_frames", "dh_link_transform"):
+        monkeypatch.setattr(kinematics, name, broken)
+    q = np.array([hover, hover + [0.0, 0.1, -0.1, 0.0, 0.0]] * 6)
+    sag = tasks.fit_sag(q + np.linspace(0, 0.2, 12)[:, None], kinematics.fk_pox(q)[:, :3, 3])
+    assert np.all(np.isfinite(sag.tool_error(q)))
+    s.run(plan, "placing with the DH chain broken", release_top=spot + [0.0, 0.0, s.held_edge])
+    assert s.held is None and holding.station.arm.held_blocks == ()

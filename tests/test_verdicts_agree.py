@@ -15,10 +15,11 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
 from armlab import kinematics, make_station, motion_safety, planning, tasks
+from armlab.kinematics import Unreachable
 from armlab.station import MotionRefused
 from armlab.tasks import GuardedArm, executor, precheck
 
@@ -56,7 +57,7 @@ def restore(w) -> None:
     w.blue.position, w.blue.yaw = w.blue_pose[0].copy(), w.blue_pose[1]
 
 
-@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@settings(max_examples=60, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(dx=st.floats(-70.0, 70.0), dy=st.floats(-70.0, 70.0), bottom=st.floats(5.0, 80.0),
        wrist=st.floats(-0.4, 0.4))
 def test_the_pre_check_and_the_simulators_check_agree(world, dx, dy, bottom, wrist):
@@ -65,9 +66,12 @@ def test_the_pre_check_and_the_simulators_check_agree(world, dx, dy, bottom, wri
     s = w.session
     xy = np.array(STANDING_XY) + [dx, dy]
     T_tool_block = np.asarray(s.held_in_tool, float)
-    q_over = kinematics.ik([*xy, 160.0], np.pi / 2, wrist, current=w.start)[0]
-    lowest_below_tool = -(kinematics.fk_pox(q_over)[:3, :3] @ T_tool_block[:3, 3])[2] + s.held_edge / 2
-    q_low = kinematics.ik([*xy, bottom + lowest_below_tool], np.pi / 2, wrist, current=q_over)[0]
+    try:
+        q_over = kinematics.ik([*xy, 160.0], np.pi / 2, wrist, current=w.start)[0]
+        lowest_below_tool = -(kinematics.fk_pox(q_over)[:3, :3] @ T_tool_block[:3, 3])[2] + s.held_edge / 2
+        q_low = kinematics.ik([*xy, bottom + lowest_below_tool], np.pi / 2, wrist, current=q_over)[0]
+    except Unreachable:
+        assume(False)                                    # no such plan: the arm cannot get there top-down
     plan = planning.Plan((planning.MoveStep(planning.joint_move(w.start, q_over), "over"),
                           planning.MoveStep(planning.joint_move(q_over, q_low), "down")))
     sent = len(s.arm.sent)

@@ -36,7 +36,7 @@ import numpy as np
 from armlab import kinematics, motion_safety, planning
 from armlab.blocks import block_edge
 from armlab.gripper_geometry import GRIPPER
-from armlab.station.contract import MotionRefused
+from armlab.station.contract import Arm, MotionRefused
 
 from . import precheck
 from .guard import GuardedArm
@@ -92,7 +92,7 @@ class Release:
     yaw: float
 
 
-def guarded(arm) -> GuardedArm:
+def guarded(arm: Arm) -> GuardedArm:
     """`arm` itself when it is a GuardedArm, else a GuardedArm over it with no sag model (its commands are the
     planned joints): the raw arm of an experiment that measures the uncompensated arm."""
     return arm if isinstance(arm, GuardedArm) else GuardedArm(arm)
@@ -116,7 +116,7 @@ class ArmAlone:
         """Nothing to record: nothing held is known but by the arm."""
 
 
-def runner(value) -> Mover:
+def runner(value: Mover | Arm) -> Mover:
     """What runs plans for `value`: a task session itself (anything with a GuardedArm `arm` and `known` blocks), or
     ArmAlone over an arm (a GuardedArm, or a backend's Arm wrapped in one with no sag model)."""
     if isinstance(getattr(value, "arm", None), GuardedArm) and hasattr(value, "known"):
@@ -169,8 +169,9 @@ def _opening(arm: GuardedArm, held: Sequence[motion_safety.HeldBlock]) -> float:
     return float(getattr(arm.arm, "gripper_opening_mm", GRIPPER.max_opening_mm))
 
 
-def run(mover: Mover, plan: planning.Plan, what: str, *, grasp: Grasp | None = None, known=None, column=None,
-        release_top=None, arm=None) -> planning.ExecutionResult:
+def run(mover: Mover, plan: planning.Plan, what: str, *, grasp: Grasp | None = None, known: Sequence | None = None,
+        column: tuple[np.ndarray, float] | None = None, release_top: np.ndarray | None = None,
+        arm: Arm | None = None) -> planning.ExecutionResult:
     """Check `plan` whole, then run it and record what is held (module notes); returns planning.ExecutionResult.
 
     mover: the task Session (its held block, its known blocks; it records picks and releases), or ArmAlone.

@@ -28,7 +28,8 @@ from .session import Session, as_session
 
 __all__ = ["pick", "place", "put_back", "look", "check_block", "grasping", "pose_at", "RELEASE_GAP_MM"]
 
-RELEASE_GAP_MM = 2.0
+RELEASE_GAP_MM = 3.0   # the truly held block lay up to 2.0 mm below the kit's belief of it at a release (233 releases
+                       # of the student fuzz, two calibrations; docs/motion-contract.md): 3 mm keeps a millimetre
 
 
 def look(session: Session) -> perception.Observation:
