@@ -522,7 +522,8 @@ for root in dict.fromkeys([p for p in sys.path if p] + ["/grader", os.getcwd(), 
                     continue
                 if any(w in text for w in wanted):
                     found.append(os.path.join(folder, name))
-raise RuntimeError("found: " + " ".join(sorted(set(found))[:5]) if found else "found nothing")
+# the feedback shows only an exception's type (its text could carry hidden inputs): the type tells what was found
+raise (FileExistsError if found else LookupError)(" ".join(sorted(set(found))[:5]))
 '''
 
 
@@ -560,5 +561,4 @@ def test_a_region_looking_for_the_hidden_inputs_generator_finds_none(judge_grade
     the hidden checks' seed or the generator of their inputs finds nothing: they stay in the judge."""
     body = _as_region(LOOK_FOR_INPUTS, _reference("fk.dh_link_transform")[0])
     checks = judge_grader.hidden_checks("fk.dh_link_transform", [body])
-    assert checks and all(c.message.endswith("RuntimeError: found nothing") for c in checks), \
-        [c.message for c in checks]
+    assert checks and all("raised LookupError" in c.message for c in checks), [c.message for c in checks]
