@@ -12,12 +12,27 @@ PAR     := -n auto --maxprocesses 4 --dist loadfile --no-loadscope-reorder
 
 .PHONY: demo test lint unit notebooks lab bench browser camera sandbox student autograder docs clean
 
+# The first install (80-106 s) says what it does: a line as each step starts and one with its time when it ends;
+# the long step (requirements.txt) also shows pip's "Collecting" line per package and the count it installs.
+# pip's warnings and errors (stderr) pass as they are. The one message kept out of sight is setuptools'
+# informational "Editable installation" note (folders in the working directory named like the package may take
+# precedence in imports): here that folder is the package the editable install points to.
+define step
+	@echo "armlab install [$(1)] $(2) ..."
+	@t0=$$(date +%s); $(3) && echo "armlab install [$(1)] done in $$(( $$(date +%s) - t0 )) s"
+endef
+PIP_LINES := awk '/^Collecting / {print "    collecting " $$2; fflush()} /^Installing collected packages/ \
+	{print "    installing " split($$0, names, ",") " packages ..."; fflush()}'
+
 $(STAMP): requirements.txt pyproject.toml
-	test -x $(PY) || python3 -m venv .venv
-	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -r requirements.txt
-	$(PY) -m pip install --quiet --no-deps -e .
-	touch $(STAMP)
+	$(call step,1/4,a virtual environment in .venv,test -x $(PY) || python3 -m venv .venv)
+	$(call step,2/4,the newest pip,$(PY) -m pip install --quiet --upgrade pip)
+	$(call step,3/4,the kit's dependencies from requirements.txt (about 80 s the first time),\
+		{ $(PY) -m pip install -r requirements.txt; echo $$? >.venv/.pip-status; } | $(PIP_LINES); \
+		test "$$(cat .venv/.pip-status)" = 0)
+	$(call step,4/4,the kit itself (editable: your changes to armlab/ count at once),\
+		PYTHONWARNINGS="ignore:Editable installation" $(PY) -m pip install --quiet --no-deps -e .)
+	@touch $(STAMP)
 
 ## make demo: the main job, headless, on the simulator
 demo: $(STAMP)

@@ -39,9 +39,10 @@ _state: dict[str, ServerProcess | None] = {"server": None}
 # first four on a loaded 2-core machine, 130-280 s for the rest); every other file follows in collection order.
 # Only the order depends on this list: a stale entry costs time, never a result.
 START_FIRST = ("tests/test_grading.py", "tests/test_hidden_checks_open.py", "tests/test_blank_release_runs.py",
-               "tests/test_grading_attacks.py", "tests/test_lab_04_08.py", "tests/test_place_fuzz.py",
-               "tests/test_station_contract.py", "tests/test_hidden_checks.py", "notebooks/07_autonomous_tasks.ipynb",
-               "tests/test_station_panel_browser.py")
+               "tests/test_grading_attacks.py", "tests/test_hub_image.py", "tests/test_lab_04_08.py",
+               "tests/test_place_fuzz.py", "tests/test_grading_self_check.py", "tests/test_station_contract.py",
+               "tests/test_hidden_checks.py", "tests/test_grading_redteam.py", "tests/test_grading_fuzz.py",
+               "notebooks/07_autonomous_tasks.ipynb", "tests/test_station_panel_browser.py")
 
 
 def _ensure_shared_server() -> str:

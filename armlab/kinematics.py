@@ -4,9 +4,10 @@ Units: millimetres and radians. Frames: poses are in the world (board) frame; th
 `ee_gripper_link` (x = approach direction out of the gripper, y = finger opening direction, z completes the frame).
 Joint vectors are (5,) or (N, 5) in the order waist, shoulder, elbow, wrist_angle, wrist_rotate.
 
-Two models of one arm: the DH chain (dh_link_transform, dh_frames, fk_dh and fk: the course's method and the
-students' exercise) and the product of exponentials (link_frames, fk_pox, joint_positions: the manufacturer's model,
-which the simulator and the viewer use as the physical arm). They agree to 1e-9 mm.
+Two models of one arm: the DH chain (dh_link_transform, dh_frames, fk_dh: the course's method, built on the students'
+slot fk.dh_link_transform and used only where notebook 02 shows it) and the product of exponentials (link_frames,
+fk_pox, fk, joint_positions, jacobian: the manufacturer's model, the kit's truth, which safety checks, planning, the
+simulator and every reference use as the physical arm). They agree to 1e-9 mm.
 """
 
 from __future__ import annotations
@@ -20,12 +21,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from armlab import slots
 from armlab.arguments import finite_array, finite_float
 from armlab.robot import DH_TOOL_ROTATION, RobotModel, rx200
+from armlab.slots import SlotNotWritten, standin
 from armlab.transforms import exp_se3, homogeneous, rot_x, rot_y, rot_z
-from armlab_course.exercises import registry as course
-from armlab_course.exercises.fallback import reference_fallback
-from armlab_course.exercises.registry import ExerciseNotWritten
 
 __all__ = [
     "Unreachable",
@@ -42,10 +42,12 @@ __all__ = [
     "ik_branches",
     "BRANCHES",
     "ik_batch",
+    "ik_pox",
     "IKResult",
     "IKBatchResult",
     "steepest_pitch",
     "check_joints",
+    "arm_geometry",
 ]
 
 
@@ -89,17 +91,22 @@ def _check_angle(value, name: str) -> np.ndarray:
 # Forward kinematics
 # ---------------------------------------------------------------------------------------------------------------
 
+# The four elementary motions of a DH link as screws (w, v): rotation about z, translation along z, along x, rotation
+# about x; exp_se3 of a screw with w = 0 is the translation by v times the amount.
+_ELEMENTARY_SCREWS = np.array([[0.0, 0, 1, 0, 0, 0], [0, 0, 0, 0, 0, 1], [0, 0, 0, 1, 0, 0], [1, 0, 0, 0, 0, 0]])
+
+
 def _dh_by_elementary_motions(theta, d, a, alpha) -> np.ndarray:
-    """The reference path while fk.dh_link_transform is blank: the product of the four elementary motions as 4x4
-    matrices, Rz(theta) @ Tz(d) @ Tx(a) @ Rx(alpha) (numerically the same, four matrix products slower)."""
-    theta, d, a, alpha = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in (theta, d, a, alpha)))
-    zero = np.zeros_like(d)
-    return (homogeneous(rot_z(theta)) @ homogeneous(None, np.stack([zero, zero, d], -1))
-            @ homogeneous(None, np.stack([a, zero, zero], -1)) @ homogeneous(rot_x(alpha)))
+    """The stand-in while fk.dh_link_transform is blank: the product of the matrix exponentials of the link's four
+    elementary screw motions (theta about z, d along z, a along x, alpha about x), the PoX way (the same transform to
+    1e-12, by another method; four exponentials and three matrix products slower)."""
+    params = np.stack(np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in (theta, d, a, alpha))), -1)
+    E = exp_se3(_ELEMENTARY_SCREWS, params)                                          # (..., 4, 4, 4)
+    return E[..., 0, :, :] @ E[..., 1, :, :] @ E[..., 2, :, :] @ E[..., 3, :, :]
 
 
-@reference_fallback(course.DH_LINK, _dh_by_elementary_motions, "DH link transforms are products of the "
-                                                                       "four elementary motions' matrices")
+@standin("fk.dh_link_transform", _dh_by_elementary_motions, "DH link transforms are products of the "
+                                                               "four elementary motions' exponentials")
 def dh_link_transform(theta, d, a, alpha) -> np.ndarray:
     """Standard DH link transform(s) (..., 4, 4) = Rz(theta) Tz(d) Tx(a) Rx(alpha); lengths in mm, angles in rad.
 
@@ -124,6 +131,9 @@ def dh_frames(q, robot: RobotModel | None = None, check_limits: bool = True) -> 
     q = check_joints(q, robot, check_limits)
     qs = np.atleast_2d(q)
     dh = robot.dh
+    if dh is None:
+        raise ValueError("this robot model has no DH table (the DH table is exercise fk.dh_table): chain yours with "
+                         "dataclasses.replace(robot, dh=table)")
     A = dh_link_transform(qs + dh[:, 0], dh[:, 1], dh[:, 2], dh[:, 3])  # (N, 5, 4, 4)
     frames = np.empty((qs.shape[0], 7, 4, 4))
     frames[:, 0] = np.eye(4)
@@ -170,12 +180,13 @@ def fk_pox(q, robot: RobotModel | None = None, check_limits: bool = True) -> np.
 
 
 def fk(q, robot: RobotModel | None = None, check_limits: bool = True) -> np.ndarray:
-    """Tool pose in the world: (4, 4) for q (5,) rad, (N, 4, 4) for q (N, 5); translation in mm. By the DH table
-    (fk_dh).
+    """Tool pose in the world: (4, 4) for q (5,) rad, (N, 4, 4) for q (N, 5); translation in mm. By the
+    manufacturer's model (fk_pox): the kit's truth, which safety checks, planning, the simulator and every reference
+    use, so it never runs the DH exercise (fk_dh is the DH chain notebook 02 builds on it).
 
     Raises ValueError for a wrong shape, NaN, or (with check_limits) a joint outside its limits.
     """
-    return fk_dh(q, robot, check_limits)
+    return fk_pox(q, robot, check_limits)
 
 
 def joint_positions(q, robot: RobotModel | None = None) -> np.ndarray:
@@ -246,12 +257,15 @@ class _Candidates:
     wrist_distance: np.ndarray  # (N, 4) distance from shoulder to wrist centre, mm
 
 
+def arm_geometry(robot: RobotModel | None = None) -> tuple[float, float, float, float]:
+    """The arm's lengths in mm, read off the manufacturer's model at q = 0: the shoulder axis's height, the upper arm
+    (shoulder to elbow), the forearm (elbow to wrist) and the tool point's reach beyond the wrist_angle axis."""
+    chain = _planar_chain(robot or rx200())
+    return chain.shoulder[1], chain.upper_arm, chain.forearm, chain.reach
+
+
 def _planar_geometry(robot: RobotModel):
-    dh = robot.dh
-    shoulder_height = dh[0, 1]
-    upper_arm, forearm = dh[1, 2], dh[2, 2]
-    wrist_to_tool = dh[4, 1]
-    return shoulder_height, upper_arm, forearm, wrist_to_tool
+    return arm_geometry(robot)
 
 
 # Per branch: is the waist turned away from the target, and the sign of delta (the forearm's angle from the upper
@@ -263,70 +277,147 @@ _DELTA_SIGN = np.where(np.array([e == "elbow up" for _, e in _BRANCHES]) != _FLI
 _ELBOW_DOWN = np.array([e == "elbow down" for _, e in _BRANCHES], float)
 
 
-_NUMERICAL_ITERATIONS = 40     # Gauss-Newton steps of the reference IK (quadratic convergence: ~6 from a seed)
-_APPROACH_WEIGHT_MM = 100.0    # the approach direction's error counts as this many mm per unit
-_NUMERICAL_SEEDS = ((0.0, 1.0), (-0.6, 2.2), (0.8, 0.3))     # (shoulder, elbow bend) rad of the reference IK's seeds
-_NUDGE = 1e-7                  # rad: the joint step of the reference IK's forward differences
+_NEWTON_ITERATIONS = 30       # Newton steps of the kit's IK on the planar chain (quadratic: ~5 from a seed)
+_NEWTON_SEEDS = (1.0, 2.4, 0.3)   # rad: the elbow bends of the kit's IK's seeds, towards each branch's side
+
+
+@dataclass(frozen=True)
+class _PlanarChain:
+    """The arm's shoulder-elbow-wrist chain in its own vertical plane (forward, up; mm, rad), read off the
+    manufacturer's model at q = 0 (link frames 1..3 and the tool, data/rx200_pox.csv): the shoulder point, the upper
+    arm's and forearm's lengths, the upper arm's angle and the forearm's turn from it at q = 0, the signs with which
+    joints 2..4 turn the plane counter-clockwise (forward towards up), the tool point's reach beyond the wrist, the
+    approach's angle at q = 0 and the waist's heading at q = 0."""
+
+    shoulder: tuple[float, float]
+    upper_arm: float
+    forearm: float
+    rest_upper: float
+    rest_turn: float
+    turn: tuple[float, float, float]
+    reach: float
+    approach0: float
+    heading0: float
+
+
+_CHAINS: dict[bytes, _PlanarChain] = {}
+
+
+def _planar_chain(robot: RobotModel) -> _PlanarChain:
+    """The robot's _PlanarChain (computed once per PoX description)."""
+    key = robot.M.tobytes() + robot.frames_home.tobytes() + robot.screws.tobytes()
+    chain = _CHAINS.get(key)
+    if chain is None:
+        tool = robot.M[:3, 3]
+        heading0 = math.atan2(tool[1], tool[0])
+        forward = np.array([math.cos(heading0), math.sin(heading0), 0.0])
+        (sx, sz), (ex, ez), (wx, wz) = [(float(o @ forward), float(o[2])) for o in robot.frames_home[:3, :3, 3]]
+        approach = robot.M[:3, 0]
+        across = np.cross(forward, [0.0, 0.0, 1.0])              # an axis along it turns forward towards up
+        axes = robot.screws[:, :3]
+        if not (np.allclose(axes[0], [0.0, 0.0, 1.0]) and np.allclose(np.abs(axes[1:4] @ across), 1.0)
+                and np.allclose(np.cross(axes[4], approach), 0.0) and np.allclose(robot.screws[0, 3:], 0.0)):
+            raise ValueError("the kit's IK needs a vertical waist axis through the origin, the shoulder, elbow and "
+                             "wrist_angle axes across the arm's plane and wrist_rotate along the approach")
+        rest_upper = math.atan2(ez - sz, ex - sx)
+        chain = _PlanarChain((sx, sz), math.hypot(ex - sx, ez - sz), math.hypot(wx - ex, wz - ez), rest_upper,
+                             math.atan2(wz - ez, wx - ex) - rest_upper,
+                             tuple(float(np.sign(robot.screws[j, :3] @ across)) for j in (1, 2, 3)),
+                             float(np.linalg.norm(tool - robot.frames_home[2, :3, 3])),
+                             math.atan2(float(approach[2]), float(approach @ forward)), heading0)
+        if len(_CHAINS) >= _GEOMETRY_ENTRIES:
+            _CHAINS.clear()
+        _CHAINS[key] = chain
+    return chain
+
+
+def _wrist_goal(r, z, pitch, flipped, chain: _PlanarChain, xp=np):
+    """Where the wrist must be, from the shoulder in the arm's plane (mm), for a target `r` mm from the base axis at
+    height `z` mm, approach pitched `pitch` rad below horizontal, the waist facing it (flipped 0) or turned away (1);
+    and the approach's angle below the arm's forward horizontal (rad)."""
+    side = 1.0 - 2.0 * flipped
+    below = xp.pi * flipped + side * pitch
+    return (side * r - chain.reach * xp.cos(below) - chain.shoulder[0],
+            z - chain.shoulder[1] + chain.reach * xp.sin(below), below)
+
+
+def _newton_step(t, b, gx, gz, chain: _PlanarChain, xp=np):
+    """One damped Newton step (at most 0.5 rad) moving the upper arm's angle `t` and the forearm's turn `b` (rad) so
+    that the planar chain's wrist reaches (gx, gz) mm; also the wrist's distance from it before the step (mm)."""
+    l1, l2 = chain.upper_arm, chain.forearm
+    c1, s1, c12, s12 = xp.cos(t), xp.sin(t), xp.cos(t + b), xp.sin(t + b)
+    ex, ez = l1 * c1 + l2 * c12 - gx, l1 * s1 + l2 * s12 - gz
+    det = l1 * l2 * xp.sin(b)
+    det = xp.where(xp.abs(det) < 1e-12, 1e-12, det)
+    dt = -(l2 * c12 * ex + l2 * s12 * ez) / det                  # minus the 2 x 2 Jacobian's inverse times the error
+    db = ((l1 * c1 + l2 * c12) * ex + (l1 * s1 + l2 * s12) * ez) / det
+    scale = xp.maximum(1.0, xp.maximum(xp.abs(dt), xp.abs(db)) / 0.5)
+    return t + dt / scale, b + db / scale, xp.hypot(ex, ez)
+
+
+def _chain_joints(heading, t, b, below, chain: _PlanarChain, flipped):
+    """Joint angles q1..q4 (rad, not wrapped) putting the arm's plane at `heading` (turned away when flipped), the
+    upper arm at angle `t`, the forearm turned `b` from it and the approach `below` rad under forward horizontal."""
+    s2, s3, s4 = chain.turn
+    q2 = (t - chain.rest_upper) * s2
+    q3 = (b - chain.rest_turn) * s3
+    return heading - chain.heading0 + _PI * flipped, q2, q3, (-below - chain.approach0 - s2 * q2 - s3 * q3) * s4
+
+
+def _newton_branch(heading, r, z, pitch, flipped, delta_sign, chain: _PlanarChain):
+    """One branch of the kit's IK (_numerical_candidates) for one target, on Python floats: q1..q4 (rad, not
+    wrapped), or None where Newton's method finds no solution on the branch's side (out of reach)."""
+    gx, gz, below = _wrist_goal(r, z, pitch, flipped, chain, _SCALAR_MATH)
+    for seed in _NEWTON_SEEDS:
+        b = delta_sign * seed
+        t = math.atan2(gz, gx) - 0.5 * b
+        for _ in range(_NEWTON_ITERATIONS):
+            t, b, error = _newton_step(t, b, gx, gz, chain, _SCALAR_MATH)
+            if error < 1e-10:
+                break
+        b = _PI - (_PI - b) % _TWO_PI
+        if _newton_step(t, b, gx, gz, chain, _SCALAR_MATH)[2] < 1e-7 and (b > 0) == (delta_sign > 0):
+            return _chain_joints(heading, t, b, below, chain, flipped)
+    return None
 
 
 def _numerical_candidates(P: np.ndarray, pitch: np.ndarray, roll: np.ndarray, robot: RobotModel) -> _Candidates:
-    """The reference path while the exercise ik.candidates is blank: every branch solved numerically on the
-    manufacturer's PoX model (link_frames). The waist faces the target or turns away from it, the wrist
-    rotates by `roll`; shoulder, elbow and wrist_angle follow by damped Gauss-Newton on the tool point and the
-    approach direction, from a seed with the elbow on the branch's side. A branch counts where it converges onto the
-    target (1e-6 mm) and stays on its elbow's side. Slower than the closed form (about 40 batched PoX evaluations)."""
-    dh = robot.dh
-    h0, L1, L2, Lt = _planar_geometry(robot)
-    o1, o3 = dh[0, 0], dh[2, 0]
-    n = len(P)
+    """The kit's own IK (ik_pox, and the stand-in while exercise ik.candidates is blank), every branch at once, solved
+    numerically on the manufacturer's model: the waist turns the arm's plane to the target (or away from it), the
+    wrist rotates by `roll`; in that plane Newton's method moves the upper arm's and forearm's angles until the
+    wrist reaches the point `reach` short of the target along the approach (the planar chain read off the PoX model
+    at q = 0, seeded with the elbow bent to the branch's side), and the wrist angle makes up the approach. A branch
+    counts where Newton's method lands (1e-7 mm) with the elbow on the branch's side; the joints agree with the PoX
+    model to 1e-9 mm (the chain is that model's, for an arm whose model _planar_chain accepts)."""
+    chain = _planar_chain(robot)
     planar = np.hypot(P[:, 0], P[:, 1])
-    heading = np.where(planar > 1e-9, np.arctan2(P[:, 1], P[:, 0]), o1)
-    approach = tool_orientation(heading, pitch, roll)[:, :, 0]                       # (N, 3) tool x axis
-    wrist_distance = np.linalg.norm(P - Lt * approach - [0.0, 0.0, h0], axis=1)
-    in_reach = (wrist_distance <= L1 + L2 + 1e-9) & (wrist_distance >= abs(L1 - L2) - 1e-9)
-    branch_side = np.tile(_DELTA_SIGN, n)
-    target, aim = np.repeat(P, 4, axis=0), np.repeat(approach, 4, axis=0)
-    flat = np.zeros((4 * n, 5))
-    flat[:, 0] = (heading[:, None] - o1 + np.pi * _FLIPPED).ravel()
-    flat[:, 4] = np.repeat(roll, 4)
-    ok = np.zeros(4 * n, bool)
-    for shoulder, bend in _NUMERICAL_SEEDS:               # later seeds only where the earlier ones did not land
-        todo = np.flatnonzero(~ok & np.repeat(in_reach, 4))
+    heading = np.where(planar > 1e-9, np.arctan2(P[:, 1], P[:, 0]), chain.heading0)
+    gx, gz, below = _wrist_goal(planar[:, None], P[:, 2:3], pitch[:, None], _FLIPPED, chain)      # (N, 4)
+    distance = np.hypot(gx, gz)
+    in_reach = (distance <= chain.upper_arm + chain.forearm + 1e-9) & \
+        (distance >= abs(chain.upper_arm - chain.forearm) - 1e-9)
+    elbow_side = np.broadcast_to(_DELTA_SIGN, gx.shape)     # the sign of the forearm's turn from the upper arm
+    theta, bend, ok = np.zeros(gx.shape), np.zeros(gx.shape), np.zeros(gx.shape, bool)
+    for seed in _NEWTON_SEEDS:                              # later seeds only where the earlier ones did not land
+        todo = np.flatnonzero(in_reach & ~ok)
         if not todo.size:
             break
-        q = flat[todo].copy()
-        q[:, 1], q[:, 2] = shoulder, -branch_side[todo] * bend - o3        # the elbow bent to the branch's side
-        q[:, 3] = 0.0
-        active = np.ones(len(todo), bool)
-        for _ in range(_NUMERICAL_ITERATIONS):
-            idx = np.flatnonzero(active)
-            if not idx.size:
+        goal_x, goal_z, sign = gx.ravel()[todo], gz.ravel()[todo], elbow_side.ravel()[todo]
+        b = sign * seed
+        t = np.arctan2(goal_z, goal_x) - 0.5 * b
+        for _ in range(_NEWTON_ITERATIONS):
+            t, b, error = _newton_step(t, b, goal_x, goal_z, chain)
+            if error.max() < 1e-10:
                 break
-            T = link_frames(q[idx], robot, check_limits=False)[:, 6]
-            e = np.concatenate([target[todo[idx]] - T[:, :3, 3],
-                                _APPROACH_WEIGHT_MM * (aim[todo[idx]] - T[:, :3, 0])], axis=1)
-            # how the tool point and the approach move with shoulder, elbow and wrist_angle: forward differences
-            nudged = q[idx, None, :] + _NUDGE * np.eye(5)[1:4]                                 # (M, 3, 5)
-            T_n = link_frames(nudged.reshape(-1, 5), robot, check_limits=False)[:, 6].reshape(len(idx), 3, 4, 4)
-            d_point = (T_n[..., :3, 3] - T[:, None, :3, 3]) / _NUDGE                           # (M, 3 joints, 3)
-            d_aim = (T_n[..., :3, 0] - T[:, None, :3, 0]) / _NUDGE
-            A = np.swapaxes(np.concatenate([d_point, _APPROACH_WEIGHT_MM * d_aim], axis=2), 1, 2)   # (M, 6, 3)
-            At = np.swapaxes(A, 1, 2)
-            step = np.linalg.solve(At @ A + 1e-9 * np.eye(3), At @ e[..., None])[..., 0]
-            q[idx, 1:4] += step / np.maximum(1.0, np.abs(step).max(axis=1, keepdims=True) / 0.5)
-            active[idx[np.abs(e).max(axis=1) < 1e-7]] = False
-        T = link_frames(q, robot, check_limits=False)[:, 6]
-        landed = (np.linalg.norm(T[:, :3, 3] - target[todo], axis=1) < 1e-6) & \
-            (np.abs(T[:, :3, 0] - aim[todo]).max(axis=1) < 1e-9)
-        on_branch = np.sign(_wrap(-(q[:, 2] + o3))) == branch_side[todo]    # the forearm's turn from the upper arm
-        good = landed & on_branch
-        flat[todo[good]] = q[good]
-        ok[todo[good]] = True
-    q = _wrap(flat.reshape(n, 4, 5))
-    ok = ok.reshape(n, 4)
+        b = _wrap(b)
+        good = (_newton_step(t, b, goal_x, goal_z, chain)[2] < 1e-7) & (np.sign(b) == sign)
+        theta.ravel()[todo[good]], bend.ravel()[todo[good]], ok.ravel()[todo[good]] = t[good], b[good], True
+    q = np.empty(gx.shape + (5,))
+    q[..., 0], q[..., 1], q[..., 2], q[..., 3] = _chain_joints(heading[:, None], theta, bend, below, chain, _FLIPPED)
+    q[..., 4] = roll[:, None]
+    q = _wrap(q)
     q[~ok] = np.nan
-    valid = ok & robot.within_limits(q)
-    return _Candidates(q, np.repeat(in_reach[:, None], 4, axis=1), valid, np.repeat(wrist_distance[:, None], 4, axis=1))
+    return _Candidates(q, in_reach, ok & robot.within_limits(q), distance)
 
 
 # The math the closed-form IK needs, for numpy arrays (the batch: every target and branch at once) or for Python
@@ -396,25 +487,19 @@ def _branch_joints(heading, r, z, pitch, flipped, delta_sign, geometry, xp=np):
     return q1, q2, q3, q4, ok, d2
 
 
-_GEOMETRY: dict[bytes, tuple[float, ...]] = {}   # DH table's bytes -> its geometry (no model kept: the planner
-_GEOMETRY_ENTRIES = 16                            # makes a model with inner limits per grasp; they must be freed)
+_GEOMETRY_ENTRIES = 16     # planar chains kept (no model kept: the planner makes a model with inner limits per grasp)
 
 
 def _ik_geometry(robot: RobotModel) -> tuple[float, ...]:
-    """(shoulder height, upper arm, forearm, wrist-to-tool) mm and the DH offsets o1, o2, o3 rad, as Python floats
-    (computed once per DH table: it is all they depend on)."""
-    dh = np.asarray(robot.dh, dtype=float)
-    key = dh.tobytes()
-    geometry = _GEOMETRY.get(key)
-    if geometry is None:
-        geometry = (*(float(v) for v in _planar_geometry(robot)), float(dh[0, 0]), float(dh[1, 0]), float(dh[2, 0]))
-        if len(_GEOMETRY) >= _GEOMETRY_ENTRIES:
-            _GEOMETRY.clear()
-        _GEOMETRY[key] = geometry
-    return geometry
+    """(shoulder height, upper arm, forearm, wrist-to-tool) mm and the joint offsets o1, o2, o3 rad (the waist's
+    heading, minus the upper arm's elevation and minus the forearm's turn from it, at q = 0), as Python floats, read
+    off the manufacturer's model (_planar_chain) once per robot description."""
+    chain = _planar_chain(robot)
+    return (chain.shoulder[1], chain.upper_arm, chain.forearm, chain.reach, chain.heading0, -chain.rest_upper,
+            -chain.rest_turn)
 
 
-@reference_fallback(course.IK_BRANCHES, _numerical_candidates, "inverse kinematics is solved numerically on the PoX "
+@standin("ik.candidates", _numerical_candidates, "inverse kinematics is solved numerically on the PoX "
                                                             "model (slower)")
 def _ik_candidates(P: np.ndarray, pitch: np.ndarray, roll: np.ndarray, robot: RobotModel) -> _Candidates:
     """Every IK branch for targets P (N, 3) with pitch (N,) and roll (N,), vectorised over targets and branches
@@ -477,14 +562,23 @@ def _ik_one(position, pitch, roll, current, robot: RobotModel) -> np.ndarray | N
     roll = _PI - (_PI - roll) % _TWO_PI
     if not lo5 <= roll <= hi5:
         return None
-    found = []
+    found, chain = [], None
     for flipped, delta_sign, elbow_down in _BRANCH_SIGNS:
-        try:
-            q1, q2, q3, q4, ok, _ = _branch_joints(heading, r, z, pitch, flipped, delta_sign, geometry, _SCALAR_MATH)
-        except ExerciseNotWritten as e:
-            if e.exercise_id == course.IK_BRANCHES.id:
-                return None
-            raise
+        if chain is None:
+            try:
+                q1, q2, q3, q4, ok, _ = _branch_joints(heading, r, z, pitch, flipped, delta_sign, geometry,
+                                                       _SCALAR_MATH)
+            except SlotNotWritten as e:
+                if e.slot_id != "ik.candidates":
+                    raise
+                if not slots.standing_in("ik.candidates"):
+                    return None                       # the general path's stand-in answers first, and says so
+                chain = _planar_chain(robot)          # blank: the kit's own IK, on floats
+        if chain is not None:
+            joints = _newton_branch(heading, r, z, pitch, flipped, delta_sign, chain)
+            ok = joints is not None
+            if ok:
+                q1, q2, q3, q4 = joints
         if not ok:
             continue
         q1, q2, q3, q4 = (_PI - (_PI - q1) % _TWO_PI, _PI - (_PI - q2) % _TWO_PI,     # _wrap, inline
@@ -582,12 +676,21 @@ def ik_branches(position, pitch, roll: float = 0.0, robot: RobotModel | None = N
     return _ik_candidates(P, pitch_a, roll_a, robot).q[0]
 
 
-def _ik_general(position, pitch, roll, current, robot: RobotModel) -> np.ndarray:
-    """ik() through the batch machinery (_prepare, _ik_candidates, _rank) for one target."""
+def ik_pox(position, pitch, roll: float = 0.0, current=None, robot: RobotModel | None = None) -> np.ndarray:
+    """The kit's own inverse kinematics, never the student's: what ik() returns (the same arguments, branches,
+    joint limits, order and Unreachable reasons), solved numerically on the manufacturer's PoX model (damped
+    Gauss-Newton per branch) instead of by the closed form of exercise ik.candidates. For the kit's truths (a
+    simulated scene's arm pose, a kit recording), where a student's IK must change nothing; slower than ik()."""
+    return _ik_general(position, pitch, roll, current, robot or rx200(), _numerical_candidates)
+
+
+def _ik_general(position, pitch, roll, current, robot: RobotModel, candidates=None) -> np.ndarray:
+    """ik() through the batch machinery (_prepare, the branch candidates, _rank) for one target; candidates: the
+    solver of every branch (default _ik_candidates: the closed form, exercise ik.candidates)."""
     P, pitch_a, roll_a, cur, single = _prepare(position, pitch, roll, current, robot)
     if not single:
         raise ValueError("ik takes one position (3,); use ik_batch for (N, 3)")
-    c = _ik_candidates(P, pitch_a, roll_a, robot)
+    c = (candidates or _ik_candidates)(P, pitch_a, roll_a, robot)
     branches = np.flatnonzero(c.valid[0])
     if branches.size == 0:
         raise Unreachable(_explain(c, 0, robot, P[0], pitch_a[0]))

@@ -20,9 +20,10 @@ its links' +10 mm margin covers (REAL_CLEARANCE).
 A held block against the other objects (held_intrusion, the one rule for it): along a path sampled at most
 HELD_PATH_STEP_RAD apart (held_path_fractions), the held block may go HELD_CONTACT_TOL_MM into another object
 (resting on a stack, placing on one, touching a neighbour), and never deeper than it already is at the start of the
-path (the block a held block rests on when the lift starts). Whoever knows where the objects are measures the depths:
-the simulator (armlab.sim.arm, its true objects) and the task layer's pre-check (armlab.tasks.precheck, its
-detections, with a smaller allowance that covers detection error).
+path (the block a held block rests on when the lift starts). One routine measures the depths (held_depths: upright
+prisms, Prism, by the separating axis theorem); whoever knows where the objects are calls it: the simulator
+(armlab.sim.arm, its true objects) and the task layer's pre-check (armlab.tasks.precheck, its detections, with a
+smaller allowance that covers detection error), so the two never disagree about the geometry.
 
 Where a held block may be put down (placement_problem, check_placement: the one placement rule, used by
 tasks.place, the clicks, the events through tasks.place, and planning.plan_place): its footprint (a square of its
@@ -50,7 +51,8 @@ from armlab.station.contract import MotionRefused
 
 __all__ = ["BOARD_CONTACT_TOL_MM", "REAL_LINK_MARGIN_MM", "PATH_STEP_RAD", "MAX_MOVING_TIME_S", "LINK_POINTS",
            "PAD_NAMES", "HELD_CONTACT_TOL_MM", "HELD_PATH_STEP_RAD", "BoardClearance", "SIM_CLEARANCE",
-           "REAL_CLEARANCE", "HeldBlock", "Segment", "refusal", "check_target", "check_timing", "path_fractions",
+           "REAL_CLEARANCE", "HeldBlock", "Segment",
+           "Prism", "held_depths", "refusal", "check_target", "check_timing", "path_fractions",
            "held_path_fractions", "held_intrusion", "board_intrusion", "check_move", "check_plan",
            "PLACE_BASE_MARGIN_MM", "arm_reach_mm", "placement_problem", "check_placement"]
 
@@ -167,6 +169,43 @@ def held_path_fractions(q_from, q_to) -> np.ndarray:
     """Fractions s (n,) in [0, 1] at which a held block is checked against the other objects along the straight
     joint path q_from -> q_to (rad): path_fractions at HELD_PATH_STEP_RAD."""
     return path_fractions(q_from, q_to, HELD_PATH_STEP_RAD)
+
+
+@dataclass(frozen=True)
+class Prism:
+    """An upright prism: its footprint as convex pieces (each (K, 2) mm in its own frame, their union the shape), from
+    -half_height to +half_height mm along its own z, placed by pose (4, 4) (its centre and axes in the world, mm)."""
+
+    pieces: tuple[np.ndarray, ...]
+    half_height: float
+    pose: np.ndarray
+    name: str = "object"
+
+    @property
+    def radius(self) -> float:
+        """Radius (mm) of a sphere about its centre that holds it, plus 1 mm (the quick test of held_depths)."""
+        corners = np.vstack(self.pieces)
+        return float(np.sqrt(np.max(np.sum(corners ** 2, axis=1)) + self.half_height ** 2)) + 1.0
+
+
+def held_depths(moving: Prism, poses, other: Prism) -> np.ndarray:
+    """How deep (mm) the prism `moving`, placed at each of poses (n, 4, 4) (its centre frame in the world; its own
+    pose is not used), goes into the fixed prism `other`: (n,) > 0 penetration, <= 0 apart (-inf: too far apart to
+    test). Separating axes over every pair of convex pieces (a union goes as deep as its deepest pair). The one
+    geometry of the held-block rule (module notes)."""
+    from armlab.sim.geometry import convex_penetration, prism_features  # armlab.sim's __init__ imports its arm,
+    #                                                                     which imports this module: import on use
+    poses = np.asarray(poses, float)
+    centres = poses[:, :3, 3]
+    depth = np.full(len(poses), -np.inf)
+    near = np.flatnonzero(np.linalg.norm(centres - np.asarray(other.pose, float)[:3, 3], axis=1)
+                          < moving.radius + other.radius)
+    if not near.size:
+        return depth
+    a = [prism_features(p, moving.half_height, poses[near]) for p in moving.pieces]
+    b = [prism_features(p, other.half_height, other.pose) for p in other.pieces]
+    depth[near] = np.max([convex_penetration(x, y) for x in a for y in b], axis=0)
+    return depth
 
 
 def held_intrusion(depth, allowance_mm: float = HELD_CONTACT_TOL_MM) -> int | None:

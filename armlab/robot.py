@@ -42,7 +42,9 @@ class RobotModel:
         lower, upper: position limits (5,), rad.
         velocity: velocity limits (5,), rad/s.
         home, sleep: named poses (5,), rad.
-        dh: (5, 4) standard DH rows (theta_offset rad, d mm, a mm, alpha rad) from the world frame.
+        dh: (5, 4) standard DH rows (theta_offset rad, d mm, a mm, alpha rad) from the world frame, or None where
+            the kit has no DH table (the student release: the table is exercise fk.dh_table; nothing of the kit
+            but notebook 02's DH chain, kinematics.dh_frames and fk_dh, uses it).
         screws: (5, 6) space-frame screw axes (w, v), v in mm, world frame.
         M: (4, 4) tool frame ee_gripper_link in the world at q = 0 (mm).
         frames_home: (5, 4, 4) link frames 1..5 (the poses of DH frames 1..5) in the world at q = 0 (mm).
@@ -56,7 +58,7 @@ class RobotModel:
     velocity: np.ndarray
     home: np.ndarray
     sleep: np.ndarray
-    dh: np.ndarray
+    dh: np.ndarray | None
     screws: np.ndarray
     M: np.ndarray
     frames_home: np.ndarray
@@ -104,9 +106,10 @@ class RobotModel:
         for name, lo, hi, home, vel in zip(self.joint_names, deg(self.lower), deg(self.upper), deg(self.home),
                                            deg(self.velocity)):
             rows.append(f"  {name:12} {lo:8.1f} {hi:8.1f} {home:8.1f} {vel:10.1f}")
-        rows.append("DH (standard)     theta0 (deg)   d (mm)   a (mm)  alpha (deg)")
-        for name, (theta0, d, a, alpha) in zip(self.joint_names, self.dh):
-            rows.append(f"  {name:12} {deg(theta0):13.2f} {d:8.2f} {a:8.2f} {deg(alpha):12.2f}")
+        if self.dh is not None:
+            rows.append("DH (standard)     theta0 (deg)   d (mm)   a (mm)  alpha (deg)")
+            for name, (theta0, d, a, alpha) in zip(self.joint_names, self.dh):
+                rows.append(f"  {name:12} {deg(theta0):13.2f} {d:8.2f} {a:8.2f} {deg(alpha):12.2f}")
         rows.append("PoX screws (world)   wx     wy     wz      vx (mm)   vy (mm)   vz (mm)")
         for name, (wx, wy, wz, vx, vy, vz) in zip(self.joint_names, self.screws):
             rows.append(f"  {name:12} {wx:6.2f} {wy:6.2f} {wz:6.2f} {vx:10.2f} {vy:9.2f} {vz:9.2f}")
@@ -166,9 +169,12 @@ def _named_table(path: Path, header: list[str], names: tuple[str, ...]) -> tuple
 
 def load_robot(joints_csv: Path | str | None = None, dh_csv: Path | str | None = None,
                pox_csv: Path | str | None = None) -> RobotModel:
-    """Load and validate a robot description; defaults to the RX200 files in `data/`."""
+    """Load and validate a robot description; defaults to the RX200 files in `data/`. The DH table is optional: with
+    no dh_csv given and no rx200_dh.csv in the data folder (the student release leaves it out: it is the answer of
+    exercise fk.dh_table) the model's dh is None."""
     joints_path = Path(joints_csv or data_path("rx200_joints.csv"))
     dh_path = Path(dh_csv or data_path("rx200_dh.csv"))
+    dh_given = dh_csv is not None
     pox_path = Path(pox_csv or data_path("rx200_pox.csv"))
 
     joints, joint_lines = _named_table(
@@ -184,7 +190,8 @@ def load_robot(joints_csv: Path | str | None = None, dh_csv: Path | str | None =
             if not lower[i] <= value <= upper[i]:
                 raise RobotDataError(f"{where}: {pose} pose {value} is outside its limits")
 
-    dh, _ = _named_table(dh_path, ["joint", "theta_offset_rad", "d_mm", "a_mm", "alpha_rad"], JOINT_NAMES)
+    dh = _named_table(dh_path, ["joint", "theta_offset_rad", "d_mm", "a_mm", "alpha_rad"], JOINT_NAMES)[0] \
+        if dh_given or dh_path.is_file() else None
 
     frame_rows = tuple(f"frame{i}_home" for i in range(1, 6))
     pox, pox_lines = _named_table(pox_path, ["name", "wx", "wy", "wz", "vx", "vy", "vz"],
@@ -201,7 +208,8 @@ def load_robot(joints_csv: Path | str | None = None, dh_csv: Path | str | None =
 
     arrays = [np.array(a, dtype=float) for a in (lower, upper, velocity, home, sleep)]
     for a in arrays + [dh, screws, M, frames_home, points_home]:
-        a.setflags(write=False)
+        if a is not None:
+            a.setflags(write=False)
     return RobotModel(JOINT_NAMES, *arrays, dh=dh, screws=screws, M=M, frames_home=frames_home,
                       points_home=points_home)
 

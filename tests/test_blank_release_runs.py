@@ -79,7 +79,7 @@ def test_only_exercise_and_check_cells_raise_and_each_names_its_exercise(blank_r
             regions = {r.exercise_id for r in find_regions(cell.source, stem)}
             tags = set(CHECK_TAG.findall(cell.source)[0].split()) if CHECK_TAG.search(cell.source) else set()
             named = STUB_ERROR.match(error["evalue"])
-            if error["ename"] != "ExerciseNotWritten" or not named:
+            if error["ename"] not in ("ExerciseNotWritten", "SlotNotWritten") or not named:
                 wrong.append(f"{stem} cell {i}: {error['ename']}: {error['evalue'][:200]}")
             elif named["id"] not in regions | tags:
                 wrong.append(f"{stem} cell {i} (exercises {sorted(regions | tags)}) raised for {named['id']}")
@@ -113,5 +113,6 @@ def test_the_reference_paths_say_so_in_one_line_each(blank_run):
                      for line in _stderr(c).splitlines() if line.startswith("note: exercise ")]
                     for nb in notebooks.values()]
     assert all(len(n) == len(set(n)) for n in per_notebook), "a reference path announced itself twice"
-    assert {"calib.tag_extrinsics", "calib.depth_plane", "ik.candidates", "fk.dh_link_transform", "fk.dh_table",
-            "detect.classify", "grab.move_path", "teach.replay", "events.sort_stack"} <= set(ids), sorted(set(ids))
+    # not fk.dh_link_transform: nothing but notebook 02's DH chain calls it, and that chains the student's table
+    assert {"calib.tag_extrinsics", "calib.depth_plane", "ik.candidates", "fk.dh_table", "detect.classify",
+            "grab.move_path", "teach.replay", "events.sort_stack"} <= set(ids), sorted(set(ids))

@@ -96,8 +96,8 @@ def graded(tmp_path_factory) -> tuple[dict, Path]:
         write_regions(subs / name, "fk.dh_table", reference_bodies("fk.dh_table"))
     write_regions(student("library_call"), "fk.euler", [LIBRARY_EULER])
     write_regions(student("renamed_copy"), "fk.euler", [disguised(reference_bodies("fk.euler")[0], runnable=True)])
-    kit = student("kit_call")            # the notebook's stand-in (the kit's table with the lengths put in)
-    write_regions(kit, "fk.dh_table", ["    return kit_table(h0, L1, beta, L2, Lt)"])
+    kit = student("kit_call")            # the notebook's stand-in (the PoX model with the lengths put in)
+    write_regions(kit, "fk.dh_table", ["    return pox_of_lengths(h0, L1, beta, L2, Lt)"])
     out = base / "out"
     results = grade_class(subs, out, ROOT, jobs=2, limits=Limits(timeout_s=240, cpu_s=25), exercises=GRADED)
     return results, out
@@ -127,10 +127,9 @@ def test_wrong_answer_costs_its_own_exercise_only(graded):
 
 
 def test_a_wrong_kit_function_does_not_cost_the_exercise_that_calls_it(graded):
-    """fk.dh_link_transform wrong (d negated): kinematics.fk, which ik.numerical's solution calls, goes wrong with it,
-    so ik.numerical fails in the submission's one pass (tests/wrong_answers.py DEPENDS); the grader runs it again
-    alone, the reference in place of the link transform, and it scores full marks there."""
-    assert "fk.dh_link_transform" in DEPENDS["ik.numerical"]
+    """fk.dh_link_transform wrong (d negated): kinematics.fk, which ik.numerical's solution calls, is the kit's PoX
+    model and never chains the student's link transform, so ik.numerical keeps its full marks (no DEPENDS rerun)."""
+    assert "ik.numerical" not in DEPENDS
     results = graded[0]["wrong_link"]
     assert results["fk.dh_link_transform"].score < exercise("fk.dh_link_transform").points
     assert results["ik.numerical"].score == exercise("ik.numerical").points, \
@@ -191,7 +190,7 @@ def test_a_library_call_in_place_of_the_exercise_scores_below_full_marks(graded)
     assert len(static) == 1 and not static[0].passed and "scipy.spatial.transform.Rotation" in static[0].message
     assert 0 < result.score < exercise("fk.euler").points
     kit = graded[0]["kit_call"]["fk.dh_table"]
-    assert any("kit_table" in c.message for c in kit.checks if c.name.startswith("static"))
+    assert any("pox_of_lengths" in c.message for c in kit.checks if c.name.startswith("static"))
 
 
 def test_a_submission_of_the_edited_files_only(graded):

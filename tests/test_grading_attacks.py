@@ -377,6 +377,7 @@ def test_run_autograder_in_a_gradescope_layout_with_student_code_unprivileged(tm
         (root / "submission/armlab").symlink_to(root / "source/armlab", target_is_directory=True)
         before = hashlib.sha256(b"".join(p.read_bytes() for p in sorted((root / "source").rglob("*.py")))).hexdigest()
         env = dict(os.environ, ARMLAB_AUTOGRADER_ROOT=str(root), ARMLAB_PYTHON=python, ARMLAB_SANDBOX="user",
+                   ARMLAB_ALLOW_SHARED_NETWORK="1",
                    ARMLAB_GRADE_EXERCISES=f"{DH},{CHAIN},fk.dh_link_transform", ARMLAB_GRADE_TIMEOUT="300")
         env.pop("PYTHONPATH", None)
         done = subprocess.run([str(root / "run_autograder")], env=env, capture_output=True, text=True, timeout=1200)
@@ -467,3 +468,97 @@ def test_two_grader_processes_never_share_a_run_user():
     finally:
         holder.communicate("\n", timeout=60)
     assert theirs not in uids_in_use()
+
+
+# -- the judge (issue 37): open tasks scored by replay, hidden inputs never in the sandbox ------------------------
+OPEN = ("detect.segment", "grab.move_path", "events.sort_stack")
+FORGE = '''
+import gc, json, os, sys
+ones = [1.0] * 6
+for name in ("armlab_grader.harness", "armlab_grader.wire"):       # the child's output rewritten: every outcome met
+    module = sys.modules.get(name)
+    if module is not None:
+        module._numbers = lambda value: ones
+        module.encode = lambda value, depth=0: ones
+for obj in gc.get_objects():                          # the simulator of the run, wherever it is: no block left held
+    if type(obj).__name__ in ("World", "SimWorld", "SimArm") and hasattr(obj, "held"):
+        try:
+            obj.held.clear()
+        except Exception:
+            pass
+for folder, _, names in os.walk(os.getcwd()):         # result files of the run, rewritten
+    for name in names:
+        if "result" in name:
+            try:
+                with open(os.path.join(folder, name), "w") as f:
+                    f.write(json.dumps({"payload": json.dumps(ones), "hmac": "0" * 64}))
+            except OSError:
+                pass
+frame = sys._getframe()                               # an answer of its own to the judge, in this run's protocol
+while frame is not None:
+    seen = frame.f_locals
+    if "nonce" in seen and "reply" in seen and "request" in seen:
+        os.write(seen["reply"], (json.dumps({"nonce": seen["nonce"], "seq": seen["request"]["seq"], "value": ones,
+                                             "forbidden": []}) + "\\n").encode())
+        break
+    frame = frame.f_back
+raise RuntimeError("no work")
+'''
+LOOK_FOR_INPUTS = '''
+import os, sys
+found = [m for m in sys.modules if "hidden" in m.split(".") or m.endswith((".judge", "._replay"))]
+wanted = ("SEED = " + "2026" + "1101", "def _link" + "_batches", "default_rng([" + "SEED")
+for root in dict.fromkeys([p for p in sys.path if p] + ["/grader", os.getcwd(), "/tmp", os.path.expanduser("~")]):
+    for folder, folders, names in os.walk(root):
+        if folder.endswith(("site-packages", "dist-packages")):      # the libraries: only the kit's entries
+            folders[:] = [d for d in folders if "armlab" in d]
+            names = [n for n in names if "armlab" in n]
+        for name in names:
+            if name.endswith((".py", ".json", ".txt")) or "hidden" in name:
+                try:
+                    with open(os.path.join(folder, name), errors="ignore") as f:
+                        text = f.read(400_000)
+                except OSError:
+                    continue
+                if any(w in text for w in wanted):
+                    found.append(os.path.join(folder, name))
+# the feedback shows only an exception's type (its text could carry hidden inputs): the type tells what was found
+raise (FileExistsError if found else LookupError)(" ".join(sorted(set(found))[:5]))
+'''
+
+
+def _as_region(code: str, like: str) -> str:
+    """`code` indented as the region `like` (a reference body) is."""
+    first = next(line for line in like.splitlines() if line.strip())
+    return textwrap.indent(code.strip("\n"), first[:len(first) - len(first.lstrip())])
+
+
+@pytest.fixture(scope="module")
+def judge_grader():
+    from armlab_course.grading.grade import Grader
+
+    grader = Grader(ROOT, Limits(timeout_s=300, cpu_s=200), [*OPEN, "fk.dh_link_transform"])
+    yield grader
+    grader.close()
+
+
+@pytest.mark.parametrize("attack", ["raise", "forge"])
+def test_open_tasks_give_nothing_to_a_region_that_raises_or_forges_its_outcome(judge_grader, attack):
+    """Every open task's regions raise everywhere, or (forge) rewrite the child's output and result files, look for
+    the simulator to change it and answer the judge in its place with every outcome met, then raise: the judge
+    replays only what the child says the robot should do, on its own simulator, so no open-task check passes (the
+    issue measured 23.1 of 30 points for this with the outcome scored in the child)."""
+    code = FORGE if attack == "forge" else 'raise RuntimeError("no work")'
+    bodies = {e: [_as_region(code, body) for body in _reference(e)] for e in OPEN}
+    got = judge_grader.hidden_checks_together(bodies)
+    for exercise_id in OPEN:
+        assert got[exercise_id] and not any(c.passed for c in got[exercise_id]), \
+            (exercise_id, [(c.passed, c.message) for c in got[exercise_id]])
+
+
+def test_a_region_looking_for_the_hidden_inputs_generator_finds_none(judge_grader):
+    """A region that searches the sandbox (its modules, sys.path, the grader's folder, the work tree, /tmp, home) for
+    the hidden checks' seed or the generator of their inputs finds nothing: they stay in the judge."""
+    body = _as_region(LOOK_FOR_INPUTS, _reference("fk.dh_link_transform")[0])
+    checks = judge_grader.hidden_checks("fk.dh_link_transform", [body])
+    assert checks and all("raised LookupError" in c.message for c in checks), [c.message for c in checks]

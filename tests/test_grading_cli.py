@@ -4,6 +4,7 @@ wrong homography to the camera pose that calls it, and exits non-zero when anyth
 
 from __future__ import annotations
 
+import json
 import os
 import subprocess
 import sys
@@ -81,16 +82,26 @@ def test_check_names_the_first_failing_check_and_does_not_charge_the_caller(stud
     assert "2 written exercise(s) not yet passing" in done.stdout and "not written yet" in done.stdout
 
 
-def test_check_passes_with_exit_0_when_everything_written_passes(tmp_path):
-    """The homography and the pose written as the reference: every check of theirs passes, except the pose's check
-    cell shared with the depth plane, which waits for it (not written yet): that is no failure (exit 0)."""
+def test_check_exits_0_only_when_nothing_is_blank_or_failing(tmp_path):
+    """The homography and the pose written as the reference pass every check of theirs, except the pose's check cell
+    shared with the depth plane, which waits for it: with blank exercises left the whole self-check exits 1 and
+    says what is not written, each exercise on a progress line; `check EXERCISE` on the homography alone exits 0,
+    an unknown id exits 2 naming the known ones."""
     folder = tmp_path / "student"
     make_student_release(ROOT, folder)
     for exercise_id in (HOMOGRAPHY, POSE):
         write_regions(folder, exercise_id, _reference(exercise_id))
     done = _armlab("check", cwd=folder)
-    assert done.returncode == 0, done.stdout + done.stderr
+    assert done.returncode == 1, done.stdout + done.stderr
     assert "1 written" not in done.stdout and "not written yet" in done.stdout, done.stdout
+    lines = done.stdout.splitlines()
+    assert any(ln.startswith("[") and f"] {HOMOGRAPHY}: written, 6 / 6" in ln for ln in lines), done.stdout
+    assert any(ln.startswith("[") and "] fk.euler: blank, 0 / 5" in ln for ln in lines), done.stdout
+    one = _armlab("check", HOMOGRAPHY, cwd=folder)
+    assert one.returncode == 0 and f"{HOMOGRAPHY}: written" in one.stdout and "fk.euler" not in one.stdout, \
+        one.stdout + one.stderr
+    unknown = _armlab("check", "fk.nothing", cwd=folder)
+    assert unknown.returncode == 2 and "fk.euler" in unknown.stderr and "Traceback" not in unknown.stderr
 
 
 def test_check_says_what_is_missing_when_it_cannot_run(tmp_path):
@@ -181,3 +192,21 @@ def test_csv_cells_that_read_as_formulas_are_neutralised():
     rows = list(csv.reader(io.StringIO(text)))
     assert rows[1] == ["'=HYPERLINK(\"http://x\")", "'+1", "-2.5"], rows
     assert rows[2] == ["'@SUM(A1)", "'-x", "3"] and rows[3] == ["bob", "plain, text", "0"], rows
+
+
+def test_odd_student_names_get_folders_of_their_own(tmp_path):
+    """A student folder named grades.csv, one whose name reads like another's hashed folder, and two names that
+    differ in case each get their own results folder; grades.csv stays the class's file."""
+    from armlab_course.grading.report import student_folder, write_reports
+    from armlab_course.grading.results import ExerciseResult
+
+    def result(score: float) -> dict:
+        return {"fk.euler": ExerciseResult("fk.euler", score, exercise("fk.euler").points, [], "")}
+
+    names = ["grades.csv", student_folder("grades.csv"), "Alice", "alice", "answers.csv"]
+    write_reports({name: result(k) for k, name in enumerate(names)}, tmp_path)
+    assert (tmp_path / "grades.csv").is_file()
+    folders = [p for p in tmp_path.iterdir() if p.is_dir()]
+    assert len(folders) == len(names)
+    scores = sorted(json.loads((f / "results.json").read_text())["score"] for f in folders)
+    assert scores == list(range(len(names)))

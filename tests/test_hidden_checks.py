@@ -60,3 +60,86 @@ def test_an_open_tasks_outcome_passes_only_when_every_criterion_is_met(value, pa
     (ok, message), = compare(spec, [{"value": [1.0, 1.0]}, {"value": value}], None, [2])
     assert ok == passed, message
     assert passed or message == "hidden check 1, call 2: the result differs from the expected value"
+
+
+def test_the_wire_carries_plain_data_only():
+    """Arrays cross the judge's pipe as bytes with a dtype and a shape, and come back equal; a message naming a
+    dtype outside the list (an object array: pickle), a byte count that does not fit the shape, or a line that is no
+    JSON object is refused."""
+    import base64
+
+    import numpy as np
+
+    from armlab_course.grading.wire import WireError, decode, dumps, encode, loads
+
+    image = np.arange(720 * 1280, dtype=np.uint16).reshape(720, 1280) % 977
+    sent = loads(dumps({"value": encode([image, np.float32(2.5), (1, "large", None)])}))
+    got = decode(sent["value"])
+    assert isinstance(sent["value"][0], dict) and got[0].dtype == np.uint16 and np.array_equal(got[0], image)
+    assert got[1:] == [2.5, [1, "large", None]]
+    raw = base64.b64encode(b"\x80\x04N.").decode()
+    for bad in ({"ndarray": raw, "dtype": "object", "shape": [1]}, {"ndarray": raw, "dtype": "float64", "shape": [9]}):
+        with pytest.raises(WireError):
+            decode(bad)
+    for line in (b"[1, 2]", b"not json", b"{" * 100_000):
+        with pytest.raises(WireError):
+            loads(line)
+
+
+_CHILD = '''
+import json, sys, time
+first = json.loads(sys.stdin.readline())
+nonce, mode = first["nonce"], sys.argv[1]
+print(json.dumps({"nonce": nonce, "ready": len(first["jobs"])}), flush=True)
+for line in sys.stdin:
+    request = json.loads(line)
+    if request.get("end"):
+        break
+    answer = {"nonce": nonce, "seq": request["seq"], "value": sum(request["args"]), "forbidden": []}
+    if request["seq"] == 2:
+        if mode == "other nonce":
+            answer["nonce"] = "0" * 32
+        elif mode == "out of turn":
+            answer["seq"] = 1
+        elif mode == "garbage":
+            print("not json", flush=True)
+            continue
+        elif mode == "silent":
+            time.sleep(30)
+        elif mode == "ends":
+            sys.exit(0)
+        elif mode == "raises":
+            answer = {"nonce": nonce, "seq": 2, "error": "ValueError: the student's", "forbidden": ["cv2.x"]}
+    print(json.dumps(answer), flush=True)
+'''
+
+
+@pytest.mark.parametrize("mode", ["honest", "raises", "other nonce", "out of turn", "garbage", "silent", "ends"])
+def test_the_judge_takes_only_this_runs_answers_in_turn(mode):
+    """A child (a plain process speaking the protocol) that answers the second call with another run's nonce, out of
+    turn, with no JSON, not at all before the deadline, or not at all since it ended: the first call keeps its
+    value, the second and every later one fail with the reason, and the judge returns; a student's error fails its
+    call alone and its forbidden calls are kept."""
+    import subprocess
+    import sys
+    import time
+
+    from armlab_course.grading.judge import run_jobs
+
+    proc = subprocess.Popen([sys.executable, "-c", _CHILD, mode], stdin=subprocess.PIPE, stdout=subprocess.PIPE)
+    try:
+        jobs = [{"function": "f", "forbidden": [], "cases": [[1, 2], [3, 4]]},
+                {"function": "g", "forbidden": [], "cases": [[5, 6]]}]
+        out, problem = run_jobs(proc, jobs, time.monotonic() + 3.0)
+    finally:
+        proc.kill()
+        proc.wait()
+    first, second, third = out[0]["results"][0], out[0]["results"][1], out[1]["results"][0]
+    assert first == {"value": 3}
+    if mode == "honest":
+        assert (second, third, problem) == ({"value": 7}, {"value": 11}, "")
+    elif mode == "raises":
+        assert second == {"error": "ValueError: the student's"} and third == {"value": 11} and not problem
+        assert out[0]["forbidden"] == ["cv2.x"]
+    else:
+        assert problem and second == third == {"error": problem}, (mode, out, problem)

@@ -151,3 +151,54 @@ def test_private_uses_finds_both_forms(tmp_path):
         assert len(found) == 3 and "_SUBPIX_CRITERIA" in found[0] + found[1] and "kinematics._wrap" in found[2], found
     finally:
         probe.unlink()
+
+
+# -- the seam between the engine and the course ------------------------------------------------------------------
+
+COURSE = "armlab_course"
+DISPATCH = "armlab.__main__"     # may hand the grade / check / exercises commands to the course, inside a function
+
+
+def course_imports(path: Path) -> list[tuple[int, str, bool]]:
+    """Every import of the course package in a source file, at any depth: (line, module, at module level)."""
+    tree = ast.parse(path.read_text(), str(path))
+    top = {id(node) for node in tree.body}
+    found = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            names = [a.name for a in node.names]
+        elif isinstance(node, ast.ImportFrom) and not node.level:
+            names = [node.module or ""]
+        else:
+            continue
+        found += [(node.lineno, n, id(node) in top) for n in names if n == COURSE or n.startswith(COURSE + ".")]
+    return found
+
+
+def engine_packages() -> list[str]:
+    """armlab's subpackages and the top-level modules (as one group, "armlab")."""
+    return ["armlab"] + sorted({m.split(".")[1] for m in module_names() if m.count(".") >= 1
+                                and (PACKAGE / m.split(".")[1]).is_dir()})
+
+
+@pytest.mark.parametrize("package", engine_packages())
+def test_the_engine_imports_nothing_of_the_course(package):
+    """Per package of the engine: no module imports armlab_course, at module level or inside a function; the one
+    exception is the command line's dispatch (armlab/__main__.py), and only lazily, inside a function."""
+    modules = {name: path for name, path in module_names().items()
+               if (name.split(".")[1] if name.count(".") and (PACKAGE / name.split(".")[1]).is_dir() else "armlab")
+               == package}
+    assert modules, package
+    found = []
+    for name, path in sorted(modules.items()):
+        for line, module, at_top in course_imports(path):
+            if name != DISPATCH or at_top:
+                found.append(f"{path.relative_to(ROOT)}:{line}: imports {module}")
+    assert not found, "the engine imports the course:\n" + "\n".join(found)
+
+
+def test_the_seams_check_sees_an_import_of_the_course(tmp_path):
+    probe = tmp_path / "probe.py"
+    probe.write_text("import os\nfrom armlab_course.exercises import registry\n\n\ndef f():\n"
+                     "    import armlab_course.grading.cli\n")
+    assert course_imports(probe) == [(2, "armlab_course.exercises", True), (6, "armlab_course.grading.cli", False)]

@@ -62,7 +62,7 @@ def elbow_up(q, target):
 # Forward kinematics
 # ---------------------------------------------------------------------------------------------------------------
 
-@pytest.mark.exercise("fk.dh_link_transform")
+@pytest.mark.exercise("fk.dh_link_transform", "fk.dh_table")   # the kit's DH table: instructor only
 def test_dh_matches_pox_at_random_poses():
     q = random_q(10_000, seed=1)
     T_dh, T_pox = k.fk_dh(q), k.fk_pox(q)
@@ -121,7 +121,7 @@ def test_dh_link_transform_is_rz_tz_tx_rx():
     assert A.shape == (2, 3, 4, 4)
 
 
-@pytest.mark.exercise("fk.dh_link_transform")
+@pytest.mark.exercise("fk.dh_link_transform", "fk.dh_table")
 def test_link_frames_and_joint_positions():
     q = random_q(200, seed=4)
     F = k.link_frames(q)

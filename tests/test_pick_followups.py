@@ -58,7 +58,7 @@ def test_a_block_that_cannot_be_placed_is_put_back_where_it_was_picked(picked):
     with pytest.raises(MotionRefused, match=r"refused before moving: \(0, 700\) mm is off the board"):
         tasks.place(session, (0.0, 700.0, 0.0))                       # the placement rule: nothing moves
     with pytest.raises(Unreachable):
-        tasks.place(session, (0.0, -100.0, 0.0))                      # allowed, but the arm cannot get there
+        tasks.place(session, (0.0, -150.0, 0.0))                      # allowed, but the arm cannot get there
     # a put-back that would carry the block into something is refused before moving, still holding it
     saved = session.known
     session.known = [*saved, planning.Obstacle(float(start[0]) + 30.0, float(start[1]), 30.0, 12.0)]

@@ -1,10 +1,11 @@
 """One suite, two backends: the simulated station and the real one on the fake vendor modules (tests/test_hardware.py's
 fakes of interbotix_xs_modules and pyrealsense2) must keep the same contract (armlab.station.contract): state names,
 torque, an emergency stop that wins, limits refused with the joint named, the board refused, frames' shapes and
-dtypes, move and grip semantics, and the capabilities each declares; and the motion contract
-(armlab.station.contract.Arm): a stop from another thread always wins (a looped move_to, and TaskMachine.estop()
-during a pick: 200 trials each on each backend, none lost), a stopped blocking move raises, a move asked for during a
-non-blocking one waits for it, Ctrl+C holds the arm and closing parks it, a closed station refuses."""
+dtypes, move and grip semantics, the arm knowing what it holds, and the capabilities each declares; and the motion
+contract (armlab.station.contract.Arm): a stop from another thread always wins (a looped move_to, and
+TaskMachine.estop() during a pick: 200 trials each on each backend, none lost), a stopped blocking move raises, a move
+asked for during a non-blocking one waits for it, Ctrl+C holds the arm and closing parks it, a closed station
+refuses."""
 
 from __future__ import annotations
 
@@ -18,7 +19,7 @@ import numpy as np
 import pytest
 from test_hardware import vendors  # noqa: F401  (the fake vendor modules, a fixture)
 
-from armlab import kinematics, make_station, planning, tasks
+from armlab import kinematics, make_station, motion_safety, planning, tasks
 from armlab.hardware import interbotix
 from armlab.station import (
     BACKENDS,
@@ -37,6 +38,7 @@ from armlab.station import (
 )
 from armlab.station import registry as station_registry
 from armlab.tasks import GuardedArm
+from armlab.transforms import homogeneous
 
 Q_READY = np.array([0.0, -0.5, 0.3, 1.2, 0.0])   # tool well above the board, reachable from sleep
 Q_OTHER = np.array([0.6, -0.3, 0.1, 1.3, 0.4])   # another such pose
@@ -159,6 +161,30 @@ def test_a_move_into_the_board_is_refused_the_same_way(station):
         station.arm.move_to([0.0, 0.1, 0.2])
     with pytest.raises(MotionRefused, match="velocity limits.*would need"):
         station.arm.move_to(Q_READY, moving_time=0.3)
+
+
+def test_the_arm_knows_what_it_holds_and_refuses_it_into_the_board(station):
+    """A block the arm is told it holds (what the task layer's executor does at a grasp) is checked along every move
+    like the pads: 30 mm along the approach (tool x) beyond the tool point, a move that takes it 10 mm under the board
+    is refused naming it with nothing moved, while the same move with nothing held is allowed; open_gripper() forgets
+    it."""
+    arm = station.arm
+    arm.move_to(Q_READY)
+    low = kinematics.ik(np.array([0.0, 300.0, 35.0]), np.pi / 2)[0]        # the tool point 35 mm over the board
+    block = motion_safety.HeldBlock(30.0, homogeneous(np.eye(3), [30.0, 0.0, 0.0]), "held test block")
+    assert arm.held_blocks == ()
+    arm.set_held_blocks((block,))
+    assert arm.held_blocks == (block,)
+    before = physical_joints(station)
+    with pytest.raises(MotionRefused, match=r"collision with the board\): the held test block would go down"):
+        arm.move_to(low)
+    np.testing.assert_allclose(physical_joints(station), before, atol=1e-9)
+    with pytest.raises(TypeError, match="HeldBlock"):
+        arm.set_held_blocks((np.eye(4),))
+    arm.open_gripper()
+    assert arm.held_blocks == ()
+    arm.move_to(low)
+    np.testing.assert_allclose(arm.joint_positions(), low, atol=ATOL)
 
 
 def test_moves_block_or_run_in_the_background_and_reach_their_goal(station):

@@ -2,11 +2,12 @@
 token, fresh settings), and a real Chromium (Debian's, driven by Playwright; WebGL in software) that runs in a
 network namespace of its own whose one way out is JupyterLab's port (tests/browser.OnePort): the meshcat server's
 port is proved unreachable from the browser. Notebook 08 runs there, at a laptop's 1366 x 768, and the page is checked
-with real mouse events: the panel fits (E-STOP and 3D view visible together, no horizontal scrollbar); a click on a
-block's pixel grabs that block in the simulated world; the mouse-over readout is within 2 mm of the truth; the E-STOP
-button stops a running motion; a 50 px slider drag moves a joint a sensible amount; the inline 3D view (meshcat's
-viewer in an anywidget, over the kernel's connection) shows the arm, the blocks and the point cloud and follows the
-arm, at a measured frame rate; close() tells the open page; saving the run notebook changes only outputs.
+with real mouse events: the panel fits (E-STOP and 3D view visible together, no horizontal scrollbar; at 1366 x 768
+and 1280 x 720 the E-STOP stays in the window with the sliders or the log scrolled into view, and no label is cut); a
+click on a block's pixel grabs that block in the simulated world; the mouse-over readout is within 2 mm of the truth;
+the E-STOP button stops a running motion; a 50 px slider drag moves a joint a sensible amount; the inline 3D view
+(meshcat's viewer in an anywidget, over the kernel's connection) shows the arm, the blocks and the point cloud and
+follows the arm, at a measured frame rate; close() tells the open page; saving the run notebook changes only outputs.
 
 The simulator's ground truth comes from the notebook's own kernel through a second client (tests/browser.Kernel).
 Everything started here is torn down at the end of the module (browser, kernels, server) and checked gone.
@@ -184,6 +185,48 @@ def test_the_panel_fits_a_laptop_screen(station):
     assert scrolling == [], f"horizontal scrollbars: {scrolling}"
     station.measured["panel_width_px"] = page.locator(".armlab-station-panel").bounding_box()["width"]
     station.shot("01-panel-1366x768")
+
+
+LAPTOPS = ({"width": 1366, "height": 768}, {"width": 1280, "height": 720})     # browser windows on laptops
+CLIPPED_LABELS = """() => [...document.querySelectorAll(
+        '.armlab-station-panel button, .armlab-station-panel .widget-label, .armlab-station-panel label')]
+    .filter(e => e.offsetParent !== null && e.scrollWidth > e.clientWidth + 1)
+    .map(e => `${(e.textContent || '').trim()} (${e.scrollWidth} px of text in ${e.clientWidth} px)`)"""
+ON_TOP = """e => { const r = e.getBoundingClientRect();
+    const hit = document.elementFromPoint(r.x + r.width / 2, r.y + r.height / 2);
+    return hit !== null && (hit === e || e.contains(hit)); }"""
+
+
+@pytest.mark.parametrize("size", LAPTOPS, ids=lambda s: f"{s['width']}x{s['height']}")
+def test_the_estop_stays_pinned_and_no_label_is_clipped(station, size):
+    """At both laptop windows: no label of the panel is cut (a view tab read "detecti..."); the E-STOP and the 3D
+    view are visible together with the panel's top in view; and with the sliders or the log scrolled into view at
+    the window's bottom (the panel's top far above) the E-STOP is still inside the window and on top (the element
+    at its centre is the button: nothing covers it)."""
+    page = station.page
+    page.set_viewport_size(size)
+    try:
+        page.locator(".armlab-station-panel").evaluate("p => p.scrollIntoView({block: 'start'})")
+        time.sleep(0.5)
+        assert page.evaluate(CLIPPED_LABELS) == [], f"labels cut at {size}"
+        for name in ("button.armlab-estop", ".armlab-viewer"):
+            box = page.locator(name).bounding_box()
+            assert 0 <= box["y"] and box["y"] + box["height"] <= size["height"], f"{name} outside the window: {box}"
+        station.shot(f"01-panel-top-{size['width']}x{size['height']}")
+        for what, target in (("sliders", page.locator(".armlab-slider").last), ("log", page.locator("pre.armlab-log"))):
+            target.evaluate("e => e.scrollIntoView({block: 'end'})")
+            time.sleep(0.3)
+            shown = target.bounding_box()
+            assert shown["y"] + shown["height"] <= size["height"] + 1, f"the {what} did not scroll into view: {shown}"
+            estop = page.locator("button.armlab-estop")
+            box = estop.bounding_box()
+            assert 0 <= box["y"] and box["y"] + box["height"] <= size["height"], \
+                f"E-STOP outside the window with the {what} in view: {box}"
+            assert estop.evaluate(ON_TOP), f"the E-STOP is covered with the {what} in view"
+            station.measured.setdefault("estop_y_px", {})[f"{size['width']}x{size['height']}/{what}"] = box["y"]
+            station.shot(f"01-panel-{what}-{size['width']}x{size['height']}")
+    finally:
+        page.set_viewport_size(VIEWPORT)
 
 
 def test_mouse_over_shows_world_coordinates_within_2_mm(station):

@@ -343,11 +343,13 @@ def test_joint_sliders_start_from_and_follow_the_viewers_pose(viewer):
 
 
 def test_joint_sliders_drive_the_arm_within_its_limits(viewer):
-    from armlab import make_station
+    from armlab import make_station, tasks
 
     station = make_station("sim", seed=0, scene="empty")
     station.arm.home()
-    box = viewer.joint_sliders(arm=station.arm)
+    with pytest.raises(TypeError, match="TaskMachine"):              # no slider moves the arm around the executor
+        viewer.joint_sliders(arm=station.arm)
+    box = viewer.joint_sliders(machine=tasks.TaskMachine(tasks.Session(station, tasks.GuardedArm(station.arm))))
     np.testing.assert_allclose(viewer.q, station.arm.joint_positions(), atol=0.005)  # the viewer shows the arm first
     np.testing.assert_allclose([s.value for s in box.sliders], viewer.q)
     assert [(s.min, s.max) for s in box.sliders] == list(zip(rx200().lower, rx200().upper, strict=True))
@@ -358,7 +360,7 @@ def test_joint_sliders_drive_the_arm_within_its_limits(viewer):
     assert box.note.value == ""
     box.sliders[1].value = 1.2                                        # tips the arm into the board: refused
     box.sliders[2].value = 1.0
-    assert "not moved: MotionRefused" in box.note.value and "board" in box.note.value
+    assert "not moved: PlanRefused" in box.note.value and "board" in box.note.value   # before the first command
     assert station.arm.joint_positions()[2] < 0.05                    # the arm did not go there
     np.testing.assert_allclose([s.value for s in box.sliders], viewer.q)   # the sliders went back to the arm
     box.gripper.value = "closed"

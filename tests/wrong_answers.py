@@ -109,8 +109,8 @@ HIDDEN_WRONG = {   # per exercise: wrong answers its hidden checks must catch (a
     },
     "detect.classify": {
         "per-class spreads ignored": _replaced(
-            "detect.classify", "d = self.distances(rgb_means)",
-            "d = np.linalg.norm(color_features(rgb_means)[:, None, :] - self.means[None], axis=-1)"),
+            "detect.classify", "d = np.sqrt((((X[:, None, :] - self.means[None]) / self.stds[None]) ** 2).sum(-1))",
+            "d = np.linalg.norm(X[:, None, :] - self.means[None], axis=-1)"),
         "margin to the farthest class": _replaced("detect.classify", "d[rows, order[:, 1]] - d[rows, order[:, 0]]",
                                                   "d[rows, order[:, -1]] - d[rows, order[:, 0]]"),
     },
@@ -153,11 +153,11 @@ HIDDEN_WRONG = {   # per exercise: wrong answers its hidden checks must catch (a
 }
 # the exercises whose hidden checks run the simulator at length (tested apart: test_hidden_checks_open.py)
 OPEN_TASKS = ("events.sort_stack", "grab.move_path", "teach.replay", "detect.segment")
-# exercises whose hidden checks call another exercise's region (through the kit: kinematics.fk chains the student's
-# dh_link_transform; pose_from_corners calls the student's dlt_homography), so that the other one's wrong answer fails
-# them too; the grader then runs the exercise again alone, the reference in place of the rest (Grader.grade), which
-# test_grading.py::test_a_wrong_kit_function_does_not_cost_the_exercise_that_calls_it shows on the first pair
-DEPENDS = {"ik.numerical": {"fk.dh_link_transform"}, "calib.tag_extrinsics": {"calib.tag_homography"}}
+# exercises whose hidden checks call another exercise's region (pose_from_corners calls the student's dlt_homography;
+# kinematics.fk is the PoX model, so ik.numerical no longer calls dh_link_transform), so that the other one's wrong
+# answer fails them too; the grader then runs the exercise again alone, the reference in place of the rest
+# (Grader.grade), which test_grading.py::test_a_wrong_kit_function_does_not_cost_the_exercise_that_calls_it shows
+DEPENDS = {"calib.tag_extrinsics": {"calib.tag_homography"}}
 
 
 def wrong_sets(ids: list[str]) -> list[list[str]]:

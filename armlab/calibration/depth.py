@@ -16,8 +16,7 @@ from armlab.arguments import finite_float, instance_of, int_in_range
 from armlab.camera import Camera
 from armlab.images import check_depth, check_mask
 from armlab.lab import lab_config
-from armlab_course.exercises import registry as course
-from armlab_course.exercises.fallback import reference_fallback
+from armlab.slots import standin
 
 __all__ = ["DepthCorrection", "fit_depth_correction", "board_depth", "board_samples"]
 
@@ -117,7 +116,7 @@ def _robust_plane(depth_mm, camera: Camera, step: int = 4, inlier_mm: float = 6.
                            int(inliers.sum()))
 
 
-@reference_fallback(course.DEPTH_PLANE, _robust_plane, "the depth's bias plane comes from one robust fit "
+@standin("calib.depth_plane", _robust_plane, "the depth's bias plane comes from one robust fit "
                                                          "(scipy least squares, Cauchy loss)")
 def fit_depth_correction(depth_mm, camera: Camera, step: int = 4, inlier_mm: float = 6.0,
                          iterations: int = 6, exclude=None) -> DepthCorrection:

@@ -14,9 +14,8 @@ from armlab.calibration.tags import TagDetection, detect_tags
 from armlab.camera import check_intrinsics, look_at
 from armlab.images import check_rgb
 from armlab.lab import TagLayout, lab_config
+from armlab.slots import standin
 from armlab.transforms import homogeneous, invert_transform, log_so3
-from armlab_course.exercises import registry as course
-from armlab_course.exercises.fallback import reference_fallback
 
 __all__ = ["ExtrinsicsResult", "calibrate_extrinsics", "extrinsics_from_detections", "hand_measured_extrinsic",
            "compare_extrinsics"]
@@ -54,7 +53,7 @@ def _refined(world, pixels, K, dist, R, t) -> np.ndarray:
     return homogeneous(cv2.Rodrigues(rvec)[0], tvec.ravel())
 
 
-@reference_fallback(course.TAG_EXTRINSICS, _opencv_pose, "the camera pose comes from cv2.solvePnP")
+@standin("calib.tag_extrinsics", _opencv_pose, "the camera pose comes from cv2.solvePnP")
 def pose_from_corners(world_mm, pixels, K, dist, refine: bool = True) -> np.ndarray:
     """T_cam_world (4, 4) that maps the board points world_mm (N, 3) mm (N >= 4, all on the board: z = 0) onto their
     image corners pixels (N, 2) px through K (3, 3) and dist.

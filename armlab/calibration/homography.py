@@ -13,8 +13,7 @@ from armlab.calibration.tags import TagDetection
 from armlab.camera import Camera
 from armlab.images import check_rgb
 from armlab.lab import TagLayout, lab_config
-from armlab_course.exercises import registry as course
-from armlab_course.exercises.fallback import reference_fallback
+from armlab.slots import standin
 
 __all__ = ["BoardView", "tag_homography", "dlt_homography"]
 
@@ -94,7 +93,7 @@ def _normalising_similarity(points: np.ndarray) -> np.ndarray:
     return np.array([[s, 0, -s * centre[0]], [0, s, -s * centre[1]], [0, 0, 1.0]])
 
 
-@reference_fallback(course.TAG_HOMOGRAPHY, _opencv_homography, "homographies come from cv2.findHomography")
+@standin("calib.tag_homography", _opencv_homography, "homographies come from cv2.findHomography")
 def dlt_homography(src, dst) -> np.ndarray:
     """The 3x3 homography H (H[2, 2] = 1) taking the points src (N, 2) to dst (N, 2), N >= 4, any units (pixels,
     mm): the normalised direct linear transform (Hartley & Zisserman, alg. 4.2). Exact for four points in general

@@ -21,8 +21,7 @@ from armlab._paths import data_path
 from armlab.blocks import COLORS, LAB_RGB
 from armlab.files import read_json, write_json_atomic
 from armlab.schemas import comment, field_error, number, strict_object, vector
-from armlab_course.exercises import registry as course
-from armlab_course.exercises.fallback import reference_fallback
+from armlab.slots import standin
 
 __all__ = ["ColorModel", "color_features", "white_balance_gains", "default_color_model", "COLOR_MODEL_FILE",
            "LAB_HSV_TABLE", "hsv_table_classify"]
@@ -85,22 +84,23 @@ class ColorModel:
         stds = np.array([np.maximum(X[labels == n].std(axis=0), min_std) for n in names])
         return ColorModel(names, means, stds)
 
-    def distances(self, rgb_means) -> np.ndarray:
-        """Normalised distances (N, K) of mean colours (N, 3) to every class."""
+    def common_distances(self, rgb_means) -> np.ndarray:
+        """Distances (N, K) of mean colours (N, 3) to every class mean in feature space, in units of one spread
+        common to every class (the mean of the fitted spreads): the kit's own measure (the BGR check, the stand-ins);
+        each class's own spreads are what exercise detect.classify weighs."""
         X = color_features(rgb_means)
-        return np.sqrt((((X[:, None, :] - self.means[None]) / self.stds[None]) ** 2).sum(-1))
+        return np.linalg.norm(X[:, None, :] - self.means[None], axis=-1) / float(self.stds.mean())
 
     def _nearest_mean(self, rgb_means) -> tuple[list[str], np.ndarray]:
         """The reference path while detect.classify is blank: the nearest class mean in feature space with one
-        common spread for every class (the mean of the fitted spreads), ignoring each class's own; margin: the
-        second-nearest's distance minus the nearest's, in those common units."""
-        X = color_features(rgb_means)
-        d = np.linalg.norm(X[:, None, :] - self.means[None], axis=-1) / float(self.stds.mean())
+        common spread for every class (common_distances), ignoring each class's own; margin: the second-nearest's
+        distance minus the nearest's, in those common units."""
+        d = self.common_distances(rgb_means)
         ranked = np.sort(d, axis=1)
         margin = ranked[:, 1] - ranked[:, 0] if len(self.names) > 1 else np.full(len(d), np.inf)
         return [self.names[i] for i in d.argmin(axis=1)], margin
 
-    @reference_fallback(course.CLASSIFY, _nearest_mean, "colours are the nearest class mean, with one spread "
+    @standin("detect.classify", _nearest_mean, "colours are the nearest class mean, with one spread "
                                                           "for every class")
     def classify(self, rgb_means) -> tuple[list[str], np.ndarray]:
         """Nearest class name per mean colour (N, 3), and the margin (N,): second-best minus best distance.
@@ -108,7 +108,8 @@ class ColorModel:
         Exercise detect.classify (notebook 04: nearest colour class with per-class spreads).
         """
         # BEGIN SOLUTION detect.classify
-        d = self.distances(rgb_means)
+        X = color_features(rgb_means)
+        d = np.sqrt((((X[:, None, :] - self.means[None]) / self.stds[None]) ** 2).sum(-1))
         order = np.argsort(d, axis=1)
         best = [self.names[i] for i in order[:, 0]]
         rows = np.arange(len(d))

@@ -230,7 +230,7 @@ def detect_objects(rgb, depth_mm, camera: Camera, arm_q=None, color_model: Color
         m.cube_sized = _cube_sized(m.sides, settings)
     found = _describe(measured, f, settings, color_model, gains)
     swapped = bgr_problem(np.array([b.mean_rgb * gains for b in found if b.is_block]).reshape(-1, 3),
-                          color_model.distances)
+                          color_model.common_distances)
     if swapped is not None:
         raise NotRGBError(f"rgb: {swapped}")
     found.sort(key=lambda b: float(np.hypot(*b.position[:2])))

@@ -9,7 +9,7 @@
   BGR frame with any of them is told apart from a colour cast (which the white balance removes, a swap it cannot).
   A frame of only red, blue, green and violet blocks reads plausibly either way and passes.
 
-Units: 8-bit colour levels; the model's normalised distances (ColorModel.distances).
+Units: 8-bit colour levels; the model's normalised distances (ColorModel.common_distances).
 """
 
 from __future__ import annotations
@@ -55,7 +55,7 @@ def board_problem(rgb_small: np.ndarray, right_small: np.ndarray, board_small: n
 
 def bgr_problem(balanced_rgb: np.ndarray, distances) -> str | None:
     """Why white-balanced mean colours (N, 3) of the cube faces say the image is BGR, or None. `distances` maps
-    colours (N, 3) to the model's distances (N, K) (ColorModel.distances)."""
+    colours (N, 3) to the model's distances (N, K) (ColorModel.common_distances)."""
     x = np.asarray(balanced_rgb, float).reshape(-1, 3)
     if len(x) == 0:
         return None

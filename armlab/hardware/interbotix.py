@@ -1,11 +1,13 @@
 """The real Interbotix RX200 through the manufacturer's ROS 2 Python API, behind armlab.station.contract.Arm.
 
 Safety, in the order a move is handled:
-- Every move is checked BEFORE anything is sent (armlab.hardware.safety.check_move: armlab.motion_safety's rules,
+- Every move is checked BEFORE anything is sent (armlab.motion_safety.check_move with the real arm's floors,
   the simulator's too): position limits of armlab.robot.rx200(), the driver's velocity rule
   (armlab.profile.velocity_violations), a valid time profile (moving time at most MAX_MOVING_TIME_S = 32.737 s, the
-  servos' Profile_Velocity limit), and the board clearance of the links and the pads (at the measured finger
-  opening) along the straight joint-space path. A refused move raises MotionRefused naming the reason and sends nothing.
+  servos' Profile_Velocity limit), and the board clearance of the links, the pads (at the measured finger
+  opening) and the blocks the arm holds (held_blocks, as the task layer's executor recorded them at the grasp: the
+  arm knows what it holds, whatever sends the next command) along the straight joint-space path. A refused move raises
+  MotionRefused naming the reason and sends nothing.
 - Moving time defaults to armlab.profile.default_moving_time and accel time to ACCEL_FRACTION x moving time.
   The trajectory time is set before set_joint_positions because the driver checks velocities against its stored
   moving time and its last command, not the new ones; if the driver still refuses, MotionRefused says so.
@@ -68,9 +70,11 @@ from typing import Any
 
 import numpy as np
 
+from armlab import motion_safety
+from armlab.gripper_geometry import GRIPPER
 from armlab.hardware import HardwareUnavailable
 from armlab.hardware.ros_session import DRIVER_TIMEOUT_S, RosApi, get_bot
-from armlab.hardware.safety import DEFAULT_BOARD_MARGIN_MM, check_move, pad_opening_mm
+from armlab.hardware.safety import DEFAULT_BOARD_MARGIN_MM, clearance, pad_opening_mm
 from armlab.profile import MIN_MOVING_TIME_S
 from armlab.robot import RobotModel, rx200
 from armlab.station.contract import EmergencyStopped, MotionRefused, StationClosed
@@ -178,6 +182,7 @@ class RealArm:
         self._move_ends = clock()
         self._estopped = False
         self._torque_on = True
+        self._held: tuple[motion_safety.HeldBlock, ...] = ()
         self.closed = False
         with self._lock:
             bot.arm.capture_joint_positions()          # a reused bot: its last command may be stale
@@ -214,6 +219,25 @@ class RealArm:
         return self._estopped
 
     @property
+    def gripper_opening_mm(self) -> float:
+        """The gap between the pads (mm), from the measured finger position."""
+        return pad_opening_mm(self.finger_position_mm())
+
+    @property
+    def held_blocks(self) -> tuple[motion_safety.HeldBlock, ...]:
+        """What the arm holds, as the task layer told it (set_held_blocks); () after open_gripper()."""
+        return self._held
+
+    def set_held_blocks(self, blocks) -> None:
+        """Record the blocks between the pads (motion_safety.HeldBlock: edge mm, pose in the tool frame, as the task
+        layer's executor recorded them at the grasp): every later move checks them against the board like the pads,
+        on the commanded angles, before anything is sent. The driver cannot see a block: this is how the arm knows."""
+        blocks = tuple(blocks)
+        if not all(isinstance(b, motion_safety.HeldBlock) for b in blocks):
+            raise TypeError("set_held_blocks takes motion_safety.HeldBlock values (edge mm, T_tool_block (4, 4) mm)")
+        self._held = blocks
+
+    @property
     def torque_enabled(self) -> bool:
         """True when the motors hold the arm (False while it is torqued off for teaching)."""
         return self._torque_on
@@ -244,8 +268,9 @@ class RealArm:
             state = self._joint_state()
             q_now = self._arm_joints(state)
             opening = pad_opening_mm(1000.0 * float(state[FINGER_JOINT])) if FINGER_JOINT in state else None
-            moving_time, accel_time = check_move(q_now, q, moving_time, accel_time, self.robot, self.board_margin_mm,
-                                                 opening)
+            moving_time, accel_time = motion_safety.check_move(q_now, q, moving_time, accel_time, self.robot,
+                                                               clearance(self.board_margin_mm), GRIPPER, opening,
+                                                               self._held)
             arm = self._bot.arm
             arm.set_trajectory_time(moving_time, accel_time)
             self._require_motion_allowed()        # a stop that came during the register writes wins
@@ -287,6 +312,7 @@ class RealArm:
         if self._estopped:
             raise EmergencyStopped("the arm is emergency-stopped: call reset() before using the gripper")
         self._bot.gripper.release(float(self.grasp_delay_s))
+        self._held = ()
 
     def close_gripper(self) -> bool:
         """Close the gripper; True when the fingers stopped more than held_threshold_mm before fully closed.

@@ -5,7 +5,8 @@ The Interbotix driver moves every joint with the same time-based trapezoidal pro
 straight joint-space line that motion_safety samples. The real arm checks COMMANDED angles: its links keep
 board_margin_mm (default DEFAULT_BOARD_MARGIN_MM = motion_safety.REAL_LINK_MARGIN_MM) above the board to cover the
 sag the driver does not model; its finger pads, like the simulator's, may press motion_safety.BOARD_CONTACT_TOL_MM
-into it. The arm does not know what it holds: a plan carrying a block is checked with motion_safety.check_plan.
+into it. What the arm holds (RealArm.held_blocks, set by the task layer's executor at the grasp) is checked on
+every move by the same held-block routine as the executor's whole-plan pre-check (motion_safety.held_depths).
 Units: rad, s, mm; heights are world z (the board surface is z = 0).
 """
 

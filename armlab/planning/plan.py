@@ -8,6 +8,7 @@ Units: rad, rad/s, s.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -156,12 +157,17 @@ class ExecutionResult:
         return self.grasps[-1] if self.grasps else None
 
 
-def execute(plan: Plan, arm, check_start: bool = True, start_tolerance: float = 0.05) -> ExecutionResult:
+def execute(plan: Plan, arm, check_start: bool = True, start_tolerance: float = 0.05,
+            after_gripper: Callable[[GripperStep, bool | None], None] | None = None) -> ExecutionResult:
     """Run a plan on an arm: move_to for every waypoint of every move, open_gripper / close_gripper for gripper steps.
 
+    The low-level runner: it checks nothing but the start. The task layer never calls it directly; it runs every
+    plan through its executor (armlab.tasks.executor), which checks the whole plan first.
     With check_start, refuses (ValueError, nothing sent) when the arm's measured joints are more than
-    start_tolerance rad from the plan's start. Exceptions from the arm (MotionRefused, EmergencyStopped, ...)
-    propagate unchanged, with a note naming the step; no later command is sent.
+    start_tolerance rad from the plan's start. after_gripper(step, answer) is called right after each gripper step
+    (answer: close_gripper's, None for an open), before the next command, so a caller can record what is held.
+    Exceptions from the arm (MotionRefused, EmergencyStopped, ...) propagate unchanged, with a note naming the step;
+    no later command is sent.
     """
     if not isinstance(plan, Plan):
         raise ValueError(f"execute takes a Plan, got {type(plan).__name__}")
@@ -182,9 +188,13 @@ def execute(plan: Plan, arm, check_start: bool = True, start_tolerance: float = 
             elif step.action == "open":
                 arm.open_gripper()
                 commands += 1
+                if after_gripper is not None:
+                    after_gripper(step, None)
             else:
                 grasps.append(bool(arm.close_gripper()))
                 commands += 1
+                if after_gripper is not None:
+                    after_gripper(step, grasps[-1])
         except Exception as e:
             if hasattr(e, "add_note"):
                 e.add_note(f"while executing plan step {i} ({step.label or type(step).__name__}) after "

@@ -27,7 +27,6 @@ from armlab.blocks import ObjectState, footprint
 from armlab.gripper_geometry import GRIPPER
 from armlab.profile import trapezoid_fraction
 from armlab.robot import RobotModel, rx200
-from armlab.sim.geometry import convex_penetration, prism_features
 from armlab.sim.gripper import GripperGeometry, close_on, push_with_pads
 from armlab.sim.world import World, describe_object
 from armlab.station.contract import EmergencyStopped, MotionRefused, StationClosed
@@ -116,10 +115,10 @@ def _xyz(p) -> str:
     return f"({p[0]:.1f}, {p[1]:.1f}, {p[2]:.1f})"
 
 
-def _radius(o: ObjectState) -> float:
-    """Radius (mm) of a sphere about the object's centre that holds it (+ 1 mm): the pre-check of held collisions."""
-    corners = np.vstack(footprint(o.shape, o.edge))
-    return float(np.sqrt(np.max(np.sum(corners ** 2, axis=1)) + (o.edge / 2) ** 2)) + 1.0
+def _prism(o: ObjectState) -> motion_safety.Prism:
+    """An object as the held-block rule's upright prism (its footprint, its edge high, where it stands now)."""
+    return motion_safety.Prism(tuple(footprint(o.shape, o.edge)), o.edge / 2, homogeneous(rot_z(o.yaw), o.position),
+                               describe_object(o))
 
 
 @dataclass
@@ -164,6 +163,7 @@ class SimArm:
         self._estopped = False
         self.closed = False
         self._held: list[tuple[object, np.ndarray]] = []    # (object, its pose in the tool frame)
+        self._told: tuple[motion_safety.HeldBlock, ...] = ()  # what the task layer says it holds (set_held_blocks)
         self.gripper_opening_mm = self.gripper_geometry.max_opening_mm
         self._q_true = self._physical(self._motor)
         world.add_listener(self._on_time)
@@ -272,9 +272,33 @@ class SimArm:
         if self._estopped:
             raise EmergencyStopped(f"{what} refused: the arm is emergency-stopped; call reset() first")
 
+    @property
+    def held_blocks(self) -> tuple[motion_safety.HeldBlock, ...]:
+        """What the arm was told it holds (set_held_blocks; the contract's, armlab.station.contract.Arm): () after
+        open_gripper(). The objects truly between the pads are `holding`."""
+        return self._told
+
+    def set_held_blocks(self, blocks) -> None:
+        """Record the blocks the gripper holds, as the task layer believes them (motion_safety.HeldBlock: edge mm, pose
+        in the tool frame): every later move checks them against the board too, on the commanded angles as the real
+        arm does (_told_collision), besides the true held objects on the physical ones."""
+        blocks = tuple(blocks)
+        if not all(isinstance(b, motion_safety.HeldBlock) for b in blocks):
+            raise TypeError("set_held_blocks takes motion_safety.HeldBlock values (edge mm, T_tool_block (4, 4) mm)")
+        self._told = blocks
+
     def _held_parts(self) -> list[motion_safety.HeldBlock]:
         """The held blocks, for the board check: each a cube at its pose in the tool frame."""
         return [motion_safety.HeldBlock(obj.edge, T_rel, f"held {obj.color} block") for obj, T_rel in self._held]
+
+    def _told_collision(self, q0, q1) -> str | None:
+        """Why the straight path q0 -> q1 (motor positions, rad) would take a block the arm was told it holds
+        (held_blocks) below the board, or None: checked on the commanded angles with the contact floor, exactly as
+        the real arm checks them (it cannot know its sag), so a belief that the sag puts a little low at a grasp is
+        not refused here for what the arm's true held objects are checked for."""
+        if not self._told:
+            return None
+        return motion_safety.board_intrusion(q0, q1, motion_safety.SIM_CLEARANCE, self.robot, held=self._told)
 
     def _board_collision(self, q0, q1, physical) -> str | None:
         """Why the straight joint-space path q0 -> q1 would put a link, a pad or a held block below the board
@@ -302,20 +326,13 @@ class SimArm:
         dq = np.asarray(q1) - np.asarray(q0)
         s = motion_safety.held_path_fractions(q0, q1)
         T = kinematics.fk_pox(physical(q0 + s[:, None] * dq), self.robot, check_limits=False)     # (n, 4, 4)
-        fixed = [(o, [prism_features(p, o.edge / 2, homogeneous(rot_z(o.yaw), o.position))
-                      for p in footprint(o.shape, o.edge)]) for o in others]
+        fixed = [(o, _prism(o)) for o in others]
         first = None       # (sample where the depth first exceeds the allowance, held, other, depth (n,), centres)
         for held, T_rel in self._held:
             poses = T @ T_rel                                                                       # (n, 4, 4)
             centres = poses[:, :3, 3]
-            for other, other_pieces in fixed:
-                near = np.flatnonzero(np.linalg.norm(centres - other.position, axis=1) < _radius(held) + _radius(other))
-                if not near.size:
-                    continue
-                moving = [prism_features(p, held.edge / 2, poses[near]) for p in footprint(held.shape, held.edge)]
-                depth = np.full(len(s), -np.inf)
-                # Footprints are unions of convex pieces: two objects go as deep into each other as their deepest pair.
-                depth[near] = np.max([convex_penetration(a, b) for a in moving for b in other_pieces], axis=0)
+            for other, prism in fixed:
+                depth = motion_safety.held_depths(_prism(held), poses, prism)   # the pre-check's geometry too
                 hit = motion_safety.held_intrusion(depth, HELD_CONTACT_TOL_MM)
                 if hit is not None and (first is None or hit < first[0]):
                     first = (hit, held, other, depth, centres)
@@ -353,6 +370,9 @@ class SimArm:
                                              motion_safety.SIM_CLEARANCE, self.gripper_geometry,
                                              self.gripper_opening_mm, self._held_parts(), self._physical)
             q = np.asarray(q, dtype=float)
+            hit = self._told_collision(start, q)
+            if hit:
+                raise motion_safety.refusal("collision with the board", hit)
             hit = self._held_collision(start, q, self._physical)
             if hit:
                 raise motion_safety.refusal("collision of the held block", hit)
@@ -421,7 +441,7 @@ class SimArm:
         with self.world.lock:
             self._check_ready("opening the gripper")
             held = sorted(self.holding, key=lambda o: o.position[2])
-            self._held = []
+            self._held, self._told = [], ()
             self.world.held.difference_update(o.id for o in held)
             self.gripper_opening_mm = self.gripper_geometry.max_opening_mm
             for o in held:

@@ -197,7 +197,7 @@ def sim_case(scene: str, seed: int, arm_over_board: bool = False) -> Case:
             xy = obj.position[:2] + rng.uniform(40, 70) * np.array([np.cos(a), np.sin(a)])
             z = max(o.top_z for o in world.objects) + rng.uniform(35, 80)
             try:
-                q = kinematics.ik(np.array([xy[0], xy[1], z]), np.pi / 2)[0]
+                q = kinematics.ik_pox(np.array([xy[0], xy[1], z]), np.pi / 2)[0]   # the kit's IK
                 arm.move_to(q)
                 break
             except ValueError:

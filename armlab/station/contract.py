@@ -57,7 +57,9 @@ class Arm(Protocol):
     - a move asked for while a non-blocking one runs waits for it to end, then starts (both backends wait);
     - Ctrl+C (KeyboardInterrupt) while a move runs holds the arm where it is (not an emergency stop) and the
       interrupt propagates; closing the station then parks the arm in its sleep pose (unless emergency-stopped);
-    - after the station is closed every command raises StationClosed.
+    - after the station is closed every command raises StationClosed;
+    - the arm knows what it holds: the blocks recorded by set_held_blocks (until open_gripper()) are checked along
+      every move like the pads, whatever sends the command.
     """
 
     robot: RobotModel
@@ -97,6 +99,15 @@ class Arm(Protocol):
 
     def set_torque(self, enabled: bool) -> None:
         """Torque on (holds position) or off (the arm can be moved by hand for teaching)."""
+
+    @property
+    def held_blocks(self) -> tuple:
+        """What the arm holds, as it was told (set_held_blocks): motion_safety.HeldBlock each (edge mm, pose in the
+        tool frame T_tool_block (4, 4) mm); () after open_gripper()."""
+
+    def set_held_blocks(self, blocks) -> None:
+        """Record the blocks the gripper holds (the task layer's executor does at each grasp): every later move_to
+        checks them against the board like the pads (MotionRefused before anything moves)."""
 
     def emergency_stop(self) -> None:
         """Halt at once; every further motion raises EmergencyStopped until reset()."""

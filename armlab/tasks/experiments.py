@@ -5,7 +5,9 @@ reach_experiment: for each board location (x, y) the simulated student clicks th
 in the image (on the simulator: the TRUE camera's projection, station.camera.truth; on the real arm pass the
 clicked pixels), the click becomes a world point (tasks.click_world: calibrated camera + corrected depth), the tool
 goes top-down to (x, y, z) through the given arm (from above, like the lab), and the tool point reached is measured
-(a `measure` function; on the simulator the ground truth arm.tool_pose_true). Units: px, mm; world (board) frame.
+(a `measure` function; on the simulator the ground truth arm.tool_pose_true). Each approach (above, then down) and
+each way back up is one plan run through the session's executor (session.run: checked whole before it moves).
+Units: px, mm; world (board) frame.
 """
 
 from __future__ import annotations
@@ -59,14 +61,20 @@ def reach_experiment(session: Session, arm, measure, locations=LAB_LOCATIONS_MM,
         clicked = click_world(session, uv, frame)
         target = np.array([clicked[0], clicked[1], z])
         roll = 0.0
-        above = kinematics.ik(target + [0, 0, hover_mm], np.pi / 2, roll, current=arm.joint_positions())[0]
-        planning.execute(planning.Plan((planning.MoveStep(planning.joint_move(arm.joint_positions(), above)),)),
-                         arm)
+        here = np.asarray(arm.joint_positions(), float)
+        above = kinematics.ik(target + [0, 0, hover_mm], np.pi / 2, roll, current=here)[0]
         down = kinematics.ik(target, np.pi / 2, roll, current=above)[0]
-        arm.move_to(down)
+        what = f"reaching ({target[0]:.0f}, {target[1]:.0f}, {target[2]:.0f}) mm"
+        session.run(_moves(here, above, down), what, arm=arm)
         rows.append(ReachRow(np.array([xy[0], xy[1], z]), clicked, np.asarray(measure(), float)))
-        arm.move_to(above)
+        session.run(_moves(np.asarray(arm.joint_positions(), float), above), f"{what}: back up", arm=arm)
     return rows
+
+
+def _moves(*poses) -> planning.Plan:
+    """Joint moves (default timing) from poses[0] through each next pose (5,) rad, as one plan."""
+    return planning.Plan(tuple(planning.MoveStep(planning.joint_move(a, b), f"to pose {i + 1}")
+                               for i, (a, b) in enumerate(zip(poses[:-1], poses[1:]))))
 
 
 def format_table(headers, rows, floatfmt: str = "{:.1f}") -> str:

@@ -84,6 +84,19 @@ class GuardedArm:
         """The wrapped arm's state: True after an emergency stop until reset()."""
         return self.arm.emergency_stopped
 
+    @property
+    def held_blocks(self) -> tuple:
+        """What the wrapped arm says it holds (Arm.held_blocks: motion_safety.HeldBlock, edge mm and pose in the
+        tool frame); () from an arm that does not keep it (a stand-in)."""
+        return tuple(getattr(self.arm, "held_blocks", ()))
+
+    def set_held_blocks(self, blocks) -> None:
+        """Tell the wrapped arm what it holds (Arm.set_held_blocks), so its own per-move check covers them; ignored
+        by an arm that does not keep it (a stand-in)."""
+        setter = getattr(self.arm, "set_held_blocks", None)
+        if setter is not None:
+            setter(tuple(blocks))
+
     def joint_positions(self) -> np.ndarray:
         """Estimated physical joint angles (5,) rad: the encoder reading plus the predicted sag."""
         return self.sag.physical(self.arm.joint_positions(), self.robot)

@@ -124,7 +124,7 @@ class TaskMachine:
         one, which is returned."""
         def action():
             session = self._guarded()
-            session.calibration = perception.calibrate_camera(self.station, intrinsics, arm=session.arm)
+            session.calibration = perception.calibrate_camera(self.station, intrinsics, arm=session)
             return session.calibration
         return self._run("calibrate", action)
 
@@ -133,12 +133,13 @@ class TaskMachine:
         return self._run("detect", lambda: handling.look(self._guarded()).blocks)
 
     def execute(self, work) -> Any:
-        """Run a planning.Plan (returns planning.ExecutionResult) or a list of (block, place position) pairs: pick
+        """Run a planning.Plan through the session's executor (session.run: checked whole with what is held and known
+        before its first command; returns planning.ExecutionResult) or a list of (block, place position) pairs: pick
         each block and place it (returns the list of pick answers)."""
         def action():
             session = self._guarded()
             if isinstance(work, planning.Plan):
-                return planning.execute(work, session.arm)
+                return session.run(work, "the state machine's plan")
             out = []
             for block, position in work:
                 out.append(handling.pick(session, block))
@@ -186,4 +187,4 @@ class TaskMachine:
         program = program or self.program
         if program is None:
             raise ValueError("nothing to repeat: teach a program or pass one")
-        return self._run("repeat", lambda: teach.repeat(self._guarded().arm, program))
+        return self._run("repeat", lambda: teach.repeat(self._guarded(), program))

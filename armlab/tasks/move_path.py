@@ -4,9 +4,10 @@ whole and runs (notebook 05 teaches it; notebook 06 swaps two blocks with it).
 `move_path` is the exercise grab.move_path: from the arm's joints it returns a planning.Plan that grasps a cube at a
 point or releases the held cube at a point. `grab_with` and `drop_with` run such a plan in a task session
 (tasks.start_session(station)) the way tasks.pick and tasks.place run the kit's own (planning.plan_pick / plan_place):
-the whole plan is checked first (tasks.precheck: joint limits, speeds, the board and the session's known blocks, the
-pads and the held block), so a plan that would hit something raises MotionRefused with nothing sent; then it runs on the
-session's guarded arm (sag compensated). Units: mm, rad, s; world (board) frame; tool point = the manufacturer's
+through the session's one executor (session.run, tasks.executor): the placement rule, then the whole plan checked
+first (joint limits, speeds, the board and the session's known blocks, the pads and the held block), so a plan that
+would hit something raises MotionRefused with nothing sent; then it runs on the session's guarded arm (sag
+compensated) and what is held is recorded. Units: mm, rad, s; world (board) frame; tool point = the manufacturer's
 ee_gripper_link.
 """
 
@@ -16,13 +17,13 @@ from collections.abc import Callable
 
 import numpy as np
 
-from armlab import motion_safety, planning
+from armlab import planning
 from armlab.blocks import block_edge
 from armlab.gripper_geometry import GRIPPER
 from armlab.kinematics import Unreachable
 from armlab.robot import RobotModel, rx200
 
-from . import handling, precheck
+from . import handling
 from .session import Session, as_session
 
 __all__ = ["move_path", "kit_move_path", "grab_with", "drop_with", "MovePath", "PATH_ACTIONS", "TIP_MARGIN_MM"]
@@ -94,55 +95,26 @@ def kit_move_path(q_start, target, yaw: float, edge: float, action: str,
     raise ValueError(f"action is {action!r}: kit_move_path knows {' and '.join(PATH_ACTIONS)}")
 
 
-def _pose_at(plan: planning.Plan, action: str) -> np.ndarray:
-    """The joints (5,) where the plan's first gripper `action` ("close" or "open" after a move) happens."""
-    q = np.asarray(plan.start, float)
-    for step in plan.steps:
-        if isinstance(step, planning.MoveStep):
-            q = step.trajectory.end
-        elif step.action == action:
-            return np.asarray(q, float)
-    raise ValueError(f"the plan never does '{action}' with the gripper: {plan.describe()}")
-
-
-def _checked_plan(path: MovePath, q, target, yaw: float, edge: float, action: str) -> planning.Plan:
-    plan = path(q, target, yaw, edge, action)
-    if not isinstance(plan, planning.Plan):
-        raise TypeError(f"move_path must return a planning.Plan, got {type(plan).__name__}")
-    return plan
-
-
 def grab_with(session: Session, block, path: MovePath = move_path) -> bool:
-    """Pick a detected block (detection.Block) with the plan `path` makes for it (action "grasp"): checked whole,
-    then run on the session's guarded arm; True when the block is held. Raises ValueError when a block is held
-    already and MotionRefused (nothing sent) when the plan would hit something or break a limit."""
+    """Pick a detected block (detection.Block) with the plan `path` makes for it (action "grasp"), run like
+    tasks.pick's own (handling.grasping: through the session's executor, checked whole first); True when the block
+    is held. Raises ValueError when a block is held already and MotionRefused (nothing sent) when the plan would hit
+    something or break a limit."""
     session = as_session(session, "grab_with")
     if session.held is not None:
         raise ValueError(f"the gripper already holds the {session.held.color} block: drop it first")
     edge, top, yaw = block_edge(block.size), np.asarray(block.position, float), float(block.yaw)
-    plan = _checked_plan(path, session.arm.joint_positions(), top, yaw, edge, "grasp")
-    grasped = motion_safety.HeldBlock(edge, precheck.held_pose_at_grasp(_pose_at(plan, "close"), top, yaw, edge),
-                                      f"picked {block.color} block")
-    precheck.check_whole_plan(plan, session.arm, GRIPPER.max_opening_mm, grasped=grasped,
-                              known=precheck.known_boxes(session.known, top[:2], edge / 2),
-                              what=f"move_path grasping the {block.color} block")
-    held = bool(planning.execute(plan, session.arm).holding)
-    session.picked(block, held, grasped.T_tool_block)
-    return held
+    plan = path(session.arm.joint_positions(), top, yaw, edge, "grasp")
+    if not isinstance(plan, planning.Plan):
+        raise TypeError(f"move_path must return a planning.Plan, got {type(plan).__name__}")
+    descent = next((s.trajectory for s in plan.steps if isinstance(s, planning.MoveStep) and s.label == "descend"),
+                   None)
+    return handling.grasping(session, plan, block, f"move_path grasping the {block.color} block", descent=descent)
 
 
 def drop_with(session: Session, position, yaw: float = 0.0, path: MovePath = move_path) -> bool:
     """Put the held block's bottom-face centre at `position` (3,) world mm with the plan `path` makes (action
-    "release"), checked whole first (MotionRefused, nothing sent); True when the plan ran through."""
+    "release"), run like tasks.place's own (the placement rule, the release RELEASE_GAP_MM above the spot, the
+    executor's whole-plan check: MotionRefused with nothing sent); True when the plan ran through."""
     session = as_session(session, "drop_with")
-    edge = session.held_edge
-    p = np.asarray(position, float)
-    plan = _checked_plan(path, session.arm.joint_positions(), p + [0.0, 0.0, handling.RELEASE_GAP_MM], float(yaw),
-                         edge, "release")
-    held = () if session.held_in_tool is None else (
-        motion_safety.HeldBlock(edge, session.held_in_tool, f"held {session.held.color} block"),)
-    precheck.check_whole_plan(plan, session.arm, edge, held=held, known=precheck.known_boxes(session.known),
-                              what=f"move_path releasing at ({p[0]:.1f}, {p[1]:.1f}, {p[2]:.1f}) mm")
-    planning.execute(plan, session.arm)
-    session.released(p + [0.0, 0.0, edge])
-    return True
+    return handling.place(session, position, yaw, path=path)

@@ -26,6 +26,8 @@ from armlab.camera import Camera
 from armlab.kinematics import Unreachable
 from armlab.station.contract import Frame, Station
 
+from . import executor
+
 __all__ = ["Observation", "calibrate_camera", "clear_view", "observe", "surface_point", "pointed_point",
            "checkerboard_intrinsics", "station_intrinsics", "CLEAR_VIEW_MIN_CLEARANCE_MM", "REAL_CHECKERBOARD_FOLDER"]
 
@@ -76,20 +78,26 @@ def station_intrinsics(station: Station, folder=None) -> tuple[np.ndarray, np.nd
     return checkerboard_intrinsics(path, size)
 
 
-def clear_view(arm, obstacles=(), held_below: float = 0.0) -> None:
-    """Move the arm to the camera-clear pose (planning.plan_camera_clear) unless it is already there; held_below: how
-    far a held block hangs below the tool point (mm).
+def clear_view(mover, obstacles=(), held_below: float = 0.0) -> None:
+    """Move the arm to the camera-clear pose (planning.plan_camera_clear) unless it is already there, through the
+    executor (tasks.executor: checked whole first, with what is held). mover: a task Session (its held block and
+    known blocks are checked), or an arm alone (a GuardedArm or a backend's Arm: what it says it holds is checked).
+    obstacles: what the move passes over; held_below: how far a held block hangs below the tool point (mm).
 
     When the move from a low hover point would pass closer than the default clearance over a neighbour, a smaller
     clearance that still keeps the finger tips above it (CLEAR_VIEW_MIN_CLEARANCE_MM) is tried, then the arm is first
     lifted back (shoulder back by 0.3 or 0.6 rad, which raises the tool over the board; kept
-    planning.LIMIT_MARGIN_RAD inside the joint limits). Raises Unreachable when nothing works (nothing moves then).
+    planning.LIMIT_MARGIN_RAD inside the joint limits); a way the whole-plan check refuses is passed over too. Raises
+    Unreachable when no way is planned, else the last refusal (PlanRefused); nothing moves then.
     """
+    runner = executor.runner(mover)
+    arm = runner.arm
     q = np.asarray(arm.joint_positions(), dtype=float)
     if np.abs(q - planning.CAMERA_CLEAR_POSE).max() < 0.02:
         return
     inner = planning.inner_limits(arm.robot)
     lifts = [None] + [np.clip(q - [0.0, d, 0.0, 0.0, 0.0], inner.lower, inner.upper) for d in (0.3, 0.6)]
+    refused: executor.PlanRefused | None = None
     for q_up in lifts:
         for clearance in (planning.DEFAULT_CLEARANCE_MM, CLEAR_VIEW_MIN_CLEARANCE_MM):
             try:
@@ -99,8 +107,14 @@ def clear_view(arm, obstacles=(), held_below: float = 0.0) -> None:
                 continue
             if q_up is not None:
                 plan = planning.Plan((planning.MoveStep(planning.joint_move(q, q_up), "lift back"),)).then(plan)
-            planning.execute(plan, arm)
+            try:
+                executor.run(runner, plan, "moving out of the camera's view")
+            except executor.PlanRefused as e:
+                refused = e
+                continue
             return
+    if refused is not None:
+        raise refused
     raise Unreachable("cannot move the arm out of the camera's view without passing too low over a block")
 
 
@@ -109,7 +123,7 @@ def calibrate_camera(station: Station, intrinsics="checkerboard", arm=None) -> C
 
     intrinsics: "checkerboard" (station_intrinsics: the station camera's own checkerboard set), "factory"
         (station.camera.K, dist) or a (K, dist) pair.
-    arm: the arm to move out of view (default station.arm; pass a tasks GuardedArm to keep its guards).
+    arm: what moves the arm out of view (clear_view's mover: a task Session, or an arm; default station.arm).
     Raises ValueError when the tags are not seen or the board has too little depth.
     """
     if isinstance(intrinsics, str):
@@ -121,12 +135,12 @@ def calibrate_camera(station: Station, intrinsics="checkerboard", arm=None) -> C
             raise ValueError(f"intrinsics must be 'checkerboard', 'factory' or (K, dist), got {intrinsics!r}")
     else:
         K, dist = intrinsics
-    arm = arm or station.arm
-    clear_view(arm)
+    runner = executor.runner(arm or station.arm)
+    clear_view(runner)
     frame = station.camera.capture()
     ext = calibration.calibrate_extrinsics(frame.rgb, K, dist)
     camera = Camera(K, dist, ext.T_cam_world, frame.rgb.shape[1], frame.rgb.shape[0])
-    exclude = detection.arm_mask(camera, np.asarray(arm.joint_positions(), float))
+    exclude = detection.arm_mask(camera, np.asarray(runner.arm.joint_positions(), float))
     correction = calibration.fit_depth_correction(frame.depth, camera, exclude=exclude)
     return Calibration(camera, correction, notes=f"tags {ext.tag_ids}, reprojection {ext.rms_px:.2f} px, depth "
                                                  f"residual {correction.residual_mm:.1f} mm")
@@ -135,17 +149,18 @@ def calibrate_camera(station: Station, intrinsics="checkerboard", arm=None) -> C
 def observe(station: Station, calib: Calibration, arm=None, obstacles=(), clear: bool = True, held_below: float = 0.0,
             all_objects: bool = False, settings: detection.DetectionSettings | None = None) -> Observation:
     """Move the arm out of view (clear_view, unless clear=False), capture a frame, correct its depth and detect.
+    arm: clear_view's mover (a task Session, or an arm; default station.arm).
 
     Observation.blocks holds the cubes (detection.detect_blocks) or, with all_objects, every object's top face
     (detection.detect_objects: distractors included, e.g. for plans that must avoid them). settings: the detector's
     (default detection.DetectionSettings()).
     """
-    arm = arm or station.arm
+    runner = executor.runner(arm or station.arm)
     if clear:
-        clear_view(arm, obstacles, held_below)
+        clear_view(runner, obstacles, held_below)
     frame = station.camera.capture()
     depth = calib.depth_correction.apply(frame.depth)
-    q = np.asarray(arm.joint_positions(), dtype=float)
+    q = np.asarray(runner.arm.joint_positions(), dtype=float)
     detect = detection.detect_objects if all_objects else detection.detect_blocks
     return Observation(frame, depth, detect(frame.rgb, depth, calib.camera, arm_q=q, settings=settings), q)
 

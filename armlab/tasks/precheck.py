@@ -8,10 +8,12 @@ What the arms refuse mid-plan, checked here first (MotionRefused names the step,
   (REAL_CLEARANCE), and on the angles the task layer predicts the links take (sag.physical of the commands) with the
   simulator's floors (SIM_CLEARANCE), the contact floor (pads, held block) PRECHECK_MARGIN_MM stricter to cover the
   sag model's residual;
-- the held block against the known blocks along every move it is carried: its surface sampled on a grid, each known
-  block an upright box (a detection: its top-face centre, yaw and edge; an Obstacle from an earlier place: its
-  cylinder), and their top edges sampled against the held cube, under the arms' rule (motion_safety.held_intrusion)
-  with PRECHECK_MARGIN_MM less allowance (none: the simulator allows 0.5 mm, the margin covers detection error).
+- the held block against the known blocks along every move it is carried, with the simulator's own geometry
+  (motion_safety.held_depths: upright prisms by separating axes) and rule (motion_safety.held_intrusion): the held
+  cube at its pose in the tool frame, each known block an upright prism standing on the board (a detection: its
+  top-face centre, yaw and edge; an Obstacle from an earlier place: the polygon around its cylinder), with
+  PRECHECK_MARGIN_MM less allowance (none: the simulator allows 0.5 mm, the margin covers detection error).
+Every pose is the manufacturer's model (kinematics.fk_pox), never the DH chain built on the student's exercise.
 The picked block itself and whatever stands in its column (the stack it comes from) are not obstacles to the lift.
 Units: mm, rad; world (board) frame; tool frame = ee_gripper_link.
 """
@@ -27,14 +29,14 @@ from armlab import kinematics, motion_safety, planning
 from armlab.gripper_geometry import GRIPPER, GripperGeometry
 from armlab.planning import Obstacle
 from armlab.station.contract import MotionRefused
-from armlab.transforms import homogeneous, wrap_quarter
+from armlab.transforms import homogeneous, rot_z, wrap_quarter
 
 from .guard import GuardedArm
 
-__all__ = ["PRECHECK_MARGIN_MM", "KnownBox", "known_boxes", "held_pose_at_grasp", "plan_segments", "check_whole_plan"]
+__all__ = ["PRECHECK_MARGIN_MM", "KnownBox", "known_boxes", "known_prism", "held_prism", "held_pose_at_grasp",
+           "plan_segments", "check_whole_plan"]
 
 PRECHECK_MARGIN_MM = 0.5        # the contact floor and the held block's clearance are this much stricter than the sim
-_GRID = 7                       # samples per cube edge on each face of the held block
 
 
 @dataclass(frozen=True)
@@ -73,7 +75,7 @@ def held_pose_at_grasp(q_grasp, top, yaw: float, edge: float) -> np.ndarray:
     gap (its centre on the tool's z-x plane, y = 0 in the tool frame) and turn it until a face lies flat on a pad
     (its yaw the closing direction's heading, modulo 90 deg: a detection's yaw error is gone once it is held). Its
     height and its place along the approach are the detection's: the pads do not move it that way."""
-    T_tool = kinematics.fk(np.asarray(q_grasp, float))
+    T_tool = kinematics.fk_pox(np.asarray(q_grasp, float))
     R_tool, t_tool = T_tool[:3, :3], T_tool[:3, 3]
     centre = R_tool.T @ (np.asarray(top, float) - [0.0, 0.0, edge / 2] - t_tool)    # tool frame
     centre[1] = 0.0
@@ -111,70 +113,46 @@ def plan_segments(plan: planning.Plan, arm: GuardedArm, opening_mm: float, held:
     return out
 
 
-def _cube_surface(edge: float) -> np.ndarray:
-    """Points (6 g^2, 3) on the surface of a cube of `edge` mm centred at the origin (a g x g grid on each face)."""
-    g = np.linspace(-0.5, 0.5, _GRID) * edge
-    a, b = (m.ravel() for m in np.meshgrid(g, g))
-    h = np.full_like(a, edge / 2)
-    faces = [np.column_stack(v) for v in ((h, a, b), (-h, a, b), (a, h, b), (a, -h, b), (a, b, h), (a, b, -h))]
-    return np.concatenate(faces)
+_CYLINDER_SIDES = 16             # a known cylinder (an earlier place's Obstacle) as the polygon around it
 
 
-def _box_edges(box: KnownBox) -> np.ndarray:
-    """Points (m, 3) on a known box's top edges and its vertical edges (world mm)."""
-    g = np.linspace(-1.0, 1.0, 2 * _GRID + 1) * box.half
-    yaw = 0.0 if box.yaw is None else box.yaw
-    c, s = np.cos(yaw), np.sin(yaw)
-    local = [np.column_stack([g, np.full_like(g, sy)]) for sy in (-box.half, box.half)]
-    local += [np.column_stack([np.full_like(g, sx), g]) for sx in (-box.half, box.half)]
-    xy = np.concatenate(local)
-    top = np.column_stack([box.x + c * xy[:, 0] - s * xy[:, 1], box.y + s * xy[:, 0] + c * xy[:, 1],
-                           np.full(len(xy), box.top)])
-    corners = top[[0, 2 * _GRID, 2 * _GRID + 1, 4 * _GRID + 1]]
-    zs = np.linspace(0.0, box.top, 2 * _GRID + 1)
-    vertical = np.concatenate([np.column_stack([np.repeat(p[None, :2], len(zs), 0), zs]) for p in corners])
-    return np.concatenate([top, vertical])
-
-
-def _inside_box(points: np.ndarray, box: KnownBox) -> np.ndarray:
-    """Depth (...,) mm of world points inside a known box (<= 0 outside): the least distance to its surface."""
-    d = points[..., :2] - [box.x, box.y]
-    up = box.top - points[..., 2]
+def known_prism(box: KnownBox) -> motion_safety.Prism:
+    """A known box as the held-block rule's upright prism (motion_safety.Prism): standing on the board up to its top;
+    a cylinder (yaw None) as the regular polygon of _CYLINDER_SIDES sides around it."""
     if box.yaw is None:
-        side = box.half - np.linalg.norm(d, axis=-1)
+        a = np.arange(_CYLINDER_SIDES) * 2 * np.pi / _CYLINDER_SIDES
+        piece = np.column_stack([np.cos(a), np.sin(a)]) * box.half / np.cos(np.pi / _CYLINDER_SIDES)
     else:
-        c, s = np.cos(box.yaw), np.sin(box.yaw)
-        u, v = c * d[..., 0] + s * d[..., 1], -s * d[..., 0] + c * d[..., 1]
-        side = box.half - np.maximum(np.abs(u), np.abs(v))
-    return np.minimum(np.minimum(side, up), points[..., 2])
+        piece = np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]]) * box.half
+    pose = homogeneous(rot_z(0.0 if box.yaw is None else box.yaw), [box.x, box.y, box.top / 2])
+    return motion_safety.Prism((piece,), box.top / 2, pose, f"the known block at ({box.x:.1f}, {box.y:.1f}) mm "
+                                                            f"(top {box.top:.1f} mm)")
+
+
+def held_prism(block: motion_safety.HeldBlock) -> motion_safety.Prism:
+    """A held cube as the held-block rule's prism (its pose is given per path sample)."""
+    piece = np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]]) * block.edge_mm / 2
+    return motion_safety.Prism((piece,), block.edge_mm / 2, np.eye(4), block.name)
 
 
 def _held_hits(q0, q1, held: Sequence[motion_safety.HeldBlock], boxes: Sequence[KnownBox]) -> str | None:
-    """Why carrying `held` along the straight planned joint path q0 -> q1 would push it into a known box, or None."""
+    """Why carrying `held` along the straight planned joint path q0 -> q1 would push it into a known box, or None:
+    the simulator's geometry (motion_safety.held_depths) and rule (held_intrusion), PRECHECK_MARGIN_MM less
+    allowance."""
     if not held or not boxes:
         return None
     s = motion_safety.held_path_fractions(q0, q1)
-    T = kinematics.fk(q0 + s[:, None] * (q1 - q0), check_limits=False)                 # (n, 4, 4)
+    T = kinematics.fk_pox(q0 + s[:, None] * (q1 - q0), check_limits=False)             # (n, 4, 4)
     for block in held:
-        T_b = T @ np.asarray(block.T_tool_block, float)                                 # (n, 4, 4) cube poses
-        centres = T_b[:, :3, 3]
-        surface = np.einsum("nij,kj->nki", T_b[:, :3, :3], _cube_surface(block.edge_mm)) + centres[:, None]
+        poses = T @ np.asarray(block.T_tool_block, float)                               # (n, 4, 4) cube poses
         for box in boxes:
-            near = np.hypot(centres[:, 0] - box.x, centres[:, 1] - box.y) < (block.edge_mm + 2 * box.half) * 0.75 + 1
-            if not near.any() or centres[near, 2].min() - block.edge_mm > box.top:
-                continue
-            inside = _inside_box(surface[near], box).max(axis=1)                       # held surface into the box
-            edges = _box_edges(box)
-            local = np.einsum("nji,nkj->nki", T_b[near, :3, :3], edges[None] - centres[near, None])
-            depth = np.full(len(s), -np.inf)
-            depth[near] = np.maximum(inside, (block.edge_mm / 2 - np.abs(local).max(axis=2)).max(axis=1))
-            # the arms' rule (motion_safety.held_intrusion); PRECHECK_MARGIN_MM of its allowance covers detection error
+            other = known_prism(box)
+            depth = motion_safety.held_depths(held_prism(block), poses, other)
             if motion_safety.held_intrusion(depth, motion_safety.HELD_CONTACT_TOL_MM - PRECHECK_MARGIN_MM) is not None:
                 i = int(np.argmax(depth))
-                c = centres[i]
-                return (f"the {block.name} would go {depth[i]:.1f} mm into the known block at ({box.x:.1f}, "
-                        f"{box.y:.1f}) mm (top {box.top:.1f} mm), with its centre at ({c[0]:.1f}, {c[1]:.1f}, "
-                        f"{c[2]:.1f}) mm")
+                c = poses[i, :3, 3]
+                return (f"the {block.name} would go {depth[i]:.1f} mm into {other.name}, with its centre at "
+                        f"({c[0]:.1f}, {c[1]:.1f}, {c[2]:.1f}) mm")
     return None
 
 

@@ -100,8 +100,8 @@ class SagModel:
         """Predicted tool position error (..., 3) mm (physical - commanded FK) at commanded joints q_cmd."""
         robot = robot or rx200()
         q = np.asarray(q_cmd, dtype=float)
-        return (kinematics.fk(self.physical(q, robot), robot, check_limits=False)[..., :3, 3]
-                - kinematics.fk(q, robot, check_limits=False)[..., :3, 3])
+        return (kinematics.fk_pox(self.physical(q, robot), robot, check_limits=False)[..., :3, 3]
+                - kinematics.fk_pox(q, robot, check_limits=False)[..., :3, 3])
 
 
 def fit_sag(q_cmd, p_measured, robot: RobotModel | None = None, iterations: int = 2) -> SagModel:
@@ -127,7 +127,7 @@ def fit_sag(q_cmd, p_measured, robot: RobotModel | None = None, iterations: int 
         s, e = _features(q, robot)
         A = np.concatenate([J[:, :, [1]] * s[:, None, :], J[:, :, [2]] * e[:, None, :], J[:, :, :4]], axis=2)
         # the residual still unexplained at q_lin, plus what the current model already accounts for there
-        rhs = p - kinematics.fk(q_lin, robot, check_limits=False)[:, :3, 3] + np.einsum(
+        rhs = p - kinematics.fk_pox(q_lin, robot, check_limits=False)[:, :3, 3] + np.einsum(
             "nij,nj->ni", J[:, :, :5], model.deflection(q, robot))
         A2, b2 = A.reshape(-1, _N_PARAMS), rhs.reshape(-1)
         params, _, rank, _ = np.linalg.lstsq(A2, b2, rcond=None)
@@ -135,7 +135,7 @@ def fit_sag(q_cmd, p_measured, robot: RobotModel | None = None, iterations: int 
             raise ValueError(f"fit_sag: the {q.shape[0]} poses do not determine the model (rank {rank} < "
                              f"{_N_PARAMS}): spread them over reach, height and heading")
         model = SagModel(params)
-    resid = p - kinematics.fk(model.physical(q, robot), robot, check_limits=False)[:, :3, 3]
+    resid = p - kinematics.fk_pox(model.physical(q, robot), robot, check_limits=False)[:, :3, 3]
     return SagModel(model.params, float(np.sqrt(np.mean(np.sum(resid**2, axis=1)))), int(q.shape[0]))
 
 
@@ -144,7 +144,7 @@ def hover_pose(q, robot: RobotModel | None = None) -> np.ndarray | None:
     which the arm comes down onto it, or None when the pose lies beyond HOVER_MAX_REACH_MM (approached directly)."""
     robot = robot or rx200()
     q = np.asarray(q, dtype=float)
-    p = kinematics.fk(q, robot)[:3, 3]
+    p = kinematics.fk_pox(q, robot)[:3, 3]
     if np.hypot(p[0], p[1]) >= HOVER_MAX_REACH_MM:
         return None
     return kinematics.ik(p + [0.0, 0.0, HOVER_HEIGHT_MM], np.pi / 2, 0.0, current=q, robot=robot)[0]

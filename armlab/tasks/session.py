@@ -4,10 +4,12 @@ model) and what it knows of the board (the blocks seen, the block held). One cal
     session = tasks.start_session(station)       # calibrates the camera and fits the sag model HERE
     tasks.pick(session, block); tasks.place(session, spot)
 
-Every behaviour of armlab.tasks (look, pick, place, put_back, the clicks, move_path's grab_with / drop_with, the
-TaskMachine, the event runner, the reach experiment) and the GUIs of armlab.ui take the session as their first
-argument. Nothing is kept on the station: two sessions over one station are two independent sets of knowledge (do
-not drive one arm from both at once). A bare station passed where a session is wanted raises a TypeError saying to
+Every motion goes through the session's one executor, session.run(plan, what) (tasks.executor): the whole plan is
+checked before its first command, with what is held and what is known on the board. Every behaviour of
+armlab.tasks (look, pick, place, put_back, the clicks, move_path's grab_with / drop_with, the TaskMachine, the event
+runner, the reach experiment) and the GUIs of armlab.ui take the session as their first argument. Nothing is kept
+on the station: two sessions over one station are two independent sets of knowledge (do not drive one arm from both
+at once). A bare station passed where a session is wanted raises a TypeError saying to
 start one. Units: mm, rad; world (board) frame.
 """
 
@@ -18,13 +20,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from armlab import planning
 from armlab.arguments import instance_of
 from armlab.blocks import block_edge
 from armlab.calibration import Calibration
 from armlab.planning import Obstacle
 from armlab.station.contract import Station
 
-from . import perception
+from . import executor, perception
 from .guard import GuardedArm
 from .sag import SagModel, calibration_poses, fit_sag, hover_pose
 
@@ -59,6 +62,12 @@ class Session:
     last: perception.Observation | None = None
     held_in_tool: np.ndarray | None = None
     picked_down: object | None = None
+
+    def run(self, plan: planning.Plan, what: str, **options) -> planning.ExecutionResult:
+        """Check `plan` whole, then run it on the guarded arm and record what is held: the one executor
+        (tasks.executor.run; options: grasp, known, column, release_top, arm). MotionRefused with nothing sent when
+        the placement rule or the whole-plan check refuses; `what` names the motion in the message."""
+        return executor.run(self, plan, what, **options)
 
     @property
     def held_edge(self) -> float:
@@ -134,7 +143,7 @@ def start_session(station: Station, intrinsics="checkerboard", sag: SagModel | N
     if calibration is not None:
         session.calibration = instance_of(calibration, "calibration", Calibration, "an armlab.calibration.Calibration")
     else:
-        session.calibration = perception.calibrate_camera(station, intrinsics, arm=arm)
+        session.calibration = perception.calibrate_camera(station, intrinsics, arm=session)
     return session
 
 

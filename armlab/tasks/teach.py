@@ -5,9 +5,10 @@ record arm.joint_positions() with the gripper state wanted there; Recorder does 
 state is the state after arriving there: replaying moves to each waypoint in turn (a joint move timed by
 armlab.planning.timing.moving_time, the lab's pi/4 rad/s rule within the velocity limits) and then opens or closes
 the gripper when its state changes. The whole program becomes an armlab.planning.Plan (TeachProgram.to_plan), so it
-is executed by planning.execute and plotted (joint angles against time, as the lab report's figure 10) by
-planning.plot_plan. Taught readings are torque-off positions (no sag): replay through the session's GuardedArm
-(session.arm, session = tasks.start_session(station)) to return to them despite the sag. Files: JSON {"format":
+is run by the task layer's executor (tasks.executor: checked whole before its first command) and plotted (joint
+angles against time, as the lab report's figure 10) by planning.plot_plan. Taught readings are torque-off positions
+(no sag): replay through the session (session = tasks.start_session(station): its guarded arm) to return to them
+despite the sag. Files: JSON {"format":
 "armlab-teach/1", "name", "joint_names", "waypoints": [{"q": [5 rad], "gripper": "open" | "closed"}, ...]}, written
 atomically, validated on load (TeachFileError names the file and the waypoint). Units: rad, s; world mm for the swap
 spots.
@@ -25,6 +26,8 @@ from armlab.blocks import block_edge
 from armlab.files import read_json, write_json_atomic
 from armlab.robot import JOINT_NAMES, RobotModel, rx200
 from armlab.schemas import comment, number, strict_object, validate, vector
+
+from . import executor
 
 __all__ = ["GRIPPER_STATES", "TeachProgram", "TeachFileError", "Recorder", "save_teach", "load_teach", "repeat",
            "plot_teach", "swap_waypoints"]
@@ -142,10 +145,17 @@ def load_teach(path) -> TeachProgram:
         raise TeachFileError(f"{path}: {e}") from None
 
 
-def repeat(arm, program: TeachProgram, scaling: str = "trapezoid") -> planning.ExecutionResult:
-    """Replay a program on an arm, starting with a joint move from where the arm is to the first waypoint."""
-    plan = program.to_plan(start=np.asarray(arm.joint_positions(), dtype=float), scaling=scaling)
-    return planning.execute(plan, arm)
+def repeat(mover, program: TeachProgram, scaling: str = "trapezoid") -> planning.ExecutionResult:
+    """Replay a program, starting with a joint move from where the arm is to the first waypoint, through the
+    executor (tasks.executor: the whole replay is checked before its first command, with what is held).
+
+    mover: a task Session (preferred: its held block and known blocks are checked) or an arm (a GuardedArm such as
+    session.arm, or a backend's Arm: what the arm says it holds is checked). A close in the program grasps nothing the
+    kit knows of. Raises MotionRefused with nothing sent when the replay is refused."""
+    runner = executor.runner(mover)
+    plan = program.to_plan(start=np.asarray(runner.arm.joint_positions(), dtype=float), scaling=scaling)
+    name = f" {program.name!r}" if program.name else ""
+    return executor.run(runner, plan, f"repeating the taught program{name}")
 
 
 def plot_teach(program: TeachProgram, ax=None):
@@ -169,7 +179,7 @@ def swap_waypoints(hover_mm: float = 100.0, release_gap_mm: float = 6.0) -> tupl
     def at(spot, z, state):
         x, y = SWAP_SPOTS_MM[spot]
         roll = planning.face_roll(np.arctan2(y, x), 0.0)
-        poses.append(kinematics.ik([x, y, z], np.pi / 2, roll)[0])
+        poses.append(kinematics.ik_pox([x, y, z], np.pi / 2, roll)[0])      # the kit's IK: never a student's
         grip.append(state)
 
     for src, dst in moves:

@@ -63,6 +63,19 @@ SLIDER_STEP_RAD = 0.01                 # joint sliders: 0.01 rad a key press; a 
 FOLLOW_READOUTS_HZ = 5.0               # status and slider readouts refresh while a command runs
 _LOG_LINES = 8
 _JOB_WAIT_S = 600.0
+# The panel's page layout (laptops down to 1280 x 720): the top row (E-STOP, reset, status) is pinned (sticky) to the
+# top of the notebook's scrolling area whatever of the panel is scrolled into view. A sticky element sticks to its
+# nearest scrolling ancestor, so the panel and JupyterLab's (and Notebook 7's) output area boxes holding it clip
+# (overflow: clip scrolls nothing) instead of hiding or scrolling (overflow: hidden or auto makes a scroll container
+# of its own, and the row would stick to that); the notebook's own scrolling area is then the one it sticks to.
+_PANEL_CSS = """<style>
+.armlab-station-panel, .jp-OutputArea-output:has(.armlab-station-panel),
+.jp-OutputArea-child:has(.armlab-station-panel), .jp-OutputArea:has(.armlab-station-panel) {
+  overflow: visible !important; overflow-x: clip !important; }
+.armlab-station-panel > .armlab-top { position: sticky; top: 0; z-index: 20; padding: 4px 0;
+  background: var(--jp-layout-color0, white); box-shadow: 0 2px 3px rgba(0, 0, 0, 0.15); }
+.armlab-station-panel .widget-toggle-button, .armlab-station-panel .jupyter-button { padding: 0 8px; }
+</style>"""
 
 
 def depth_rgb(depth_mm: np.ndarray, lo: float = DEPTH_RANGE_MM[0], hi: float = DEPTH_RANGE_MM[1]) -> np.ndarray:
@@ -702,14 +715,14 @@ class StationPanel:
             "caption": w.HTML(),
             "mouse": w.HTML(value="move the pointer over the image: world coordinates appear here"),
             "mode": w.ToggleButtons(options=list(VIEW_MODES), value=self.view_mode, description="view",
-                                    style={"button_width": "84px"}),
+                                    style={"button_width": "auto"}, layout=w.Layout(width="auto")),  # whole labels
             "live": w.ToggleButton(value=False, description="live camera", icon="video-camera", **button),
             "refresh": w.Button(description="refresh view", icon="refresh", **button),
             "calibrate": w.Button(description="calibrate", icon="crosshairs", **button),
             "detect": w.Button(description="detect", icon="search", **button),
             "teach": w.Button(description="teach", icon="hand-paper-o", **button),
             "gripper": w.ToggleButtons(options=["open", "closed"], value="open", description="waypoint",
-                                       style={"button_width": "72px"}),
+                                       style={"button_width": "auto"}, layout=w.Layout(width="auto")),
             "record": w.Button(description="record waypoint", icon="circle", **button),
             "repeat": w.Button(description="repeat", icon="repeat", **button),
             "home": w.Button(description="home", icon="home", **button),
@@ -722,6 +735,7 @@ class StationPanel:
         }
         widgets["sliders"] = [w.FloatSlider(value=0.0, min=float(lo), max=float(hi), step=SLIDER_STEP_RAD,
                                             description=name, readout_format=".2f", continuous_update=False,
+                                            style={"description_width": "96px"},   # "wrist_rotate" whole
                                             layout=w.Layout(width="100%", margin="2px 0"))   # no overflow
                               for name, lo, hi in zip(self.robot.joint_names, self.robot.lower, self.robot.upper)]
         for name in ("estop", "reset", "calibrate", "detect", "teach", "record", "repeat", "home", "sleep",
@@ -766,13 +780,15 @@ class StationPanel:
         flexible = dict(min_width="0", overflow="hidden")
         top = w.HBox([widgets["estop"], widgets["reset"], w.Box([widgets["status"]], layout=w.Layout(
             flex="1 1 auto", margin="0 0 0 8px", **flexible))], layout=w.Layout(width="100%", align_items="center"))
+        top.add_class("armlab-top")                                # pinned (_PANEL_CSS)
         camera = w.VBox([widgets["mode"], widgets["image"], widgets["depth_scale"], widgets["caption"],
                          widgets["mouse"]], layout=w.Layout(flex="1 1 55%", **flexible))
         views = [camera]
         if self.viewer is not None and not self.viewer.closed:
             views.append(w.Box([self.viewer.widget(height_px=330)],
                                layout=w.Layout(flex="1 1 45%", margin="0 0 0 8px", **flexible)))
-        parts = [top, w.HBox(views, layout=w.Layout(width="100%", align_items="flex-start")),
+        parts = [w.HTML(_PANEL_CSS, layout=w.Layout(display="none")), top,
+                 w.HBox(views, layout=w.Layout(width="100%", align_items="flex-start")),
                  w.HBox(controls, layout=w.Layout(width="100%", flex_flow="row wrap")),
                  w.HTML("<b>joints</b> (rad; release a slider to move the arm there; refused while a command runs)"),
                  w.VBox(widgets["sliders"], layout=w.Layout(width="100%")), widgets["log"]]
@@ -782,7 +798,7 @@ class StationPanel:
                 return ("StationPanel(camera, world readout, click-to-grab/drop, teach/repeat, E-STOP, joints): "
                         "run the cell")
 
-        box = StationPanelBox(parts, layout=w.Layout(width="100%", overflow="hidden"))
+        box = StationPanelBox(parts, layout=w.Layout(width="100%"))      # overflow: _PANEL_CSS
         box.add_class("armlab-station-panel")
         return box
 

@@ -403,20 +403,23 @@ class Viewer:
         """ipywidgets sliders, one per joint (rad, within the joint limits), that start from the viewer's pose and
         follow it (every later show() or animate() moves them too, without moving anything back).
 
-        Without an arm they move the drawn arm (and a "gripper mm" slider opens the drawn fingers). With an arm (e.g.
-        station.arm) the viewer first shows the arm's reading, each released slider moves the ARM there (arm.move_to; a
-        refused move, e.g. into the board, is reported under the sliders and they return to the arm's pose) and the
-        viewer then shows where the arm is; the gripper is an open/close toggle. With a machine (an
-        armlab.tasks.TaskMachine) the arm is machine.station.arm and each move goes through the machine: refused (said
-        under the sliders) unless it is idle, so never during another command or after an emergency stop, and stopped by
-        machine.estop() (the machine drives a task session, tasks.start_session(station), which calibrated and moved the
-        arm when it was started). Blocking moves run in the kernel: for an emergency stop during motions, use the
-        station panel (armlab.ui.station_panel), whose sliders always go through its machine. After close() the sliders
-        are disabled with a note. Returns a VBox (attributes sliders, gripper, note); display it in a live notebook."""
+        Without a machine they move the drawn arm only (and a "gripper mm" slider opens the drawn fingers). With a
+        machine (an armlab.tasks.TaskMachine) they move its station's arm, every move through the machine and so
+        through its session's one executor (the whole plan checked first, with what the arm holds): the viewer first
+        shows the arm's reading, each released slider moves the ARM there (a refused move, e.g. into the board, is
+        reported under the sliders and they return to the arm's pose), never during another command or after an
+        emergency stop, and machine.estop() stops it; the gripper is an open/close toggle. A bare arm (arm=) is
+        refused with a TypeError naming the machine: no slider moves the arm around the executor. Blocking moves run
+        in the kernel: for an emergency stop during motions, use the station panel (armlab.ui.station_panel), whose
+        sliders always go through its machine. After close() the sliders are disabled with a note. Returns a VBox
+        (attributes sliders, gripper, note); display it in a live notebook."""
         import ipywidgets as widgets
 
         robot = rx200()
         lo, hi = np.asarray(robot.lower, float), np.asarray(robot.upper, float)
+        if arm is not None and machine is None:
+            raise TypeError("joint_sliders: the arm moves only through a state machine and its session's executor: "
+                            "joint_sliders(machine=tasks.TaskMachine(session)), session = tasks.start_session(station)")
         if machine is not None:
             if arm is not None and arm is not machine.station.arm:
                 raise ValueError("joint_sliders: give the machine alone (its station's arm is the one moved)")
@@ -445,17 +448,15 @@ class Viewer:
                 viewer.show(q, gripper.value)
                 return
             try:
-                if machine is not None and machine.state != "idle":
+                if machine.state != "idle":
                     raise RuntimeError(f"the machine is in {machine.state!r}" + (
                         " (emergency-stopped: reset it first)" if machine.state == "estop" else ""))
                 if _change is not None and _change["owner"] is gripper:
-                    arm.close_gripper() if gripper.value == "closed" else arm.open_gripper()
-                elif machine is not None:
-                    here = np.clip(np.asarray(arm.joint_positions(), float), lo, hi)
-                    machine.execute(planning.Plan((planning.MoveStep(planning.joint_move(here, q, robot=robot),
-                                                                     "sliders"),)))
+                    step = planning.GripperStep("close" if gripper.value == "closed" else "open", "sliders")
                 else:
-                    arm.move_to(q)
+                    here = np.clip(np.asarray(arm.joint_positions(), float), lo, hi)
+                    step = planning.MoveStep(planning.joint_move(here, q, robot=robot), "sliders")
+                machine.execute(planning.Plan((step,)))
                 note.value = ""
             except Exception as e:   # a refused or stopped move: say why, never raise into the widget's comm
                 note.value = f"not moved: {type(e).__name__}: {str(e).splitlines()[0][:160]}"

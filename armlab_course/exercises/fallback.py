@@ -1,38 +1,31 @@
-"""The kit's reference path for a package exercise that is still blank.
+"""The course's side of the engine's slots (armlab.slots): stand-ins named by an exercise's declaration.
 
-In the student release a package exercise's region is a stub raising ExerciseNotWritten
-(armlab_course.exercises.registry)
-for that exercise. So that the simulator, the viewer and the demonstrations of later notebooks keep working while a
-student has not written it yet, the kit calls such a function through `reference_fallback`: when (and only when) the
-ExerciseNotWritten of that very exercise is what raised, it says so in one line, once per exercise, and returns what
-the kit's reference path gives instead -- a different method, never the solution (the manufacturer's PoX model for
-the DH chain, OpenCV's solvePnP for the tag pose, ...). In the instructor's repository, and once the student has
-written the exercise, the reference is never used.
+In the student release a package exercise's region is a stub raising the engine's SlotNotWritten for that exercise
+(a notebook exercise's stub raises ExerciseNotWritten, its subclass). So that the simulator, the viewer and the
+demonstrations of later notebooks keep working while a student has not written it yet, the kit calls such a
+function through a stand-in (armlab.slots.standin; here `reference_fallback` and `with_reference`, which check the
+id is a registered exercise): when (and only when) that very exercise's stub is what raised, it says so in one line,
+once per exercise, and returns what the kit's own method gives instead -- a different method, never the solution.
+In the instructor's repository, and once the student has written the exercise, the stand-in is never used.
 """
 
 from __future__ import annotations
 
-import functools
-import logging
 from collections.abc import Callable
 from typing import TypeVar
+
+from armlab import slots
 
 from .registry import Exercise, ExerciseNotWritten, exercise
 
 __all__ = ["reference_fallback", "with_reference", "require_written", "fallbacks_used"]
 
 F = TypeVar("F", bound=Callable)
-# The note that a reference path stands in: a WARNING of the "armlab_course.exercises" logger. With no logging set up (a
-# notebook, a script) Python's last-resort handler writes the bare message to stderr; an application that configures
-# logging formats, routes or silences it like any other record.
-_log = logging.getLogger("armlab_course.exercises")
-_announced: set[str] = set()
-_standing_in: set[str] = set()     # exercises whose last call went to the reference
 
 
 def fallbacks_used() -> set[str]:
-    """The exercises whose reference path has stood in during this process."""
-    return set(_announced)
+    """The exercises whose stand-in has answered during this process."""
+    return slots.standins_used()
 
 
 def _declared(which: Exercise | str) -> Exercise:
@@ -40,34 +33,11 @@ def _declared(which: Exercise | str) -> Exercise:
 
 
 def reference_fallback(which: Exercise | str, reference: Callable, instead: str) -> Callable[[F], F]:
-    """Decorate a kit function whose work includes the package exercise `which` (its declaration in
-    armlab_course.exercises.registry): when that exercise's ExerciseNotWritten is raised, log one line (a warning of the
-    "armlab_course.exercises" logger, once per exercise) saying `instead` is used, and return
-    reference(*args, **kwargs).
-    Any other error, including one from a student's own attempt or another exercise's stub, propagates."""
-    declared = _declared(which)                             # KeyError now for an unregistered id
-
-    def decorate(function: F) -> F:
-        @functools.wraps(function)
-        def wrapper(*args, **kwargs):
-            try:
-                result = function(*args, **kwargs)
-            except ExerciseNotWritten as e:
-                if e.exercise_id != declared.id:
-                    raise
-                _standing_in.add(declared.id)
-                if declared.id not in _announced:
-                    _announced.add(declared.id)
-                    _log.warning("note: exercise %s (notebook %s) is not written yet: %s", declared.id,
-                                 declared.notebook_number, instead)
-                return reference(*args, **kwargs)
-            _standing_in.discard(declared.id)
-            return result
-
-        wrapper.__wrapped_exercise__ = declared.id
-        return wrapper  # type: ignore[return-value]
-
-    return decorate
+    """Decorate a function whose work includes the exercise `which` (its declaration, or its id): armlab.slots.standin
+    for the exercise's id (KeyError now for an unregistered one). While the exercise is blank, one note (a warning of
+    the "armlab.slots" logger, once per exercise) says `instead` is used and reference(*args, **kwargs) answers; any
+    other error, including one from a student's own attempt or another exercise's stub, propagates."""
+    return slots.standin(_declared(which).id, reference, instead)
 
 
 def with_reference(function: Callable, which: Exercise | str, reference: Callable, instead: str) -> Callable:
@@ -79,9 +49,9 @@ def with_reference(function: Callable, which: Exercise | str, reference: Callabl
 
 def require_written(which: Exercise | str) -> None:
     """For a check cell: raise the exercise's ExerciseNotWritten while it is blank, so that the check cannot pass on
-    the kit's reference path. A package exercise is blank when its region in the imported package's source still
-    holds only the stub; a notebook exercise when the last call of its function (through with_reference) went to
-    the reference."""
+    the kit's stand-in. A package exercise is blank when its region in the imported package's source still holds
+    only the stub; a notebook exercise when the last call of its function (through with_reference) went to the
+    stand-in."""
     from pathlib import Path
 
     from .markers import is_blank
@@ -91,6 +61,6 @@ def require_written(which: Exercise | str) -> None:
         source = Path(__file__).resolve().parents[2] / e.where
         blank = is_blank(source.read_text(encoding="utf-8"), e.id, e.where)
     else:
-        blank = e.id in _standing_in
+        blank = slots.standing_in(e.id)
     if blank:
         raise ExerciseNotWritten(e.id)

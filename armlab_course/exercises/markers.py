@@ -1,7 +1,7 @@
 """Exercise regions in source text: `# BEGIN SOLUTION <id>` ... `# END SOLUTION` lines (same indentation, never
 nested, never empty), `<id>` a registered exercise (armlab_course.exercises.registry). A stub replaces a region's body
-by
-two lines raising ExerciseNotWritten(<id>) (its message: the id, the notebook that teaches it, what to write), so the
+by two lines raising the exercise's not-written error (its message: the id, the notebook that teaches it, what to
+write; in an engine file the engine's own SlotNotWritten, in a notebook the course's ExerciseNotWritten), so the
 surrounding code still imports and runs up to the point of use.
 
 Written answers: a markdown cell holding `<!-- BEGIN ANSWER <id> -->` ... `<!-- END ANSWER -->`; the release
@@ -70,20 +70,26 @@ def find_regions(text: str, where: str = "<text>") -> list[Region]:
     return regions
 
 
-def stub_lines(exercise_id: str) -> list[str]:
-    """The lines (without indentation) a blank region of the exercise holds in the student release."""
-    exercise(exercise_id)                                   # KeyError for an unregistered id
-    return ["from armlab_course.exercises import ExerciseNotWritten", f"raise ExerciseNotWritten({exercise_id!r})"]
+def stub_lines(exercise_id: str, where: str = "") -> list[str]:
+    """The lines (without indentation) a blank region of the exercise holds in the student release. In an engine file
+    (`where` under armlab/) the stub raises the engine's own armlab.slots.SlotNotWritten with the course's message and
+    label written in, so the released engine imports no course code; elsewhere (a notebook) it raises the course's
+    ExerciseNotWritten."""
+    e = exercise(exercise_id)                               # KeyError for an unregistered id
+    if where.startswith("armlab/"):
+        return ["from armlab.slots import SlotNotWritten", f"raise SlotNotWritten({e.id!r},",
+                f"                     {e.message()!r},", f"                     {e.label()!r})"]
+    return ["from armlab_course.exercises import ExerciseNotWritten", f"raise ExerciseNotWritten({e.id!r})"]
 
 
 def is_blank(text: str, exercise_id: str, where: str = "<text>") -> bool:
-    """True when every region of exercise `exercise_id` in a source text still holds only its stub (or the text has
-    no region of it): the student has not written it yet."""
-    stub = stub_lines(exercise_id)
+    """True when every region of exercise `exercise_id` in a source text still holds only a stub (either kind, see
+    stub_lines) or the text has no region of it: the student has not written it yet."""
+    stubs = [[line.strip() for line in stub_lines(exercise_id, where)] for where in ("", "armlab/")]
     lines = text.splitlines()
     bodies = [[line.strip() for line in lines[r.begin + 1:r.end] if line.strip()]
               for r in find_regions(text, where) if r.exercise_id == exercise_id]
-    return all(body == stub for body in bodies)
+    return all(body in stubs for body in bodies)
 
 
 def stub_regions(text: str, where: str = "<text>") -> str:
@@ -93,7 +99,7 @@ def stub_regions(text: str, where: str = "<text>") -> str:
     out, last = [], 0
     for region in find_regions(text, where):
         out += lines[last:region.begin + 1]
-        out += [region.indent + line for line in stub_lines(region.exercise_id)]
+        out += [region.indent + line for line in stub_lines(region.exercise_id, where)]
         last = region.end
     out += lines[last:]
     return "\n".join(out) + ("\n" if text.endswith("\n") else "")

@@ -82,19 +82,38 @@ def scaled_durations_by_search(program, speed: float, robot: RobotModel | None =
     return np.array(out)
 
 
-def segment_by_colour_model(rgb_balanced, max_distance: float = 8.0) -> np.ndarray:
-    """detect.segment's reference: every pixel of a white-balanced RGB image (H, W, 3) uint8 labelled by the kit's
-    colour model (nearest class in chromaticity, with the per-class spreads), -1 where even the nearest class is
-    more than `max_distance` spreads away (the board, shadows); else the colour's index in armlab.blocks.COLORS."""
+_LOOKUP_BITS = 6          # bits per channel of segment_by_colour_model's lookup table (64 levels: 262144 colours)
+_LOOKUPS: dict[tuple, np.ndarray] = {}
+
+
+def _colour_lookup(max_distance: float) -> np.ndarray:
+    """The kit's colour model's label (an index in armlab.blocks.COLORS, -1 for none) of every colour quantised to
+    _LOOKUP_BITS per channel (taken at its bin's centre), indexed r << 2b | g << b | b: computed once per model."""
     from armlab.blocks import COLORS
     from armlab.detection import default_color_model
 
-    rgb = np.asarray(rgb_balanced)
     model = default_color_model()
-    d = model.distances(rgb.reshape(-1, 3).astype(float))
-    labels = np.array([COLORS.index(n) for n in model.names])[d.argmin(axis=1)]
-    labels[d.min(axis=1) > max_distance] = -1
-    return labels.reshape(rgb.shape[:2])
+    key = (model.names, model.means.tobytes(), model.stds.tobytes(), float(max_distance))
+    if key not in _LOOKUPS:
+        step = 1 << (8 - _LOOKUP_BITS)
+        levels = np.arange(0, 256, step) + (step - 1) / 2
+        grid = np.stack(np.meshgrid(levels, levels, levels, indexing="ij"), -1).reshape(-1, 3)
+        d = model.common_distances(grid)
+        labels = np.array([COLORS.index(n) for n in model.names])[d.argmin(axis=1)]
+        labels[d.min(axis=1) > max_distance] = -1
+        _LOOKUPS.clear()
+        _LOOKUPS[key] = labels.astype(np.int64)
+    return _LOOKUPS[key]
+
+
+def segment_by_colour_model(rgb_balanced, max_distance: float = 8.0) -> np.ndarray:
+    """detect.segment's reference: every pixel of a white-balanced RGB image (H, W, 3) uint8 labelled by the kit's
+    colour model (nearest class mean in chromaticity, one spread common to every class) through a lookup table of
+    colours quantised to 64 levels per channel; -1 where even the nearest class is more than `max_distance` spreads
+    away (the board, shadows); else the colour's index in armlab.blocks.COLORS."""
+    rgb = np.asarray(rgb_balanced).astype(np.int64) >> (8 - _LOOKUP_BITS)
+    index = (rgb[..., 0] << (2 * _LOOKUP_BITS)) | (rgb[..., 1] << _LOOKUP_BITS) | rgb[..., 2]
+    return _colour_lookup(max_distance)[index]
 
 
 def stack_by_kit(depth_mm, mask, camera, edges_mm=(38.0, 25.0)) -> tuple[float, int, np.ndarray]:
@@ -117,18 +136,19 @@ def stack_by_kit(depth_mm, mask, camera, edges_mm=(38.0, 25.0)) -> tuple[float, 
     v, u = np.nonzero(np.asarray(mask, bool) & (np.abs(height - top_z) < 5.0))
     xy = pixels_to_plane(camera, np.column_stack([u, v]), top_z)[:, :2]
     (cx, cy), (w, l), _ = cv2.minAreaRect(xy.astype(np.float32))
-    large, small = max(edges_mm), min(edges_mm)
+    small, large = sorted(edges_mm)
     edge = large if np.sqrt(w * l) > 0.5 * (large + small) else small
     return top_z, stack_levels(top_z, edge, {"large": large, "small": small}), np.array([cx, cy, top_z])
 
 
 def pose_error_by_log(T, T_target) -> np.ndarray:
-    """ik.numerical's reference for pose_error: the position difference and the kit's matrix logarithm
-    (armlab.transforms.log_so3) of the rotation from the tool's orientation to the target's."""
-    from armlab.transforms import log_so3
+    """ik.numerical's reference for pose_error: the position difference and the rotation vector (scipy's
+    Rotation.as_rotvec) of the rotation from the tool's orientation to the target's."""
+    from scipy.spatial.transform import Rotation
 
-    T, T_target = np.asarray(T, dtype=float), np.asarray(T_target, dtype=float)
-    return np.concatenate([T_target[:3, 3] - T[:3, 3], log_so3(T_target[:3, :3] @ T[:3, :3].T)])
+    pose, target = np.array(T, dtype=float), np.array(T_target, dtype=float)
+    turn = Rotation.from_matrix(target[:3, :3] @ pose[:3, :3].T).as_rotvec()
+    return np.concatenate([target[:3, 3] - pose[:3, 3], turn])
 
 
 def ik_by_least_squares(T_target, q0, weight_mm: float = 100.0, tol_mm: float = 1e-3, max_iterations: int = 200,
@@ -146,7 +166,7 @@ def ik_by_least_squares(T_target, q0, weight_mm: float = 100.0, tol_mm: float = 
 
     def residual(q):
         e = pose_error_by_log(kinematics.fk(q, check_limits=False), T_target)
-        history.append([np.linalg.norm(e[:3]), np.linalg.norm(e[3:])])
+        history.append([float(np.sqrt(e[:3] @ e[:3])), float(np.sqrt(e[3:] @ e[3:]))])
         return weight * e
 
     q0 = np.clip(np.asarray(q0, dtype=float), robot.lower + 1e-9, robot.upper - 1e-9)   # strictly inside

@@ -1,7 +1,7 @@
 """The course's one declaration per exercise, and the typed exception a blank exercise raises.
 
-A leaf module: it imports nothing from armlab, so the library (kinematics, calibration, detection) can refer to an
-exercise's declaration (`registry.DH_LINK`) without knowing anything else of the course layer.
+A leaf module of the course: of armlab it imports only armlab.slots (the engine's SlotNotWritten, which a blank
+exercise's ExerciseNotWritten is). The library never imports the course; it names its slots by the exercise's id.
 
 An exercise is one of three kinds:
 - "code": code a student writes between `# BEGIN SOLUTION <id>` and `# END SOLUTION` lines, either in a notebook
@@ -17,6 +17,8 @@ An exercise is one of three kinds:
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+
+from armlab.slots import SlotNotWritten
 
 __all__ = ["Exercise", "EXERCISES", "KINDS", "NOTEBOOKS", "ExerciseNotWritten", "exercise", "notebook_of",
            "of_notebook"]
@@ -57,23 +59,34 @@ class Exercise:
     def notebook_number(self) -> str:
         return self.notebook[:2]
 
+    def label(self) -> str:
+        """How a note names the exercise: 'exercise <id> (notebook NN)'."""
+        return f"exercise {self.id} (notebook {self.notebook_number})"
+
     def message(self) -> str:
         """What a blank stub says: the exercise, the notebook that teaches it and what to write where."""
         what = " and ".join(self.functions) if len(self.functions) < 3 else \
             ", ".join(self.functions[:-1]) + " and " + self.functions[-1]
         if self.kind == "written":
-            return f"exercise {self.id} (notebook {self.notebook_number}): answer the question about {what}"
+            return f"{self.label()}: answer the question about {what}"
         place = f" in {self.where}" if self.in_package else ""
-        return f"exercise {self.id} (notebook {self.notebook_number}): write {what}{place}"
+        return f"{self.label()}: write {what}{place}"
 
 
-class ExerciseNotWritten(NotImplementedError):
-    """Raised by a blank exercise's stub: `exercise_id` says which; the message says what to write where. The kit's
-    reference paths (armlab_course.exercises.fallback) stand in for exactly this error of exactly their exercise."""
+class ExerciseNotWritten(SlotNotWritten):
+    """Raised by a blank exercise's stub in a notebook: the engine's SlotNotWritten (armlab.slots) for the exercise's
+    id (`exercise_id`, the same as `slot_id`), labelled with its notebook; the message says what to write where. The
+    kit's stand-ins (armlab.slots.standin, armlab_course.exercises.fallback) answer for exactly this error of exactly
+    their exercise. (A package file's stub raises SlotNotWritten itself, with the same message and label: the
+    released engine imports no course code.)"""
 
     def __init__(self, exercise_id: str):
-        self.exercise_id = exercise_id
-        super().__init__(exercise(exercise_id).message())
+        e = exercise(exercise_id)
+        super().__init__(e.id, e.message(), e.label())
+
+    @property
+    def exercise_id(self) -> str:
+        return self.slot_id
 
     def __reduce__(self):
         return type(self), (self.exercise_id,)

@@ -6,14 +6,17 @@
 The bundle holds the instructor's tracked files (hidden checks included) with setup.sh and run_autograder
 (tools/autograder/) at its top; Gradescope unpacks it into ROOT/source, puts the student's upload in
 ROOT/submission and reads ROOT/results/results.json. Environment: ARMLAB_GRADE_EXERCISES (comma-separated exercise
-ids; default every exercise) and ARMLAB_GRADE_TIMEOUT (wall-clock seconds per notebook run; default 300).
+ids; default every exercise), ARMLAB_GRADE_TIMEOUT (wall-clock seconds per notebook run; default 300) and
+ARMLAB_ALLOW_SHARED_NETWORK=1 (grade in the uid fallback, where student code shares the container's network).
 """
 
 from __future__ import annotations
 
+import json
 import os
 import shutil
 import sys
+import tempfile
 from pathlib import Path
 
 from .run import Limits
@@ -78,14 +81,44 @@ def run(root: Path | str) -> Path:
             raise NotADirectoryError(f"{root / part}: no such folder (is {root} laid out as Gradescope's /autograder?)")
     (root / "results").mkdir(exist_ok=True)
     lock_down(root / "source", root / "results")
-    submission = read_submission(root / "submission", check_reference(root / "source"))    # read only: nothing runs
+    with tempfile.TemporaryDirectory(dir=root, prefix="found-") as tmp:
+        folder, refused = find_upload(root / "submission", Path(tmp) / "submission")
+        if refused:
+            return _write_refusal(root / "results" / "results.json", refused)
+        submission = read_submission(folder, check_reference(root / "source"))    # read only: nothing runs
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+    shared_network = os.environ.get("ARMLAB_ALLOW_SHARED_NETWORK", "") == "1"
     with Grader(root / "source", limits_from_env(), exercises_from_env(), written=submission.bodies,
-                parallel=max(1, min(cores, 4))) as grader:         # one submission: its runs side by side
+                parallel=max(1, min(cores, 4)), shared_network=shared_network,
+                private=[root / "submission"]) as grader:         # one submission: its runs side by side
         results = grader.grade(submission)
         grader.verify_sources()
     path = root / "results" / "results.json"
     atomic_write(path, results_json(results))
+    return path
+
+
+def find_upload(upload: Path, into: Path) -> tuple[Path, str | None]:
+    """The submission's release files found wherever they are in the `upload` (flat, in a folder, in the release's
+    layout: armlab_course.grading.upload), staged in the release's layout in the new folder `into`; said on stdout
+    (Gradescope shows it). Returns (into, None), or (into, why the upload is refused)."""
+    from .upload import find_release_files, refusal, stage
+
+    found = find_release_files(upload)
+    why = refusal(found)
+    if why is None:
+        stage(upload, found, into)
+        print("release files found in the upload:")
+        print("\n".join(f"  {name} <- {rel}" for name, rel in sorted(found.files.items())), flush=True)
+    return into, why
+
+
+def _write_refusal(path: Path, why: str) -> Path:
+    """results.json for an upload that cannot be graded: score 0 and the reason, shown to the student."""
+    from .report import atomic_write
+
+    print(why, flush=True)
+    atomic_write(path, json.dumps({"score": 0.0, "output": why, "tests": []}, indent=1) + "\n")
     return path
 
 

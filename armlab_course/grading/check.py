@@ -1,6 +1,12 @@
-"""The student's self-check (`python -m armlab check`): the public CHECK cells of every written exercise, run in a
-sandboxed copy of the student's own checkout (the same sandbox and runner as the grader; their notebooks hold no
-stored outputs, so a check cell passes when its asserts do). No hidden checks: those are the instructor's.
+"""The student's self-check (`python -m armlab check [EXERCISE]`): the public CHECK cells of the written exercises,
+run in a sandboxed copy of the student's own checkout by the grader's own runner and sandbox (the same nbval
+plugin, kernel, sanitize file and limits; their notebooks hold no stored outputs, so a check cell passes when its
+asserts do). No hidden checks: those are the instructor's.
+
+Each notebook runs once, up to the last CHECK cell of the exercises asked for (a later cell cannot change an
+earlier cell's verdict, so the verdict is the grader's, sooner): one exercise of notebook 02 takes seconds. Each
+exercise is reported as soon as its notebook has run (progress(exercise id, result, status)), as "written" (every
+check passes), "failing", "blank" or "by hand".
 
 Each exercise is scored by its own CHECK cells. A check cell of exercise B that fails while an exercise A it uses (B's
 region or check cell names A's function) fails too is reported as "not checked: it needs A, which fails" instead
@@ -12,10 +18,11 @@ from __future__ import annotations
 import json
 import re
 import tempfile
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-from armlab_course.exercises.registry import EXERCISES, Exercise
+from armlab_course.exercises.registry import EXERCISES, Exercise, exercise
 
 from .results import CheckResult, ExerciseResult, score_exercise
 from .run import DEFAULT_LIMITS, Limits, Runner, check_cells
@@ -23,7 +30,7 @@ from .sandbox import detect
 from .splice import build_worktree
 from .submission import read_submission
 
-__all__ = ["SelfCheck", "self_check", "missing_tools", "is_blank_result"]
+__all__ = ["SelfCheck", "self_check", "missing_tools", "is_blank_result", "status_of"]
 
 
 @dataclass
@@ -35,16 +42,38 @@ class SelfCheck:
 
     @property
     def ok(self) -> bool:
-        """Every written exercise passes every check, or fails only because one it needs is not written yet (blank
-        ones are counted, not failed; written answers are graded by hand)."""
-        return all(r.score == r.max_score for e, r in self.results.items()
-                   if not is_blank_result(r) and not r.by_hand and self.blocked.get(e, ("", ""))[1] != "is not written"
-                   " yet")
+        """Every exercise checked is written and passes every check (a written answer: answered). A blank one, or
+        one waiting for another, is not ok: `python -m armlab check` then exits 1."""
+        return all(status_of(r, self.blocked) in ("written", "by hand") for r in self.results.values())
 
 
 def is_blank_result(result: ExerciseResult) -> bool:
     """The exercise was not written (its region is still the stub)."""
     return not result.checks and result.reason == "not written (blank region)"
+
+
+def status_of(result: ExerciseResult, blocked: dict[str, tuple[str, str]] | None = None) -> str:
+    """"blank", "by hand" (a written answer given), "written" (full points) or "failing"."""
+    if is_blank_result(result) or (result.by_hand and not result.answer):
+        return "blank"
+    if result.by_hand:
+        return "by hand"
+    if result.score == result.max_score and not (blocked or {}).get(result.exercise_id):
+        return "written"
+    return "failing"
+
+
+def _truncated(notebook: Path, last: int) -> None:
+    """Keep the notebook's cells up to its code cell `last` (nbval's index) and the cells before it."""
+    nb = json.loads(notebook.read_text(encoding="utf-8"))
+    code = 0
+    for k, cell in enumerate(nb["cells"]):
+        if cell.get("cell_type") == "code":
+            if code == last:
+                nb["cells"] = nb["cells"][:k + 1]
+                break
+            code += 1
+    notebook.write_text(json.dumps(nb), encoding="utf-8")
 
 
 def missing_tools() -> list[str]:
@@ -59,38 +88,55 @@ def _uses(ex: Exercise, text: str) -> bool:
     return any(re.search(rf"\b{re.escape(n)}\b", text) for n in names)
 
 
-def self_check(checkout: Path | str = ".", limits: Limits = DEFAULT_LIMITS, unsafe: bool = False) -> SelfCheck:
-    """Run the notebooks of `checkout` that teach a written exercise and score each exercise by its CHECK cells."""
+def self_check(checkout: Path | str = ".", limits: Limits = DEFAULT_LIMITS, unsafe: bool = False,
+               only: str | None = None,
+               progress: Callable[[str, ExerciseResult, str], None] | None = None) -> SelfCheck:
+    """Run the notebooks of `checkout` that check a written exercise, each up to the last CHECK cell of the exercises
+    asked for (`only`: that one exercise id; default every one), and score each exercise by its CHECK cells, calling
+    progress(exercise id, result, status) as each is known. KeyError for an unknown id."""
     checkout = Path(checkout).resolve()
+    asked = [exercise(only)] if only else list(EXERCISES)
     sub = read_submission(checkout, checkout)
     results: dict[str, ExerciseResult] = {}
-    written = [e for e in EXERCISES if e.id not in sub.blank and e.id not in sub.problems and e.kind != "written"]
-    notebooks = sorted({e.notebook for e in written})
+
+    def tell(ex: Exercise, result: ExerciseResult) -> None:
+        results[ex.id] = result
+        if progress is not None:
+            progress(ex.id, result, status_of(result))
+
+    written = [e for e in asked if e.id not in sub.blank and e.id not in sub.problems and e.kind != "written"]
+    for ex in asked:
+        if ex.kind == "written":
+            tell(ex, ExerciseResult(ex.id, 0.0, ex.points, [], "graded by hand" if ex.id in sub.answers else
+                                    "not written (blank region)", sub.answers.get(ex.id)))
+        elif ex.id in sub.problems or ex.id in sub.blank:
+            tell(ex, ExerciseResult(ex.id, 0.0, ex.points, [], sub.problems.get(ex.id, "not written (blank region)")))
     runs, sources = {}, {}
+    if not written:
+        return SelfCheck({e.id: results[e.id] for e in asked}, {})
     runner = Runner(detect(unsafe), limits)
     try:
         with tempfile.TemporaryDirectory(prefix="armlab-check-") as tmp:
             tree = build_worktree(checkout, Path(tmp) / "work")
-            for name in notebooks:
+            for name in sorted({e.notebook for e in written}):
                 path = f"notebooks/{name}.ipynb"
+                tags = check_cells(tree / path)
+                mine = [e for e in written if e.notebook == name]
+                wanted = [i for i, ids in tags.items() if any(e.id in ids for e in mine)]
+                if wanted:
+                    _truncated(tree / path, max(wanted))
                 code = [c for c in json.loads((tree / path).read_text())["cells"] if c["cell_type"] == "code"]
                 sources[name] = ["".join(c["source"]) for c in code]
-                runs[name] = (check_cells(tree / path), runner.notebook(tree, path, lax=True))
+                runs[name] = (tags, runner.notebook(tree, path, lax=True))
+                for ex in mine:
+                    tags, run = runs[name]
+                    checks = [CheckResult(f"{ex.notebook} cell {i}", i in run.cells and run.cells[i].passed,
+                                          run.cells[i].message if i in run.cells else run.problem or
+                                          "the cell did not run") for i, ids in tags.items() if ex.id in ids]
+                    tell(ex, score_exercise(ex.id, checks, run.problem))
     finally:
         runner.close()
-    for ex in EXERCISES:
-        if ex.kind == "written" and ex.id in sub.answers:
-            results[ex.id] = ExerciseResult(ex.id, 0.0, ex.points, [], "graded by hand", sub.answers[ex.id])
-            continue
-        if ex.id in sub.problems or ex.id in sub.blank:
-            reason = sub.problems.get(ex.id, "not written (blank region)")
-            results[ex.id] = ExerciseResult(ex.id, 0.0, ex.points, [], reason)
-            continue
-        tags, run = runs[ex.notebook]
-        checks = [CheckResult(f"{ex.notebook} cell {i}", i in run.cells and run.cells[i].passed,
-                              run.cells[i].message if i in run.cells else run.problem or "the cell did not run")
-                  for i, ids in tags.items() if ex.id in ids]
-        results[ex.id] = score_exercise(ex.id, checks, run.problem)
+    results = {e.id: results[e.id] for e in asked}
     blocked: dict[str, tuple[str, str]] = {}
     failing = [e for e in written if results[e.id].score < results[e.id].max_score]
     for ex in failing:

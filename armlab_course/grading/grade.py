@@ -24,12 +24,17 @@ before any report is written.
 
 from __future__ import annotations
 
+import contextlib
+import copy
 import hashlib
+import re
 import shutil
 import tempfile
 import threading
+import time
 from collections.abc import Callable, Iterable
 from concurrent.futures import ThreadPoolExecutor
+from dataclasses import replace
 from pathlib import Path
 
 from armlab_course.exercises.registry import EXERCISES, exercise
@@ -38,7 +43,7 @@ from . import report as _report  # noqa: F401  (imported now: nothing of the gra
 from . import similarity as _similarity
 from .results import CheckResult, ExerciseResult, score_exercise
 from .run import DEFAULT_LIMITS, Limits, NotebookRun, Runner, check_cells
-from .sandbox import WORK, Sandbox, detect
+from .sandbox import WORK, Sandbox, detect, owner_only, python_outside, refuse_shared_network
 from .splice import RegionRejected, build_worktree, check_body, splice_into
 from .static import STATIC_CHECK, static_check
 from .submission import Submission, exercise_file, read_submission, regions_of, source_texts
@@ -49,9 +54,47 @@ except ImportError:                    # a student release: public checks only
     _hidden = None
 
 __all__ = ["CheckResult", "ExerciseResult", "Grader", "GraderChanged", "grade_submission", "grade_class",
-           "check_reference", "source_hashes"]
+           "check_reference", "source_hashes", "TIME_BUDGET", "Deadline"]
+
+# A submission's runs all end within TIME_BUDGET x --timeout (wall clock) of its first run's start, whatever its
+# regions do: each run's own limit is cut to the time left, a run due after the deadline does not start (its checks
+# fail, saying so), and an exercise that failed in the one pass is rerun alone only while time is left (else it is
+# scored from the pass).
+TIME_BUDGET = 8
+
+
+class Deadline:
+    """When a submission's time is up: `seconds` from now (time.monotonic)."""
+
+    def __init__(self, seconds: float) -> None:
+        self.seconds = float(seconds)
+        self.at = time.monotonic() + self.seconds
+
+    def left(self) -> float:
+        return self.at - time.monotonic()
+
+    def spent(self) -> str:
+        return (f"not run: the submission's time ({TIME_BUDGET} x the {self.seconds / TIME_BUDGET:g} s timeout) "
+                f"was spent")
 
 _OWN_SOURCES = (Path(__file__).parent, Path(__file__).parents[1] / "exercises")
+
+
+# what reading a run's results of the wrong shape raises: the run's exercises fail, naming it; the class goes on
+_MALFORMED = (KeyError, TypeError, ValueError, AttributeError, IndexError, RecursionError)
+
+
+_RAISED = re.compile(r"(raised )([A-Za-z_][\w.]*)(?::.*)?$", re.DOTALL)
+_TAIL = re.compile(r"^(the hidden checks gave no results \(.*?\)):.*$", re.DOTALL)
+
+
+def student_side(message: str) -> str:
+    """A hidden check's message as the student may see it: which check and call failed and how (the exception's
+    type, 'the result differs', the property), never what the region put into its exception's text or printed
+    while the hidden checks ran (it holds the hidden inputs it was called with, or whatever it read of the run)."""
+    message = _RAISED.sub(lambda m: f"{m[1]}{m[2]} (its message is not shown: the hidden checks' inputs stay hidden)",
+                          message)
+    return _TAIL.sub(lambda m: f"{m[1]} (the run's output is not shown)", message)
 
 
 class GraderChanged(RuntimeError):
@@ -83,23 +126,19 @@ def check_reference(reference: Path) -> Path:
     return reference.resolve()
 
 
-def _hidden_source() -> Path | None:
-    if _hidden is None:
-        return None
-    path = Path(_hidden.__file__)
-    return path.parent if path.name == "__init__.py" else path
-
-
 class Grader:
     """Grades submissions against the instructor's checkout `reference` in `sandbox` (default: detect(unsafe));
     results of identical regions are shared (thread-safe). close() removes its temporary trees."""
 
     def __init__(self, reference: Path | str, limits: Limits = DEFAULT_LIMITS, exercises: Iterable[str] | None = None,
                  unsafe: bool = False, sandbox: Sandbox | None = None, written: Iterable[str] | None = None,
-                 parallel: int = 1):
+                 parallel: int = 1, shared_network: bool = False, private: Iterable[Path] = ()):
         """exercises: those graded (default every one); written: those some submission to grade has written (default
         every graded one): only their expected values are computed, and grading another written one raises
-        ValueError; parallel: how many runs of one submission (its notebooks, its hidden checks) go at once."""
+        ValueError; parallel: how many runs of one submission (its notebooks, its hidden checks) go at once;
+        shared_network: grade in the uid fallback although it cannot take the network away (see
+        refuse_shared_network); private: folders besides the reference that the fallback's uids may not read (the
+        submissions, the output), made owner-only until close()."""
         if parallel < 1:
             raise ValueError(f"parallel must be at least 1, got {parallel}")
         self.parallel = int(parallel)
@@ -111,13 +150,18 @@ class Grader:
         written = None if written is None else set(written)
         self._computed = [e for e in self.exercise_ids if written is None or e in written]
         self.sandbox = sandbox or detect(unsafe)
+        refuse_shared_network(self.sandbox, shared_network)
+        self._private = contextlib.ExitStack()
+        if self.sandbox.kind == "user":         # every instructor path owner-only while student code runs
+            python_outside([self.reference, *private])
+            self._private.enter_context(owner_only(self.reference, *private))
         self._sources = source_hashes()
         self._tmp = tempfile.TemporaryDirectory(prefix="armlab-grade-")
         self._root = Path(self._tmp.name)
         self._pristine = build_worktree(self.reference, self._root / "reference")
         self._pristine.chmod(0o700)            # never entered by a run's user (the "user" sandbox)
         (self._root / "runs").mkdir(mode=0o711)
-        self.runner = Runner(self.sandbox, limits, _hidden_source())
+        self.runner = Runner(self.sandbox, limits)
         self._cache: dict[tuple, object] = {}
         self._locks: dict[tuple, threading.Lock] = {}
         self._guard = threading.Lock()
@@ -127,6 +171,7 @@ class Grader:
     def close(self) -> None:
         self.runner.close()
         self._tmp.cleanup()
+        self._private.close()
 
     def __enter__(self) -> Grader:
         return self
@@ -159,12 +204,32 @@ class Grader:
     def _discard(self, tree: Path) -> None:
         shutil.rmtree(tree.parent, ignore_errors=True)
 
-    def _notebook(self, tree: Path, name: str) -> NotebookRun:
+    def _bounded(self, deadline: Deadline | None, exercises: int = 1) -> Runner | None:
+        """The runner for one run: the limits of `exercises` exercises' worth of runs, cut to the time the
+        submission has left; None when none is left."""
+        left = float("inf") if deadline is None else deadline.left()
+        if left < 1:
+            return None
+        if deadline is None and exercises == 1:
+            return self.runner
+        runner = copy.copy(self.runner)        # shares the read-only folder; its own limits
+        runner.limits = replace(self.limits, timeout_s=min(self.limits.timeout_s * exercises, left),
+                                cpu_s=int(min(self.limits.cpu_s * exercises, left + 10)))
+        return runner
+
+    def _notebook(self, tree: Path, name: str, deadline: Deadline | None = None) -> NotebookRun:
+        """The notebook's run on a fresh copy of `tree`; a run that could not start, or whose results could not be
+        read, is a NotebookRun with the reason (never an exception: one submission never stops the class)."""
+        runner = self._bounded(deadline)
+        if runner is None:
+            return NotebookRun({}, deadline.spent())
         run_tree = self._fresh(tree)
         try:
             with self._guard:
                 self.runs += 1
-            return self.runner.notebook(run_tree, f"notebooks/{name}.ipynb")
+            return runner.notebook(run_tree, f"notebooks/{name}.ipynb")
+        except (OSError, ValueError, TypeError, KeyError, AttributeError, RecursionError, MemoryError) as e:
+            return NotebookRun({}, f"the notebook run's results could not be read ({type(e).__name__})")
         finally:
             self._discard(run_tree)
 
@@ -178,22 +243,27 @@ class Grader:
         forbidden = list(forbidden_of(exercise_id))
         return [None if compared_only and spec.outcome else
                 {"notebook": notebook, "function": spec.function, "adapter": spec.adapter, "prelude": spec.prelude,
-                 "cases": [args for check in checks for args in check], "forbidden": forbidden}
+                 "cases": [args for check in checks for args in check], "forbidden": forbidden, "judge": spec.judge}
                 for spec, checks in zip(_hidden.specs_of(exercise_id), _hidden.cases_of(exercise_id), strict=True)]
 
     def _with_specs(self, exercise_ids: Iterable[str]) -> list[str]:
         return [e for e in exercise_ids if _hidden is not None and _hidden.specs_of(e)]
 
-    def _harness(self, tree: Path, exercise_ids: list[str], compared_only: bool = False
-                 ) -> tuple[dict[str, list[dict | None]] | None, str]:
+    def _harness(self, tree: Path, exercise_ids: list[str], compared_only: bool = False,
+                 deadline: Deadline | None = None) -> tuple[dict[str, list[dict | None]] | None, str]:
         """Per exercise, its jobs' outputs (None for a job not run: see _jobs) from one harness run on a fresh copy
-        of `tree`; or None and why."""
+        of `tree`; or None and why (never an exception for what the run gave back)."""
+        runner = self._bounded(deadline, max(1, len(exercise_ids)))
+        if runner is None:
+            return None, deadline.spent()
         run_tree = self._fresh(tree)
         try:
             inside = self.runner.sandbox.inside(run_tree)
             jobs = {e: self._jobs(e, inside, compared_only) for e in exercise_ids}
             wanted = [job for e in exercise_ids for job in jobs[e] if job is not None]
-            got, problem = self.runner.harness(run_tree, wanted, exercises=len(exercise_ids)) if wanted else ([], "")
+            got, problem = runner.harness(run_tree, wanted, exercises=1) if wanted else ([], "")
+        except (OSError, ValueError, TypeError, KeyError, AttributeError, RecursionError, MemoryError) as e:
+            return None, f"the hidden checks' results could not be read ({type(e).__name__})"
         finally:
             self._discard(run_tree)
         if got is None:
@@ -231,12 +301,13 @@ class Grader:
                                               strict=True)):
             names = [f"hidden check {first + i}" for i in range(len(cases))]
             if outputs is None:
-                checks += [CheckResult(n, False, problem) for n in names]
+                checks += [CheckResult(n, False, student_side(problem)) for n in names]
             else:
                 verdicts = _hidden.compare(spec, outputs[k]["results"], self._expected[exercise_id][k],
                                            [len(c) for c in cases], first)
-                checks += [CheckResult(n, ok, msg) for n, (ok, msg) in zip(names, verdicts, strict=True)]
-                seen += outputs[k]["forbidden"]
+                checks += [CheckResult(n, ok, student_side(msg)) for n, (ok, msg) in zip(names, verdicts,
+                                                                                           strict=True)]
+                seen += [name for name in outputs[k]["forbidden"] if isinstance(name, str)]
             first += len(cases)
         return checks, sorted(set(seen))
 
@@ -252,8 +323,12 @@ class Grader:
         seen: list[str] = []
         if exercise_id in self._expected:
             outputs, problem = hidden
-            hidden_checks, seen = self._hidden_results(exercise_id, None if outputs is None else
-                                                       outputs[exercise_id], problem)
+            try:
+                hidden_checks, seen = self._hidden_results(exercise_id, None if outputs is None else
+                                                           outputs[exercise_id], problem)
+            except _MALFORMED as e:             # the run's results were not of the shape a harness writes
+                hidden_checks, seen = self._hidden_results(
+                    exercise_id, None, f"the hidden checks' results could not be read ({type(e).__name__})")
             checks += [CheckResult(c.name, c.passed, self._redact(c.message)) for c in hidden_checks]
         static = static_check(exercise_id, bodies)
         if static is not None and not static.passed:
@@ -283,12 +358,14 @@ class Grader:
         text = "\0\0".join(f"{e}\0" + "\0".join(b) for e, b in sorted(bodies.items()))
         return hashlib.sha256(text.encode()).hexdigest()
 
-    def grade_exercise(self, exercise_id: str, bodies: list[str]) -> ExerciseResult:
-        """The exercise alone: `bodies` spliced into the reference, its notebook and its hidden checks run."""
+    def grade_exercise(self, exercise_id: str, bodies: list[str], deadline: Deadline | None = None
+                       ) -> ExerciseResult:
+        """The exercise alone: `bodies` spliced into the reference, its notebook and its hidden checks run (within
+        `deadline`, if given)."""
         return self._once(("alone", exercise_id, self._digest({exercise_id: bodies})),
-                          lambda: self._alone(exercise_id, bodies))
+                          lambda: self._alone(exercise_id, bodies, deadline))
 
-    def _alone(self, exercise_id: str, bodies: list[str]) -> ExerciseResult:
+    def _alone(self, exercise_id: str, bodies: list[str], deadline: Deadline | None = None) -> ExerciseResult:
         try:
             for body in bodies:
                 check_body(body, exercise_id)
@@ -300,18 +377,20 @@ class Grader:
             if not any(exercise_id in ids for ids in check_cells(tree / f"notebooks/{ex.notebook}.ipynb").values()):
                 return score_exercise(exercise_id, [],
                                       f"notebooks/{ex.notebook}.ipynb has no '# CHECK {exercise_id}' cell")
-            runs, hidden = self._run_all(tree, [ex.notebook], [exercise_id])
+            runs, hidden = self._run_all(tree, [ex.notebook], [exercise_id], deadline)
             run = runs[ex.notebook]
             return score_exercise(exercise_id, self._checks(exercise_id, bodies, run, tree, hidden), run.problem)
         finally:
             self._discard(tree)
 
-    def _together(self, written: dict[str, list[str]]) -> dict[str, tuple[list[CheckResult], str]]:
+    def _together(self, written: dict[str, list[str]], deadline: Deadline | None = None
+                  ) -> dict[str, tuple[list[CheckResult], str]]:
         """Every written exercise's checks from one pass (each notebook once, the hidden checks in one run), with
         its notebook run's problem ('' when none)."""
         tree = self._spliced(written)
         try:
-            runs, hidden = self._run_all(tree, sorted({exercise(e).notebook for e in written}), list(written))
+            runs, hidden = self._run_all(tree, sorted({exercise(e).notebook for e in written}), list(written),
+                                         deadline)
             out = {}
             for e, b in written.items():
                 run = runs[exercise(e).notebook]
@@ -320,13 +399,14 @@ class Grader:
         finally:
             self._discard(tree)
 
-    def _run_all(self, tree: Path, notebooks: list[str], exercise_ids: list[str]
+    def _run_all(self, tree: Path, notebooks: list[str], exercise_ids: list[str], deadline: Deadline | None = None
                  ) -> tuple[dict[str, NotebookRun], tuple[dict | None, str]]:
         """The notebooks' runs and the exercises' hidden checks on `tree`, `parallel` runs at a time (the hidden
-        checks, the longest, first)."""
+        checks, the longest, first), none past `deadline`."""
         with ThreadPoolExecutor(max_workers=self.parallel) as pool:
-            hidden = pool.submit(self._harness, tree, self._with_specs(exercise_ids))
-            runs = dict(zip(notebooks, pool.map(lambda name: self._notebook(tree, name), notebooks), strict=True))
+            hidden = pool.submit(self._harness, tree, self._with_specs(exercise_ids), False, deadline)
+            runs = dict(zip(notebooks, pool.map(lambda name: self._notebook(tree, name, deadline), notebooks),
+                            strict=True))
             return runs, hidden.result()
 
     def _reference_bodies(self, exercise_id: str) -> list[str]:
@@ -336,6 +416,8 @@ class Grader:
                           lambda: regions_of(source_texts(self._pristine / name), exercise_id, name))
 
     def grade(self, submission: Submission) -> dict[str, ExerciseResult]:
+        """Every graded exercise's result for `submission`; its runs end within TIME_BUDGET x the timeout."""
+        deadline = Deadline(TIME_BUDGET * self.limits.timeout_s)
         results: dict[str, ExerciseResult] = {}
         written: dict[str, list[str]] = {}
         for exercise_id in self.exercise_ids:
@@ -358,7 +440,7 @@ class Grader:
                 except RegionRejected as e:
                     results[exercise_id] = ExerciseResult(exercise_id, 0.0, points, [], str(e))
         if written:
-            together = self._once(("together", self._digest(written)), lambda: self._together(written))
+            together = self._once(("together", self._digest(written)), lambda: self._together(written, deadline))
             failing = {e for e, (checks, _) in together.items() if not checks or not all(c.passed for c in checks)}
             for exercise_id, (checks, problem) in together.items():
                 others_fail = failing - {exercise_id}
@@ -367,8 +449,12 @@ class Grader:
                     # every check passed, or each other exercise that failed is the reference itself: the pass
                     # was already this exercise alone as far as a failure can tell
                     results[exercise_id] = score_exercise(exercise_id, checks, problem)
+                elif deadline.left() < 1:
+                    results[exercise_id] = score_exercise(exercise_id, checks, problem or (
+                        "scored from the pass with every exercise in place: the submission's time was spent before "
+                        "it could run alone"))
                 else:
-                    results[exercise_id] = self.grade_exercise(exercise_id, written[exercise_id])
+                    results[exercise_id] = self.grade_exercise(exercise_id, written[exercise_id], deadline)
         return {e: results[e] for e in self.exercise_ids}
 
     # -- for instructors trying hidden specs ----------------------------------------------------------------
@@ -410,11 +496,13 @@ def grade_submission(folder: Path | str, reference: Path | str, limits: Limits =
 
 def grade_class(submissions: Path | str, out: Path | str, reference: Path | str, jobs: int = 1,
                 limits: Limits = DEFAULT_LIMITS, exercises: Iterable[str] | None = None, unsafe: bool = False,
-                progress: Callable[[str, dict[str, ExerciseResult]], None] | None = None) -> dict[str, dict]:
+                progress: Callable[[str, dict[str, ExerciseResult]], None] | None = None,
+                shared_network: bool = False) -> dict[str, dict]:
     """Grade every student folder of `submissions` (in parallel on `jobs` threads, each run its own sandboxed
     process), calling progress(student, results) as each is done, and write OUT/grades.csv,
-    OUT/<student>/results.json and OUT/<student>/feedback.md, and the regions' similarity for the instructor:
-    OUT/similarity.csv and OUT/similarity.md (armlab_course.grading.similarity)."""
+    OUT/<student folder>/results.json and feedback.md (report.student_folder), and the regions' similarity for the
+    instructor: OUT/similarity.csv and OUT/similarity.md (armlab_course.grading.similarity). shared_network: see
+    Grader."""
     from .report import write_reports
 
     submissions = Path(submissions)
@@ -429,19 +517,39 @@ def grade_class(submissions: Path | str, out: Path | str, reference: Path | str,
         raise ValueError(f"--jobs must be at least 1, got {jobs}")
     reference = check_reference(Path(reference))
     read = {p: read_submission(p, reference) for p in students}       # read only: nothing runs yet
+    names = _unique_names(read[p].name for p in students)
     written = {e for submission in read.values() for e in submission.bodies}
     # a class smaller than the jobs: the spare ones run a submission's notebooks and hidden checks side by side
     parallel = max(1, jobs // len(students))
-    with Grader(reference, limits, exercises, unsafe=unsafe, written=written, parallel=parallel) as grader:
-        def one(path: Path) -> dict[str, ExerciseResult]:
-            results = grader.grade(read[path])
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    with Grader(reference, limits, exercises, unsafe=unsafe, written=written, parallel=parallel,
+                shared_network=shared_network, private=[submissions.resolve(), out.resolve()]) as grader:
+        def one(path: Path, name: str) -> dict[str, ExerciseResult]:
+            try:
+                results = grader.grade(read[path])
+            except Exception as e:         # noqa: BLE001 -- one submission never stops the class: it scores 0
+                why = f"the grader could not grade this submission ({type(e).__name__}): tell your instructor"
+                results = {i: ExerciseResult(i, 0.0, exercise(i).points, [], why) for i in grader.exercise_ids}
             if progress is not None:
-                progress(path.name, results)
+                progress(name, results)
             return results
 
         with ThreadPoolExecutor(max_workers=jobs) as pool:
-            graded = dict(zip((p.name for p in students), pool.map(one, students), strict=True))
+            graded = dict(zip(names, pool.map(one, students, names), strict=True))
         grader.verify_sources()
-    write_reports(graded, Path(out))
-    _similarity.write_similarity(read.values(), reference, Path(out), next(iter(graded.values())))
+    write_reports(graded, out)
+    _similarity.write_similarity(read.values(), reference, out, next(iter(graded.values())))
     return graded
+
+
+def _unique_names(names: Iterable[str]) -> list[str]:
+    """The students' names, each once: a second name that reads like an earlier one gets " (2)" and so on."""
+    out: list[str] = []
+    for name in names:
+        unique, k = name, 1
+        while unique in out:
+            k += 1
+            unique = f"{name} ({k})"
+        out.append(unique)
+    return out

@@ -1,17 +1,20 @@
 """Child side of the hidden checks: `python -m armlab_grader.harness`, run by the grader in the sandbox with the
-grading work tree (run.py). Standard input holds the run's key (one line) and the request: {"out": path, "jobs":
-[...]}; it is read whole and closed before any student code runs, and nothing of the request is left on disk or in
-sys.argv.
+grading work tree (run.py), talking to the judge (armlab_course.grading.judge) over its standard input and a
+duplicate of its standard output, one plain-data message a line (armlab_grader.wire; docs/grading.md, "The judge").
+The first message names the jobs (functions, adapters, forbidden names; no inputs); then each request carries one
+call's arguments and gets that call's result. The child holds no seed, generator, reference, scorer or key: it calls
+the student's functions on the inputs it is given, nothing is left on disk or in sys.argv, and the student's prints
+go to the run's log, not into the answers.
 
 Each job finds the exercise's function -- in a notebook, by running the code cells in an IPython shell up to the
 cell that defines it (prelude "cells"), or only their imports, definitions and literal constants (prelude
 "definitions": no simulator run); in the package, by importing it -- and calls it (through the spec's adapter,
-armlab_grader.hidden.<adapter>, when the exercise is a method or needs built objects) on each case's arguments.
+armlab_grader.adapters.<adapter>, when the exercise is a method or needs built objects) on each case's arguments.
 Before any student code runs, each job's forbidden functions are replaced by tripwires (CallWatch) that note a
 call made from the student's own code, whatever name it was reached by (getattr with a built-up string, an alias,
-functools.partial). The results (numbers and nested lists, NaN allowed; never pickle) and the forbidden calls
-seen are written signed with the run's key. It decides nothing: the grader's process compares the results with the
-values of the reference.
+functools.partial). The results (numbers, nested lists, arrays as plain data; never pickle) and the forbidden calls
+seen go back with each answer. It decides nothing: the judge compares the results with the values of the reference,
+or replays and scores what they tell the robot.
 """
 
 from __future__ import annotations
@@ -20,6 +23,7 @@ import ast
 import importlib
 import inspect
 import json
+import os
 import re
 import sys
 import types
@@ -27,7 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .child_common import close_stdin, read_key, read_rest, write_signed
+from . import wire
 
 
 def _definitions(source: str) -> str:
@@ -211,52 +215,100 @@ class CallWatch:
         CallWatch._active = None
 
 
-def _plain(value):
-    """A JSON-able copy of a result: arrays and tuples become (nested) lists of floats."""
-    if isinstance(value, (tuple, list)):
-        return [_plain(v) for v in value]
-    return np.asarray(value, dtype=float).tolist()
+def _adapters():
+    """The child's adapters (armlab_grader.adapters: plain data into the kit's objects and back), imported by main()
+    before any student code runs."""
+    return sys.modules["armlab_grader.adapters"]
 
 
-def run_job(job: dict, watch: CallWatch) -> dict:
-    """{"results": per call its value or error (an error for every call when the function cannot be found),
-    "forbidden": the forbidden calls `watch` saw}. A plain function gets its list arguments as arrays; an adapter
-    gets the JSON arguments as they are."""
-    try:
-        if job.get("notebook"):
-            function = _notebook_function(Path(job["notebook"]), job["function"], job.get("prelude", "cells"))
-        else:
-            function = _package_object(job["function"])
-            for member in ([function] if not isinstance(function, type) else list(vars(function).values())):
-                watch.add_region(member)
-        adapter = getattr(importlib.import_module("armlab_grader.hidden"), job["adapter"]) if job.get("adapter") \
-            else None
-    except Exception as e:                                       # the student's cells, reported for every call
-        return {"results": [{"error": f"{type(e).__name__}: {e}"[:300]} for _ in job["cases"]], "forbidden": []}
-    results = []
-    for args in job["cases"]:
+class _Job:
+    """One job of the run: the student's function found once (its error kept and reported for every call), the
+    adapter that calls it, and the forbidden calls its watch saw."""
+
+    def __init__(self, job: dict, watch: CallWatch):
+        self.job, self.watch = job, watch
+        self._loaded: tuple | None = None
+
+    def _load(self) -> tuple:
+        if self._loaded is None:
+            job = self.job
+            try:
+                if job.get("notebook"):
+                    function = _notebook_function(Path(job["notebook"]), job["function"], job.get("prelude", "cells"))
+                else:
+                    function = _package_object(job["function"])
+                    for member in ([function] if not isinstance(function, type) else list(vars(function).values())):
+                        self.watch.add_region(member)
+                adapter = getattr(_adapters(), job["adapter"]) if job.get("adapter") else None
+                self._loaded = (function, adapter, "")
+            except Exception as e:                               # the student's cells, reported for every call
+                self._loaded = (None, None, f"{type(e).__name__}: {e}"[:300])
+        return self._loaded
+
+    def call(self, args: list) -> dict:
+        """{"value": plain data} or {"error": the student's exception in one line}."""
+        function, adapter, error = self._load()
+        if error:
+            return {"error": error}
+        args = wire.decode(args)
         try:
-            with watch:
+            with self.watch:
                 if adapter is None:
                     value = function(*[np.asarray(a) if isinstance(a, list) else a for a in args])
                 else:
                     value = adapter(function, *args)
-            results.append({"value": _plain(value)})
-        except Exception as e:                                   # the student's error, reported per case
-            results.append({"error": f"{type(e).__name__}: {e}"[:300]})
-    return {"results": results, "forbidden": sorted(set(watch.seen))}
+            return {"value": wire.encode(_numbers(value))}
+        except Exception as e:                                   # the student's error, reported per call
+            return {"error": f"{type(e).__name__}: {e}"[:300]}
+
+
+def _numbers(value):
+    """A result as plain data: tuples, lists and dicts element-wise, arrays, strings and None kept (the wire sends
+    them), anything else as a float array (TypeError for what is not a number)."""
+    if isinstance(value, (tuple, list)):
+        return [_numbers(v) for v in value]
+    if isinstance(value, dict):
+        return {str(k): _numbers(v) for k, v in value.items()}
+    if value is None or isinstance(value, (str, np.ndarray)):
+        return value
+    return np.asarray(value, dtype=float).tolist()
 
 
 def main() -> int:
-    key = read_key()
-    request = json.loads(read_rest())
-    close_stdin()
+    """The child's loop: the first message names the jobs (no inputs); then each request {"seq", "job", "args"}
+    gets its answer {"nonce", "seq", "value" or "error", "forbidden"}, until {"end": true} or the pipe closes."""
+    reply = os.dup(1)
+    os.dup2(2, 1)                      # the student's prints go to the run's log, never into the answers
     sys.argv = [""]
+    importlib.import_module("armlab_grader.adapters")
+    reader = wire.LineReader(0)
+    first = wire.loads(reader.line())
+    nonce = str(first["nonce"])
     # every job's forbidden functions found before any student code runs (so that none can be swapped first)
-    watches = [CallWatch(job.get("forbidden", [])) for job in request["jobs"]]
-    out = [run_job(job, watch) for job, watch in zip(request["jobs"], watches, strict=True)]
-    write_signed(request["out"], out, key)
-    return 0
+    jobs = [_Job(job, CallWatch(job.get("forbidden", []))) for job in first["jobs"]]
+    _write_all(reply, wire.dumps({"nonce": nonce, "ready": len(jobs)}))
+    while True:
+        try:
+            request = wire.loads(reader.line())
+        except EOFError:
+            return 0
+        if request.get("end"):
+            return 0
+        job = jobs[int(request["job"])]
+        answer = job.call(request["args"])
+        answer.update(nonce=nonce, seq=request["seq"], forbidden=sorted(set(job.watch.seen)))
+        try:
+            line = wire.dumps(answer)
+        except (TypeError, ValueError) as e:
+            line = wire.dumps({"nonce": nonce, "seq": request["seq"], "error": f"unsendable result: {e}"[:300],
+                               "forbidden": answer["forbidden"]})
+        _write_all(reply, line)
+
+
+def _write_all(fd: int, data: bytes) -> None:
+    view = memoryview(data)
+    while view:
+        view = view[os.write(fd, view):]
 
 
 if __name__ == "__main__":

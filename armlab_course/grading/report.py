@@ -4,8 +4,10 @@ autograder format (score; tests with name, score, max_score, output, visibility)
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
+import re
 import tempfile
 from pathlib import Path
 
@@ -15,7 +17,7 @@ from .csv_cells import csv_text
 from .results import ExerciseResult
 
 __all__ = ["atomic_write", "results_json", "feedback_md", "grades_csv", "answers_csv", "table",
-           "self_check_report", "write_reports"]
+           "self_check_report", "write_reports", "student_folder"]
 
 
 def atomic_write(path: Path, text: str) -> None:
@@ -139,10 +141,34 @@ def answers_csv(graded: dict[str, dict[str, ExerciseResult]]) -> str:
                     ([student, *(results[i].answer or "" for i in by_hand)] for student, results in graded.items()))
 
 
+_RESERVED = ("grades.csv", "answers.csv")
+_PLAIN = re.compile(r"[\w][\w .@+,-]{0,99}")
+
+
+def student_folder(student: str) -> str:
+    """The folder of OUT that holds a student's results.json and feedback.md: the student's name when it is a
+    plain one (letters, digits, space, . @ + , - _; not starting with a dot or a dash; not one of the grader's own
+    files grades.csv and answers.csv), else its plain characters followed by a short hash of the whole name (so two
+    odd names never share a folder)."""
+    if _PLAIN.fullmatch(student) and student.lower() not in _RESERVED and student.rstrip(" .") == student:
+        return student
+    plain = re.sub(r"[^\w.@+,-]+", "_", student).strip("._-")[:60] or "student"
+    return f"{plain}-{hashlib.sha256(student.encode('utf-8', 'surrogatepass')).hexdigest()[:10]}"
+
+
 def write_reports(graded: dict[str, dict[str, ExerciseResult]], out: Path) -> None:
+    """OUT/<student folder>/results.json and feedback.md for each student (see student_folder), then
+    OUT/grades.csv and, when the course has written answers, OUT/answers.csv."""
+    taken: set[str] = set()
     for student, results in graded.items():
-        atomic_write(out / student / "results.json", results_json(results))
-        atomic_write(out / student / "feedback.md", feedback_md(student, results))
+        name, k = student_folder(student), 1
+        while name.lower() in taken:          # a plain name that reads like another's hashed one
+            k += 1
+            name = f"{student_folder(student)}-{k}"
+        taken.add(name.lower())
+        folder = out / name
+        atomic_write(folder / "results.json", results_json(results))
+        atomic_write(folder / "feedback.md", feedback_md(student, results))
     atomic_write(out / "grades.csv", grades_csv(graded))
     if any(r.by_hand for r in next(iter(graded.values())).values()):
         atomic_write(out / "answers.csv", answers_csv(graded))

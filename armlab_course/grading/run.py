@@ -1,11 +1,13 @@
 """Run student code for grading: a notebook of a grading work tree under `pytest --nbval`, or the hidden checks'
 harness, each in the sandbox (armlab_course.grading.sandbox) under the run's limits, and read what it reports.
 
-The child-side files (the nbval plugin, the harness, the kernel's start-up file, the hidden checks' adapters) are
-copied once, when the Runner is made, into a folder of the grader's that every run sees read-only, with a kernelspec
-of its own (so neither the instructor's nor the student's IPython or Jupyter settings enter). A run's results come
-back in a file signed with a key the run's main process reads from its standard input before any student code
-starts (HMAC-SHA256): a process of the run that rewrites the file cannot forge the signature. The run's console
+The child-side files (the nbval plugin, the harness, the kernel's start-up file, the plain-data format and the
+adapters; never the hidden checks) are copied once, when the Runner is made, into a folder of the grader's that every
+run sees read-only, with a kernelspec of its own (so neither the instructor's nor the student's IPython or Jupyter
+settings enter). A notebook run's results come back in a file signed with a key its pytest process reads from its
+standard input before any student code starts (HMAC-SHA256): the kernel that runs student code cannot forge the
+signature. The hidden checks' child answers the judge (armlab_course.grading.judge) over a pipe instead: what it
+says is the student's answer, which the judge checks. The run's console
 output goes to a file of which only the end is read; when the run ends or times out, the sandbox's PID namespace
 (or, for the unprivileged-user sandbox, a kill of every process of the run's user) ends everything it started.
 """
@@ -23,6 +25,8 @@ import signal
 import subprocess
 import sys
 import tempfile
+import time
+from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -37,7 +41,10 @@ _MAX_RESULTS_BYTES = 64 * 2**20     # a result file larger than this is refused 
 _CONFIG = "[pytest]\naddopts =\nfilterwarnings =\n    ignore::DeprecationWarning\n"
 KERNEL_NAME = "armlab-grader"
 # the grader's files that run in the child, copied into the run's read-only folder (package armlab_grader)
-CHILD_FILES = ("nbval_guard.py", "harness.py", "kernel_startup.py", "child_common.py")
+CHILD_FILES = ("nbval_guard.py", "harness.py", "kernel_startup.py", "child_common.py", "wire.py", "adapters.py")
+# of those, what only the hidden checks' child needs (a student release, whose self-check runs no hidden check, may
+# leave them out)
+HIDDEN_CHILD_FILES = ("harness.py", "wire.py", "adapters.py")
 # the environment a run inherits from the grader: locale and the numerics settings, nothing else
 _KEEP_ENV = ("PATH", "LANG", "LANGUAGE", "TZ", "PYTHONHASHSEED", "TERM")
 _KEEP_PREFIXES = ("LC_", "OPENBLAS", "NPY_", "OPENCV_", "OMP_", "MKL_")
@@ -102,32 +109,37 @@ def _ended(returncode: int) -> str:
     return f"exit code {returncode}"
 
 
+def tail_of(log) -> str:
+    """The last OUTPUT_TAIL bytes of a run's log file, as text."""
+    size = log.seek(0, os.SEEK_END)
+    log.seek(max(0, size - OUTPUT_TAIL))
+    return log.read().decode(errors="replace")
+
+
 class Runner:
     """Runs notebooks and the hidden checks of grading work trees in `sandbox` under `limits`. Owns the read-only
     folder of child-side files (made now, from the grader's own sources: nothing of the grader is read after student
     code starts); close() removes it."""
 
     def __init__(self, sandbox: Sandbox, limits: Limits = DEFAULT_LIMITS, hidden_source: Path | None = None):
+        """hidden_source: ignored (the hidden checks stay in the judge: nothing of them is copied for the child)."""
         self.sandbox, self.limits = sandbox, limits
         self._tmp = tempfile.TemporaryDirectory(prefix="armlab-grader-")
         self.files = Path(self._tmp.name) / "grader"
-        self._write_child_files(hidden_source)
+        self._write_child_files()
 
     def close(self) -> None:
         self._tmp.cleanup()
 
-    def _write_child_files(self, hidden_source: Path | None) -> None:
+    def _write_child_files(self) -> None:
         lib = self.files / "lib" / "armlab_grader"
         lib.mkdir(parents=True)
         (lib / "__init__.py").write_text('"""The grader\'s child-side files (a read-only copy for the runs)."""\n')
         here = Path(__file__).parent
         for name in CHILD_FILES:
+            if name in HIDDEN_CHILD_FILES and not (here / name).is_file():
+                continue
             shutil.copy2(here / name, lib / name)
-        if hidden_source is not None:
-            if hidden_source.is_dir():
-                shutil.copytree(hidden_source, lib / "hidden", ignore=shutil.ignore_patterns("__pycache__"))
-            else:
-                shutil.copy2(hidden_source, lib / "hidden.py")
         inside = self.sandbox.grader_inside(self.files)
         startup = f"{inside}/lib/armlab_grader/kernel_startup.py"
         spec = {"argv": [sys.executable, "-m", "ipykernel_launcher", "-f", "{connection_file}",
@@ -149,11 +161,12 @@ class Runner:
         env.setdefault("PATH", "/usr/bin:/bin")
         return env
 
-    def run(self, cmd: list[str], worktree: Path, stdin: bytes, limits: Limits | None = None
-            ) -> tuple[bool, str, int]:
-        """Run `cmd` (paths as seen inside) in the work tree in the sandbox with `stdin` under `limits` (default: the
-        runner's); (finished in time, the last OUTPUT_TAIL bytes of its output, its return code). Everything the run
-        started is gone when this returns."""
+    @contextmanager
+    def started(self, cmd: list[str], worktree: Path, limits: Limits | None = None, talk: bool = False):
+        """Start `cmd` (paths as seen inside) in the work tree in the sandbox under `limits` (default: the runner's);
+        yield (the process, its log: a temporary file with its console output). talk: its standard output is a
+        pipe to read (the judge's answers), its standard error the log; otherwise both go to the log. Standard input
+        is always a pipe. Everything the run started is gone when the block ends."""
         limits = limits or self.limits
         with self.sandbox.slot(worktree, self.files) as uid:
             argv = self.sandbox.argv(cmd, worktree, self.files, limits, uid)
@@ -161,29 +174,45 @@ class Runner:
             if group is not None:
                 argv = group.wrap(argv)
             with tempfile.TemporaryFile() as log:
-                proc = subprocess.Popen(argv, cwd=worktree, env=self._environment(worktree), stdout=log,
-                                        stderr=subprocess.STDOUT, stdin=subprocess.PIPE, start_new_session=True)
+                proc = subprocess.Popen(argv, cwd=worktree, env=self._environment(worktree),
+                                        stdout=subprocess.PIPE if talk else log,
+                                        stderr=log if talk else subprocess.STDOUT, stdin=subprocess.PIPE,
+                                        start_new_session=True)
                 try:
-                    proc.stdin.write(stdin)
-                    proc.stdin.close()
-                except (BrokenPipeError, OSError):
-                    pass
-                try:
-                    proc.wait(timeout=limits.timeout_s)
-                    done = True
-                except subprocess.TimeoutExpired:
-                    done = False
+                    yield proc, log
                 finally:
                     try:
                         os.killpg(proc.pid, signal.SIGKILL)
                     except ProcessLookupError:
                         pass
                     proc.wait()
+                    for pipe in (proc.stdin, proc.stdout):
+                        if pipe is not None:
+                            try:
+                                pipe.close()
+                            except OSError:
+                                pass
                     if group is not None:
                         group.close()
-                size = log.seek(0, os.SEEK_END)
-                log.seek(max(0, size - OUTPUT_TAIL))
-                out = log.read().decode(errors="replace")
+
+    def run(self, cmd: list[str], worktree: Path, stdin: bytes, limits: Limits | None = None
+            ) -> tuple[bool, str, int]:
+        """Run `cmd` (paths as seen inside) in the work tree in the sandbox with `stdin` under `limits` (default: the
+        runner's); (finished in time, the last OUTPUT_TAIL bytes of its output, its return code). Everything the run
+        started is gone when this returns."""
+        limits = limits or self.limits
+        with self.started(cmd, worktree, limits) as (proc, log):
+            try:
+                proc.stdin.write(stdin)
+                proc.stdin.close()
+            except (BrokenPipeError, OSError):
+                pass
+            try:
+                proc.wait(timeout=limits.timeout_s)
+                done = True
+            except subprocess.TimeoutExpired:
+                done = False
+            out = tail_of(log)
         return done, out, proc.returncode
 
     def notebook(self, worktree: Path, notebook: str, lax: bool = False) -> NotebookRun:
@@ -214,30 +243,20 @@ class Runner:
         return NotebookRun(cells, died)
 
     def harness(self, worktree: Path, jobs: list[dict], exercises: int = 1) -> tuple[list | None, str]:
-        """The hidden checks' jobs run in one sandboxed harness process of `worktree` (armlab_grader.harness): per job
-        {"results": per call {"value": ...} or {"error": ...}, "forbidden": forbidden calls seen}; or None and
-        why. The run's wall-clock and CPU limits are the runner's times `exercises` (the hidden checks of that many
-        exercises run in this one process)."""
+        """The hidden checks' jobs (armlab_course.grading.judge.run_jobs: each with its cases and its judge-side
+        hook) asked of one sandboxed child of `worktree` (armlab_grader.harness) over the judge's pipe: per job
+        {"results": per case {"value": ...} or {"error": ...}, "forbidden": forbidden calls seen}; or None and why
+        when the child never answered. The run's wall-clock and CPU limits are the runner's times `exercises` (the
+        hidden checks of that many exercises run in this one process)."""
+        from .judge import run_jobs
+
         limits = replace(self.limits, timeout_s=self.limits.timeout_s * max(1, exercises),
                          cpu_s=self.limits.cpu_s * max(1, exercises))
-        work = self.sandbox.inside(worktree)
-        private = worktree / ".grader"
-        private.mkdir(exist_ok=True)
-        results = private / "hidden-results.json"
-        key = secrets.token_bytes(32)
-        request = json.dumps({"out": f"{work}/.grader/hidden-results.json", "jobs": jobs}).encode()
-        done, out, code = self.run([sys.executable, "-m", "armlab_grader.harness"], worktree,
-                                   key.hex().encode() + b"\n" + request, limits)
-        if not done:
-            return None, f"the hidden checks did not finish within {limits.timeout_s:g} s (wall clock)"
-        try:
-            got = verify_signed(results, key)
-            if not isinstance(got, list) or len(got) != len(jobs) or not all(
-                    isinstance(job, dict) and isinstance(job.get("results"), list) and
-                    all(isinstance(r, dict) for r in job["results"]) and isinstance(job.get("forbidden"), list)
-                    for job in got):
-                raise ValueError("not a list of results per job")
-            return got, ""
-        except (OSError, ValueError) as e:
-            tail = " | ".join(out.strip().splitlines()[-2:])
-            return None, f"the hidden checks gave no results ({_ended(code)}; {e}): {tail}"[:600]
+        with self.started([sys.executable, "-m", "armlab_grader.harness"], worktree, limits, talk=True) as (proc, log):
+            got, problem = run_jobs(proc, jobs, time.monotonic() + limits.timeout_s)
+            if problem:
+                proc.kill()
+                proc.wait()
+                tail = " | ".join(tail_of(log).strip().splitlines()[-2:])
+                problem = f"{problem} ({_ended(proc.returncode)}): {tail}"[:600]
+        return got, problem

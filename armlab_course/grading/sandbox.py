@@ -21,39 +21,61 @@ from __future__ import annotations
 
 import fcntl
 import itertools
+import json
 import os
 import shutil
-import signal
 import stat
 import subprocess
 import sys
 import sysconfig
 import threading
-import time
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
+from .watch import entries
+from .watch import kill_until_gone as _kill_until_gone
+
 __all__ = ["GRADER", "HOME", "WORK", "USER_UIDS", "Limits", "Sandbox", "SandboxUnavailable", "detect", "lock_down",
-           "RUN_USERS", "uid_lock_dir", "uids_in_use"]
+           "RUN_USERS", "uid_lock_dir", "uids_in_use", "remove_owned", "SHARED_TMP", "owner_only",
+           "refuse_shared_network", "python_outside"]
 
 @dataclass(frozen=True)
 class Limits:
-    """timeout_s: wall-clock seconds for one run; cpu_s: CPU seconds per process; memory_mb: address space per
-    process; max_procs: processes of one run at once (a pids cgroup, or the run's own user's RLIMIT_NPROC).
-    (Defined here, where the sandbox applies them; armlab_course.grading.run re-exports it.)"""
+    """One run's limits (defined here, where the sandbox applies them; armlab_course.grading.run re-exports it):
+    - timeout_s: wall-clock seconds for the run;
+    - cpu_s: CPU seconds per process (RLIMIT_CPU);
+    - memory_mb: address space per process (RLIMIT_AS), and the resident memory of all the run's processes together
+      (the watch);
+    - max_procs: processes of the run at once (RLIMIT_NPROC of a uid or user namespace of the run's own, a pids
+      cgroup where there is one, and the watch's count);
+    - disk_mb: the largest file (RLIMIT_FSIZE, which also caps the run's console output) and what the run may add
+      to its work tree and home (the watch);
+    - scratch_mb: the size of each of the sandbox's memory-backed folders (/tmp, the home, /dev/shm);
+    - max_files: files and folders the run may add (the watch)."""
 
     timeout_s: float = 300.0
     cpu_s: int = 300
     memory_mb: int = 8192
     max_procs: int = 256
+    disk_mb: int = 1024
+    scratch_mb: int = 512
+    max_files: int = 20_000
 
 
 WORK = "/home/student/work"        # the work tree, inside a "bwrap" sandbox
 HOME = "/home/student"
 GRADER = "/grader"                 # the grader's files (read-only), inside a "bwrap" sandbox
 USER_UIDS = range(64000, 64016)    # the unprivileged users of the "user" backend, one per concurrent run
-_SYSTEM = ("/usr", "/bin", "/sbin", "/lib", "/lib64", "/lib32", "/etc")
+_SYSTEM = ("/usr", "/bin", "/sbin", "/lib", "/lib64", "/lib32")
+# what of /etc the runs need (the dynamic loader's cache, time zone, user and host names, the alternatives' links,
+# fonts, MIME types); never all of it (shadow, gshadow, sudoers, keys)
+_ETC = ("ld.so.cache", "ld.so.conf", "ld.so.conf.d", "localtime", "timezone", "passwd", "group", "nsswitch.conf",
+        "hosts", "host.conf", "alternatives", "fonts", "mime.types", "os-release", "matplotlibrc")
+# the shared temporary folders a run under a uid of its own may write to (the "user" backend): emptied of what the
+# run's uid owns after each run
+SHARED_TMP = ("/tmp", "/var/tmp", "/dev/shm")
+_WATCH = (Path(__file__).parent / "watch.py").read_text(encoding="utf-8")    # read now: see watch.py
 
 
 class SandboxUnavailable(RuntimeError):
@@ -76,11 +98,27 @@ def _python_roots() -> list[str]:
 
 def _limits_argv(limits, nproc: bool = False) -> list[str]:
     """`prlimit` with the run's limits: CPU seconds (soft: SIGXCPU, hard 5 s later: SIGKILL), address space, file
-    size, no core files; with `nproc`, the process count of the run's own user (the "user" backend)."""
+    size, no core files; with `nproc`, the process count of the run's own uid or user namespace."""
     cap = limits.memory_mb * 2**20
+    size = limits.disk_mb * 2**20
     procs = [f"--nproc={limits.max_procs}:{limits.max_procs}"] if nproc else []
-    return ["prlimit", f"--cpu={limits.cpu_s}:{limits.cpu_s + 5}", f"--as={cap}:{cap}", f"--fsize={2**30}:{2**30}",
+    return ["prlimit", f"--cpu={limits.cpu_s}:{limits.cpu_s + 5}", f"--as={cap}:{cap}", f"--fsize={size}:{size}",
             "--core=0:0", *procs, "--"]
+
+
+def _drop_to(uid: int) -> list[str]:
+    """setpriv to `uid`: its own group, no supplementary groups, no capabilities (none to inherit, an empty bounding
+    set), no privilege from a set-uid program."""
+    return ["setpriv", f"--reuid={uid}", f"--regid={uid}", "--clear-groups", "--inh-caps=-all",
+            "--bounding-set=-all", "--no-new-privs", "--"]
+
+
+def _watched(argv: list[str], worktree: Path, limits, uid: int | None) -> list[str]:
+    """`argv` under the watch (armlab_course.grading.watch), with the run's caps."""
+    caps = {"procs": limits.max_procs + 8, "rss_mb": limits.memory_mb, "disk_mb": limits.disk_mb,
+            "files": limits.max_files, "trees": [str(worktree.parent)], "uid": uid,
+            "shared": [p for p in SHARED_TMP if os.path.isdir(p)]}
+    return [sys.executable, "-I", "-S", "-c", _WATCH, json.dumps(caps), "--", *argv]
 
 
 _PIDS_V1 = Path("/sys/fs/cgroup/pids")
@@ -136,25 +174,53 @@ class Sandbox:
         """The grader's read-only folder as the sandboxed process sees it."""
         return GRADER if self.kind == "bwrap" else str(grader)
 
+    @property
+    def own_uid(self) -> bool:
+        """Whether each run gets a uid of its own from USER_UIDS: the "user" backend, and "bwrap" when the grader is
+        root (student code never runs as root, even in a namespace)."""
+        return self.kind == "user" or (self.kind == "bwrap" and os.getuid() == 0)
+
     def argv(self, cmd: list[str], worktree: Path, grader: Path, limits, uid: int | None = None) -> list[str]:
-        """The command line that runs `cmd` (its paths already as seen inside) in this sandbox."""
-        bounded = _limits_argv(limits, nproc=self.kind == "user") + cmd
-        if self.kind == "bwrap":
-            binds: list[str] = []
-            for path in _SYSTEM:
-                binds += ["--ro-bind-try", path, path]
-            for root in _python_roots():
-                binds += ["--ro-bind", root, root]
-            # the private /tmp and /home first: a bind below them (a venv under /tmp, say) must come after
-            return ["bwrap", "--die-with-parent", "--new-session", "--unshare-all", "--cap-drop", "ALL",
-                    "--proc", "/proc", "--dev", "/dev", "--tmpfs", "/tmp", "--tmpfs", "/home", *binds,
-                    "--dir", HOME, "--bind", str(worktree), WORK, "--ro-bind", str(grader), GRADER,
-                    "--chdir", WORK, "--", *bounded]
-        if self.kind == "user":
+        """The command line that runs `cmd` (its paths already as seen inside) in this sandbox, under the watch."""
+        bounded = _limits_argv(limits, nproc=self.kind != "none") + cmd
+        if self.own_uid:
             assert uid is not None
-            return ["setpriv", f"--reuid={uid}", f"--regid={uid}", "--clear-groups", "--inh-caps=-all",
-                    "--bounding-set=-all", "--", *bounded]
-        return bounded
+            bounded = _drop_to(uid) + bounded
+        if self.kind == "bwrap":
+            return _watched(self._bwrap(worktree, grader, limits, uid is not None) + bounded, worktree, limits, uid)
+        return _watched(bounded, worktree, limits, uid)
+
+    @staticmethod
+    def _bwrap(worktree: Path, grader: Path, limits, as_root: bool) -> list[str]:
+        """bubblewrap's part of the command line. As root: no user namespace (the run's uid is a real, unprivileged
+        one, dropped to by setpriv inside, so that root-owned files stay root's); otherwise a user namespace of the
+        run's own (which also gives RLIMIT_NPROC a count of the run's processes alone) and no capabilities. The
+        root, /dev and the bound system folders are read-only; /tmp, the home and /dev/shm are memory-backed and
+        `scratch_mb` each."""
+        size = str(limits.scratch_mb * 2**20)
+        binds: list[str] = []
+        for path in _SYSTEM:
+            binds += ["--ro-bind-try", path, path]
+        binds += ["--perms", "0755", "--dir", "/etc"]
+        for name in _ETC:
+            binds += ["--ro-bind-try", f"/etc/{name}", f"/etc/{name}"]
+        made: set[str] = set()
+        for root in _python_roots():
+            for parent in reversed(Path(root).parents[:-1]):    # bwrap would make them owner-only
+                if str(parent) not in made and not str(parent).startswith(_SYSTEM):
+                    made.add(str(parent))
+                    binds += ["--perms", "0755", "--dir", str(parent)]
+            binds += ["--ro-bind", root, root]
+        namespaces = (["--unshare-ipc", "--unshare-pid", "--unshare-net", "--unshare-uts", "--unshare-cgroup-try"]
+                      if as_root else ["--unshare-all", "--cap-drop", "ALL"])
+        # the private /tmp and home first: a bind below them (a venv under /tmp, say) must come after
+        return ["bwrap", "--die-with-parent", "--new-session", *namespaces, "--proc", "/proc",
+                "--dev", "/dev", "--perms", "1777", "--size", size, "--tmpfs", "/dev/shm", "--remount-ro", "/dev",
+                "--perms", "1777", "--size", size, "--tmpfs", "/tmp",
+                "--perms", "0755", "--dir", str(Path(HOME).parent), "--perms", "0777", "--size", size, "--tmpfs", HOME,
+                *binds,
+                "--bind", str(worktree), WORK, "--ro-bind", str(grader), GRADER, "--remount-ro", "/",
+                "--chdir", WORK, "--"]
 
     def home(self, worktree: Path) -> str:
         """HOME for the run: a private tmpfs in "bwrap", else a folder beside the work tree."""
@@ -162,9 +228,10 @@ class Sandbox:
 
     @contextmanager
     def slot(self, worktree: Path, grader: Path):
-        """Prepare one run (for "user": take a free uid, hand the work tree and a home to it) and clean up after it
-        (for "user": kill every process of that uid). Yields the uid or None."""
-        if self.kind != "user":
+        """Prepare one run (with a uid of its own: take a free one, hand the work tree and a home to it) and clean up
+        after it (kill every process of that uid; for "user", remove what it left in the shared temporary folders).
+        Yields the uid or None."""
+        if not self.own_uid:
             if self.kind == "none":
                 Path(self.home(worktree)).mkdir(exist_ok=True)
             yield None
@@ -173,18 +240,21 @@ class Sandbox:
         try:
             _kill_user(uid)                                # a crashed grader's leftovers (its lock died with it)
             run_dir = worktree.parent                      # the run's own folder: the work tree and a home
-            Path(self.home(worktree)).mkdir(exist_ok=True)
+            if self.kind == "user":
+                Path(self.home(worktree)).mkdir(exist_ok=True)
+                for base in (run_dir.parent, grader.parent):
+                    for parent in (base, *base.parents):   # traversable by the run's user, not listable
+                        mode = parent.stat().st_mode
+                        if parent.stat().st_uid == os.getuid() and not mode & 0o001:
+                            parent.chmod((mode & ~0o004) | 0o001)
             _chown_tree(run_dir, uid)
             run_dir.chmod(0o700)
-            for base in (run_dir.parent, grader.parent):
-                for parent in (base, *base.parents):       # traversable by the run's user, not listable
-                    mode = parent.stat().st_mode
-                    if parent.stat().st_uid == os.getuid() and not mode & 0o001:
-                        parent.chmod((mode & ~0o004) | 0o001)
             _readable_tree(grader)
             yield uid
         finally:
             _kill_user(uid)
+            if self.kind == "user":
+                remove_owned(uid, SHARED_TMP)
             RUN_USERS.give(uid)
 
 
@@ -284,24 +354,67 @@ def _pids_of(uid: int) -> list[int]:
     return pids
 
 
-def _kill_until_gone(members) -> None:
-    """SIGKILL every pid members() lists, again until it lists none (a process may fork while it is being killed;
-    at most 100 rounds)."""
-    for _ in range(100):
-        pids = members()
-        if not pids:
-            return
-        for pid in pids:
-            try:
-                os.kill(pid, signal.SIGKILL)
-            except ProcessLookupError:
-                pass
-        time.sleep(0.02)
-
-
 def _kill_user(uid: int) -> None:
     """Kill every process of `uid` until none is left."""
     _kill_until_gone(lambda: _pids_of(uid))
+
+
+def remove_owned(uid: int, folders: tuple[str, ...]) -> list[str]:
+    """Remove every entry of `folders` (not below them: the shared temporary folders are sticky, so a uid can only
+    have made entries at their top or inside its own) that `uid` owns; the paths removed."""
+    gone = []
+    for folder in folders:
+        for entry, _info in entries(folder, uid):
+            try:
+                if entry.is_dir(follow_symlinks=False):
+                    shutil.rmtree(entry.path, ignore_errors=True)
+                else:
+                    os.unlink(entry.path)
+                gone.append(entry.path)
+            except OSError:
+                continue
+    return gone
+
+
+@contextmanager
+def owner_only(*paths: Path):
+    """Make each existing folder of `paths` owner-only (mode & 0o700) while the block runs, then give each its mode
+    back: what the "user" backend's uids must not read (the instructor's checkout, the submissions, the output)."""
+    modes = {}
+    try:
+        for path in paths:
+            if path.is_dir() and not path.is_symlink():
+                modes[path] = path.stat().st_mode & 0o7777
+                path.chmod(modes[path] & 0o700)
+        yield
+    finally:
+        for path, mode in modes.items():
+            try:
+                path.chmod(mode)
+            except OSError:
+                pass
+
+
+def refuse_shared_network(sandbox: Sandbox, allowed: bool) -> None:
+    """SandboxUnavailable, saying why, for the "user" backend unless the instructor allowed it: without namespaces
+    student code shares the machine's network (127.0.0.1 included, which the notebook's kernel itself needs, so no
+    filter can tell the two apart)."""
+    if sandbox.kind == "user" and not allowed:
+        raise SandboxUnavailable("student code would run in the uid fallback (root without namespaces), which cannot "
+                                 "take the network away: a region could send the hidden checks out or reach a "
+                                 "service on 127.0.0.1. Grade where bubblewrap runs, or pass --allow-shared-network "
+                                 "(Gradescope: ARMLAB_ALLOW_SHARED_NETWORK=1) to grade anyway")
+
+
+def python_outside(paths: list[Path]) -> None:
+    """SandboxUnavailable when the grader's Python lives inside one of `paths` (which the "user" backend makes
+    owner-only: the run's uid could not start it)."""
+    here = [Path(os.path.realpath(p)) for p in (sys.prefix, sys.executable)]
+    for path in paths:
+        inside = [h for h in here if h == path.resolve() or path.resolve() in h.parents]
+        if inside:
+            raise SandboxUnavailable(f"the grader's Python ({inside[0]}) lives inside {path}, which the uid fallback "
+                                     f"makes owner-only: run the grader with a Python outside it")
 
 
 def lock_down(*paths: Path) -> None:
@@ -315,17 +428,25 @@ def lock_down(*paths: Path) -> None:
 def _bwrap_works() -> tuple[bool, str]:
     if shutil.which("bwrap") is None:
         return False, "bubblewrap is not installed (Debian: apt-get install bubblewrap)"
+    try:
+        usage = subprocess.run(["bwrap", "--help"], capture_output=True, text=True, timeout=30).stdout
+    except (OSError, subprocess.TimeoutExpired) as e:
+        return False, f"bubblewrap did not start ({e})"
+    if "--size" not in usage:
+        return False, ("this bubblewrap cannot size a tmpfs (--size, bubblewrap 0.8 and later): the sandbox's /tmp "
+                       "would be unbounded memory; install a newer bubblewrap")
     probe = Sandbox("bwrap")
     import tempfile
 
     with tempfile.TemporaryDirectory() as tmp:
         (Path(tmp) / "w").mkdir()
         (Path(tmp) / "g").mkdir()
-        cmd = probe.argv([sys.executable, "-c", "print('ok')"], Path(tmp) / "w", Path(tmp) / "g", Limits())
-        try:
-            done = subprocess.run(cmd, capture_output=True, text=True, timeout=60, stdin=subprocess.DEVNULL)
-        except (OSError, subprocess.TimeoutExpired) as e:
-            return False, f"bubblewrap did not start ({e})"
+        with probe.slot(Path(tmp) / "w", Path(tmp) / "g") as uid:
+            cmd = probe.argv([sys.executable, "-c", "print('ok')"], Path(tmp) / "w", Path(tmp) / "g", Limits(), uid)
+            try:
+                done = subprocess.run(cmd, capture_output=True, text=True, timeout=60, stdin=subprocess.DEVNULL)
+            except (OSError, subprocess.TimeoutExpired) as e:
+                return False, f"bubblewrap did not start ({e})"
     if done.returncode != 0 or done.stdout.strip() != "ok":
         return False, f"bubblewrap cannot make namespaces here: {done.stderr.strip()[:200]}"
     return True, ""

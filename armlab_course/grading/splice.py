@@ -21,8 +21,7 @@ __all__ = ["RegionRejected", "tracked_files", "check_body", "splice_text", "writ
 # nbval's comment markers, the kit's check tags and exercise markers: a student body may hold none of them. A line
 # is a marker the way nbval reads one (nbval.plugin.find_comment_markers: the stripped line starts with '#', and
 # lstrip('#').strip() is the marker), so any number of '#' counts.
-_FORBIDDEN = re.compile(r"^\s*#+\s*(NBVAL_\w*|CHECK\b|BEGIN SOLUTION|END SOLUTION|PYTEST_VALIDATE_IGNORE_OUTPUT)",
-                        re.MULTILINE)
+_FORBIDDEN = re.compile(r"^\s*#+\s*(NBVAL_\w*|CHECK\b|BEGIN SOLUTION|END SOLUTION|PYTEST_VALIDATE_IGNORE_OUTPUT)")
 # the grader's own files: never copied into a work tree that student code sees
 GRADER_ONLY = ("armlab_course/grading/hidden.py", "armlab_course/grading/hidden/")
 
@@ -48,11 +47,12 @@ def tracked_files(reference: Path) -> list[str]:
 def check_body(body: str, exercise_id: str) -> None:
     """RegionRejected naming the line when a student body holds an nbval marker, a CHECK tag or an exercise
     marker."""
-    found = _FORBIDDEN.search(body)
-    if found:
-        line = body[found.start():].splitlines()[0].strip()
-        raise RegionRejected(f"the region of {exercise_id} holds the marker line {line!r}: markers and tags are not "
-                             f"allowed inside an exercise region")
+    # line by line as str.splitlines() splits them (what splicing and nbval do): a form feed, a lone carriage return
+    # or U+2028 starts a line there too, so a marker cannot hide behind one
+    for line in body.splitlines():
+        if _FORBIDDEN.match(line):
+            raise RegionRejected(f"the region of {exercise_id} holds the marker line {line.strip()!r}: markers and "
+                                 f"tags are not allowed inside an exercise region")
 
 
 def splice_text(text: str, exercise_id: str, bodies: list[str], start: int, where: str) -> tuple[str, int]:

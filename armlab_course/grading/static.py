@@ -33,15 +33,22 @@ def forbidden_of(exercise_id: str) -> tuple[str, ...]:
     return tuple(FORBIDDEN.get(exercise_id, ())) + FORBIDDEN_EVERYWHERE
 
 
+class Unreadable(ValueError):
+    """A region the static check cannot read: nested too deeply for the parser, or too large."""
+
+
 def _parse(body: str) -> tuple[ast.Module | None, int]:
     """The region's statements, dedented (a region sits inside a function or a loop), and how many lines were put
-    before them; None when it does not parse (the notebook run reports that)."""
+    before them; None when it does not parse (the notebook run reports that); Unreadable when the parser gives up
+    (nesting deeper than Python's recursion limit, memory)."""
     text = textwrap.dedent(body)
     for offset, attempt in ((0, text), (1, "def _region():\n" + textwrap.indent(text, "    "))):
         try:
             return ast.parse(attempt), offset
         except SyntaxError:
             continue
+        except (RecursionError, MemoryError) as e:
+            raise Unreadable(f"the region is nested too deeply to be checked ({type(e).__name__})") from None
     return None, 0
 
 
@@ -99,7 +106,10 @@ def static_check(exercise_id: str, bodies: list[str]) -> CheckResult | None:
         return None
     own = exercise(exercise_id).functions
     for k, body in enumerate(bodies, start=1):
-        uses = forbidden_uses(body, names, own)
+        try:
+            uses = forbidden_uses(body, names, own)
+        except Unreadable as e:
+            return CheckResult(STATIC_CHECK, False, f"{e}: write it as plain statements")
         if uses:
             name, line = uses[0]
             where = f"region {k}, line {line}" if len(bodies) > 1 else f"line {line} of the region"

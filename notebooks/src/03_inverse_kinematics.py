@@ -47,10 +47,9 @@ robot = rx200()
 lab = lab_config()
 rng = np.random.default_rng(3)
 
-h0 = robot.dh[0, 1]                 # shoulder height, 104.57 mm
-L1 = robot.dh[1, 2]                 # upper arm (hypotenuse of the 50 x 200 mm L), 206.155 mm
-L2 = robot.dh[2, 2]                 # forearm, 200 mm
-Lt = robot.dh[4, 1]                 # wrist_angle axis to the tool point, 158.575 mm
+# shoulder height 104.57 mm, upper arm (hypotenuse of the 50 x 200 mm L) 206.155 mm, forearm 200 mm, wrist_angle axis
+# to the tool point 158.575 mm: read off the manufacturer's model
+h0, L1, L2, Lt = kinematics.arm_geometry(robot)
 beta = np.arctan2(50.0, 200.0)      # the L's angle from vertical
 print(f"h0 = {h0:.2f} mm, L1 = {L1:.3f} mm, L2 = {L2:.1f} mm, Lt = {Lt:.3f} mm, beta = {np.degrees(beta):.2f} deg")
 

@@ -101,7 +101,7 @@ def see(session: Session, obstacles=(), settings: DetectionSettings | None = Non
     """Arm out of the camera's view, one frame, corrected depth, every object's top face (tasks.perception.observe with
     all_objects: distractors included, which the plans avoid), with the session's calibration and guarded arm."""
     session = as_session(session, "see")
-    obs = perception.observe(session.station, session.calibration, session.arm, obstacles, all_objects=True,
+    obs = perception.observe(session.station, session.calibration, session, obstacles, all_objects=True,
                              settings=settings)
     return Look(obs.frame, obs.depth, obs.blocks)
 

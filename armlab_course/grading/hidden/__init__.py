@@ -1,19 +1,18 @@
-"""The hidden checks (instructor only: not in the student release, see RELEASE_EXCLUDES): per exercise, fresh inputs
-drawn from the grader's own seed. The student's function runs in a bounded subprocess of the grading work tree
-(armlab_course.grading.harness) and writes its results as JSON; the expected values come from the same harness run on
-the
-reference work tree; the comparison happens here, in the grader's process, so nothing the student's code patches
-can change it.
+"""The hidden checks (instructor only: not in the student release, see RELEASE_EXCLUDES, and never copied into the
+sandbox): per exercise, fresh inputs drawn from the grader's own seed. They run in the judge, the grader's own
+process (armlab_course.grading.judge): it sends each call's inputs as plain data to the sandboxed child
+(armlab_course.grading.harness), which calls the student's function and answers in plain data; the expected values
+come from the same protocol run on the reference work tree before any student code runs; the comparison, and every
+open task's replay and score, happen here, so nothing the student's code does can change them.
 
 Each exercise's hidden checks live in a module of their own, named by its declaration (Exercise.hidden, by default
 its id with the dot as an underscore: `fk_dh_transform`): SPECS (a tuple of HiddenSpec) and FORBIDDEN (the library
 and kit functions that would do the exercise for the student; armlab_course.grading.static reads the region's text for
 them, nothing is run). An exercise without such a module is graded by its public checks only.
 
-The adapters (`_call_*` functions of those modules) run in the child, never here: they build what the student's
-function takes (a Camera, a colour model, a sim arm, detections) from JSON arguments and turn its result into
-numbers. They reach the library only through its public parameters. `armlab_course.grading.hidden.<adapter name>` finds
-an adapter in whichever exercise module defines it.
+The adapters a spec names run in the child (armlab_course.grading.adapters, copied into the sandbox): they build what
+the student's function takes (a Camera, a colour model, a sim arm, detections) from plain data and turn its result
+into plain data. A spec's judge hook (HiddenSpec.judge) runs here.
 """
 
 from __future__ import annotations
@@ -39,13 +38,18 @@ SEED = 20261101
 class HiddenSpec:
     """function: the name in the exercise's notebook, or the dotted path of a package exercise's function (or class);
     cases: from a numpy Generator, a list of hidden checks, each a list of argument lists (JSON-able: floats, bools,
-    lists); atol: the tolerance of the comparison (in the function's units); adapter: the name of a `_call_*`
-    function of this module the child calls as adapter(function, *args) instead of function(*args) ('' for none);
+    lists); atol: the tolerance of the comparison (in the function's units); adapter: the name of a function of
+    armlab_course.grading.adapters the child calls as adapter(function, *args) instead of function(*args) ('' for
+    none);
     prelude: how the child reaches a notebook function ('cells': every code cell before it runs; 'definitions':
     only their imports, definitions and literal constants, no simulator run); agree: the fraction of a result's
     numbers that must match the expected ones within atol (1.0: all); outcome: an open task graded on outcomes,
     each number of a result a criterion met (1.0) or not (0.0), so the expected value is all ones and the reference
-    does not run for it (the kit's tests hold the reference to full marks)."""
+    does not run for it (the kit's tests hold the reference to full marks); judge: the judge-side hook,
+    judge(call, *args) -> the value compared, where call(*request_args) asks the child for one call of the function
+    (through the adapter) and returns its plain answer (raising judge.ChildError with the student's error): it
+    renders inputs, scores answers and, for an open task, replays what the answers tell the robot on the judge's own
+    simulator (None: the case's arguments are sent as they are and the answer is the value)."""
 
     function: str
     cases: Callable[[np.random.Generator], list[list[list]]]
@@ -54,6 +58,7 @@ class HiddenSpec:
     prelude: str = "cells"
     agree: float = 1.0
     outcome: bool = False
+    judge: Callable | None = None
 
 
 # Calls that would do an exercise for the student: a name matches any reference to it in the region (a call, an
@@ -91,16 +96,11 @@ def _all(attribute: str) -> dict:
 
 
 def __getattr__(name: str):
-    """SPECS and FORBIDDEN (dicts by exercise id, gathered from the exercise modules), or an adapter by name."""
+    """SPECS and FORBIDDEN (dicts by exercise id, gathered from the exercise modules)."""
     if name == "SPECS":
         return _all("SPECS")
     if name == "FORBIDDEN":
         return _all("FORBIDDEN")
-    if name.startswith("_call_"):
-        for e in EXERCISES:
-            module = module_of(e.id)
-            if module is not None and hasattr(module, name):
-                return getattr(module, name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 

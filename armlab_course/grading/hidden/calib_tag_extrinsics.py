@@ -22,11 +22,6 @@ def _tag_views(rng):
     return cases
 
 
-def _call_initial_pose(function, world, pixels, K, dist):
-    """pose_from_corners(refine=False): the region's own R and t, before the Levenberg-Marquardt refinement."""
-    return function(*(np.asarray(a, float) for a in (world, pixels, K, dist)), refine=False)
-
-
 SPECS: tuple[HiddenSpec, ...] = (HiddenSpec("armlab.calibration.extrinsics.pose_from_corners", _tag_views, atol=1e-6,
                                        adapter="_call_initial_pose"),)
 FORBIDDEN: tuple[str, ...] = (

@@ -43,15 +43,6 @@ def _views(rng):
     return cases
 
 
-def _call_intrinsics(function, homographies, image_size):
-    """The student's K with its pixel rows in units of 1000 px (atol 1e-6: 1e-3 px, about 1e-6 of a focal length)
-    and its last row as is (0, 0, 1)."""
-    K = np.asarray(function([np.asarray(H, dtype=float) for H in homographies], tuple(image_size)), dtype=float)
-    if K.shape != (3, 3):
-        raise ValueError(f"K has shape {K.shape}, not (3, 3)")
-    return np.concatenate([K[:2].ravel() / 1000.0, K[2]]).tolist()
-
-
 SPECS: tuple[HiddenSpec, ...] = (HiddenSpec("intrinsics_from_homographies", _views, atol=1e-6,
                                             adapter="_call_intrinsics", prelude="definitions"),)
 FORBIDDEN: tuple[str, ...] = (

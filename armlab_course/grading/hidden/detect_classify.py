@@ -3,8 +3,6 @@ results (armlab_course.grading.hidden)."""
 
 from __future__ import annotations
 
-import numpy as np
-
 from . import HiddenSpec
 
 
@@ -18,13 +16,6 @@ def _colour_models(rng):
         stds = rng.uniform(0.005, 0.08, (6, 3))
         cases.append([[list(COLORS), means.tolist(), stds.tolist(), rng.uniform(0, 255, (25, 3)).tolist()]])
     return cases
-
-
-def _call_classify(function, names, means, stds, rgb):
-    """ColorModel(names, means, stds).classify(rgb): the class indices and the margins."""
-    model = function(tuple(str(n) for n in names), np.asarray(means, float), np.asarray(stds, float))
-    best, margin = model.classify(np.asarray(rgb, float))
-    return [[float(model.names.index(b)) for b in best], np.asarray(margin, float).tolist()]
 
 
 SPECS: tuple[HiddenSpec, ...] = (HiddenSpec("armlab.detection.color.ColorModel", _colour_models, atol=1e-9,

@@ -22,9 +22,9 @@ def _square_faces(rng):
     return checks
 
 
-def _call_face(function, centre, edge, yaw, mm_per_px):
-    """face_geometry on a drawn square (100 x 100 px): [centre within 1 px, yaw within 5 deg modulo quarter turns and
-    in [-pi/4, pi/4), size class right] (1.0 / 0.0)."""
+def _judge_face(call, centre, edge, yaw, mm_per_px):
+    """face_geometry on a square drawn here (100 x 100 px), scored here: [centre within 1 px, yaw within 5 deg modulo
+    quarter turns and in [-pi/4, pi/4), size class right] (1.0 / 0.0)."""
     import cv2
 
     c, s = np.cos(yaw), np.sin(yaw)
@@ -32,12 +32,13 @@ def _call_face(function, centre, edge, yaw, mm_per_px):
                                                           [c + s, s - c]])
     mask = np.zeros((100, 100), np.uint8)
     cv2.fillPoly(mask, [np.round(corners * 16).astype(np.int32)], 1, cv2.LINE_8, shift=4)
-    u, v, got_yaw, size = function(mask, float(mm_per_px))
+    u, v, got_yaw, size = call(mask, float(mm_per_px))
     err = abs((float(got_yaw) - yaw + np.pi / 4) % (np.pi / 2) - np.pi / 4)
     want = "large" if edge * mm_per_px > (38.0 + 25.0) / 2 else "small"
-    return [float(np.hypot(u - centre[0], v - centre[1]) < 1.0),
+    return [float(np.hypot(float(u) - centre[0], float(v) - centre[1]) < 1.0),
             float(err < np.radians(5) and -np.pi / 4 <= float(got_yaw) < np.pi / 4), float(size == want)]
 
 
-SPECS = (HiddenSpec("face_geometry", _square_faces, atol=0, adapter="_call_face", prelude="definitions"),)
+SPECS = (HiddenSpec("face_geometry", _square_faces, atol=0, adapter="_call_face", prelude="definitions",
+                    judge=_judge_face),)
 FORBIDDEN = ("scipy.ndimage.center_of_mass", "transforms.wrap_quarter", "detect_objects", "detect_blocks")

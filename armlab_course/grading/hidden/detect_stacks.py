@@ -86,17 +86,13 @@ def render_stack(K, T, blocks, noise_mm, lost, seed, width=1280, height=720):
     return depth, mask
 
 
-def _call_stack(function, K, T, blocks, noise_mm, lost, seed):
-    """stack_from_depth on a rendered stack: [top_z mm, centre x, centre y mm, 10 x levels] (a level off is 10 units,
-    beyond any atol of a height)."""
-    from armlab.camera import Camera
-
+def _judge_stack(call, K, T, blocks, noise_mm, lost, seed):
+    """The stack rendered here (render_stack); the child's [top_z mm, centre x, centre y mm, 10 x levels]."""
     depth, mask = render_stack(K, T, blocks, noise_mm, lost, seed)
-    top_z, levels, centre = function(depth, mask, Camera(K, np.zeros(5), T), EDGES)
-    centre = np.asarray(centre, dtype=float)
-    return [float(top_z), float(centre[0]), float(centre[1]), 10.0 * float(levels)]
+    return call(depth.astype(np.float32), mask, K, T, list(EDGES))
 
 
-SPECS = (HiddenSpec("stack_from_depth", _stacks, atol=2.0, adapter="_call_stack", prelude="definitions"),)
+SPECS = (HiddenSpec("stack_from_depth", _stacks, atol=2.0, adapter="_call_stack", prelude="definitions",
+                    judge=_judge_stack),)
 FORBIDDEN = ("stack_levels", "stack_heights", "detect_objects", "detect_blocks", "segment_faces",
              "height_from_depth", "world_from_depth", "pixels_to_plane")

@@ -22,13 +22,13 @@ def _geometries(rng):
     return cases
 
 
-def _call_dh_table(function, geometry, q):
-    """The tool poses (N, 3, 4) of the table dh_table(*geometry) at joints q (N, 5): the chain of
+def _judge_dh_table(call, geometry, q):
+    """The tool poses (N, 3, 4) of the child's table dh_table(*geometry) at joints q (N, 5), chained here:
     Rz(q + offset) Tz(d) Tx(a) Rx(alpha), then the kit's fixed DH_TOOL_ROTATION."""
     from armlab.robot import DH_TOOL_ROTATION
     from armlab.transforms import homogeneous, rot_x, rot_z
 
-    table = np.asarray(function(*(float(g) for g in geometry)), dtype=float)
+    table = np.asarray(call(*(float(g) for g in geometry)), dtype=float)
     if table.shape != (5, 4):
         raise ValueError(f"dh_table returned shape {table.shape}, expected (5, 4)")
     out = []
@@ -40,9 +40,9 @@ def _call_dh_table(function, geometry, q):
     return np.array(out)
 
 
-SPECS: tuple[HiddenSpec, ...] = (HiddenSpec("dh_table", _geometries, atol=1e-6, adapter="_call_dh_table",
+SPECS: tuple[HiddenSpec, ...] = (HiddenSpec("dh_table", _geometries, atol=1e-6, judge=_judge_dh_table,
                                             prelude="definitions"),)
 FORBIDDEN: tuple[str, ...] = (
     "kinematics.fk_pox", "kinematics.fk", "kinematics.fk_dh", "kinematics.link_frames", "kinematics.dh_frames",
-    "RobotModel.dh", "kit_table",
+    "RobotModel.dh", "pox_of_lengths",
 )

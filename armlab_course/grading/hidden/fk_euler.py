@@ -34,13 +34,13 @@ def _rotations(rng):
     return cases
 
 
-def _call_euler(function, T):
-    """(cos phi, sin phi, theta, cos psi, sin psi) of the student's angles: no wrap ambiguity at phi = +/- pi."""
-    phi, theta, psi = (float(x) for x in np.asarray(function(np.asarray(T, dtype=float)), dtype=float).ravel())
+def _judge_euler(call, T):
+    """(cos phi, sin phi, theta, cos psi, sin psi) of the child's angles: no wrap ambiguity at phi = +/- pi."""
+    phi, theta, psi = (float(x) for x in np.asarray(call(T), dtype=float).ravel())
     return [np.cos(phi), np.sin(phi), theta, np.cos(psi), np.sin(psi)]
 
 
-SPECS: tuple[HiddenSpec, ...] = (HiddenSpec("euler_angles_from_T", _rotations, atol=1e-7, adapter="_call_euler",
+SPECS: tuple[HiddenSpec, ...] = (HiddenSpec("euler_angles_from_T", _rotations, atol=1e-7, judge=_judge_euler,
                                             prelude="definitions"),)
 FORBIDDEN: tuple[str, ...] = (
     "transforms.rpy_from_matrix", "scipy.spatial.transform.Rotation",

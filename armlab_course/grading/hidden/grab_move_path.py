@@ -28,13 +28,21 @@ def _grab_scenes(rng):
     return checks
 
 
-def _call_move_path(function, seed, blocks, spots):
-    """Per block of a fresh sim scene, clicked at its detected top: [grasped, landed within 3 mm of its spot] (1.0 /
-    0.0) with the student's move_path through the kit's checked runners; a refused or failed plan scores 0 for it and
-    the blocks after it."""
+def _judge_move_path(call, seed, blocks, spots):
+    """Per block of a fresh sim scene of the judge's, clicked at its detected top: [grasped, landed within 3 mm of
+    its spot] (1.0 / 0.0). Each grasp and release asks the child for the student's plan (its arm commands), which
+    the judge checks whole and runs on its own station with the kit's runners (grab_with, drop_with) and scores from
+    its simulator's truth; a refused, failed or unusable plan scores 0 for its block and the blocks after it."""
     from armlab import tasks
     from armlab.station import make_station
     from armlab.tasks.move_path import drop_with, grab_with
+
+    from ..judge import ChildGone
+    from ._replay import plan_from_plain
+
+    def path(q_start, target, yaw, edge, action):
+        return plan_from_plain(call(np.asarray(q_start, float), np.asarray(target, float), float(yaw), float(edge),
+                                    str(action)))
 
     station = make_station("sim", seed=int(seed), scene={"objects": [
         {"color": c, "size": s, "position_mm": xy, "yaw_rad": yaw} for c, s, xy, yaw in blocks]})
@@ -44,16 +52,19 @@ def _call_move_path(function, seed, blocks, spots):
     for (color, *_), spot in zip(blocks, spots, strict=True):
         truth = next(o for o in station.world.blocks if o.color == color)
         try:
-            held = grab_with(session, seen[color], path=function) and truth.id in station.world.held
-            drop_with(session, np.asarray(spot, float), 0.0, path=function)
+            held = grab_with(session, seen[color], path=path) and truth.id in station.world.held
+            drop_with(session, np.asarray(spot, float), 0.0, path=path)
             bottom = truth.position - [0.0, 0.0, truth.edge / 2]
             landed = not station.world.held and float(np.abs(bottom - spot).max()) < 3.0
-        except Exception:           # refused, unreachable or broken: this block and the rest score 0
+        except ChildGone:
+            raise
+        except Exception:           # refused, unreachable, broken or raised in the child: this block and the rest
             break
         out += [float(held), float(landed)]
     return out + [0.0] * (2 * len(blocks) - len(out))
 
 
-SPECS = (HiddenSpec("armlab.tasks.move_path.move_path", _grab_scenes, atol=0, adapter="_call_move_path", outcome=True),)
+SPECS = (HiddenSpec("armlab.tasks.move_path.move_path", _grab_scenes, atol=0, adapter="_call_move_path", outcome=True,
+                    judge=_judge_move_path),)
 FORBIDDEN = ("planning.plan_pick", "planning.plan_place", "planning.plan_pick_place", "choose_grasp", "kit_move_path",
              "grasp_height", "place_tool_height", "default_grasp_depth", "tasks.pick", "tasks.place", "handling")

@@ -24,16 +24,6 @@ def _teach_sessions(rng):
     return cases
 
 
-def _call_teach(function, seed, poses, gripper):
-    """teach_program on a fresh sim arm: the recorded q (N x 5), the gripper states (1 closed) and the torque."""
-    from armlab.station import make_station
-
-    station = make_station("sim", seed=int(seed), scene="swap")
-    program = function(station.arm, np.asarray(poses, float), list(gripper), name="hidden")
-    return np.concatenate([np.asarray(program.q, float).ravel(), [g == "closed" for g in program.gripper],
-                           [float(station.arm.torque_enabled)]])
-
-
 def _replays(rng):
     # random programs (some segments not moving at all, some long) at slow and fast speeds
     from armlab.robot import rx200
@@ -46,15 +36,6 @@ def _replays(rng):
         q[1] = q[0]                                                    # a waypoint that does not move
         cases.append([[q.tolist(), float(speed * rng.uniform(0.9, 1.1))]])
     return cases
-
-
-def _call_scaled_durations(function, q, speed):
-    from armlab.robot import rx200
-    from armlab.tasks.teach import TeachProgram
-
-    function.__globals__["robot"] = rx200()       # the notebook's `robot` (its cell ran definitions only)
-    q = np.asarray(q, float)
-    return function(TeachProgram(q, ("open",) * len(q), "hidden"), float(speed))
 
 
 def _plans(rng):
@@ -70,22 +51,6 @@ def _plans(rng):
         gripper = [str(g) for g in rng.choice(["open", "closed"], n)]
         cases.append([[q.tolist(), gripper, (floor * rng.uniform(1.05, 2.0, n - 1)).tolist()]])
     return cases
-
-
-def _call_scaled_plan(function, q, gripper, durations):
-    """scaled_plan on a TeachProgram: per step [1, duration, end joints (5)] for a move, [0, 1 close / 0 open, 0 x 5]
-    for a gripper step."""
-    from armlab import planning
-    from armlab.tasks.teach import TeachProgram
-
-    plan = function(TeachProgram(np.asarray(q, float), tuple(gripper), "hidden"), np.asarray(durations, float))
-    rows = []
-    for step in plan.steps:
-        if isinstance(step, planning.MoveStep):
-            rows.append([1.0, float(step.duration), *np.asarray(step.trajectory.end, float)])
-        else:
-            rows.append([0.0, float(step.action == "close"), 0.0, 0.0, 0.0, 0.0, 0.0])
-    return rows
 
 
 SPECS: tuple[HiddenSpec, ...] = (
