@@ -220,11 +220,13 @@ class Grader:
     def _notebook(self, tree: Path, name: str, deadline: Deadline | None = None) -> NotebookRun:
         """The notebook's run on a fresh copy of `tree`; a run that could not start, or whose results could not be
         read, is a NotebookRun with the reason (never an exception: one submission never stops the class)."""
-        runner = self._bounded(deadline)
-        if runner is None:
+        if self._bounded(deadline) is None:
             return NotebookRun({}, deadline.spent())
         run_tree = self._fresh(tree)
         try:
+            runner = self._bounded(deadline)   # again: the copy took some of the time left
+            if runner is None:
+                return NotebookRun({}, deadline.spent())
             with self._guard:
                 self.runs += 1
             return runner.notebook(run_tree, f"notebooks/{name}.ipynb")
@@ -253,14 +255,16 @@ class Grader:
                  deadline: Deadline | None = None) -> tuple[dict[str, list[dict | None]] | None, str]:
         """Per exercise, its jobs' outputs (None for a job not run: see _jobs) from one harness run on a fresh copy
         of `tree`; or None and why (never an exception for what the run gave back)."""
-        runner = self._bounded(deadline, max(1, len(exercise_ids)))
-        if runner is None:
+        if self._bounded(deadline, max(1, len(exercise_ids))) is None:
             return None, deadline.spent()
         run_tree = self._fresh(tree)
         try:
             inside = self.runner.sandbox.inside(run_tree)
             jobs = {e: self._jobs(e, inside, compared_only) for e in exercise_ids}
             wanted = [job for e in exercise_ids for job in jobs[e] if job is not None]
+            runner = self._bounded(deadline, max(1, len(exercise_ids)))   # again: after the copy
+            if runner is None:
+                return None, deadline.spent()
             got, problem = runner.harness(run_tree, wanted, exercises=1) if wanted else ([], "")
         except (OSError, ValueError, TypeError, KeyError, AttributeError, RecursionError, MemoryError) as e:
             return None, f"the hidden checks' results could not be read ({type(e).__name__})"
