@@ -185,13 +185,17 @@ def test_the_executor_records_the_release_and_the_arm_forgets_the_block(holding)
 
 def test_the_task_layer_calls_planning_execute_only_in_the_executor():
     """No module of armlab.tasks (or the control station) calls planning.execute, or imports execute from
-    armlab.planning, except the executor: every motion goes through Session.run."""
+    armlab.planning, except the executor, nor commands an arm itself (move_to, open_gripper, close_gripper) except
+    the guarded arm the executor runs plans on: every motion goes through Session.run (the sag fit's included)."""
     sources = [*(ROOT / "armlab" / "tasks").rglob("*.py"), ROOT / "armlab" / "ui" / "station_panel.py"]
     found = []
     for path in sources:
         if path.name == "executor.py" and path.parent.name == "tasks":
             continue
         for node in ast.walk(ast.parse(path.read_text(), str(path))):
+            if path.name != "guard.py" and isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and \
+                    node.func.attr in ("move_to", "open_gripper", "close_gripper"):
+                found.append(f"{path.relative_to(ROOT)}:{node.lineno}: {node.func.attr}")
             if isinstance(node, ast.ImportFrom) and (node.module or "").startswith("armlab.planning") and \
                     any(a.name == "execute" for a in node.names):
                 found.append(f"{path.relative_to(ROOT)}:{node.lineno}: imports execute")

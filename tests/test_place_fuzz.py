@@ -3,7 +3,9 @@ pick a detected block 150 mm or more from the waist axis and place it at a rando
 (in front, beside, behind the waist axis; 100-420 mm out) with a random yaw, block after block
 (benchmarks/scenarios/place_fuzz.py). Every place is done within 3 mm or refused before anything moves, never mid-plan.
 Up to 200 places here (4 stations, up to 50 each: 143 are tried, the others end when no block is left 150 mm
-out); `benchmarks/manipulation.py fuzz` runs more, by sector."""
+out); `benchmarks/manipulation.py fuzz` runs more, by sector. And, as issue 33 found them refused mid-plan, places
+of blocks detected with another calibration of the same station than the session's (the factory intrinsics with the
+station's own tags and depth plane, as notebook 04's detection is calibrated apart from the task session)."""
 
 from __future__ import annotations
 
@@ -39,3 +41,15 @@ def test_student_places_are_done_within_3_mm_or_refused_before_moving():
            if o.outcome == "done" and np.abs(o.error).max() >= TOLERANCE_MM]
     assert not off, f"placed {TOLERANCE_MM} mm or more off:\n" + "\n".join(off)
     assert counts["done"] >= 0.8 * len(outcomes), [o.message for _, o in outcomes if o.outcome != "done"]
+
+
+def test_places_of_blocks_detected_with_another_calibration_are_never_refused_mid_plan():
+    """Measured 2026-12-06: seed 240, 50 places, all done (the worst 2.15 mm off); seed 241, 19 places, all done."""
+    outcomes = run_station(240, 25, detect_with="factory")
+    counts = Counter(o.outcome for o in outcomes)
+    print(f"another calibration's detections: {len(outcomes)} places: {dict(counts)}")
+    assert len(outcomes) >= 20, f"only {len(outcomes)} places were tried"
+    assert counts["refused mid-plan"] == 0, [o.message for o in outcomes if o.outcome == "refused mid-plan"]
+    off = [f"{o.spot}: {np.round(o.error, 2)}" for o in outcomes if o.outcome == "done"
+           and np.abs(o.error).max() >= TOLERANCE_MM]
+    assert not off and counts["done"] >= 0.8 * len(outcomes), (off, dict(counts))
