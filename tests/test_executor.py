@@ -135,6 +135,19 @@ def test_teach_and_repeat_refuses_before_the_first_command(holding, mover):
     assert "held red block" in message, message
 
 
+def test_the_sag_fit_refuses_before_the_first_command(holding):
+    """tasks.calibrate_sag moves the arm alone through the executor: a pose taking the held block (the arm says it
+    holds it) into the board is refused before anything moves, and the measuring function is never called."""
+    s = holding.session
+    _, down = hover_then_into_board(s)
+    measured = []
+
+    def fit():
+        tasks.calibrate_sag(holding.station.arm, lambda: measured.append(1) or np.zeros(3), poses=[down])
+    message = assert_refused_before_moving(holding, fit, "fitting the sag model: pose 1 of 1")
+    assert "held red block" in message and not measured, message
+
+
 def test_the_station_panels_sliders_refuse_before_the_first_command(holding):
     """The control station's sliders and buttons move through TaskMachine.execute (StationPanel.move); the same
     refusal, through the panel's own call."""
