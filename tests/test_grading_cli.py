@@ -210,3 +210,33 @@ def test_odd_student_names_get_folders_of_their_own(tmp_path):
     assert len(folders) == len(names)
     scores = sorted(json.loads((f / "results.json").read_text())["score"] for f in folders)
     assert scores == list(range(len(names)))
+
+
+def test_one_total_on_stdout_in_grades_csv_and_in_the_feedback(tmp_path):
+    """`armlab grade` on a class of two (ada wrote the homography, bob nothing): the stdout line, the progress line,
+    grades.csv's total and max, feedback.md's total and results.json's score give one total per student, out of the
+    registry's automatic points, and each names the written answers' points as graded by hand."""
+    import csv
+    import re
+
+    from armlab_course.exercises.registry import EXERCISES
+
+    subs = tmp_path / "subs"
+    for name in ("ada", "bob"):
+        make_student_release(ROOT, subs / name)
+    write_regions(subs / "ada", HOMOGRAPHY, _reference(HOMOGRAPHY))
+    done = _armlab("grade", str(subs), "--out", str(tmp_path / "out"), "--reference", str(ROOT))
+    assert done.returncode == 0, done.stdout + done.stderr
+    auto = sum(e.points for e in EXERCISES if e.kind != "written")
+    by_hand = sum(e.points for e in EXERCISES if e.kind == "written")
+    assert 0 < by_hand and auto + by_hand == sum(e.points for e in EXERCISES)
+    rows = {r["student"]: r for r in csv.DictReader((tmp_path / "out/grades.csv").open())}
+    for student, score in (("ada", exercise(HOMOGRAPHY).points), ("bob", 0)):
+        said = f"{score:g} / {auto} automatic (+{by_hand} by hand: the written answers)"
+        assert f"{student}: {said}" in done.stdout.splitlines(), done.stdout
+        assert any(ln.startswith("[") and f"] {student}: {said} (" in ln for ln in done.stderr.splitlines()), \
+            done.stderr
+        assert float(rows[student]["total"]) == score and int(rows[student]["max"]) == auto, rows[student]
+        feedback = (tmp_path / "out" / student / "feedback.md").read_text()
+        assert f"Total: {said}" in feedback and re.search(rf"^total +{re.escape(said)}$", feedback, re.M), feedback
+        assert json.loads((tmp_path / "out" / student / "results.json").read_text())["score"] == score
