@@ -10,7 +10,7 @@ NBVAL   := --nbval --nbval-sanitize-with tests/nbval_sanitize.cfg --nbval-cell-t
 # START_FIRST, in place of xdist's order by number of tests, which handed the longest file out last).
 PAR     := -n auto --maxprocesses 4 --dist loadfile --no-loadscope-reorder
 
-.PHONY: demo test lint unit notebooks lab bench browser camera sandbox student autograder docs clean
+.PHONY: demo test lint unit notebooks lab bench browser camera sandbox student autograder docs exercise-docs clean
 
 # The first install (80-106 s) says what it does: a line as each step starts and one with its time when it ends;
 # the long step (requirements.txt) also shows pip's "Collecting" line per package and the count it installs.
@@ -49,7 +49,7 @@ else
 endif
 
 lint: $(STAMP)
-	$(PY) -m ruff check armlab armlab_course tests notebooks $(wildcard benchmarks tools/build-notebook tools/student-release tools/api-docs)
+	$(PY) -m ruff check armlab armlab_course tests notebooks $(wildcard benchmarks tools/build-notebook tools/student-release tools/api-docs tools/exercise-docs)
 
 unit: $(STAMP) camera sandbox
 	MPLBACKEND=Agg $(PY) -m pytest -q $(PAR) tests
@@ -80,6 +80,11 @@ bench: $(STAMP)
 docs: $(STAMP)
 	rm -rf docs/api
 	$(PY) tools/api-docs docs/api
+
+## make exercise-docs: the docs' exercise counts, points and tables, generated from the registry
+## (python -m armlab exercises --json; tools/exercise-docs --check only lists what is stale or contradicted)
+exercise-docs: $(STAMP)
+	$(PY) tools/exercise-docs
 
 ## make student: the student release (exercise regions stubbed, notebook outputs cleared) in dist/student
 student: $(STAMP)
