@@ -5,7 +5,6 @@ exercise id, points, kind, notebook or count the registry contradicts (issue 34:
 
 from __future__ import annotations
 
-import re
 import subprocess
 import sys
 from pathlib import Path
@@ -40,15 +39,6 @@ def test_the_release_doc_carries_the_generated_table_and_summary():
     auto = sum(e.points for e in EXERCISES if e.kind != "written")
     assert f"{len(EXERCISES)} exercises, {sum(e.points for e in EXERCISES)} points" in summary
     assert f"{auto} graded automatically" in summary, summary
-
-
-def test_the_student_readme_names_every_exercise_with_its_points():
-    readme = ROOT / "tools/student/README.md"
-    if not readme.is_file():
-        pytest.skip("a student release: its README.md is the student README")
-    text = readme.read_text(encoding="utf-8")
-    named = dict(re.findall(r"\(`([a-z]+\.[a-z_]+)`, (\d+)\b", text))
-    assert named == {e.id: str(e.points) for e in EXERCISES}
 
 
 def test_stale_figures_and_unknown_ids_are_named():

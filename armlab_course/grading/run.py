@@ -18,7 +18,6 @@ import hashlib
 import hmac
 import json
 import os
-import re
 import secrets
 import shutil
 import signal
@@ -30,12 +29,13 @@ from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from pathlib import Path
 
+from armlab_course.exercises.markers import CHECK_LINE
+
 from .sandbox import Limits, PidsGroup, Sandbox
 
 __all__ = ["DEFAULT_LIMITS", "Limits", "CellResult", "NotebookRun", "Runner", "check_cells", "verify_signed",
            "CHILD_FILES"]
 
-_CHECK = re.compile(r"^\s*# CHECK[ \t]+(?P<ids>.+?)\s*$", re.MULTILINE)
 OUTPUT_TAIL = 20_000               # bytes of a run's console output kept (its end)
 _MAX_RESULTS_BYTES = 64 * 2**20     # a result file larger than this is refused unread
 _CONFIG = "[pytest]\naddopts =\nfilterwarnings =\n    ignore::DeprecationWarning\n"
@@ -74,7 +74,7 @@ def check_cells(notebook: Path) -> dict[int, tuple[str, ...]]:
     code = [c for c in nb["cells"] if c["cell_type"] == "code"]
     tags = {}
     for i, cell in enumerate(code):
-        found = _CHECK.search("".join(cell["source"]))
+        found = CHECK_LINE.search("".join(cell["source"]))
         if found:
             tags[i] = tuple(found["ids"].split())
     return tags
