@@ -25,6 +25,7 @@ from nbclient import NotebookClient
 from armlab_course.exercises import exercise, find_regions, make_student_release, of_notebook
 from armlab_course.exercises.markers import CHECK_LINE
 from armlab_course.exercises.release import RUN_ALL_TAG
+from armlab_course.grading.run import code_cell_labels
 
 sys.path.insert(0, str(Path(__file__).parent))
 import browser  # noqa: E402
@@ -113,6 +114,11 @@ def test_restart_kernel_and_run_all_runs_every_cell_in_jupyterlab(release, tmp_p
             finally:
                 chromium.close()
     print(f"\nprompts after Restart Kernel and Run All Cells: {prompts}")
+    # the grader names a check cell by the count JupyterLab shows here (armlab_course.grading.run.code_cell_labels)
+    shown = [f"[{p.strip('[]: ')}]" for p in prompts]
+    named = [label.split("(", 1)[1].split(" after Run All")[0]
+             for label in code_cell_labels(release / "notebooks" / f"{STEM}.ipynb")]
+    assert shown == named, (shown, named)
     assert outputs.count("ExerciseNotWritten") >= 2 and "exercise fk.dh_table (notebook 02): write" in outputs, \
         outputs[-3000:]
     assert f"{len(of_notebook(STEM))} exercises, " in outputs, outputs[-2000:]      # the last cell: rubric("02")

@@ -12,9 +12,14 @@ __all__ = ["CheckResult", "ExerciseResult", "Total", "score_exercise", "total"]
 
 @dataclass(frozen=True)
 class CheckResult:
+    """One check: its name as the student reads it (a public check: its cell as JupyterLab shows it,
+    run.code_cell_labels), passed or not, the failure's message, and for a public check the code-cell index (nbval's
+    'Cell N') of its cell."""
+
     name: str
     passed: bool
     message: str = ""
+    cell: int | None = None
 
 
 @dataclass

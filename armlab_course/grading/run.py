@@ -33,8 +33,8 @@ from armlab_course.exercises.markers import CHECK_LINE
 
 from .sandbox import Limits, PidsGroup, Sandbox
 
-__all__ = ["DEFAULT_LIMITS", "Limits", "CellResult", "NotebookRun", "Runner", "check_cells", "verify_signed",
-           "CHILD_FILES"]
+__all__ = ["DEFAULT_LIMITS", "Limits", "CellResult", "NotebookRun", "Runner", "check_cells", "code_cell_labels",
+           "verify_signed", "CHILD_FILES"]
 
 OUTPUT_TAIL = 20_000               # bytes of a run's console output kept (its end)
 _MAX_RESULTS_BYTES = 64 * 2**20     # a result file larger than this is refused unread
@@ -66,6 +66,22 @@ class NotebookRun:
 
     cells: dict[int, CellResult]
     problem: str = ""
+
+
+def code_cell_labels(notebook: Path) -> list[str]:
+    """Per code cell (nbval's 'Cell N', 0-based among the code cells), how a student finds it in JupyterLab: the
+    notebook, the cell's position among all its cells (1-based, markdown included), the execution count JupyterLab
+    shows once Restart Kernel and Run All Cells has run every cell, and the cell's first line, e.g.
+    '02_forward_kinematics cell 22 ([10] after Run All: # CHECK fk.euler)'."""
+    cells = json.loads(Path(notebook).read_text(encoding="utf-8"))["cells"]
+    labels = []
+    for position, cell in enumerate(cells, start=1):
+        if cell["cell_type"] != "code":
+            continue
+        first = next((line.strip() for line in "".join(cell["source"]).splitlines() if line.strip()), "(empty)")
+        first = first if len(first) <= 60 else first[:57] + "..."
+        labels.append(f"{Path(notebook).stem} cell {position} ([{len(labels) + 1}] after Run All: {first})")
+    return labels
 
 
 def check_cells(notebook: Path) -> dict[int, tuple[str, ...]]:
