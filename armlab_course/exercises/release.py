@@ -13,6 +13,9 @@ submit.
   sources, instructor-only tests); the student README (STUDENT_README) becomes README.md, and the marker file
   .student-release tells the Makefile which tests a release runs.
 - The notebooks are the one editable copy of every notebook exercise (their percent-format sources stay behind).
+- The Makefile loses its lines from `# BEGIN INSTRUCTOR ONLY` to `# END INSTRUCTOR ONLY` (the targets whose tools
+  the release does not ship: notebooks, bench, exercise-docs, student, autograder); its `make check` runs the
+  self-check.
 
     python tools/student-release OUT_DIR      # or: make student
 """
@@ -21,6 +24,7 @@ from __future__ import annotations
 
 import fnmatch
 import json
+import re
 import shutil
 import subprocess
 from pathlib import Path
@@ -28,9 +32,11 @@ from pathlib import Path
 from .markers import CHECK_LINE, blank_answers, find_answers, find_regions, stub_regions
 
 __all__ = ["RELEASE_EXCLUDES", "STUDENT_README", "RELEASE_MARKER", "RUN_ALL_TAG", "student_notebook",
-           "make_student_release", "released", "raises_while_blank"]
+           "make_student_release", "released", "raises_while_blank", "without_instructor_lines"]
 
 RUN_ALL_TAG = "raises-exception"
+_INSTRUCTOR_ONLY = re.compile(r"^# BEGIN INSTRUCTOR ONLY\b.*?^# END INSTRUCTOR ONLY[^\n]*\n\n?",
+                              re.DOTALL | re.MULTILINE)
 
 STUDENT_README = "tools/student/README.md"
 RELEASE_MARKER = ".student-release"
@@ -64,6 +70,15 @@ RELEASE_EXCLUDES = (
 def released(name: str) -> bool:
     """Whether the tracked file `name` (repository-relative, '/'-separated) goes into the student release."""
     return not any(fnmatch.fnmatch(name, pattern) for pattern in RELEASE_EXCLUDES)
+
+
+def without_instructor_lines(text: str) -> str:
+    """`text` (the Makefile) without its sections from a `# BEGIN INSTRUCTOR ONLY` line to the next
+    `# END INSTRUCTOR ONLY` line; ValueError when the markers do not pair up."""
+    out = _INSTRUCTOR_ONLY.sub("", text)
+    if "INSTRUCTOR ONLY" in out:
+        raise ValueError("an INSTRUCTOR ONLY marker without its pair")
+    return out
 
 
 def raises_while_blank(source: str, where: str = "<cell>") -> bool:
@@ -115,6 +130,9 @@ def make_student_release(repo: Path | str, out: Path | str) -> list[str]:
             dst.write_text(json.dumps(student_notebook(nb, name), indent=1, ensure_ascii=False) + "\n")
             changed = any(find_regions("".join(c["source"]), name) for c in nb["cells"] if c["cell_type"] == "code") \
                 or bool(find_answers(["".join(c["source"]) for c in nb["cells"] if c["cell_type"] == "markdown"], name))
+        elif name == "Makefile":
+            dst.write_text(without_instructor_lines(src.read_text()))
+            changed = False
         elif name.endswith(".py") or name.startswith("tools/"):
             text = src.read_text()
             new_text = stub_regions(text, name)
