@@ -1,5 +1,7 @@
-"""Run All goes on in the student release (issue 34: in the blank release notebook 02 stopped at its third cell, 11 of
-its 14 code cells never ran, the rubric cell included).
+"""The student release as a student meets it (issue 34).
+
+Run All goes on (in the blank release notebook 02 stopped at its third cell, 11 of its 14 code cells never ran, the
+rubric cell included).
 
 The release tags the cells that raise while an exercise is blank -- its exercise cells and its check cells --
 "raises-exception" (armlab_course.exercises.release.RUN_ALL_TAG). Here a freshly built blank release's notebook 02
@@ -9,12 +11,20 @@ not-written message; then the same notebook runs in JupyterLab
 in headless Chromium (Playwright, Debian's chromium) through the "Restart Kernel and Run All Cells" command, and every
 code cell shows an execution count. The grader's nbval runs ignore the tag (a raising check cell fails there):
 tests/test_grading_cli.py's self-check of a wrong homography covers that.
+
+The release is true about itself (its .student-release said to run `make check`, which did not exist; its Makefile
+kept targets whose tools it does not ship; notebooks cited reference/lab.md and benchmarks/perception.py, which
+neither the release nor the repository has): its Makefile has `make check` (the self-check) and none of the
+instructor's targets; every `make X` its README, marker file and notebooks name is a target of it; every file a
+recipe runs is in it; every repository path its README, notebooks and the docs they link to cite is in it.
 """
 
 from __future__ import annotations
 
 import json
 import os
+import re
+import subprocess
 import sys
 from pathlib import Path
 
@@ -24,7 +34,7 @@ from nbclient import NotebookClient
 
 from armlab_course.exercises import exercise, find_regions, make_student_release, of_notebook
 from armlab_course.exercises.markers import CHECK_LINE
-from armlab_course.exercises.release import RUN_ALL_TAG
+from armlab_course.exercises.release import RELEASE_MARKER, RUN_ALL_TAG
 from armlab_course.grading.run import code_cell_labels
 
 sys.path.insert(0, str(Path(__file__).parent))
@@ -123,3 +133,61 @@ def test_restart_kernel_and_run_all_runs_every_cell_in_jupyterlab(release, tmp_p
         outputs[-3000:]
     assert f"{len(of_notebook(STEM))} exercises, " in outputs, outputs[-2000:]      # the last cell: rubric("02")
     assert not lab.leftovers, f"processes outlived JupyterLab: {lab.leftovers}"
+
+
+# -- the release true about itself ------------------------------------------------------------------------------
+INSTRUCTOR_TARGETS = {"notebooks", "bench", "exercise-docs", "student", "autograder"}
+TOP = ("armlab", "armlab_course", "notebooks", "tests", "tools", "benchmarks", "docs", "reference", "binder")
+CITED = re.compile(rf"(?<![\w/.-])((?:{'|'.join(TOP)})/[\w./-]*[\w/])")
+LINK = re.compile(r"\]\(([^)#:\s]+)(?:#[^)]*)?\)")
+MAKE = re.compile(r"`make ([a-z][\w-]*)`")
+
+
+def targets(makefile: Path) -> set[str]:
+    return set(re.findall(r"^([A-Za-z][\w.-]*):(?!=)", makefile.read_text(), re.MULTILINE))
+
+
+def texts(release: Path) -> dict[str, str]:
+    """What a student reads: the README, the marker file, the Makefile, every notebook's cells (markdown and code)
+    and the docs the README or a notebook links to."""
+    out = {name: (release / name).read_text() for name in ("README.md", RELEASE_MARKER, "Makefile")}
+    for path in sorted((release / "notebooks").glob("*.ipynb")):
+        out[f"notebooks/{path.name}"] = "\n".join("".join(c["source"]) for c in json.loads(path.read_text())["cells"])
+    linked = {m for text in list(out.values()) for m in CITED.findall(text) if re.fullmatch(r"docs/[\w.-]+\.md", m)}
+    for name in sorted(linked):
+        if (release / name).is_file():
+            out[name] = (release / name).read_text()
+    return out
+
+
+def test_the_release_makefile_has_check_and_no_instructor_targets(release):
+    mine, theirs = targets(release / "Makefile"), targets(ROOT / "Makefile")
+    assert INSTRUCTOR_TARGETS <= theirs, sorted(theirs)             # the instructor keeps them
+    assert "check" in mine and not mine & INSTRUCTOR_TARGETS, sorted(mine)
+    assert "INSTRUCTOR ONLY" not in (release / "Makefile").read_text()
+    dry = subprocess.run(["make", "-n", "check"], cwd=release, capture_output=True, text=True, timeout=60)
+    assert dry.returncode == 0 and "-m armlab check" in dry.stdout, dry.stdout + dry.stderr
+    ran = set(re.findall(r"(?:tools|benchmarks)/[\w./-]+", (release / "Makefile").read_text()))
+    assert ran and all((release / name).exists() for name in ran), sorted(n for n in ran if not (release / n).exists())
+
+
+def test_every_make_target_the_release_names_is_there(release):
+    mine = targets(release / "Makefile")
+    named = {(name, m) for name, text in texts(release).items() for m in MAKE.findall(text)}
+    assert {m for _, m in named} >= {"check", "test", "lab"}, sorted(named)
+    assert not [(name, m) for name, m in named if m not in mine], sorted(named)
+
+
+def test_every_path_the_release_cites_is_in_it(release):
+    missing = []
+    for name, text in texts(release).items():
+        if name == "Makefile":          # what its recipes run: the test above (the rest are its outputs: docs/api)
+            continue
+        for cited in set(CITED.findall(text)):
+            if not (release / cited.rstrip("/.")).exists():
+                missing.append(f"{name} cites {cited}")
+        if name.endswith(".md"):
+            for link in set(LINK.findall(text)):
+                if not link.startswith(("http", "mailto")) and not ((release / name).parent / link).exists():
+                    missing.append(f"{name} links to {link}")
+    assert not missing, "\n".join(sorted(missing))
