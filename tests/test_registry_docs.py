@@ -50,12 +50,14 @@ def test_stale_figures_and_unknown_ids_are_named():
             "| `fk.dh_table` | 8 | open | notebook 02 |\n"
             "**Exercise `fk.euler` (5 points, written).** and exercise fk.euler (notebook 03)\n"
             "<!-- BEGIN GENERATED summary (tools/exercise-docs) -->\n**26 exercises, 1 points**\n"
-            "<!-- END GENERATED -->\n")
+            "<!-- END GENERATED -->\n"
+            "stdout: `[3] alice: 87 / 100 automatic (+17 by hand: the written answers)`\n")
     found = disagreements(text, ROWS)
-    assert len(found) == 6, found
+    assert len(found) == 7, found
     for line, words in ((1, f"the registry has {len(EXERCISES)} exercises"), (2, "fk.dh_transform"),
                         (3, "points 4 (the registry: 5)"), (4, "kind open (the registry: code)"),
-                        (5, "kind written (the registry: code)"), (5, "notebook 03 (the registry: 02)")):
+                        (5, "kind written (the registry: code)"), (5, "notebook 03 (the registry: 02)"),
+                        (9, "automatic points")):
         assert any(s.startswith(f"line {line}:") and words in s for s in found), (line, words, found)
     assert refresh(text, ROWS) != text and render("summary", ROWS) in refresh(text, ROWS)
 

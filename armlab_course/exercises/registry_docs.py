@@ -11,8 +11,8 @@ Kinds: "summary" (the counts and points, what is graded automatically and what b
 exercise). `refresh` rewrites every block of a text; `tools/exercise-docs` (make exercise-docs) rewrites the docs and
 `--check` says which are stale. `disagreements` reads the text outside the blocks for claims about exercises --
 "`fk.euler` (5 points, code)", "(`fk.euler`, 5", "| `fk.euler` | 5 | code |", "exercise fk.euler (notebook 02)",
-"**Exercise `fk.euler`", "26 exercises, 158 points" -- and names each one the registry contradicts (an id it does
-not have, other points, another kind or notebook, another count).
+"**Exercise `fk.euler`", "26 exercises, 158 points", "/ 141 automatic (+17 by hand" -- and names each one the
+registry contradicts (an id it does not have, other points, another kind or notebook, another count).
 """
 
 from __future__ import annotations
@@ -94,13 +94,14 @@ _CLAIMS = (      # (pattern, what it states): groups id, then points / kind / no
     (re.compile(rf"\*\*(?:Exercise|Question|Open task)\b[^`*\n]*`({_ID})`"), ("id",)),
 )
 _TOTAL = re.compile(r"\b(\d+) exercises(?:,? \(?(\d+) points)?")
+_SPLIT = re.compile(r"/ (\d+) automatic \(\+(\d+) by hand")      # the grader's total, as docs quote it
 
 
 def disagreements(text: str, rows: list[dict]) -> list[str]:
     """What `text` (generated blocks left out) claims about exercises that the registry `rows` contradicts, one
     sentence each, in the order of the text."""
     by_id = {r["id"]: r for r in rows}
-    text = BLOCK.sub("", text)
+    text = BLOCK.sub(lambda m: "\n" * m[0].count("\n"), text)      # blocks out, lines where they were
     found: list[tuple[int, str]] = []
     for pattern, names in _CLAIMS:
         for m in pattern.finditer(text):
@@ -120,6 +121,12 @@ def disagreements(text: str, rows: list[dict]) -> list[str]:
         line = text.count("\n", 0, m.start()) + 1
         if int(m[1]) != len(rows) or (m[2] is not None and int(m[2]) != points):
             found.append((line, f"line {line}: {m[0]!r}: the registry has {len(rows)} exercises, {points} points"))
+    auto = sum(r["points"] for r in rows if r["kind"] != "written")
+    for m in _SPLIT.finditer(text):
+        line = text.count("\n", 0, m.start()) + 1
+        if (int(m[1]), int(m[2])) != (auto, points - auto):
+            found.append((line, f"line {line}: {m[0]!r}: the registry has {auto} automatic points, "
+                                f"{points - auto} by hand"))
     return [sentence for _, sentence in sorted(found)]
 
 
