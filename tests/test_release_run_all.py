@@ -117,8 +117,17 @@ def test_restart_kernel_and_run_all_runs_every_cell_in_jupyterlab(release, tmp_p
                 # not awaited: the command's promise settles only once its dialog is answered
                 page.evaluate("() => { window.jupyterapp.commands.execute('notebook:restart-run-all'); }")
                 page.locator(".jp-Dialog button.jp-mod-accept").click()        # "Restart" in the dialog
-                prompts = poll("every code cell to run", lambda: (lambda p: p if len(p) == len(code) and all(
-                    t.strip("[]: ").isdigit() for t in p) else None)(page.evaluate(PROMPTS)), timeout_s=300)
+                seen: list = []
+
+                def all_ran():
+                    seen[:] = page.evaluate(PROMPTS)
+                    return list(seen) if len(seen) == len(code) and all(t.strip("[]: ").isdigit() for t in seen) \
+                        else None
+
+                try:
+                    prompts = poll("every code cell to run", all_ran, timeout_s=600)
+                except AssertionError as e:
+                    raise AssertionError(f"{e}; the prompts: {seen}") from None
                 lab.note_processes()
                 outputs = "\n".join(page.locator(".jp-OutputArea-output").all_inner_texts())
             finally:
