@@ -94,6 +94,12 @@ def student(src, dst):
     K = np.array([[600.0, 0, 320], [0, 600.0, 240], [0, 0, 1]])
     return getattr(module, "_opencv" + "_pose")(world, dst + 200, K, np.zeros(5))
 '''),
+    "a library nothing had loaded yet": (["IKinSpace"], '''
+def student(src, dst):
+    import importlib
+    library = importlib.import_module("modern" + "_robotics")
+    return getattr(library, "IKin" + "Space")(np.eye(6), np.eye(4), np.eye(4), np.zeros(6), 0.01, 0.001)
+'''),
 }
 # what must not be charged: the kit calling the forbidden function for itself, a kit dataclass's generated code,
 # and plain numerical code (re.compile is no exec)

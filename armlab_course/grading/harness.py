@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import ast
 import importlib
+import importlib.util
 import inspect
 import json
 import os
@@ -112,6 +113,10 @@ def resolve(name: str, namespaces: tuple[dict, ...] = ()):
     for loading in (False, True):
         if loading:
             _import_kit_modules(parts[0])
+            try:                    # the library whose functions are named bare (IKinSpace, JacobianBody, ...)
+                importlib.import_module("modern_robotics")
+            except ImportError:
+                pass
         for module_name in sorted(sys.modules):
             if module_name in ("armlab", "armlab_course") or \
                     module_name.startswith(("armlab.", "armlab_course.", "modern_robotics", "scipy.")):
@@ -126,19 +131,26 @@ def resolve(name: str, namespaces: tuple[dict, ...] = ()):
 
 
 def _import_kit_modules(first: str) -> None:
-    """Import the kit's modules (armlab.*) named `first` or whose package is, so that a forbidden name such as
-    "extrinsics._opencv_pose" is found before any student code runs even when nothing has loaded its module yet
-    (else a region importing that module itself would call the kit's function unwatched)."""
-    import pkgutil
-
-    try:
-        import armlab
-    except ImportError:
+    """Import the kit's modules (armlab.*) named `first` (a file first.py or a package first/), or else those whose
+    source defines `first` at top level, found by their files without importing anything else: a forbidden name such
+    as "extrinsics._opencv_pose" is then found before any student code runs even when nothing has loaded its module
+    yet (else a region importing that module itself would call the kit's function unwatched)."""
+    spec = importlib.util.find_spec("armlab")
+    if spec is None or not spec.submodule_search_locations:
         return
-    for info in pkgutil.walk_packages(armlab.__path__, "armlab.", onerror=lambda name: None):
-        if first in info.name.split(".")[1:] and not info.name.startswith(("armlab.hardware", "armlab.__main__")):
+    defines = re.compile(rf"^(def|class) {re.escape(first)}\b|^{re.escape(first)}\s*[:=]", re.MULTILINE)
+    for folder in spec.submodule_search_locations:
+        root = Path(folder)
+        paths = [*root.rglob(f"{first}.py"), *root.rglob(f"{first}/__init__.py")]
+        if not paths:                                       # a bare name: the modules that define it
+            paths = [p for p in root.rglob("*.py") if defines.search(p.read_text(encoding="utf-8", errors="replace"))]
+        for path in paths:
+            parts = path.relative_to(root).with_suffix("").parts
+            name = ".".join(("armlab", *(parts[:-1] if parts[-1] == "__init__" else parts)))
+            if name.startswith(("armlab.hardware", "armlab.__main__")):
+                continue
             try:
-                importlib.import_module(info.name)
+                importlib.import_module(name)
             except Exception:                              # a module that cannot load here holds nothing to watch
                 continue
 
