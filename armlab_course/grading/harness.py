@@ -189,6 +189,8 @@ class CallWatch:
             for holder, attribute, original in targets:
                 self._install(holder, attribute, original, name)
                 self.names.add(name)
+        if _Audit.installed:
+            _Audit.remember()
 
     @staticmethod
     def _targets(obj) -> list[tuple[object, str, object]]:
@@ -311,7 +313,11 @@ def _kits(filename: str) -> bool:
     if filename not in _KIT_FILES:
         if not _KIT_ROOTS:
             for name in ("armlab", "armlab_grader", "armlab_course"):
-                for folder in getattr(sys.modules.get(name), "__path__", None) or []:
+                try:
+                    spec = importlib.util.find_spec(name)      # (finds a top-level package without importing it)
+                except (ImportError, ValueError):
+                    continue
+                for folder in (spec.submodule_search_locations or []) if spec else []:
                     _KIT_ROOTS.append(os.path.join(os.path.realpath(folder), ""))
         real = os.path.realpath(filename) if os.path.isabs(filename) else filename
         _KIT_FILES[filename] = any(real.startswith(root) for root in _KIT_ROOTS)
@@ -329,6 +335,7 @@ class _Audit:
 
     installed = False
     ran: set[str] = set()                 # files whose module code has run (every module loaded when installed)
+    loaded: set[str] = set()              # files of the modules loaded when the watches were last wired
     copies: list[str] = []                # second copies made outside a call
 
     @classmethod
@@ -336,11 +343,14 @@ class _Audit:
         if cls.installed:
             return
         cls.installed = True
-        for module in list(sys.modules.values()):
-            filename = getattr(module, "__file__", None)
-            if filename:
-                cls.ran.add(os.path.realpath(filename))
+        cls.remember()
+        cls.ran |= cls.loaded
         sys.addaudithook(cls.hook)
+
+    @classmethod
+    def remember(cls) -> None:
+        """Note the files of the modules loaded now."""
+        cls.loaded |= {f for m in list(sys.modules.values()) if isinstance(f := getattr(m, "__file__", None), str)}
 
     @staticmethod
     def _by_import_system(frame) -> bool:
@@ -373,9 +383,13 @@ class _Audit:
         watch = CallWatch._active
         frame = sys._getframe(1)
         if event == "exec" and args and isinstance(args[0], types.CodeType) and args[0].co_name == "<module>" \
-                and os.path.isabs(args[0].co_filename):
-            filename = os.path.realpath(args[0].co_filename)
-            if filename in cls.ran and (watch is not None or not cls._reloading(frame)):
+                and os.path.isabs(args[0].co_filename) and _kits(args[0].co_filename):
+            filename = args[0].co_filename
+            # a kit module run again while a module of that file is, or was, loaded (a failed import tried again
+            # is no copy); libraries re-run their own modules (cv2's loader does), so only the kit's count
+            loaded = filename in cls.loaded or any(getattr(m, "__file__", None) == filename
+                                                   for m in list(sys.modules.values()))
+            if filename in cls.ran and loaded and (watch is not None or not cls._reloading(frame)):
                 cls._note(watch, f"a second copy of {os.path.basename(filename)}")
             cls.ran.add(filename)
         if event == "compile":
