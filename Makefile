@@ -10,7 +10,7 @@ NBVAL   := --nbval --nbval-sanitize-with tests/nbval_sanitize.cfg --nbval-cell-t
 # START_FIRST, in place of xdist's order by number of tests, which handed the longest file out last).
 PAR     := -n auto --maxprocesses 4 --dist loadfile --no-loadscope-reorder
 
-.PHONY: demo test lint unit notebooks lab bench browser camera sandbox student autograder docs clean
+.PHONY: demo test test-engine test-course lint unit notebooks lab bench browser camera sandbox student autograder docs clean
 
 # The first install (80-106 s) says what it does: a line as each step starts and one with its time when it ends;
 # the long step (requirements.txt) also shows pip's "Collecting" line per package and the count it installs.
@@ -53,6 +53,14 @@ lint: $(STAMP)
 
 unit: $(STAMP) camera sandbox
 	MPLBACKEND=Agg $(PY) -m pytest -q $(PAR) tests
+
+## make test-engine / make test-course: the library's tests alone (tests/, without tests/course/), or the course's
+## (tests/course/: exercises, release, grader; minutes each for the grading files)
+test-engine: $(STAMP) camera sandbox
+	MPLBACKEND=Agg $(PY) -m pytest -q $(PAR) tests --ignore=tests/course
+
+test-course: $(STAMP) camera sandbox
+	MPLBACKEND=Agg $(PY) -m pytest -q $(PAR) tests/course
 
 notebooks: $(STAMP)
 	$(PY) -m pytest -q $(PAR) notebooks $(NBVAL)

@@ -21,7 +21,7 @@ from nbclient import NotebookClient
 
 from armlab_course.exercises import EXERCISES, exercise, find_regions, make_student_release
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 CHECK_TAG = re.compile(r"^# CHECK (?P<ids>.+)$", re.M)
 STUB_ERROR = re.compile(r"^exercise (?P<id>\S+) \(notebook \d\d\): write ")
 

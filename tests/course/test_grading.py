@@ -21,7 +21,7 @@ from armlab_course.grading import grade_class, read_submission
 from armlab_course.grading.run import Limits
 from armlab_course.grading.splice import write_regions
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 GRADED = ["fk.dh_table", "fk.euler", "ik.candidates", "fk.dh_link_transform", "ik.numerical"]
 CONTAINED = {   # region prefixes that break the run before the (correct) solution
     "kernel_exit": "    import os\n    os._exit(1)\n",
@@ -154,7 +154,7 @@ def test_the_release_lacks_the_hidden_checks(tmp_path):
     assert (ROOT / "armlab_course/grading/hidden/__init__.py").is_file()
     assert not (tmp_path / "s/armlab_course/grading/hidden").exists()
     assert (tmp_path / "s/armlab_course/grading/harness.py").is_file()
-    assert not list((tmp_path / "s/tests").glob("test_grading*.py"))
+    assert not list((tmp_path / "s/tests/course").glob("test_grading*.py"))
 
 
 def test_infinite_loop_and_corrupt_notebook_are_contained(graded):

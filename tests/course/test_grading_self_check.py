@@ -1,5 +1,5 @@
 """The self-check is the grader's public verdict (issues 32 and 37): for every exercise graded by code and each of its
-plausible wrong answers (tests/wrong_answers.py), `self_check(only=EXERCISE)` in a student release holding that
+plausible wrong answers (tests/course/wrong_answers.py), `self_check(only=EXERCISE)` in a student release holding that
 region passes and fails the same public CHECK cells, with the same names, as the grader's run of that exercise's
 notebook does for the same region (Grader.public_checks). Where a check can tell a wrong answer's cause, its message
 names it (HINTS). Each case costs a notebook run on both sides: the cheap notebooks' exercises run by default

@@ -11,7 +11,7 @@ from armlab_course.exercises.registry import exercise
 from armlab_course.grading.run import Limits
 from armlab_course.grading.submission import exercise_file, regions_of, source_texts
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 WRONG_DH = ("    return np.array([[np.pi / 2, h0, 0.0, np.pi / 2], [-(np.pi / 2 - beta), 0.0, L1, 0.0],\n"
             "                     [np.pi / 2 - beta, 0.0, L2, 0.0], [-np.pi / 2, 0.0, 0.0, -np.pi / 2],\n"
             "                     [0.0, Lt, 0.0, 0.0]])")      # alpha1's sign slipped: z1 points the other way
