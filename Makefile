@@ -63,7 +63,6 @@ lint: $(STAMP)
 unit: $(STAMP) camera sandbox
 	MPLBACKEND=Agg $(PY) -m pytest -q $(PAR) tests
 
-
 browser:
 	bash tools/ensure-chromium
 
@@ -84,6 +83,15 @@ docs: $(STAMP)
 	$(PY) tools/api-docs docs/api
 
 # BEGIN INSTRUCTOR ONLY (the student release leaves these lines out: armlab_course.exercises.release)
+.PHONY: test-engine test-course
+## make test-engine / make test-course: the library's tests alone (tests/, without tests/course/), or the course's
+## (tests/course/: exercises, release, grader; minutes each for the grading files)
+test-engine: $(STAMP) camera sandbox
+	MPLBACKEND=Agg $(PY) -m pytest -q $(PAR) tests --ignore=tests/course
+
+test-course: $(STAMP) camera sandbox
+	MPLBACKEND=Agg $(PY) -m pytest -q $(PAR) tests/course
+
 .PHONY: notebooks bench exercise-docs student autograder
 
 notebooks: $(STAMP)

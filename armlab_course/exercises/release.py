@@ -48,20 +48,20 @@ RELEASE_EXCLUDES = (
     "tools/build-notebook",
     "tools/student-release",
     "tools/student/*",
-    "tests/test_exercises.py",     # the release tool's own tests (they look for solutions)
-    "tests/test_blank_release_runs.py",   # builds a release from the instructor's checkout and runs it blank
+    "tests/course/test_exercises.py",     # the release tool's own tests (they look for solutions)
+    "tests/course/test_blank_release_runs.py",   # builds a release from the instructor's checkout and runs it blank
     "tests/test_packaging.py",     # builds wheels of the instructor's checkout
     "tests/test_repeatable.py",    # teaches by hand (the teach.record exercise) to test the simulator's rounding
     "tests/test_notebook_outputs.py",   # checks the instructor's executed notebooks (the release's have no outputs)
     "armlab_course/grading/hidden.py",    # the grader's hidden checks (fresh inputs per exercise)
     "armlab_course/grading/hidden/*",     # (one module per exercise)
     "tools/autograder/*",          # the Gradescope bundle's scripts (make autograder)
-    "tests/test_grading*.py",      # the grader's tests (they hold wrong answers and the tricks)
-    "tests/wrong_answers.py",      # the wrong answers (pieces of every solution) and the tests that run them
-    "tests/test_hidden_checks*.py",
-    "tests/test_lab_04_08.py",
-    "tests/test_ik_numerical.py",
-    "tests/test_slots.py",         # plugs the wrong answers into the engine's slots
+    "tests/course/test_grading*.py",      # the grader's tests (they hold wrong answers and the tricks)
+    "tests/course/wrong_answers.py",      # the wrong answers (pieces of every solution) and the tests that run them
+    "tests/course/test_hidden_checks*.py",
+    "tests/course/test_lab_04_08.py",
+    "tests/course/test_ik_numerical.py",
+    "tests/course/test_slots.py",         # plugs the wrong answers into the engine's slots
     # -- the kit's twins of exercises: instructor-only code and data that compute an exercise's answer
     "armlab/data/rx200_dh.csv",    # fk.dh_table: the DH table (the engine runs on the PoX model without it)
 )

@@ -319,13 +319,7 @@ class Grader:
                 hidden: tuple[dict | None, str]) -> list[CheckResult]:
         """Every check of the exercise: its public CHECK cells in `run`, its hidden checks, and a failed check for a
         forbidden call (in the region's text or seen at run time)."""
-        ex = exercise(exercise_id)
-        notebook = tree / f"notebooks/{ex.notebook}.ipynb"
-        tags = [i for i, ids in check_cells(notebook).items() if exercise_id in ids]
-        labels = code_cell_labels(notebook)
-        checks = [CheckResult(labels[i], i in run.cells and run.cells[i].passed,
-                              self._redact(run.cells[i].message if i in run.cells else
-                                           run.problem or "the cell did not run"), i) for i in tags]
+        checks = self._public(exercise_id, run, tree)
         seen: list[str] = []
         if exercise_id in self._expected:
             outputs, problem = hidden
@@ -343,6 +337,16 @@ class Grader:
             checks.append(CheckResult(STATIC_CHECK, False, f"the region called {seen[0]} while the hidden checks "
                                                            f"ran: the exercise is to write it, not to call it"))
         return checks
+
+    def _public(self, exercise_id: str, run: NotebookRun, tree: Path) -> list[CheckResult]:
+        """The exercise's public CHECK cells in the notebook run `run` of `tree`."""
+        ex = exercise(exercise_id)
+        notebook = tree / f"notebooks/{ex.notebook}.ipynb"
+        tags = [i for i, ids in check_cells(notebook).items() if exercise_id in ids]
+        labels = code_cell_labels(notebook)
+        return [CheckResult(labels[i], i in run.cells and run.cells[i].passed,
+                            self._redact(run.cells[i].message if i in run.cells else
+                                         run.problem or "the cell did not run"), i) for i in tags]
 
     def _redact(self, message: str) -> str:
         """A message without the grader's own paths."""
@@ -370,6 +374,19 @@ class Grader:
         `deadline`, if given)."""
         return self._once(("alone", exercise_id, self._digest({exercise_id: bodies})),
                           lambda: self._alone(exercise_id, bodies, deadline))
+
+    def public_checks(self, exercise_id: str, bodies: list[str]) -> list[CheckResult]:
+        """Only the exercise's public CHECK cells as grading runs them (its notebook on the reference with `bodies`
+        spliced in; no hidden checks, so no expected values are needed): what the self-check must agree with.
+        RegionRejected for a body holding markers."""
+        for body in bodies:
+            check_body(body, exercise_id)
+        tree = self._spliced({exercise_id: bodies})
+        try:
+            ex = exercise(exercise_id)
+            return self._public(exercise_id, self._notebook(tree, ex.notebook), tree)
+        finally:
+            self._discard(tree)
 
     def _alone(self, exercise_id: str, bodies: list[str], deadline: Deadline | None = None) -> ExerciseResult:
         try:

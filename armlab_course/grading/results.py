@@ -7,7 +7,9 @@ from dataclasses import dataclass, field
 
 from armlab_course.exercises.registry import exercise
 
-__all__ = ["CheckResult", "ExerciseResult", "Total", "score_exercise", "total"]
+__all__ = ["CheckResult", "ExerciseResult", "Total", "score_exercise", "total", "STATIC_CHECK"]
+
+STATIC_CHECK = "static check: no forbidden call"      # its failure: the region called the kit's or a library's answer
 
 
 @dataclass(frozen=True)
@@ -44,10 +46,13 @@ class ExerciseResult:
 
 def score_exercise(exercise_id: str, checks: list[CheckResult], reason: str = "") -> ExerciseResult:
     """The grading rule: points x (passed checks / all checks), rounded to 0.01; 0 with `reason` (or "no check ran")
-    when no check ran."""
+    when no check ran, and 0 when the region called a forbidden function (its static check failed, in the text or
+    at run time): calling the kit's or a library's answer earns nothing, whatever the other checks say."""
     points = exercise(exercise_id).points
     if not checks:
         return ExerciseResult(exercise_id, 0.0, points, [], reason or "no check ran")
+    if any(c.name == STATIC_CHECK and not c.passed for c in checks):
+        return ExerciseResult(exercise_id, 0.0, points, checks, reason)
     passed = sum(c.passed for c in checks)
     return ExerciseResult(exercise_id, round(points * passed / len(checks), 2), points, checks, reason)
 

@@ -465,6 +465,19 @@ print(f"homography error: {err_h.mean():.2f} mm mean, {err_h.max():.2f} mm max (
 # %%
 # CHECK calib.tag_homography
 require_written("calib.tag_homography")
+ids = sorted(lab.tags.centres_mm)[:4]
+centres_px = np.array([next(t.center for t in tags if t.tag_id == i) for i in ids])
+targets = view.from_world(np.array([lab.tags.centres_mm[i] for i in ids]))
+miss = np.abs(cv2.perspectiveTransform(centres_px.reshape(-1, 1, 2), H).reshape(-1, 2) - targets).max()
+if miss > 1e-6:                        # name the cause where the check can tell it
+    T_src, T_dst = (cal.homography._normalising_similarity(p) for p in (centres_px, targets))
+    undone = np.linalg.solve(T_dst, H @ T_src)
+    if np.abs(cv2.perspectiveTransform(centres_px.reshape(-1, 1, 2), undone).reshape(-1, 2) - targets).max() < 1e-6:
+        raise AssertionError("your homography maps the normalised points, not the points: undo the normalisation "
+                             "(H = inverse(T_dst) @ H_normalised @ T_src)")
+    if np.allclose(cal.homography.dlt_homography(centres_px + 7.0, targets * 2.0), H):
+        raise AssertionError("your dlt_homography returns the same H whatever the points: compute it from src, dst")
+assert miss < 1e-6, f"your homography puts the four tag centres up to {miss:.3g} px from where they belong"
 again = cal.detect_tags(top_b)
 offset = max(np.abs(t.center - view.from_world([lab.tags.centres_mm[t.tag_id]])[0]).max() for t in again)
 far = np.linalg.norm(grid[:, :2] - [0, 150], axis=1) > 400

@@ -104,9 +104,16 @@ by_motions = (homogeneous(rot_z(params[:, 0])) @ homogeneous(None, np.stack([zer
 assert A.shape == (500, 4, 4), f"dh_link_transform of 500 links gave shape {A.shape}, expected (500, 4, 4)"
 assert np.allclose(A[:, 3], [0, 0, 0, 1], atol=0), "the last row of a link transform must be (0, 0, 0, 1)"
 err = np.abs(A - by_motions).max()
-off_mm, off_rot = np.abs(A - by_motions)[:, :3, 3].max(), np.abs(A - by_motions)[:, :3, :3].max()
+if err >= 1e-9:                        # name the cause where the check can tell it
+    for k, name in enumerate(("theta", "d", "a", "alpha")):
+        flipped = params * np.where(np.arange(4) == k, -1.0, 1.0)
+        assert np.abs(kinematics.dh_link_transform(*flipped.T) - by_motions).max() > 1e-9, \
+            f"your link transform is right with {name} negated: check {name}'s sign"
+    row = int(np.argmax(np.abs(A - by_motions).max(axis=(0, 2))))
+    off_mm, off_rot = np.abs(A - by_motions)[:, :3, 3].max(), np.abs(A - by_motions)[:, :3, :3].max()
 assert err < 1e-9, (f"your link transforms differ from Rz Tz Tx Rx by up to {off_mm:.2g} mm in position and "
-                    f"{off_rot:.2g} in a rotation matrix entry (unitless): check the order and the signs")
+                    f"{off_rot:.2g} in a rotation matrix entry (unitless), first in row {row}: multiply the four "
+                    f"matrices again and compare that row, entry by entry")
 print("OK: dh_link_transform equals Rz(theta) Tz(d) Tx(a) Rx(alpha) for 500 random links within 1e-9")
 
 # %% [markdown]
@@ -316,8 +323,21 @@ T_dh, T_pox = fk_from_table(Q, yours), fk_pox(Q)
 home = fk_from_table(robot.home, yours)[:3, 3]
 err_p = np.abs(T_dh[:, :3, 3] - T_pox[:, :3, 3]).max()
 err_R = np.abs(T_dh[:, :3, :3] - T_pox[:, :3, :3]).max()
+if not np.allclose(fk_from_table(Q[:50], yours), fk_pox(Q[:50]), atol=1e-6):   # name the cause where it can tell
+    for i, j in np.ndindex(5, 4):
+        other = np.array(yours, dtype=float)
+        other[i, j] = -other[i, j]
+        column = ("theta offset", "d", "a", "alpha")[j]
+        assert other[i, j] == 0 or not np.allclose(fk_from_table(Q[:50], other), fk_pox(Q[:50]), atol=1e-6), \
+            f"your table is right with row {i + 1}'s {column} negated: check its sign (which way z{i + 1} points)"
+    for i, step in np.ndindex(5, 2):
+        other = np.array(yours, dtype=float)
+        other[i, 0] += (2 * beta, -2 * beta)[step]
+        assert not np.allclose(fk_from_table(Q[:50], other), fk_pox(Q[:50]), atol=1e-6), \
+            f"row {i + 1}'s theta offset is off by 2 beta: the L's tilt beta is taken off there where you add it " \
+            "(or added where you take it off)"
 assert np.allclose(home, [0, 408.575, 304.57], atol=1e-6), \
-    f"your table puts the tool at {home.round(1)} mm at home, expected (0, 408.6, 304.6): check d and a"
+    f"your table puts the tool at {home.round(1)} mm at home, expected (0, 408.6, 304.6)"
 assert err_p < 1e-6, f"your table's tool point is up to {err_p:.2g} mm off the PoX model at random poses: " \
     "check the theta offsets and the twists"
 assert err_R < 1e-9, f"your table's tool orientation is up to {err_R:.2g} off the PoX model: check frame 5"
@@ -367,6 +387,13 @@ assert angles.shape == (300, 3), f"euler_angles_from_T should return 3 angles, g
 rebuilt = matrix_from_euler_zyz(angles)
 R_tool = kinematics.fk(Q)[:, :3, :3]
 err = np.abs(rebuilt - R_tool).max()
+if err >= 1e-9:                        # name the cause where the check can tell it
+    for k, name in enumerate(("phi", "theta", "psi")):
+        for how, other in (("negated", -angles[:, k]), ("mirrored (pi minus it)", np.pi - angles[:, k])):
+            fixed = angles.copy()
+            fixed[:, k] = other
+            assert np.abs(matrix_from_euler_zyz(fixed) - R_tool).max() > 1e-9, \
+                f"your angles are right with {name} {how}: check the signs of the two entries of R it is read from"
 turn = np.degrees(np.arccos(np.clip((np.einsum("nji,nji->n", rebuilt, R_tool) - 1) / 2, -1, 1))).max()
 assert err < 1e-9, (f"Rz(phi) Ry(theta) Rz(psi) of your angles misses the tool's rotation by up to {turn:.2g} deg "
                     f"({err:.2g} in a rotation matrix entry, unitless)")
@@ -374,7 +401,8 @@ assert np.all((angles[:, 1] >= 0) & (angles[:, 1] <= np.pi)), "theta must lie in
 for a, flip in ((0.7, 0.0), (-2.0, np.pi)):                 # sin(theta) = 0: psi = 0, phi carries the rotation
     got = euler_angles_from_T(homogeneous(rot_z(a) @ rot_y(flip)))
     assert abs(got[2]) < 1e-12 and np.isclose(got[1], flip, atol=1e-12) and np.isclose(got[0], a, atol=1e-9), \
-        f"at theta = {flip:.2f} expected (phi, theta, psi) = ({a}, {flip:.2f}, 0), got {np.round(got, 3)}"
+        f"at theta = {flip:.2f} expected (phi, theta, psi) = ({a}, {flip:.2f}, 0), got {np.round(got, 3)}: where " \
+        "sin(theta) = 0 set psi = 0 and let phi carry the rotation (a singular case of its own)"
 print("OK: your Euler angles rebuild the tool's rotation at 300 random poses within 1e-9 and the singular poses "
       "keep psi = 0")
 

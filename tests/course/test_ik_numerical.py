@@ -13,8 +13,8 @@ import pytest
 from armlab_course.exercises.markers import stub_lines
 from armlab_course.grading.run import Limits
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "tests"))
+ROOT = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT / "tests" / "course"))
 pytest.importorskip("wrong_answers", reason="the instructor's checkout only (the student release leaves it out)")
 CHEAP = ("ik.candidates", "ik.numerical")        # notebook 03's exercises graded by code: no simulator run
 

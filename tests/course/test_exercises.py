@@ -31,7 +31,7 @@ from armlab_course.exercises import (
 )
 from armlab_course.exercises.markers import stub_lines
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 CHECK_TAG = re.compile(r"^# CHECK (?P<ids>.+)$", re.M)
 
 

@@ -21,7 +21,7 @@ from armlab_course.grading import grade_class, read_submission
 from armlab_course.grading.run import Limits
 from armlab_course.grading.splice import write_regions
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 GRADED = ["fk.dh_table", "fk.euler", "ik.candidates", "fk.dh_link_transform", "ik.numerical"]
 CONTAINED = {   # region prefixes that break the run before the (correct) solution
     "kernel_exit": "    import os\n    os._exit(1)\n",
@@ -154,7 +154,7 @@ def test_the_release_lacks_the_hidden_checks(tmp_path):
     assert (ROOT / "armlab_course/grading/hidden/__init__.py").is_file()
     assert not (tmp_path / "s/armlab_course/grading/hidden").exists()
     assert (tmp_path / "s/armlab_course/grading/harness.py").is_file()
-    assert not list((tmp_path / "s/tests").glob("test_grading*.py"))
+    assert not list((tmp_path / "s/tests/course").glob("test_grading*.py"))
 
 
 def test_infinite_loop_and_corrupt_notebook_are_contained(graded):
@@ -183,12 +183,12 @@ def test_kernel_death_memory_hog_and_huge_output_are_contained(graded, student, 
 
 def test_a_library_call_in_place_of_the_exercise_scores_below_full_marks(graded):
     """scipy's Rotation.as_euler('ZYZ') computes the right values (every public and hidden check passes); the static
-    check fails naming the call."""
+    check fails naming the call, and the exercise scores 0: calling the answer earns nothing (issue 32)."""
     result = graded[0]["library_call"]["fk.euler"]
     static = [c for c in result.checks if c.name.startswith("static")]
     assert all(c.passed for c in result.checks if not c.name.startswith("static"))
     assert len(static) == 1 and not static[0].passed and "scipy.spatial.transform.Rotation" in static[0].message
-    assert 0 < result.score < exercise("fk.euler").points
+    assert result.score == 0
     kit = graded[0]["kit_call"]["fk.dh_table"]
     assert any("pox_of_lengths" in c.message for c in kit.checks if c.name.startswith("static"))
 

@@ -17,7 +17,7 @@ from armlab_course.exercises.registry import exercise
 from armlab_course.grading.splice import write_regions
 from armlab_course.grading.submission import exercise_file, regions_of, source_texts
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 HOMOGRAPHY, POSE = "calib.tag_homography", "calib.tag_extrinsics"   # the pose calls the homography
 
 

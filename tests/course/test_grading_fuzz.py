@@ -34,7 +34,7 @@ from armlab_course.grading.submission import (
     source_texts,
 )
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 NOTEBOOK = "notebooks/02_forward_kinematics.ipynb"
 EULER = "fk.euler"
 PACKAGE = next(e for e in EXERCISES if e.in_package)

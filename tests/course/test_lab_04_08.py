@@ -13,8 +13,8 @@ import pytest
 from armlab_course.exercises.markers import stub_lines
 from armlab_course.grading.run import Limits
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "tests"))
+ROOT = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT / "tests" / "course"))
 MINE = ("detect.segment", "detect.face", "grab.click_target", "grab.move_path", "events.sort_stack",
         "station.transition")
 CHEAP = ("detect.face", "grab.click_target", "station.transition")      # hidden checks without a simulator run

@@ -1,6 +1,7 @@
 """The hidden checks of the exercises graded by comparison with the reference (every one but the open tasks of
-test_hidden_checks_open.py): the reference passes them, plausible wrong answers fail them (tests/wrong_answers.py);
-every exercise has them; the static check names a forbidden call; an open task's outcome is compared with all ones."""
+test_hidden_checks_open.py): the reference passes them, plausible wrong answers fail them
+(tests/course/wrong_answers.py); every exercise has them; the static check names a forbidden call; an open task's
+outcome is compared with all ones."""
 
 from __future__ import annotations
 

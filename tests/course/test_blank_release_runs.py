@@ -22,7 +22,7 @@ from nbclient import NotebookClient
 from armlab_course.exercises import EXERCISES, exercise, find_regions, make_student_release
 from armlab_course.exercises.release import RUN_ALL_TAG
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 CHECK_TAG = re.compile(r"^# CHECK (?P<ids>.+)$", re.M)
 STUB_ERROR = re.compile(r"^exercise (?P<id>\S+) \(notebook \d\d\): write ")
 

@@ -14,7 +14,7 @@ import pytest
 from armlab_course.exercises.registry import exercise
 from armlab_course.grading.upload import find_release_files, refusal, release_names, stage
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 NOTEBOOK = "notebooks/02_forward_kinematics.ipynb"
 PACKAGE = "armlab/kinematics.py"
 

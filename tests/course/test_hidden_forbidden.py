@@ -68,7 +68,7 @@ def _resolves(name: str, modules: dict[str, ModuleType]) -> bool:
 
 def _notebook_names(exercise_id: str) -> set[str]:
     """Names the exercise's notebook binds at top level (a notebook's own helper may be forbidden too)."""
-    path = Path(__file__).resolve().parents[1] / "notebooks" / "src" / f"{exercise(exercise_id).notebook}.py"
+    path = Path(__file__).resolve().parents[2] / "notebooks" / "src" / f"{exercise(exercise_id).notebook}.py"
     if not path.is_file():
         return set()
     names = set()

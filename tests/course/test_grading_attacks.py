@@ -29,7 +29,7 @@ from armlab_course.grading.sandbox import SandboxUnavailable, detect
 from armlab_course.grading.splice import check_body, write_regions
 from armlab_course.grading.submission import exercise_file, read_submission, regions_of, source_texts
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 DH, CHAIN = "fk.euler", "fk.dh_table"
 GRADED = [DH, CHAIN]
 MARK = "armlab-attack-7f3c"          # in every process an attack starts: none may be left after the run

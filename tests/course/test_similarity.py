@@ -24,7 +24,7 @@ from armlab_course.grading import similarity
 from armlab_course.grading.similarity import FLAG_AT, REFERENCE, fingerprints, score, similarity_rows, tokens
 from armlab_course.grading.submission import Submission
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 CODE = [e.id for e in EXERCISES if e.kind != "written"]
 INDEPENDENT_BELOW = 0.4       # measured: at most 0.32 (fk.euler by hand: the same matrix entries, in other shapes)
 
@@ -96,7 +96,7 @@ def test_references_of_different_exercises_score_low_against_each_other():
 
 
 def test_hard_coded_answers_score_low_and_edits_of_the_reference_high():
-    """tests/wrong_answers.py: a hard-coded value shares nothing with the reference; a slip made in a copy of the
+    """tests/course/wrong_answers.py: a hard-coded value shares nothing with the reference; a slip made in a copy of the
     reference (one sign, one index) is still a copy."""
     for exercise_id, wrong in HIDDEN_WRONG.items():
         reference = reference_bodies(exercise_id)
@@ -133,7 +133,7 @@ def test_rows_are_sorted_and_the_same_in_every_process():
     rows = similarity_rows(_class(), {e: reference_bodies(e) for e in ("fk.euler", "fk.dh_link_transform")})
     assert rows == sorted(rows, key=lambda r: (r[0], r[1], r[2] != REFERENCE, r[2]))
     assert [r[2] for r in rows if r[0] == "zoe"] == [REFERENCE, "./reference", "=cmd|' /C calc'!A0", "al\nice"]
-    script = ("import json, sys; sys.path.insert(0, 'tests'); from test_similarity import _class; "
+    script = ("import json, sys; sys.path.insert(0, 'tests/course'); from test_similarity import _class; "
               "from wrong_answers import reference_bodies; "
               "from armlab_course.grading.similarity import similarity_rows; "
               "print(json.dumps(similarity_rows(_class(), {e: reference_bodies(e) for e in "

@@ -1,7 +1,7 @@
 """The engine's slots (armlab.slots) and its truth: a plausible wrong answer in any package slot changes nothing the kit
 believes, only that slot's own demonstrations.
 
-For every package exercise and each of its two wrong answers (tests/wrong_answers.py HIDDEN_WRONG), a copy of the
+For every package exercise and each of its two wrong answers (tests/course/wrong_answers.py HIDDEN_WRONG), a copy of the
 engine with that wrong region computes, in a fresh process, the kit's truths: forward kinematics and the Jacobian
 (the manufacturer's PoX model), the kit's own IK (ik_pox), every stand-in (the kit's reference for each slot), the
 course's references for the notebooks' exercises, the motion safety verdicts (board intrusion of fixed moves, the
@@ -26,7 +26,7 @@ from wrong_answers import HIDDEN_WRONG
 from armlab import slots
 from armlab_course.exercises import EXERCISES, find_regions
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 PACKAGE_SLOTS = [e for e in EXERCISES if e.in_package]
 
 PROBE = r'''

@@ -14,8 +14,8 @@ import pytest
 from armlab_course.exercises.markers import stub_lines
 from armlab_course.grading.run import Limits
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "tests"))
+ROOT = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT / "tests" / "course"))
 CHEAP = ("calib.zhang", "calib.pinhole")          # notebook 01's exercises whose hidden checks run no simulator
 
 

@@ -41,7 +41,7 @@ from armlab_course.grading.sandbox import (
     remove_owned,
 )
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 SMALL = Limits(timeout_s=60, cpu_s=30, memory_mb=1200, max_procs=48, disk_mb=96, scratch_mb=48, max_files=2000)
 
 

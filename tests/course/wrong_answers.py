@@ -11,7 +11,7 @@ from armlab_course.exercises.registry import exercise
 from armlab_course.grading.run import Limits
 from armlab_course.grading.submission import exercise_file, regions_of, source_texts
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 WRONG_DH = ("    return np.array([[np.pi / 2, h0, 0.0, np.pi / 2], [-(np.pi / 2 - beta), 0.0, L1, 0.0],\n"
             "                     [np.pi / 2 - beta, 0.0, L2, 0.0], [-np.pi / 2, 0.0, 0.0, -np.pi / 2],\n"
             "                     [0.0, Lt, 0.0, 0.0]])")      # alpha1's sign slipped: z1 points the other way
@@ -66,8 +66,9 @@ HIDDEN_WRONG = {   # per exercise: wrong answers its hidden checks must catch (a
     },
     "calib.tag_extrinsics": {   # the refinement after the region would repair both: the adapter leaves it out
         "hard-coded": ["    R, t = np.diag([1.0, -1.0, -1.0]), np.array([0.0, 150.0, 1000.0])"],
-        "pixels, not normalised points": _replaced("calib.tag_extrinsics", "dlt_homography(world[:, :2], normalised)",
-                                                   "dlt_homography(world[:, :2], pixels)"),
+        "pixels, not normalised points": _replaced("calib.tag_extrinsics",
+                                                   "_opencv_homography(world[:, :2], normalised)",
+                                                   "_opencv_homography(world[:, :2], pixels)"),
     },
     "calib.depth_plane": {
         "one fit, no rejection": _replaced("calib.depth_plane", "range(iterations)", "range(1)"),
@@ -153,11 +154,11 @@ HIDDEN_WRONG = {   # per exercise: wrong answers its hidden checks must catch (a
 }
 # the exercises whose hidden checks run the simulator at length (tested apart: test_hidden_checks_open.py)
 OPEN_TASKS = ("events.sort_stack", "grab.move_path", "teach.replay", "detect.segment")
-# exercises whose hidden checks call another exercise's region (pose_from_corners calls the student's dlt_homography;
-# kinematics.fk is the PoX model, so ik.numerical no longer calls dh_link_transform), so that the other one's wrong
-# answer fails them too; the grader then runs the exercise again alone, the reference in place of the rest
-# (Grader.grade), which test_grading.py::test_a_wrong_kit_function_does_not_cost_the_exercise_that_calls_it shows
-DEPENDS = {"calib.tag_extrinsics": {"calib.tag_homography"}}
+# exercises whose hidden checks call another exercise's region, so that the other one's wrong answer fails them too;
+# the grader then runs the exercise again alone, the reference in place of the rest (Grader.grade). None is left:
+# kinematics.fk is the PoX model (ik.numerical no longer calls dh_link_transform), and the check of
+# calib.tag_extrinsics runs the kit's homography in place of the student's dlt_homography (adapters._call_initial_pose)
+DEPENDS: dict[str, set[str]] = {}
 
 
 def wrong_sets(ids: list[str]) -> list[list[str]]:

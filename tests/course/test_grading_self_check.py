@@ -1,0 +1,76 @@
+"""The self-check is the grader's public verdict (issues 32 and 37): for every exercise graded by code and each of its
+plausible wrong answers (tests/course/wrong_answers.py), `self_check(only=EXERCISE)` in a student release holding that
+region passes and fails the same public CHECK cells, with the same names, as the grader's run of that exercise's
+notebook does for the same region (Grader.public_checks). Where a check can tell a wrong answer's cause, its message
+names it (HINTS). Each case costs a notebook run on both sides: the cheap notebooks' exercises run by default
+(CHEAP), the others with ARMLAB_SELF_CHECK_ALL=1."""
+
+from __future__ import annotations
+
+import os
+import shutil
+
+import pytest
+from wrong_answers import HIDDEN_WRONG, ROOT, reference_bodies
+
+from armlab_course.exercises import make_student_release
+from armlab_course.exercises.registry import EXERCISES
+from armlab_course.grading.check import self_check
+from armlab_course.grading.grade import Grader
+from armlab_course.grading.run import Limits
+from armlab_course.grading.splice import write_regions
+
+CODED = [e.id for e in EXERCISES if e.kind != "written"]
+CHEAP = ("fk.dh_link_transform", "fk.dh_table", "fk.euler", "calib.tag_homography")
+EVERY = os.environ.get("ARMLAB_SELF_CHECK_ALL") == "1"
+# (exercise, wrong answer) -> what the failing check's message says of the cause
+HINTS = {
+    ("calib.tag_homography", "hard-coded"): "the same H whatever the points",
+    ("calib.tag_homography", "normalisation not undone"): "undo the normalisation",
+    ("fk.dh_link_transform", "d negated"): "right with d negated",
+    ("fk.dh_link_transform", "theta and alpha swapped in row 0"): "first in row 0",
+    ("fk.dh_table", "alpha1's sign slipped"): "row 1's alpha negated",
+    ("fk.dh_table", "the L's tilt added, not taken off"): "row 2's theta offset is off by 2 beta",
+    ("fk.euler", "psi's sign slipped"): "right with psi mirrored",
+    ("fk.euler", "no singular case"): "a singular case of its own",
+}
+LIMITS = Limits(timeout_s=400, cpu_s=400)
+
+
+@pytest.fixture(scope="module")
+def release(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("self-check") / "release"
+    make_student_release(ROOT, folder)
+    return folder
+
+
+@pytest.fixture(scope="module")
+def grader():
+    with Grader(ROOT, LIMITS, CODED, written=(), parallel=2) as own:
+        yield own
+
+
+def test_every_hint_is_for_a_kept_wrong_answer():
+    assert all(label in HIDDEN_WRONG[e] for e, label in HINTS), sorted(HINTS)
+
+
+@pytest.mark.parametrize("exercise_id", [e if e in CHEAP or EVERY else
+                                         pytest.param(e, marks=pytest.mark.skip("ARMLAB_SELF_CHECK_ALL=1 runs it"))
+                                         for e in CODED])
+def test_the_self_check_gives_the_graders_public_verdict(exercise_id, release, grader, tmp_path):
+    answers = {"reference": reference_bodies(exercise_id), **HIDDEN_WRONG[exercise_id]}
+    verdicts = {}
+    for label, bodies in answers.items():
+        student = tmp_path / label.replace(" ", "_").replace("'", "")
+        shutil.copytree(release, student)
+        write_regions(student, exercise_id, bodies)
+        mine = self_check(student, LIMITS, only=exercise_id).results[exercise_id]
+        public = grader.public_checks(exercise_id, bodies)
+        assert public and [(c.name, c.passed) for c in mine.checks] == [(c.name, c.passed) for c in public], \
+            (label, mine.checks, public)
+        verdicts[label] = all(c.passed for c in public)
+        hint = HINTS.get((exercise_id, label))
+        if hint:
+            failed = [c.message for c in mine.checks if not c.passed]
+            assert failed and hint in failed[0], (label, failed)
+    assert verdicts["reference"], f"{exercise_id}: the reference fails its own public checks"
