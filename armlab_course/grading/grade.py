@@ -7,18 +7,20 @@ counting
 one; a region calling a forbidden library or kit function -- found in its text (armlab_course.grading.static) or seen
 called while the hidden checks ran (armlab_course.grading.harness) -- gets one more check, failed.
 
-One pass: the student's regions of every written exercise go into one copy of the instructor's tree (the reference
-stays in place for the blank ones), each notebook that checks a written exercise runs once, and the hidden checks
-of every written exercise run in one harness process. An exercise whose checks all pass there is scored from that
-run. An exercise with a failing check is run again alone -- its regions in the reference, the reference in place for
-every other exercise -- and scored from that run, so that one mistake costs one exercise. Results of identical
-regions are shared within one Grader (the work tree, so the outcome, is the same). A submission's runs (each notebook,
-the hidden checks) are independent: with `parallel` > 1 they go side by side.
+One pass: the student's regions of every written exercise go into one copy of the student release (built once per
+Grader by the release builder, armlab_course.exercises.release: every other region a stub the kit stands in for, no
+reference, hidden spec or grader module in it), each notebook that checks a written exercise runs once, and the
+hidden checks of every written exercise run in one harness process. An exercise whose checks all pass there is scored
+from that run. An exercise with a failing check, when another written exercise failed too, is run again alone -- its
+regions and those of the exercises that passed in the release, the failing ones blank -- and scored from that run,
+so that one mistake costs one exercise. Results of identical regions are shared within one Grader (the work tree, so
+the outcome, is the same). A submission's runs (each notebook, the hidden checks) are independent: with `parallel` > 1
+they go side by side.
 
-Everything of the grader is imported, the instructor's tree copied and every expected value computed when the
-Grader is made, before any student code runs; student code runs only in the sandbox (armlab_course.grading.sandbox),
-each
-run in a fresh copy of its tree, and the grader's own sources are checked against the hashes taken at the start
+Everything of the grader is imported, the instructor's tree copied, the release built and every expected value
+computed (the reference run once on the instructor's copy) when the Grader is made, before any student code runs;
+student code runs only in the sandbox (armlab_course.grading.sandbox), each run in a fresh copy of the release with
+its regions, and the grader's own sources are checked against the hashes taken at the start
 before any report is written.
 """
 
@@ -44,7 +46,7 @@ from . import similarity as _similarity
 from .results import CheckResult, ExerciseResult, score_exercise
 from .run import DEFAULT_LIMITS, Limits, NotebookRun, Runner, check_cells
 from .sandbox import WORK, Sandbox, detect, owner_only, python_outside, refuse_shared_network
-from .splice import RegionRejected, build_worktree, check_body, splice_into
+from .splice import RegionRejected, build_worktree, check_body, release_worktree, splice_into
 from .static import STATIC_CHECK, static_check
 from .submission import Submission, exercise_file, read_submission, regions_of, source_texts
 
@@ -158,8 +160,13 @@ class Grader:
         self._sources = source_hashes()
         self._tmp = tempfile.TemporaryDirectory(prefix="armlab-grade-")
         self._root = Path(self._tmp.name)
-        self._pristine = build_worktree(self.reference, self._root / "reference")
-        self._pristine.chmod(0o700)            # never entered by a run's user (the "user" sandbox)
+        # the instructor's files: read by the grader (the reference's bodies) and run once, before any student code,
+        # for the expected values; never a student run's tree
+        self._instructor = build_worktree(self.reference, self._root / "instructor")
+        self._instructor.chmod(0o700)          # never entered by a run's user (the "user" sandbox)
+        # what every student run's tree is made of: the student release (built once), the student's regions spliced
+        self._pristine = release_worktree(self._instructor, self._root / "release")
+        self._pristine.chmod(0o700)
         (self._root / "runs").mkdir(mode=0o711)
         self.runner = Runner(self.sandbox, limits)
         self._cache: dict[tuple, object] = {}
@@ -195,7 +202,8 @@ class Grader:
         return dest
 
     def _spliced(self, bodies: dict[str, list[str]]) -> Path:
-        """A copy of the reference with these exercises' regions replaced (bodies already checked)."""
+        """A copy of the student release with these exercises' regions replaced (bodies already checked); every
+        other exercise stays blank (the kit's stand-in answers for it)."""
         tree = self._fresh(self._pristine)
         for exercise_id, exercise_bodies in bodies.items():
             splice_into(tree, exercise_id, exercise_bodies)
@@ -283,7 +291,7 @@ class Grader:
         ids = self._with_specs(self._computed)
         if not ids:
             return {}
-        got, problem = self._harness(self._pristine, ids, compared_only=True)
+        got, problem = self._harness(self._instructor, ids, compared_only=True)
         if got is None:
             raise RuntimeError(f"the reference's hidden checks gave no results: {problem}")
         expected = {}
@@ -362,18 +370,21 @@ class Grader:
         text = "\0\0".join(f"{e}\0" + "\0".join(b) for e, b in sorted(bodies.items()))
         return hashlib.sha256(text.encode()).hexdigest()
 
-    def grade_exercise(self, exercise_id: str, bodies: list[str], deadline: Deadline | None = None
-                       ) -> ExerciseResult:
-        """The exercise alone: `bodies` spliced into the reference, its notebook and its hidden checks run (within
+    def grade_exercise(self, exercise_id: str, bodies: list[str], deadline: Deadline | None = None,
+                       beside: dict[str, list[str]] | None = None) -> ExerciseResult:
+        """The exercise alone: `bodies` spliced into the student release (with the `beside` exercises' bodies, already
+        checked, in place too; every other exercise blank), its notebook and its hidden checks run (within
         `deadline`, if given)."""
-        return self._once(("alone", exercise_id, self._digest({exercise_id: bodies})),
-                          lambda: self._alone(exercise_id, bodies, deadline))
+        beside = {e: b for e, b in (beside or {}).items() if e != exercise_id}
+        return self._once(("alone", exercise_id, self._digest({exercise_id: bodies}), self._digest(beside)),
+                          lambda: self._alone(exercise_id, bodies, deadline, beside))
 
-    def _alone(self, exercise_id: str, bodies: list[str], deadline: Deadline | None = None) -> ExerciseResult:
+    def _alone(self, exercise_id: str, bodies: list[str], deadline: Deadline | None = None,
+               beside: dict[str, list[str]] | None = None) -> ExerciseResult:
         try:
             for body in bodies:
                 check_body(body, exercise_id)
-            tree = self._spliced({exercise_id: bodies})
+            tree = self._spliced({**(beside or {}), exercise_id: bodies})
         except RegionRejected as e:
             return score_exercise(exercise_id, [], str(e))
         try:
@@ -414,10 +425,11 @@ class Grader:
             return runs, hidden.result()
 
     def _reference_bodies(self, exercise_id: str) -> list[str]:
-        """The reference's region bodies of the exercise (from the grader's private copy)."""
+        """The reference's region bodies of the exercise (from the grader's private copy of the instructor's
+        files)."""
         name = exercise_file(exercise(exercise_id))
         return self._once(("reference", exercise_id),
-                          lambda: regions_of(source_texts(self._pristine / name), exercise_id, name))
+                          lambda: regions_of(source_texts(self._instructor / name), exercise_id, name))
 
     def grade(self, submission: Submission) -> dict[str, ExerciseResult]:
         """Every graded exercise's result for `submission`; its runs end within TIME_BUDGET x the timeout."""
@@ -446,25 +458,24 @@ class Grader:
         if written:
             together = self._once(("together", self._digest(written)), lambda: self._together(written, deadline))
             failing = {e for e, (checks, _) in together.items() if not checks or not all(c.passed for c in checks)}
+            passing = {e: b for e, b in written.items() if e not in failing}
             for exercise_id, (checks, problem) in together.items():
-                others_fail = failing - {exercise_id}
-                if exercise_id not in failing or not any(written[e] != self._reference_bodies(e)
-                                                         for e in others_fail):
-                    # every check passed, or each other exercise that failed is the reference itself: the pass
-                    # was already this exercise alone as far as a failure can tell
+                if exercise_id not in failing or not failing - {exercise_id}:
+                    # every check passed, or no other exercise failed: the tree of a run alone (the exercises that
+                    # passed in place, the failing ones blank) would be the pass's own
                     results[exercise_id] = score_exercise(exercise_id, checks, problem)
                 elif deadline.left() < 1:
                     results[exercise_id] = score_exercise(exercise_id, checks, problem or (
                         "scored from the pass with every exercise in place: the submission's time was spent before "
                         "it could run alone"))
                 else:
-                    results[exercise_id] = self.grade_exercise(exercise_id, written[exercise_id], deadline)
+                    results[exercise_id] = self.grade_exercise(exercise_id, written[exercise_id], deadline, passing)
         return {e: results[e] for e in self.exercise_ids}
 
     # -- for instructors trying hidden specs ----------------------------------------------------------------
     def hidden_checks(self, exercise_id: str, bodies: list[str]) -> list[CheckResult]:
-        """Only the hidden checks of `bodies` spliced into the reference (no notebook run): for instructors trying a
-        new HiddenSpec against wrong answers. RegionRejected for a body holding markers."""
+        """Only the hidden checks of `bodies` spliced into the student release (no notebook run): for instructors
+        trying a new HiddenSpec against wrong answers. RegionRejected for a body holding markers."""
         return self.hidden_checks_together({exercise_id: bodies})[exercise_id]
 
     def hidden_checks_together(self, bodies: dict[str, list[str]]) -> dict[str, list[CheckResult]]:
