@@ -349,3 +349,96 @@ def test_results_of_the_wrong_shape_fail_that_submission_only(monkeypatch, grade
     messages = result.reason + " ".join(c.message for c in result.checks)
     reasons = ("could not be read", "without results", "gave no results", "differs")
     assert any(words in messages for words in reasons), result
+
+
+# what only the grader's side holds: the hidden checks' registry and specs, the judge, the grading driver
+GRADER_MARKERS = ("class HiddenSpec", "def cases_of(", "def run_jobs(", "class Grader:", "def _compute_expected(")
+_SCAN = """
+import json, os, sys
+markers = json.loads(sys.stdin.readline())
+found, seen, scanned = [], set(), 0
+roots = [p for p in sys.path if p and os.path.isdir(p) and not p.startswith(sys.base_prefix)
+         and "-packages" not in p]
+roots += [os.getcwd(), os.environ["HOME"], "/tmp"]
+for base in sys.path:                                      # what a .pth file or an editable install adds
+    if base.endswith("-packages") and os.path.isdir(base):
+        for name in os.listdir(base):
+            if name.endswith(".pth") or "armlab" in name.lower() or name.startswith("__editable__"):
+                roots.append(os.path.join(base, name))
+for base in list(roots):
+    if os.path.isfile(base) and base.endswith(".pth"):
+        roots += [line.strip() for line in open(base, errors="replace") if line.strip().startswith("/")]
+for root in roots:
+    walk = [(root, [], [""])] if os.path.isfile(root) else os.walk(root)
+    for folder, _dirs, files in walk:
+        for name in files:
+            path = os.path.join(folder, name)
+            if path in seen or not name.endswith((".py", ".ipynb", ".pth", ".json", ".txt", ".md", ".csv")):
+                continue
+            seen.add(path)
+            try:
+                text = open(path, encoding="utf-8", errors="replace").read()
+            except OSError:
+                continue
+            scanned += 1
+            found += [[path, m[:60]] for m in markers if m in text]
+mods = {}
+for mod in ("armlab_course.grading.hidden", "armlab_course.grading.grade", "armlab_course.grading.judge",
+            "armlab_course.grading.harness"):
+    try:
+        __import__(mod)
+        mods[mod] = sys.modules[mod].__file__
+    except ImportError:
+        mods[mod] = None
+print(json.dumps({"found": found[:20], "scanned": scanned, "modules": mods}))
+"""
+
+
+def _solution_lines(release: Path) -> list[str]:
+    """Lines of the reference's exercise regions (at least 25 characters, stripped) that the student release holds
+    nowhere: each is in the instructor's solutions only."""
+    from armlab_course.exercises.registry import EXERCISES
+    from armlab_course.grading.submission import exercise_file, regions_of, source_texts
+
+    released = "\n".join(p.read_text(encoding="utf-8", errors="replace") for p in release.rglob("*")
+                         if p.is_file() and p.suffix in (".py", ".ipynb", ".md"))
+    lines = set()
+    for e in EXERCISES:
+        name = exercise_file(e)
+        if not name.endswith((".py", ".ipynb")) or e.id.startswith("answer"):
+            continue
+        for body in regions_of(source_texts(ROOT / name), e.id, name):
+            lines.update(line.strip() for line in body.splitlines() if len(line.strip()) >= 25)
+    return sorted(line for line in lines if line not in released and json_safe(line))
+
+
+def json_safe(line: str) -> bool:
+    """Whether the line reads the same inside a notebook's JSON (no quote or backslash to escape)."""
+    return '"' not in line and "\\" not in line
+
+
+def test_a_region_that_walks_its_sandbox_finds_no_solution_or_grader_source(grader, tmp_path):
+    """What a region sees (the work tree of a grading run: the release with the student's regions, run in the sandbox
+    with the grading runs' environment and sys.path, its home, /tmp, and what any .pth file of the environment adds)
+    holds no line of any reference solution and no source of the grader's side (hidden specs, judge, grader), and
+    none of those modules imports. The markers are real: the instructor's own tree holds every one."""
+    from armlab_course.exercises.release import make_student_release
+
+    make_student_release(ROOT, tmp_path / "release")
+    markers = _solution_lines(tmp_path / "release") + list(GRADER_MARKERS)
+    instructor = "\n".join(p.read_text(encoding="utf-8", errors="replace") for pattern in ("**/*.py", "**/*.ipynb")
+                           for p in ROOT.glob(pattern) if ".venv" not in p.parts and p.is_file())
+    assert len(markers) > 50 and all(m in instructor for m in markers), [m for m in markers if m not in instructor]
+    import json
+
+    tree = grader._spliced({"fk.euler": ["    return np.zeros(3)"]})
+    try:
+        done, out, code = grader.runner.run([sys.executable, "-c", _SCAN], tree,
+                                            json.dumps(markers).encode() + b"\n")
+    finally:
+        grader._discard(tree)
+    assert done and code == 0, out
+    report = json.loads(out.strip().splitlines()[-1])
+    assert report["scanned"] > 100, report
+    assert report["found"] == [], report["found"]
+    assert not any(report["modules"].values()), report["modules"]

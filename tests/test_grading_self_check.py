@@ -19,11 +19,6 @@ from armlab_course.grading.run import Limits
 from armlab_course.grading.splice import write_regions
 
 TRIED = ("fk.dh_link_transform", "fk.dh_table", "fk.euler", "calib.tag_homography")
-# The grader's tree holds the reference of calib.tag_extrinsics, whose BoardView calls the student's dlt_homography;
-# the release's blank stand-in does not: a hard-coded homography passes check cell 14 in the release and fails it in
-# the grader ("max() arg is an empty sequence"). The seam of issue 32 (the engine's truth never runs student code)
-# removes the difference; strict, so that this mark goes when it does.
-SEAM = pytest.mark.xfail(strict=True, reason="issue 32: the kit's tag_extrinsics calls the student's dlt_homography")
 LIMITS = Limits(timeout_s=300, cpu_s=200)
 
 
@@ -40,8 +35,7 @@ def grader():
         yield own
 
 
-@pytest.mark.parametrize("exercise_id", [pytest.param(e, marks=SEAM) if e == "calib.tag_homography" else e
-                                         for e in TRIED])
+@pytest.mark.parametrize("exercise_id", TRIED)
 def test_the_self_check_gives_the_graders_public_verdict(exercise_id, release, grader, tmp_path):
     notebook = exercise(exercise_id).notebook
     answers = {"reference": reference_bodies(exercise_id), **HIDDEN_WRONG[exercise_id]}
