@@ -298,15 +298,84 @@ def test_a_submission_ends_within_its_time_budget(monkeypatch, grader):
     assert any("time" in (r.reason + " ".join(c.message for c in r.checks)) for r in results.values())
 
 
-def test_a_hidden_check_error_shows_its_type_not_the_inputs(grader):
-    """A region that puts its arguments into its exception's message: the feedback names the exception only."""
+def _cell_and_line(grader, exercise_id: str, bodies: list[str], text: str) -> tuple[int, int]:
+    """The code cell of the exercise's notebook, with these bodies spliced into the release, whose source holds
+    `text`, and the line (from 1) it is on."""
+    import json
+
+    tree = grader._spliced({exercise_id: bodies})
+    try:
+        nb = json.loads((tree / f"notebooks/{exercise(exercise_id).notebook}.ipynb").read_text())
+    finally:
+        grader._discard(tree)
+    code = ["".join(c["source"]) for c in nb["cells"] if c["cell_type"] == "code"]
+    cell = next(i for i, source in enumerate(code) if text in source)
+    return cell, next(n for n, line in enumerate(code[cell].splitlines(), 1) if text in line)
+
+
+LEAKS = ("inputs:", "array(", "/grader", "armlab_grader", "harness", "wire.py", "adapters", "/home/student",
+         "<work>", "<grader>", "Traceback", "judge")
+
+
+def test_a_hidden_check_error_shows_its_type_and_frames_not_the_inputs(grader):
+    """A region that puts its arguments into its exception's message: the feedback names the exception and where in
+    the region it was raised (the notebook cell and its line), never the message, the inputs or the grader's
+    frames."""
     euler = "fk.euler"
     body = "    raise ValueError('inputs: ' + repr(T) + ' end')"
-    checks = grader.hidden_checks(euler, [body] * len(grader._reference_bodies(euler)))
+    bodies = [body] * len(grader._reference_bodies(euler))
+    checks = grader.hidden_checks(euler, bodies)
     failed = [c for c in checks if not c.passed]
-    assert failed and all("ValueError" in c.message for c in failed), checks
-    assert not any("inputs:" in c.message or "array(" in c.message for c in checks), checks
+    cell, line = _cell_and_line(grader, euler, bodies, "raise ValueError('inputs: '")
+    where = f"in your code: {exercise(euler).notebook} cell {cell}, line {line}, in euler_angles_from_T)"
+    assert failed and all("ValueError" in c.message and where in c.message for c in failed), checks
+    assert not any(leak in c.message for c in checks for leak in LEAKS), checks
     assert exercise(euler).points > 0
+
+
+def test_an_error_deep_in_the_regions_own_helper_shows_each_of_its_frames(grader):
+    """A region whose helper recurses twice before it raises: the feedback lists the region's own frames, innermost
+    last (the function, then the helper three times, each at its line of the cell), and nothing of the kit or the
+    grader in between; the exception's message (the hidden input) stays hidden."""
+    euler = "fk.euler"
+    body = textwrap.indent(textwrap.dedent("""\
+        def _deeper(m, k):
+            if k == 0:
+                raise ZeroDivisionError("leaked " + repr(m))
+            return _deeper(m, k - 1)
+        return _deeper(T, 2)"""), "    ")
+    bodies = [body] * len(grader._reference_bodies(euler))
+    checks = grader.hidden_checks(euler, bodies)
+    failed = [c for c in checks if not c.passed]
+    notebook = exercise(euler).notebook
+    cell, outer = _cell_and_line(grader, euler, bodies, "return _deeper(T, 2)")
+    _, recurse = _cell_and_line(grader, euler, bodies, "return _deeper(m, k - 1)")
+    _, raised = _cell_and_line(grader, euler, bodies, "raise ZeroDivisionError")
+    frames = [f"{notebook} cell {cell}, line {outer}, in euler_angles_from_T",
+              *[f"{notebook} cell {cell}, line {recurse}, in _deeper"] * 2,
+              f"{notebook} cell {cell}, line {raised}, in _deeper"]
+    assert failed and all(f"(in your code: {'; '.join(frames)}): raised ZeroDivisionError (its message is not shown"
+                          in c.message for c in failed), failed[0].message
+    assert not any(leak in c.message or "leaked" in c.message for c in checks for leak in LEAKS), checks
+
+
+def test_frames_a_region_forges_show_only_its_own_names_in_its_own_file():
+    """The frames come from the student's process, so the grader keeps only plain triples (judge.where_of) in the
+    exercise's own notebook and in functions the region names: a frame naming another file, a place or a function
+    that carries other text (a hidden input, say) is dropped."""
+    from armlab_course.grading.grade import _at
+    from armlab_course.grading.judge import where_of
+
+    notebook = exercise("fk.euler").notebook
+    sent = [[f"{notebook} cell 8", 3, "helper"], ["armlab_grader/harness.py", 10, "call"],
+            [f"{notebook} cell 8 0.1234", 4, "helper"], [f"{notebook} cell 8", 5, "x_0_1234"],
+            [f"{notebook} cell 8", 6, "not an identifier 0.5"], [f"{notebook} cell 8", True, "helper"], "junk",
+            [f"{notebook} cell 9", 7, "<lambda>"]]
+    kept = where_of(sent)
+    assert [f for f in kept if f[2] == "not an identifier 0.5" or f[1] is True] == [] and len(kept) == 5
+    shown = _at("fk.euler", kept, ["    def helper(m):\n        return m"])
+    assert shown == f" (in your code: {notebook} cell 8, line 3, in helper; {notebook} cell 9, line 7, in <lambda>)"
+    assert _at("fk.euler", where_of("not a list"), []) == ""
 
 
 NOTEBOOK_PAYLOADS = {"not a dict": [1, 2], "cells not a mapping": {"cells": [[0, True]]},

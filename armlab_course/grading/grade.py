@@ -99,6 +99,29 @@ def student_side(message: str) -> str:
     return _TAIL.sub(lambda m: f"{m[1]} (the run's output is not shown)", message)
 
 
+_NAMES = re.compile(r"[A-Za-z_]\w*")
+_BRACKETED = {"<module>", "<lambda>", "<listcomp>", "<genexpr>", "<dictcomp>", "<setcomp>"}
+
+
+def _at(exercise_id: str, where, bodies: Iterable[str]) -> str:
+    """Where a hidden check's call raised in the student's own code, for the feedback: " (in your code: <place>,
+    line <n>, in <function>; ...)", innermost last, or ''. Of the frames the student's process sent (judge.where_of
+    kept only plain triples), only those in the exercise's own notebook (its cells) or package file, in a function
+    whose name the student's regions hold (or the exercise's function, <module>, <lambda>...), are shown: nothing
+    else of the run, so no grader path or source, and no text of the run's choosing beyond its own names and line
+    numbers."""
+    ex = exercise(exercise_id)
+    names = set(_NAMES.findall("\n".join(bodies))) | _BRACKETED
+    names |= {spec.function.rsplit(".", 1)[-1] for spec in (_hidden.specs_of(exercise_id) if _hidden else ())}
+    shown = []
+    for place, line, function in where if isinstance(where, list) else []:
+        own = (place == ex.where) if ex.in_package else re.fullmatch(rf"{re.escape(ex.notebook)} cell \d{{1,4}}",
+                                                                     place)
+        if own and function in names:
+            shown.append(f"{place}, line {line}, in {function}")
+    return f" (in your code: {'; '.join(shown)})" if shown else ""
+
+
 class GraderChanged(RuntimeError):
     """The grader's own files changed while it ran: no report is written."""
 
@@ -303,9 +326,14 @@ class Grader:
         return expected
 
     # -- checks -----------------------------------------------------------------------------------------------
-    def _hidden_results(self, exercise_id: str, outputs: list[dict] | None, problem: str
-                        ) -> tuple[list[CheckResult], list[str]]:
-        """The exercise's hidden checks from its jobs' outputs, and the forbidden calls seen."""
+    def _hidden_results(self, exercise_id: str, outputs: list[dict] | None, problem: str,
+                        bodies: list[str] = ()) -> tuple[list[CheckResult], list[str]]:
+        """The exercise's hidden checks from its jobs' outputs, and the forbidden calls seen; an error's message
+        says where in the student's own code (`bodies`) it was raised (_at)."""
+        if outputs is not None:
+            outputs = [job if job is None else {**job, "results": [
+                {**r, "at": _at(exercise_id, r.get("where"), bodies)} if isinstance(r, dict) and "error" in r else r
+                for r in job["results"]]} for job in outputs]
         checks: list[CheckResult] = []
         seen: list[str] = []
         first = 1
@@ -337,7 +365,7 @@ class Grader:
             outputs, problem = hidden
             try:
                 hidden_checks, seen = self._hidden_results(exercise_id, None if outputs is None else
-                                                           outputs[exercise_id], problem)
+                                                           outputs[exercise_id], problem, bodies)
             except _MALFORMED as e:             # the run's results were not of the shape a harness writes
                 hidden_checks, seen = self._hidden_results(
                     exercise_id, None, f"the hidden checks' results could not be read ({type(e).__name__})")
@@ -493,7 +521,7 @@ class Grader:
             self._discard(tree)
         out: dict[str, list[CheckResult]] = {e: [] for e in bodies}
         for e in ids:
-            checks, seen = self._hidden_results(e, None if outputs is None else outputs[e], problem)
+            checks, seen = self._hidden_results(e, None if outputs is None else outputs[e], problem, bodies[e])
             out[e] = checks + ([CheckResult(STATIC_CHECK, False, f"called {seen[0]} at run time")] if seen else [])
         return out
 
