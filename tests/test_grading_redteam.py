@@ -359,6 +359,49 @@ def test_an_error_deep_in_the_regions_own_helper_shows_each_of_its_frames(grader
     assert not any(leak in c.message or "leaked" in c.message for c in checks for leak in LEAKS), checks
 
 
+def test_a_public_check_failing_deep_in_the_region_shows_the_regions_frames(grader):
+    """The same helper under the notebook's own check cell: the failed check's message gives the exception and the
+    frames of the student's notebook (the check cell, then the region's function and helper, each with its cell and
+    line), and no frame of the kit or the grader."""
+    euler = "fk.euler"
+    body = textwrap.indent(textwrap.dedent("""\
+        def _deeper(m, k):
+            if k == 0:
+                raise ZeroDivisionError("public " + str(k))
+            return _deeper(m, k - 1)
+        return _deeper(T, 1)"""), "    ")
+    bodies = [body] * len(grader._reference_bodies(euler))
+    result = grader.grade_exercise(euler, bodies)
+    notebook = exercise(euler).notebook
+    cell, outer = _cell_and_line(grader, euler, bodies, "return _deeper(T, 1)")
+    _, recurse = _cell_and_line(grader, euler, bodies, "return _deeper(m, k - 1)")
+    _, raised = _cell_and_line(grader, euler, bodies, "raise ZeroDivisionError")
+    inner = (f"{notebook} cell {cell}, line {outer}, in euler_angles_from_T; {notebook} cell {cell}, line {recurse}, "
+             f"in _deeper; {notebook} cell {cell}, line {raised}, in _deeper)")
+    public = [c for c in result.checks if c.name.startswith(f"{notebook} cell")]
+    assert public and not any(c.passed for c in public), result
+    for check in public:
+        assert check.message.startswith("ZeroDivisionError: public 0 (in your code: "), check.message
+        assert check.message.endswith(inner) and f"{check.name}, line " in check.message, check.message
+        assert not any(leak in check.message for leak in LEAKS), check.message
+
+
+def test_frames_in_a_package_region_are_shown_and_the_kits_are_not(tmp_path, monkeypatch):
+    """IPython's frame of a package file counts only on a line inside an exercise region of the work tree."""
+    from armlab_course.grading.nbval_guard import own_frames
+
+    (tmp_path / "armlab").mkdir()
+    (tmp_path / "armlab/kin.py").write_text("def f(x):\n    # BEGIN SOLUTION fk.x\n    return g(x)\n"
+                                            "    # END SOLUTION\n\ndef g(x):\n    return 1 / x\n")
+    monkeypatch.chdir(tmp_path)
+    traceback = (f"Cell In[1], line 2\n      1 y = 0\n----> 2 f(y)\n\n"
+                 f"File {tmp_path}/armlab/kin.py:3, in f(x)\n----> 3     return g(x)\n\n"
+                 f"File {tmp_path}/armlab/kin.py:7, in g(x)\n----> 7     return 1 / x\n\n"
+                 f"File /usr/lib/python3/dist-packages/x.py:9, in h()\n\nZeroDivisionError: division by zero")
+    assert own_frames(traceback, ["import x", "y = 0\nf(y)"], 1, "nb") == [
+        "nb cell 1, line 2, in <module>", "armlab/kin.py, line 3, in f"]
+
+
 def test_frames_a_region_forges_show_only_its_own_names_in_its_own_file():
     """The frames come from the student's process, so the grader keeps only plain triples (judge.where_of) in the
     exercise's own notebook and in functions the region names: a frame naming another file, a place or a function
