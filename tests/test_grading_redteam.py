@@ -554,3 +554,146 @@ def test_a_region_that_walks_its_sandbox_finds_no_solution_or_grader_source(grad
     assert report["scanned"] > 100, report
     assert report["found"] == [], report["found"]
     assert not any(report["modules"].values()), report["modules"]
+
+
+UNPRIVILEGED_UID = 64990            # outside USER_UIDS: a grader user of its own, not a run's
+
+
+def attack_outcomes(grader, markers: list[str]) -> dict:
+    """What a handful of attacks gain, as booleans that say each was stopped (the same whoever runs the grader):
+    600 processes, filling /tmp, reading /etc/shadow and the root's home, student code running as root, and a region
+    walking its sandbox for solution or grader source (run on `grader`'s release tree)."""
+    import json
+
+    _, out, _ = _run("""
+        import subprocess
+        started = 0
+        for _ in range(600):
+            try:
+                subprocess.Popen(["sleep", "20"])
+                started += 1
+            except OSError:
+                break
+        print("started", started, flush=True)
+    """)
+    started = int(_last(out).split()[-1]) if "started" in out else 0
+    _, out, _ = _run("""
+        written = 0
+        try:
+            with open("/tmp/fill", "wb") as f:
+                for _ in range(400):
+                    f.write(b"x" * 2**20)
+                    f.flush()
+                    written += 1
+        except OSError:
+            pass
+        print("written", written, flush=True)
+    """)
+    filled = int(_last(out).split()[-1]) if "written" in out else -1
+    _, out, _ = _run("""
+        import os, sys
+        def readable(path):
+            try:
+                open(path, "rb").read(1)
+                return True
+            except OSError:
+                return False
+        try:                                  # root's home: only the way to the sandbox's own Python, if that is in it
+            python = [os.path.realpath(p) for p in (sys.prefix, sys.base_prefix, sys.executable)]
+            home = [e for e in os.listdir("/root") if not any(p.startswith(f"/root/{e}") for p in python)]
+        except OSError:
+            home = []
+        print(int(os.getuid() == 0), int(readable("/etc/shadow")), int(bool(home)), flush=True)
+    """)
+    root, shadow, root_home = (int(x) for x in _last(out).split())
+    tree = grader._spliced({"fk.euler": ["    return np.zeros(3)"]})
+    try:
+        _, out, _ = grader.runner.run([sys.executable, "-c", _SCAN], tree, json.dumps(markers).encode() + b"\n")
+    finally:
+        grader._discard(tree)
+    walk = json.loads(out.strip().splitlines()[-1])
+    return {"processes capped": 0 < started <= SMALL.max_procs, "/tmp capped": 0 <= filled <= SMALL.scratch_mb,
+            "not root": not root, "no /etc/shadow": not shadow, "no /root": not root_home,
+            "walk found nothing": walk["scanned"] > 100 and not walk["found"] and not any(walk["modules"].values())}
+
+
+_AS_USER = """
+import json, sys
+from armlab_course.grading.grade import Grader
+from armlab_course.grading.sandbox import PidsGroup, detect
+import test_grading_redteam as redteam
+PidsGroup.available = staticmethod(lambda: False)
+markers = json.load(open(sys.argv[1]))
+with Grader(redteam.ROOT, exercises=["fk.euler"], written=[]) as grader:
+    print(json.dumps({"kind": detect().kind, "own_uid": grader.sandbox.own_uid,
+                      "outcomes": redteam.attack_outcomes(grader, markers)}))
+"""
+
+
+def test_bubblewrap_as_an_unprivileged_user_stops_the_attacks_a_root_grader_stops(grader, tmp_path, no_cgroup):
+    """The grader run by an unprivileged user (as root here: setpriv to a uid of its own; bubblewrap then makes a user
+    namespace, the path a lab machine or a laptop takes) stops each attack of attack_outcomes as the root run does."""
+    import json
+
+    if os.getuid() != 0 or shutil.which("setpriv") is None:
+        pytest.skip("needs root (to drop to an unprivileged uid with setpriv) and setpriv")
+    if grader.sandbox.kind != "bwrap":
+        pytest.skip(f"the root run uses the {grader.sandbox.kind!r} sandbox, not bubblewrap")
+    probe = subprocess.run(["setpriv", f"--reuid={UNPRIVILEGED_UID}", f"--regid={UNPRIVILEGED_UID}", "--clear-groups",
+                            "--", "bwrap", "--unshare-all", "--ro-bind", "/", "/", "true"], capture_output=True,
+                           text=True, timeout=60)
+    if probe.returncode != 0:
+        pytest.skip(f"user namespaces are not available to an unprivileged user here: {probe.stderr.strip()[:200]}")
+    from armlab_course.exercises.release import make_student_release
+
+    make_student_release(ROOT, tmp_path / "release")
+    markers = _solution_lines(tmp_path / "release") + list(GRADER_MARKERS)
+    home = Path(tempfile.mkdtemp(prefix="armlab-unprivileged-"))   # not under tmp_path: its parents are root's 0700
+    (home / "markers.json").write_text(json.dumps(markers))
+    for path in (home, home / "markers.json"):
+        os.chown(path, UNPRIVILEGED_UID, UNPRIVILEGED_UID)
+    site = os.pathsep.join(p for p in sys.path if p.endswith("-packages") and os.path.isdir(p))
+    env = {"PATH": os.environ.get("PATH", "/usr/bin:/bin"), "HOME": str(home), "TMPDIR": str(home),
+           "PYTHONPATH": os.pathsep.join([str(ROOT), str(ROOT / "tests"), site]), "GIT_CONFIG_COUNT": "1",
+           "GIT_CONFIG_KEY_0": "safe.directory", "GIT_CONFIG_VALUE_0": "*", "MPLBACKEND": "Agg"}
+    drop = ["setpriv", f"--reuid={UNPRIVILEGED_UID}", f"--regid={UNPRIVILEGED_UID}", "--clear-groups", "--"]
+    python = _python_for(drop, env, home)
+    try:
+        done = subprocess.run([*drop, python, "-c", _AS_USER, str(home / "markers.json")], cwd=home, env=env,
+                              capture_output=True, text=True, timeout=900)
+    finally:
+        from armlab_course.grading.watch import kill_until_gone
+
+        kill_until_gone(lambda: [int(e.name) for e in os.scandir("/proc") if e.name.isdigit()
+                                 and _owner(e.path) == UNPRIVILEGED_UID])
+        shutil.rmtree(home, ignore_errors=True)
+    assert done.returncode == 0, done.stderr[-2000:]
+    as_user = json.loads(done.stdout.strip().splitlines()[-1])
+    assert as_user["kind"] == "bwrap" and not as_user["own_uid"], as_user      # a user namespace, not the uid pool
+    as_root = attack_outcomes(grader, markers)
+    assert as_root == dict.fromkeys(as_root, True), as_root
+    assert as_user["outcomes"] == as_root, as_user
+
+
+def _python_for(drop: list[str], env: dict, home: Path) -> str:
+    """A Python interpreter of this environment's version that the unprivileged user can start, and that can start
+    itself (the grader runs sys.executable): this one, else the one its environment was made from (a venv whose
+    interpreter lives in root's home), else the system's of the same version; the test skips, saying so, when there
+    is none."""
+    version = f"python{sys.version_info.major}.{sys.version_info.minor}"
+    tried = []
+    for python in (sys.executable, os.path.join(sys.base_prefix, "bin", version), f"/usr/bin/{version}"):
+        check = subprocess.run([*drop, python, "-c", "import subprocess, sys, numpy; "
+                                "subprocess.run([sys.executable, '-c', '0'], check=True)"],
+                               cwd=home, env=env, capture_output=True, text=True, timeout=120)
+        if check.returncode == 0:
+            return python
+        tried.append(f"{python}: {(check.stderr.strip().splitlines() or [''])[-1][:100]}")
+    pytest.skip(f"no Python interpreter of this environment that an unprivileged user can start ({'; '.join(tried)})")
+
+
+def _owner(path: str) -> int | None:
+    try:
+        return os.stat(path).st_uid
+    except OSError:
+        return None
