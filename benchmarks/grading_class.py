@@ -30,7 +30,7 @@ from grading import make_class
 
 from armlab_course.exercises.registry import exercise
 from armlab_course.grading.grade import TIME_BUDGET
-from armlab_course.grading.sandbox import USER_UIDS
+from armlab_course.grading.sandbox import USER_UIDS, uids_in_use
 from armlab_course.grading.splice import write_regions
 from armlab_course.grading.submission import exercise_file, regions_of, source_texts
 
@@ -60,12 +60,14 @@ _PROGRESS = re.compile(r"^\[(\d+)\] (.+): ([\d.]+) / (\d+) \((\d+) s\)$")
 
 
 def _left_processes() -> list[int]:
-    """Processes of the run uids (USER_UIDS) still alive."""
+    """Processes of the run uids (USER_UIDS) still alive whose uid no grader holds now (uids_in_use: the pool is the
+    machine's, so another grader's runs are not counted)."""
+    held = set(uids_in_use())
     left = []
     for entry in os.scandir("/proc"):
         if entry.name.isdigit():
             try:
-                if entry.stat().st_uid in USER_UIDS:
+                if entry.stat().st_uid in USER_UIDS and entry.stat().st_uid not in held:
                     left.append(int(entry.name))
             except OSError:
                 continue
@@ -106,7 +108,7 @@ def main() -> None:
             print(f"| {name} | {score:g} / {total} | {at} |")
         print(f"hostile {hostile.name}: bound {TIME_BUDGET * args.timeout:g} s (TIME_BUDGET {TIME_BUDGET} x "
               f"--timeout)")
-        print(f"processes of the run uids left: {len(_left_processes())}")
+        print(f"processes of the run uids left (uids no grader holds): {len(_left_processes())}")
         if done.returncode != 0:
             print(done.stderr[-2000:])
 
