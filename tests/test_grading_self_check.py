@@ -19,6 +19,11 @@ from armlab_course.grading.run import Limits
 from armlab_course.grading.splice import write_regions
 
 TRIED = ("fk.dh_link_transform", "fk.dh_table", "fk.euler", "calib.tag_homography")
+# A hard-coded homography passes check cell 14 in the self-check and fails it in the grader. Both now run the same
+# tree (the release with the region); the difference left is how the cell is compared: the grader compares its
+# printed output with the instructor's stored one, the self-check (no stored outputs) only that it does not raise.
+# Strict, so that this mark goes when the two agree.
+SEAM = pytest.mark.xfail(strict=True, reason="the grader compares check cell 14's output; the self-check cannot")
 LIMITS = Limits(timeout_s=300, cpu_s=200)
 
 
@@ -35,7 +40,8 @@ def grader():
         yield own
 
 
-@pytest.mark.parametrize("exercise_id", TRIED)
+@pytest.mark.parametrize("exercise_id", [pytest.param(e, marks=SEAM) if e == "calib.tag_homography" else e
+                                         for e in TRIED])
 def test_the_self_check_gives_the_graders_public_verdict(exercise_id, release, grader, tmp_path):
     notebook = exercise(exercise_id).notebook
     answers = {"reference": reference_bodies(exercise_id), **HIDDEN_WRONG[exercise_id]}
