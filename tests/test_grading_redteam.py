@@ -80,18 +80,21 @@ def _last(out: str) -> str:
     return out.strip().splitlines()[-1] if out.strip() else ""
 
 
+SIX_HUNDRED_PROCESSES = """
+    import subprocess
+    started = 0
+    for _ in range(600):
+        try:
+            subprocess.Popen(["sleep", "20"])
+            started += 1
+        except OSError:
+            break
+    print("started", started, flush=True)
+"""
+
+
 def test_six_hundred_processes_stop_at_the_cap_without_a_cgroup(no_cgroup):
-    done, out, code = _run("""
-        import subprocess
-        started = 0
-        for _ in range(600):
-            try:
-                subprocess.Popen(["sleep", "20"])
-                started += 1
-            except OSError:
-                break
-        print("started", started, flush=True)
-    """)
+    done, out, code = _run(SIX_HUNDRED_PROCESSES)
     assert done, out
     started = int(_last(out).split()[-1]) if "started" in out else 0
     assert 0 < started <= SMALL.max_procs, out
@@ -333,24 +336,30 @@ def test_a_hidden_check_error_shows_its_type_and_frames_not_the_inputs(grader):
     assert exercise(euler).points > 0
 
 
+def _deep_helper(grader, message: str, depth: int) -> tuple[list[str], int, tuple[int, int, int]]:
+    """fk.euler's bodies: a helper that recurses `depth` times, then raises ZeroDivisionError(`message`); with the
+    code cell they land in and the lines of the call from the function, of the recursion and of the raise."""
+    body = textwrap.indent(textwrap.dedent(f"""\
+        def _deeper(m, k):
+            if k == 0:
+                raise ZeroDivisionError({message})
+            return _deeper(m, k - 1)
+        return _deeper(T, {depth})"""), "    ")
+    bodies = [body] * len(grader._reference_bodies("fk.euler"))
+    found = [_cell_and_line(grader, "fk.euler", bodies, text) for text in
+             (f"return _deeper(T, {depth})", "return _deeper(m, k - 1)", "raise ZeroDivisionError")]
+    return bodies, found[0][0], tuple(line for _, line in found)
+
+
 def test_an_error_deep_in_the_regions_own_helper_shows_each_of_its_frames(grader):
     """A region whose helper recurses twice before it raises: the feedback lists the region's own frames, innermost
     last (the function, then the helper three times, each at its line of the cell), and nothing of the kit or the
     grader in between; the exception's message (the hidden input) stays hidden."""
     euler = "fk.euler"
-    body = textwrap.indent(textwrap.dedent("""\
-        def _deeper(m, k):
-            if k == 0:
-                raise ZeroDivisionError("leaked " + repr(m))
-            return _deeper(m, k - 1)
-        return _deeper(T, 2)"""), "    ")
-    bodies = [body] * len(grader._reference_bodies(euler))
+    bodies, cell, (outer, recurse, raised) = _deep_helper(grader, '"leaked " + repr(m)', 2)
     checks = grader.hidden_checks(euler, bodies)
     failed = [c for c in checks if not c.passed]
     notebook = exercise(euler).notebook
-    cell, outer = _cell_and_line(grader, euler, bodies, "return _deeper(T, 2)")
-    _, recurse = _cell_and_line(grader, euler, bodies, "return _deeper(m, k - 1)")
-    _, raised = _cell_and_line(grader, euler, bodies, "raise ZeroDivisionError")
     frames = [f"{notebook} cell {cell}, line {outer}, in euler_angles_from_T",
               *[f"{notebook} cell {cell}, line {recurse}, in _deeper"] * 2,
               f"{notebook} cell {cell}, line {raised}, in _deeper"]
@@ -364,18 +373,9 @@ def test_a_public_check_failing_deep_in_the_region_shows_the_regions_frames(grad
     frames of the student's notebook (the check cell, then the region's function and helper, each with its cell and
     line), and no frame of the kit or the grader."""
     euler = "fk.euler"
-    body = textwrap.indent(textwrap.dedent("""\
-        def _deeper(m, k):
-            if k == 0:
-                raise ZeroDivisionError("public " + str(k))
-            return _deeper(m, k - 1)
-        return _deeper(T, 1)"""), "    ")
-    bodies = [body] * len(grader._reference_bodies(euler))
+    bodies, cell, (outer, recurse, raised) = _deep_helper(grader, '"public " + str(k)', 1)
     result = grader.grade_exercise(euler, bodies)
     notebook = exercise(euler).notebook
-    cell, outer = _cell_and_line(grader, euler, bodies, "return _deeper(T, 1)")
-    _, recurse = _cell_and_line(grader, euler, bodies, "return _deeper(m, k - 1)")
-    _, raised = _cell_and_line(grader, euler, bodies, "raise ZeroDivisionError")
     inner = (f"{notebook} cell {cell}, line {outer}, in euler_angles_from_T; {notebook} cell {cell}, line {recurse}, "
              f"in _deeper; {notebook} cell {cell}, line {raised}, in _deeper)")
     public = [c for c in result.checks if c.name.startswith(f"{notebook} cell")]
@@ -565,17 +565,7 @@ def attack_outcomes(grader, markers: list[str]) -> dict:
     walking its sandbox for solution or grader source (run on `grader`'s release tree)."""
     import json
 
-    _, out, _ = _run("""
-        import subprocess
-        started = 0
-        for _ in range(600):
-            try:
-                subprocess.Popen(["sleep", "20"])
-                started += 1
-            except OSError:
-                break
-        print("started", started, flush=True)
-    """)
+    _, out, _ = _run(SIX_HUNDRED_PROCESSES)
     started = int(_last(out).split()[-1]) if "started" in out else 0
     _, out, _ = _run("""
         written = 0
