@@ -55,6 +55,18 @@ RELEASE_EXCLUDES = (
     "tests/test_notebook_outputs.py",   # checks the instructor's executed notebooks (the release's have no outputs)
     "armlab_course/grading/hidden.py",    # the grader's hidden checks (fresh inputs per exercise)
     "armlab_course/grading/hidden/*",     # (one module per exercise)
+    # the grader's side (issue 37): the release keeps only what `python -m armlab check` runs; the hidden checks'
+    # child (harness, wire, adapters) comes from the grader's own read-only folder when the instructor grades
+    "armlab_course/grading/adapters.py",
+    "armlab_course/grading/autograder.py",
+    "armlab_course/grading/grade.py",
+    "armlab_course/grading/harness.py",
+    "armlab_course/grading/judge.py",
+    "armlab_course/grading/similarity.py",
+    "armlab_course/grading/upload.py",
+    "armlab_course/grading/wire.py",
+    "tests/test_similarity.py",      # the similarity report's tests (grader side)
+    "tests/test_hidden_forbidden.py",     # reads the hidden checks' forbidden names
     "tools/autograder/*",          # the Gradescope bundle's scripts (make autograder)
     "tests/course/test_grading*.py",      # the grader's tests (they hold wrong answers and the tricks)
     "tests/course/wrong_answers.py",      # the wrong answers (pieces of every solution) and the tests that run them

@@ -24,9 +24,11 @@ import importlib
 import importlib.util
 import inspect
 import json
+import linecache
 import os
 import re
 import sys
+import traceback
 import types
 from pathlib import Path
 
@@ -36,22 +38,47 @@ from . import wire
 
 
 def _definitions(source: str) -> str:
-    """The cell's top-level imports, function and class definitions and assignments of literal constants."""
+    """The cell's top-level imports, function and class definitions and assignments of literal constants, each on its
+    own lines (every other line blank, so that a traceback's line numbers are the cell's)."""
     try:
         tree = ast.parse(source)
     except SyntaxError:
         return source                                  # let the shell report it
-    keep = []
+    keep, drop = set(), set()
     for node in tree.body:
-        if isinstance(node, (ast.Import, ast.ImportFrom, ast.FunctionDef, ast.ClassDef)):
-            keep.append(node)
-        elif isinstance(node, ast.Assign):
+        first = min([node.lineno, *(d.lineno for d in getattr(node, "decorator_list", []))])
+        lines = set(range(first, node.end_lineno + 1))
+        kept = isinstance(node, (ast.Import, ast.ImportFrom, ast.FunctionDef, ast.ClassDef))
+        if isinstance(node, ast.Assign):
             try:
                 ast.literal_eval(node.value)
-                keep.append(node)
+                kept = True
             except ValueError:
                 pass
-    return ast.unparse(ast.Module(body=keep, type_ignores=[]))
+        (keep if kept else drop).update(lines)
+    if keep & drop:                                    # statements sharing a line: kept ones only, renumbered
+        return ast.unparse(ast.Module(body=[n for n in tree.body if n.lineno in keep - drop], type_ignores=[]))
+    return "\n".join(line if i in keep else "" for i, line in enumerate(source.splitlines(), start=1))
+
+
+# IPython's file name of each notebook cell run (its code's co_filename) -> the cell as the student knows it
+# ("02_forward_kinematics cell 8": the notebook and the code cell's index, as the grader's check names say)
+_CELLS: dict[str, str] = {}
+MAX_FRAMES = 8
+
+
+def where(error: BaseException, regions: list[tuple[str, int, int]]) -> list[list]:
+    """The student's own frames of `error`'s traceback, innermost last (at most MAX_FRAMES): [place, line,
+    function], place being a notebook cell ("02_forward_kinematics cell 8", the line within the cell) or the package
+    file of a region ("armlab/kinematics.py", the line within the file). Frames of the kit, of libraries and of the
+    grader are left out."""
+    frames = []
+    for frame in traceback.extract_tb(error.__traceback__):
+        if frame.filename in _CELLS:
+            frames.append([_CELLS[frame.filename], frame.lineno, frame.name])
+        elif any(frame.filename == f and a <= (frame.lineno or 0) <= b for f, a, b in regions):
+            frames.append([os.path.relpath(frame.filename), frame.lineno, frame.name])
+    return frames[-MAX_FRAMES:]
 
 
 def _notebook_function(notebook: Path, name: str, prelude: str = "cells"):
@@ -62,11 +89,13 @@ def _notebook_function(notebook: Path, name: str, prelude: str = "cells"):
     shell.enable_gui = lambda gui=None: None      # '%matplotlib inline' outside a kernel: no event loop to start
     defines = re.compile(rf"^(def|class) {re.escape(name)}\b", re.MULTILINE)
     earlier = None
-    for cell in json.loads(notebook.read_text(encoding="utf-8"))["cells"]:
-        if cell["cell_type"] != "code":
-            continue
+    code_cells = [c for c in json.loads(notebook.read_text(encoding="utf-8"))["cells"] if c["cell_type"] == "code"]
+    for index, cell in enumerate(code_cells):
         source = "".join(cell["source"])
+        before = set(linecache.cache)
         result = shell.run_cell(_definitions(source) if prelude == "definitions" else source, silent=True)
+        _CELLS.update((name, f"{notebook.stem} cell {index}") for name in set(linecache.cache) - before
+                      if name.startswith("<ipython-input"))
         if not result.success and earlier is None:
             earlier = result.error_before_exec or result.error_in_exec
         if defines.search(source):
@@ -435,7 +464,8 @@ class _Job:
         return self._loaded
 
     def call(self, args: list) -> dict:
-        """{"value": plain data} or {"error": the student's exception in one line}."""
+        """{"value": plain data} or {"error": the student's exception in one line, "where": its frames in the
+        student's own code (where())}."""
         function, adapter, error = self._load()
         if error:
             return {"error": error}
@@ -448,7 +478,7 @@ class _Job:
                     value = adapter(function, *args)
             return {"value": wire.encode(_numbers(value))}
         except Exception as e:                                   # the student's error, reported per call
-            return {"error": f"{type(e).__name__}: {e}"[:300]}
+            return {"error": f"{type(e).__name__}: {e}"[:300], "where": where(e, self.watch.regions)}
 
 
 def _numbers(value):

@@ -9,6 +9,9 @@ from __future__ import annotations
 
 import csv
 import json
+import os
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -149,12 +152,29 @@ def test_calling_the_kits_reference_function_fails_the_hidden_checks(graded):
     assert hidden and not all(c.passed for c in hidden) and kit.score < exercise("fk.dh_table").points
 
 
-def test_the_release_lacks_the_hidden_checks(tmp_path):
+GRADER_SIDE = ("grade.py", "judge.py", "harness.py", "wire.py", "adapters.py", "similarity.py", "upload.py",
+               "autograder.py")
+
+
+def test_the_release_lacks_the_hidden_checks_and_the_graders_side(tmp_path):
+    """The release keeps what the self-check runs (it imports there, and `grade` says it is the instructor's) and
+    none of the grader's side; the instructor's tree has every file left out."""
     make_student_release(ROOT, tmp_path / "s")
+    grading = tmp_path / "s/armlab_course/grading"
     assert (ROOT / "armlab_course/grading/hidden/__init__.py").is_file()
-    assert not (tmp_path / "s/armlab_course/grading/hidden").exists()
-    assert (tmp_path / "s/armlab_course/grading/harness.py").is_file()
-    assert not list((tmp_path / "s/tests/course").glob("test_grading*.py"))
+    assert not (grading / "hidden").exists()
+    assert all((ROOT / "armlab_course/grading" / name).is_file() for name in GRADER_SIDE)
+    assert [name for name in GRADER_SIDE if (grading / name).exists()] == []
+    assert not list((tmp_path / "s/tests").rglob("test_grading*.py"))
+    probe = ("import armlab_course.grading as g, armlab_course.grading.check, armlab_course.grading.cli\n"
+             "from armlab_course.grading import read_submission\nprint(g.__file__)")
+    env = {**os.environ, "PYTHONPATH": str(tmp_path / "s")}
+    done = subprocess.run([sys.executable, "-c", probe], cwd=tmp_path / "s", env=env, capture_output=True,
+                          text=True, timeout=120)
+    assert done.returncode == 0 and done.stdout.strip() == str(grading / "__init__.py"), done.stderr
+    done = subprocess.run([sys.executable, "-m", "armlab", "grade", "x", "--out", "y"], cwd=tmp_path / "s", env=env,
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 2 and "no grader" in done.stderr and "Traceback" not in done.stderr, done.stderr
 
 
 def test_infinite_loop_and_corrupt_notebook_are_contained(graded):

@@ -80,18 +80,21 @@ def _last(out: str) -> str:
     return out.strip().splitlines()[-1] if out.strip() else ""
 
 
+SIX_HUNDRED_PROCESSES = """
+    import subprocess
+    started = 0
+    for _ in range(600):
+        try:
+            subprocess.Popen(["sleep", "20"])
+            started += 1
+        except OSError:
+            break
+    print("started", started, flush=True)
+"""
+
+
 def test_six_hundred_processes_stop_at_the_cap_without_a_cgroup(no_cgroup):
-    done, out, code = _run("""
-        import subprocess
-        started = 0
-        for _ in range(600):
-            try:
-                subprocess.Popen(["sleep", "20"])
-                started += 1
-            except OSError:
-                break
-        print("started", started, flush=True)
-    """)
+    done, out, code = _run(SIX_HUNDRED_PROCESSES)
     assert done, out
     started = int(_last(out).split()[-1]) if "started" in out else 0
     assert 0 < started <= SMALL.max_procs, out
@@ -298,15 +301,124 @@ def test_a_submission_ends_within_its_time_budget(monkeypatch, grader):
     assert any("time" in (r.reason + " ".join(c.message for c in r.checks)) for r in results.values())
 
 
-def test_a_hidden_check_error_shows_its_type_not_the_inputs(grader):
-    """A region that puts its arguments into its exception's message: the feedback names the exception only."""
+def _cell_and_line(grader, exercise_id: str, bodies: list[str], text: str) -> tuple[int, int]:
+    """The code cell of the exercise's notebook, with these bodies spliced into the release, whose source holds
+    `text`, and the line (from 1) it is on."""
+    import json
+
+    tree = grader._spliced({exercise_id: bodies})
+    try:
+        nb = json.loads((tree / f"notebooks/{exercise(exercise_id).notebook}.ipynb").read_text())
+    finally:
+        grader._discard(tree)
+    code = ["".join(c["source"]) for c in nb["cells"] if c["cell_type"] == "code"]
+    cell = next(i for i, source in enumerate(code) if text in source)
+    return cell, next(n for n, line in enumerate(code[cell].splitlines(), 1) if text in line)
+
+
+LEAKS = ("inputs:", "array(", "/grader", "armlab_grader", "harness", "wire.py", "adapters", "/home/student",
+         "<work>", "<grader>", "Traceback", "judge")
+
+
+def test_a_hidden_check_error_shows_its_type_and_frames_not_the_inputs(grader):
+    """A region that puts its arguments into its exception's message: the feedback names the exception and where in
+    the region it was raised (the notebook cell and its line), never the message, the inputs or the grader's
+    frames."""
     euler = "fk.euler"
     body = "    raise ValueError('inputs: ' + repr(T) + ' end')"
-    checks = grader.hidden_checks(euler, [body] * len(grader._reference_bodies(euler)))
+    bodies = [body] * len(grader._reference_bodies(euler))
+    checks = grader.hidden_checks(euler, bodies)
     failed = [c for c in checks if not c.passed]
-    assert failed and all("ValueError" in c.message for c in failed), checks
-    assert not any("inputs:" in c.message or "array(" in c.message for c in checks), checks
+    cell, line = _cell_and_line(grader, euler, bodies, "raise ValueError('inputs: '")
+    where = f"in your code: {exercise(euler).notebook} cell {cell}, line {line}, in euler_angles_from_T)"
+    assert failed and all("ValueError" in c.message and where in c.message for c in failed), checks
+    assert not any(leak in c.message for c in checks for leak in LEAKS), checks
     assert exercise(euler).points > 0
+
+
+def _deep_helper(grader, message: str, depth: int) -> tuple[list[str], int, tuple[int, int, int]]:
+    """fk.euler's bodies: a helper that recurses `depth` times, then raises ZeroDivisionError(`message`); with the
+    code cell they land in and the lines of the call from the function, of the recursion and of the raise."""
+    body = textwrap.indent(textwrap.dedent(f"""\
+        def _deeper(m, k):
+            if k == 0:
+                raise ZeroDivisionError({message})
+            return _deeper(m, k - 1)
+        return _deeper(T, {depth})"""), "    ")
+    bodies = [body] * len(grader._reference_bodies("fk.euler"))
+    found = [_cell_and_line(grader, "fk.euler", bodies, text) for text in
+             (f"return _deeper(T, {depth})", "return _deeper(m, k - 1)", "raise ZeroDivisionError")]
+    return bodies, found[0][0], tuple(line for _, line in found)
+
+
+def test_an_error_deep_in_the_regions_own_helper_shows_each_of_its_frames(grader):
+    """A region whose helper recurses twice before it raises: the feedback lists the region's own frames, innermost
+    last (the function, then the helper three times, each at its line of the cell), and nothing of the kit or the
+    grader in between; the exception's message (the hidden input) stays hidden."""
+    euler = "fk.euler"
+    bodies, cell, (outer, recurse, raised) = _deep_helper(grader, '"leaked " + repr(m)', 2)
+    checks = grader.hidden_checks(euler, bodies)
+    failed = [c for c in checks if not c.passed]
+    notebook = exercise(euler).notebook
+    frames = [f"{notebook} cell {cell}, line {outer}, in euler_angles_from_T",
+              *[f"{notebook} cell {cell}, line {recurse}, in _deeper"] * 2,
+              f"{notebook} cell {cell}, line {raised}, in _deeper"]
+    assert failed and all(f"(in your code: {'; '.join(frames)}): raised ZeroDivisionError (its message is not shown"
+                          in c.message for c in failed), failed[0].message
+    assert not any(leak in c.message or "leaked" in c.message for c in checks for leak in LEAKS), checks
+
+
+def test_a_public_check_failing_deep_in_the_region_shows_the_regions_frames(grader):
+    """The same helper under the notebook's own check cell: the failed check's message gives the exception and the
+    frames of the student's notebook (the check cell, then the region's function and helper, each with its cell and
+    line), and no frame of the kit or the grader."""
+    euler = "fk.euler"
+    bodies, cell, (outer, recurse, raised) = _deep_helper(grader, '"public " + str(k)', 1)
+    result = grader.grade_exercise(euler, bodies)
+    notebook = exercise(euler).notebook
+    inner = (f"{notebook} cell {cell}, line {outer}, in euler_angles_from_T; {notebook} cell {cell}, line {recurse}, "
+             f"in _deeper; {notebook} cell {cell}, line {raised}, in _deeper)")
+    public = [c for c in result.checks if c.name.startswith(f"{notebook} cell")]
+    assert public and not any(c.passed for c in public), result
+    for check in public:
+        assert check.message.startswith("ZeroDivisionError: public 0 (in your code: "), check.message
+        assert check.message.endswith(inner) and f"{check.name}, line " in check.message, check.message
+        assert not any(leak in check.message for leak in LEAKS), check.message
+
+
+def test_frames_in_a_package_region_are_shown_and_the_kits_are_not(tmp_path, monkeypatch):
+    """IPython's frame of a package file counts only on a line inside an exercise region of the work tree."""
+    from armlab_course.grading.nbval_guard import own_frames
+
+    (tmp_path / "armlab").mkdir()
+    (tmp_path / "armlab/kin.py").write_text("def f(x):\n    # BEGIN SOLUTION fk.x\n    return g(x)\n"
+                                            "    # END SOLUTION\n\ndef g(x):\n    return 1 / x\n")
+    monkeypatch.chdir(tmp_path)
+    traceback = (f"Cell In[1], line 2\n      1 y = 0\n----> 2 f(y)\n\n"
+                 f"File {tmp_path}/armlab/kin.py:3, in f(x)\n----> 3     return g(x)\n\n"
+                 f"File {tmp_path}/armlab/kin.py:7, in g(x)\n----> 7     return 1 / x\n\n"
+                 f"File /usr/lib/python3/dist-packages/x.py:9, in h()\n\nZeroDivisionError: division by zero")
+    assert own_frames(traceback, ["import x", "y = 0\nf(y)"], 1, "nb") == [
+        "nb cell 1, line 2, in <module>", "armlab/kin.py, line 3, in f"]
+
+
+def test_frames_a_region_forges_show_only_its_own_names_in_its_own_file():
+    """The frames come from the student's process, so the grader keeps only plain triples (judge.where_of) in the
+    exercise's own notebook and in functions the region names: a frame naming another file, a place or a function
+    that carries other text (a hidden input, say) is dropped."""
+    from armlab_course.grading.grade import _at
+    from armlab_course.grading.judge import where_of
+
+    notebook = exercise("fk.euler").notebook
+    sent = [[f"{notebook} cell 8", 3, "helper"], ["armlab_grader/harness.py", 10, "call"],
+            [f"{notebook} cell 8 0.1234", 4, "helper"], [f"{notebook} cell 8", 5, "x_0_1234"],
+            [f"{notebook} cell 8", 6, "not an identifier 0.5"], [f"{notebook} cell 8", True, "helper"], "junk",
+            [f"{notebook} cell 9", 7, "<lambda>"]]
+    kept = where_of(sent)
+    assert [f for f in kept if f[2] == "not an identifier 0.5" or f[1] is True] == [] and len(kept) == 5
+    shown = _at("fk.euler", kept, ["    def helper(m):\n        return m"])
+    assert shown == f" (in your code: {notebook} cell 8, line 3, in helper; {notebook} cell 9, line 7, in <lambda>)"
+    assert _at("fk.euler", where_of("not a list"), []) == ""
 
 
 NOTEBOOK_PAYLOADS = {"not a dict": [1, 2], "cells not a mapping": {"cells": [[0, True]]},
@@ -349,3 +461,229 @@ def test_results_of_the_wrong_shape_fail_that_submission_only(monkeypatch, grade
     messages = result.reason + " ".join(c.message for c in result.checks)
     reasons = ("could not be read", "without results", "gave no results", "differs")
     assert any(words in messages for words in reasons), result
+
+
+# what only the grader's side holds: the hidden checks' registry and specs, the judge, the grading driver
+GRADER_MARKERS = ("class HiddenSpec", "def cases_of(", "def run_jobs(", "class Grader:", "def _compute_expected(")
+_SCAN = """
+import json, os, sys
+markers = json.loads(sys.stdin.readline())
+found, seen, scanned = [], set(), 0
+roots = [p for p in sys.path if p and os.path.isdir(p) and not p.startswith(sys.base_prefix)
+         and "-packages" not in p]
+roots += [os.getcwd(), os.environ["HOME"], "/tmp"]
+for base in sys.path:                                      # what a .pth file or an editable install adds
+    if base.endswith("-packages") and os.path.isdir(base):
+        for name in os.listdir(base):
+            if name.endswith(".pth") or "armlab" in name.lower() or name.startswith("__editable__"):
+                roots.append(os.path.join(base, name))
+for base in list(roots):
+    if os.path.isfile(base) and base.endswith(".pth"):
+        roots += [line.strip() for line in open(base, errors="replace") if line.strip().startswith("/")]
+for root in roots:
+    walk = [(root, [], [""])] if os.path.isfile(root) else os.walk(root)
+    for folder, _dirs, files in walk:
+        for name in files:
+            path = os.path.join(folder, name)
+            if path in seen or not name.endswith((".py", ".ipynb", ".pth", ".json", ".txt", ".md", ".csv")):
+                continue
+            seen.add(path)
+            try:
+                text = open(path, encoding="utf-8", errors="replace").read()
+            except OSError:
+                continue
+            scanned += 1
+            found += [[path, m[:60]] for m in markers if m in text]
+mods = {}
+for mod in ("armlab_course.grading.hidden", "armlab_course.grading.grade", "armlab_course.grading.judge",
+            "armlab_course.grading.harness"):
+    try:
+        __import__(mod)
+        mods[mod] = sys.modules[mod].__file__
+    except ImportError:
+        mods[mod] = None
+print(json.dumps({"found": found[:20], "scanned": scanned, "modules": mods}))
+"""
+
+
+def _solution_lines(release: Path) -> list[str]:
+    """Lines of the reference's exercise regions (at least 25 characters, stripped) that the student release holds
+    nowhere: each is in the instructor's solutions only."""
+    from armlab_course.exercises.registry import EXERCISES
+    from armlab_course.grading.submission import exercise_file, regions_of, source_texts
+
+    released = "\n".join(p.read_text(encoding="utf-8", errors="replace") for p in release.rglob("*")
+                         if p.is_file() and p.suffix in (".py", ".ipynb", ".md"))
+    lines = set()
+    for e in EXERCISES:
+        name = exercise_file(e)
+        if not name.endswith((".py", ".ipynb")) or e.id.startswith("answer"):
+            continue
+        for body in regions_of(source_texts(ROOT / name), e.id, name):
+            lines.update(line.strip() for line in body.splitlines() if len(line.strip()) >= 25)
+    return sorted(line for line in lines if line not in released and json_safe(line))
+
+
+def json_safe(line: str) -> bool:
+    """Whether the line reads the same inside a notebook's JSON (no quote or backslash to escape)."""
+    return '"' not in line and "\\" not in line
+
+
+def test_a_region_that_walks_its_sandbox_finds_no_solution_or_grader_source(grader, tmp_path):
+    """What a region sees (the work tree of a grading run: the release with the student's regions, run in the sandbox
+    with the grading runs' environment and sys.path, its home, /tmp, and what any .pth file of the environment adds)
+    holds no line of any reference solution and no source of the grader's side (hidden specs, judge, grader), and
+    none of those modules imports. The markers are real: the instructor's own tree holds every one."""
+    from armlab_course.exercises.release import make_student_release
+
+    make_student_release(ROOT, tmp_path / "release")
+    markers = _solution_lines(tmp_path / "release") + list(GRADER_MARKERS)
+    instructor = "\n".join(p.read_text(encoding="utf-8", errors="replace") for pattern in ("**/*.py", "**/*.ipynb")
+                           for p in ROOT.glob(pattern) if ".venv" not in p.parts and p.is_file())
+    assert len(markers) > 50 and all(m in instructor for m in markers), [m for m in markers if m not in instructor]
+    import json
+
+    tree = grader._spliced({"fk.euler": ["    return np.zeros(3)"]})
+    try:
+        done, out, code = grader.runner.run([sys.executable, "-c", _SCAN], tree,
+                                            json.dumps(markers).encode() + b"\n")
+    finally:
+        grader._discard(tree)
+    assert done and code == 0, out
+    report = json.loads(out.strip().splitlines()[-1])
+    assert report["scanned"] > 100, report
+    assert report["found"] == [], report["found"]
+    assert not any(report["modules"].values()), report["modules"]
+
+
+UNPRIVILEGED_UID = 64990            # outside USER_UIDS: a grader user of its own, not a run's
+
+
+def attack_outcomes(grader, markers: list[str]) -> dict:
+    """What a handful of attacks gain, as booleans that say each was stopped (the same whoever runs the grader):
+    600 processes, filling /tmp, reading /etc/shadow and the root's home, student code running as root, and a region
+    walking its sandbox for solution or grader source (run on `grader`'s release tree)."""
+    import json
+
+    _, out, _ = _run(SIX_HUNDRED_PROCESSES)
+    started = int(_last(out).split()[-1]) if "started" in out else 0
+    _, out, _ = _run("""
+        written = 0
+        try:
+            with open("/tmp/fill", "wb") as f:
+                for _ in range(400):
+                    f.write(b"x" * 2**20)
+                    f.flush()
+                    written += 1
+        except OSError:
+            pass
+        print("written", written, flush=True)
+    """)
+    filled = int(_last(out).split()[-1]) if "written" in out else -1
+    _, out, _ = _run("""
+        import os, sys
+        def readable(path):
+            try:
+                open(path, "rb").read(1)
+                return True
+            except OSError:
+                return False
+        try:                                  # root's home: only the way to the sandbox's own Python, if that is in it
+            python = [os.path.realpath(p) for p in (sys.prefix, sys.base_prefix, sys.executable)]
+            home = [e for e in os.listdir("/root") if not any(p.startswith(f"/root/{e}") for p in python)]
+        except OSError:
+            home = []
+        print(int(os.getuid() == 0), int(readable("/etc/shadow")), int(bool(home)), flush=True)
+    """)
+    root, shadow, root_home = (int(x) for x in _last(out).split())
+    tree = grader._spliced({"fk.euler": ["    return np.zeros(3)"]})
+    try:
+        _, out, _ = grader.runner.run([sys.executable, "-c", _SCAN], tree, json.dumps(markers).encode() + b"\n")
+    finally:
+        grader._discard(tree)
+    walk = json.loads(out.strip().splitlines()[-1])
+    return {"processes capped": 0 < started <= SMALL.max_procs, "/tmp capped": 0 <= filled <= SMALL.scratch_mb,
+            "not root": not root, "no /etc/shadow": not shadow, "no /root": not root_home,
+            "walk found nothing": walk["scanned"] > 100 and not walk["found"] and not any(walk["modules"].values())}
+
+
+_AS_USER = """
+import json, sys
+from armlab_course.grading.grade import Grader
+from armlab_course.grading.sandbox import PidsGroup, detect
+import test_grading_redteam as redteam
+PidsGroup.available = staticmethod(lambda: False)
+markers = json.load(open(sys.argv[1]))
+with Grader(redteam.ROOT, exercises=["fk.euler"], written=[]) as grader:
+    print(json.dumps({"kind": detect().kind, "own_uid": grader.sandbox.own_uid,
+                      "outcomes": redteam.attack_outcomes(grader, markers)}))
+"""
+
+
+def test_bubblewrap_as_an_unprivileged_user_stops_the_attacks_a_root_grader_stops(grader, tmp_path, no_cgroup):
+    """The grader run by an unprivileged user (as root here: setpriv to a uid of its own; bubblewrap then makes a user
+    namespace, the path a lab machine or a laptop takes) stops each attack of attack_outcomes as the root run does."""
+    import json
+
+    if os.getuid() != 0 or shutil.which("setpriv") is None:
+        pytest.skip("needs root (to drop to an unprivileged uid with setpriv) and setpriv")
+    if grader.sandbox.kind != "bwrap":
+        pytest.skip(f"the root run uses the {grader.sandbox.kind!r} sandbox, not bubblewrap")
+    probe = subprocess.run(["setpriv", f"--reuid={UNPRIVILEGED_UID}", f"--regid={UNPRIVILEGED_UID}", "--clear-groups",
+                            "--", "bwrap", "--unshare-all", "--ro-bind", "/", "/", "true"], capture_output=True,
+                           text=True, timeout=60)
+    if probe.returncode != 0:
+        pytest.skip(f"user namespaces are not available to an unprivileged user here: {probe.stderr.strip()[:200]}")
+    from armlab_course.exercises.release import make_student_release
+
+    make_student_release(ROOT, tmp_path / "release")
+    markers = _solution_lines(tmp_path / "release") + list(GRADER_MARKERS)
+    home = Path(tempfile.mkdtemp(prefix="armlab-unprivileged-"))   # not under tmp_path: its parents are root's 0700
+    (home / "markers.json").write_text(json.dumps(markers))
+    for path in (home, home / "markers.json"):
+        os.chown(path, UNPRIVILEGED_UID, UNPRIVILEGED_UID)
+    site = os.pathsep.join(p for p in sys.path if p.endswith("-packages") and os.path.isdir(p))
+    env = {"PATH": os.environ.get("PATH", "/usr/bin:/bin"), "HOME": str(home), "TMPDIR": str(home),
+           "PYTHONPATH": os.pathsep.join([str(ROOT), str(ROOT / "tests"), site]), "GIT_CONFIG_COUNT": "1",
+           "GIT_CONFIG_KEY_0": "safe.directory", "GIT_CONFIG_VALUE_0": "*", "MPLBACKEND": "Agg"}
+    drop = ["setpriv", f"--reuid={UNPRIVILEGED_UID}", f"--regid={UNPRIVILEGED_UID}", "--clear-groups", "--"]
+    python = _python_for(drop, env, home)
+    try:
+        done = subprocess.run([*drop, python, "-c", _AS_USER, str(home / "markers.json")], cwd=home, env=env,
+                              capture_output=True, text=True, timeout=900)
+    finally:
+        from armlab_course.grading.watch import kill_until_gone
+
+        kill_until_gone(lambda: [int(e.name) for e in os.scandir("/proc") if e.name.isdigit()
+                                 and _owner(e.path) == UNPRIVILEGED_UID])
+        shutil.rmtree(home, ignore_errors=True)
+    assert done.returncode == 0, done.stderr[-2000:]
+    as_user = json.loads(done.stdout.strip().splitlines()[-1])
+    assert as_user["kind"] == "bwrap" and not as_user["own_uid"], as_user      # a user namespace, not the uid pool
+    as_root = attack_outcomes(grader, markers)
+    assert as_root == dict.fromkeys(as_root, True), as_root
+    assert as_user["outcomes"] == as_root, as_user
+
+
+def _python_for(drop: list[str], env: dict, home: Path) -> str:
+    """A Python interpreter of this environment's version that the unprivileged user can start, and that can start
+    itself (the grader runs sys.executable): this one, else the one its environment was made from (a venv whose
+    interpreter lives in root's home), else the system's of the same version; the test skips, saying so, when there
+    is none."""
+    version = f"python{sys.version_info.major}.{sys.version_info.minor}"
+    tried = []
+    for python in (sys.executable, os.path.join(sys.base_prefix, "bin", version), f"/usr/bin/{version}"):
+        check = subprocess.run([*drop, python, "-c", "import subprocess, sys, numpy; "
+                                "subprocess.run([sys.executable, '-c', '0'], check=True)"],
+                               cwd=home, env=env, capture_output=True, text=True, timeout=120)
+        if check.returncode == 0:
+            return python
+        tried.append(f"{python}: {(check.stderr.strip().splitlines() or [''])[-1][:100]}")
+    pytest.skip(f"no Python interpreter of this environment that an unprivileged user can start ({'; '.join(tried)})")
+
+
+def _owner(path: str) -> int | None:
+    try:
+        return os.stat(path).st_uid
+    except OSError:
+        return None

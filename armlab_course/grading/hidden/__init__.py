@@ -166,14 +166,15 @@ def how_it_differs(spec: HiddenSpec, got: np.ndarray | None, expected: np.ndarra
 def compare(spec: HiddenSpec, student: list[dict], expected: list[dict] | None, sizes: list[int], first: int = 1
             ) -> list[tuple[bool, str]]:
     """Per hidden check of `spec` (`sizes` calls each, numbered from `first`): passed, and a message naming the
-    first call that differs. `expected`: the reference's results, None for an outcome spec (every number 1.0)."""
+    first call that differs (for an error, with its "at": where in the student's code it was raised, as the grader
+    wrote it). `expected`: the reference's results, None for an outcome spec (every number 1.0)."""
     out, k = [], 0
     for i, n in enumerate(sizes, start=first):
         message = ""
         for j in range(k, k + n):
             got = student[j] if j < len(student) else {"error": "no result"}
             if "error" in got:
-                message = f"hidden check {i}, call {j - k + 1}: raised {got['error']}"
+                message = f"hidden check {i}, call {j - k + 1}{got.get('at', '')}: raised {got['error']}"
                 break
             try:
                 a = np.asarray(got["value"], dtype=float)
