@@ -33,6 +33,10 @@ RELEASE_EXCLUDES = (
     "benchmarks/*",
     "notebooks/src/*",        # the notebooks are the students' only copy of their exercises
     "tools/build-notebook",
+    "tools/figure_recorder.py",    # build-notebook's kernel startup: records each figure for the figure test
+    "tests/test_notebook_figures.py",   # reads the figures stored in the instructor's executed notebooks
+    "tests/test_written_questions.py",  # reads the rubrics and the model answers
+    "docs/course/instructor/*",    # the walkthrough of every solution, for the instructor
     "tools/student-release",
     "tools/student/*",
     "tests/test_exercises.py",     # the release tool's own tests (they look for solutions)
