@@ -31,6 +31,8 @@ def test_the_course_pages_are_there_and_released_and_the_walkthrough_is_not():
         assert read(name).startswith("# "), name
         assert released(f"docs/course/{name}")
     assert (ROOT / WALKTHROUGH).is_file() and not released(WALKTHROUGH)
+    assert not any(released(name) for name in ("tools/course-pictures", "tools/course-times",
+                                               "tests/test_course_docs.py"))
     assert all(released(f"docs/course/img/{p.name}") for p in (COURSE / "img").glob("*.png"))
 
 

@@ -68,9 +68,11 @@ def test_every_stored_figure_is_labelled_and_readable(path):
 # -- the rules, on figures made here -------------------------------------------------------------------------------
 @pytest.fixture
 def fresh():
-    readable()
-    yield
-    plt.close("all")
+    """The lab's figure settings for one test, matplotlib's own restored after it."""
+    with matplotlib.rc_context():
+        readable()
+        yield
+        plt.close("all")
 
 
 def test_a_figure_that_says_what_it_shows_has_no_problems(fresh):
