@@ -19,7 +19,7 @@ from armlab_course.exercises import EXERCISES, exercise
 from armlab_course.exercises.markers import answer_prompt, find_answers
 from armlab_course.exercises.release import make_student_release, released
 from armlab_course.grading.hand import model_answers, write_hand_grading
-from armlab_course.grading.hidden._rubrics import GIVEAWAYS, RUBRICS, rubric_of
+from armlab_course.grading.hidden._rubrics import FIGURE_FACTS, GIVEAWAYS, RUBRICS, rubric_of
 from armlab_course.grading.results import ExerciseResult
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -113,6 +113,18 @@ def test_every_question_has_give_aways_to_look_for():
         model = " ".join(model_answers(ROOT, [i])[i].lower().split())
         assert phrases and all(p.lower() in model for p in phrases), \
             f"{i}: every give-away is a phrase of the model answer: {[p for p in phrases if p.lower() not in model]}"
+
+
+@pytest.mark.parametrize("exercise_id", sorted(FIGURE_FACTS))
+def test_model_answers_read_the_numbers_their_notebook_prints(exercise_id):
+    """The numbers a model answer reads off its figure's cells are the ones the stored notebook printed."""
+    e = exercise(exercise_id)
+    printed = " ".join("".join(o.get("text", "")) for c in cells(ROOT / "notebooks" / f"{e.notebook}.ipynb")
+                       if c["cell_type"] == "code" for o in c.get("outputs", []))
+    printed = " ".join(printed.split())
+    model = " ".join(model_answers(ROOT, [exercise_id])[exercise_id].split())
+    assert [f for f in FIGURE_FACTS[exercise_id] if f not in model] == [], "not in the model answer"
+    assert [f for f in FIGURE_FACTS[exercise_id] if f not in printed] == [], "not printed by the notebook"
 
 
 def test_the_rubric_and_marking_sheet_are_exported_for_hand_grading(tmp_path):

@@ -437,8 +437,8 @@ fig.colorbar(im, ax=axes, shrink=0.85, label="tool point error (mm)")
 # %% [markdown]
 # <!-- BEGIN ANSWER fk.q_table_error -->
 # Prediction: largest far from the base, where the arm is stretched.
-# Observed: the error is the same all over the board to within about 0.5 mm: 4.9-5.4 mm with 152.575 mm and
-# 16.2-16.7 mm with 174.15 mm (one colour scale, 0-20 mm). A top-down grasp holds the tool axis vertical wherever the
+# Observed: the error is the same all over the board to within about 0.5 mm: 4.9 to 5.4 mm with 152.575 mm and
+# 16.2 to 16.7 mm with 174.15 mm (one colour scale, 0-20 mm). A top-down grasp holds the tool axis vertical wherever the
 # target is, so a wrong wrist-to-tool length moves the tool point straight up or down by the same amount everywhere;
 # the report's 0.66 mm lower shoulder and 0.4 mm shorter hypotenuse add a smaller error of nearly the same size
 # everywhere, which takes about 1 mm off the 6 mm and adds about 1 mm to the 15.6 mm. A few millimetres is half the

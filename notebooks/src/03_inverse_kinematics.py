@@ -684,8 +684,8 @@ fig.tight_layout()
 # Prediction: the small damping oscillates out of reach; the large one is slower inside it.
 # Observed: out of reach, λ = 0.1 and 2 mm/rad never settle: the error chatters between about 10.2 and 11 mm for all
 # 60 iterations; λ = 30 mm/rad settles after about 10 iterations at 10.0 mm, the nearest the arm gets. Inside the
-# reach, λ = 0.1 and 2 reach the target in about 10 iterations (the error falls by orders of magnitude per step), λ =
-# 30 only linearly (a straight line on the log scale), reaching the tolerance after 36. Stretched out, J loses its
+# reach, λ = 0.1 and 2 reach it in 10 steps (the error falls by orders of magnitude per step), λ = 30 only linearly
+# (a straight line on the log scale), reaching it in 36 steps. Stretched out, J loses its
 # outward direction: its smallest singular value σ goes to 0 and the undamped step divides the outward error by σ, so
 # the step is huge, hits the max_step clamp and throws the arm back and forth; the damped step has gain σ/(σ² + λ²),
 # at most 1/(2λ), so a large λ keeps it small and bounded, at the price of shrinking every step near the solution

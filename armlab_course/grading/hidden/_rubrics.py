@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 from armlab_course.exercises.registry import EXERCISES, exercise
 
-__all__ = ["Criterion", "RUBRICS", "GIVEAWAYS", "rubric_of"]
+__all__ = ["Criterion", "RUBRICS", "GIVEAWAYS", "FIGURE_FACTS", "rubric_of"]
 
 
 @dataclass(frozen=True)
@@ -118,6 +118,16 @@ GIVEAWAYS: dict[str, tuple[str, ...]] = {
     "grab.sag_question": ("15 mm too high",),
     "teach.replay_question": ("needs no camera",),
     "events.tower_question": ("440", "390"),
+}
+
+# per question, numbers its model answer reads off the figure's cells: each must stand both in the model answer and in
+# the stored notebook's printed outputs (tests/test_written_questions.py), so a model answer follows the figure when
+# the notebook changes
+FIGURE_FACTS: dict[str, tuple[str, ...]] = {
+    "calib.q_views": ("27 %", "47 px", "7 px with 16"),
+    "fk.q_table_error": ("4.9 to 5.4 mm", "16.2 to 16.7 mm"),
+    "ik.q_damping": ("in 10 steps", "in 36 steps", "10.0 mm"),
+    "events.tower_question": ("12 blocks", "456 mm"),
 }
 
 
