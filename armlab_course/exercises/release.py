@@ -46,6 +46,13 @@ RELEASE_EXCLUDES = (
     "benchmarks/*",
     "notebooks/src/*",        # the notebooks are the students' only copy of their exercises
     "tools/build-notebook",
+    "tools/figure_recorder.py",    # build-notebook's kernel startup: records each figure for the figure test
+    "tests/test_notebook_figures.py",   # reads the figures stored in the instructor's executed notebooks
+    "tests/test_written_questions.py",  # reads the rubrics and the model answers
+    "docs/course/instructor/*",    # the walkthrough of every solution, for the instructor
+    "tools/course-pictures",       # renders docs/course/img/ (the instructor's, from the solved kit)
+    "tools/course-times",          # reads the notebook sources (not in the release) for the time table
+    "tests/test_course_docs.py",   # checks the instructor's course pages, the walkthrough among them
     "tools/student-release",
     "tools/student/*",
     "tests/course/test_exercises.py",     # the release tool's own tests (they look for solutions)

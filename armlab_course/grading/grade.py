@@ -564,7 +564,9 @@ def grade_class(submissions: Path | str, out: Path | str, reference: Path | str,
     process), calling progress(student, results) as each is done, and write OUT/grades.csv,
     OUT/<student folder>/results.json and feedback.md (report.student_folder), and the regions' similarity for the
     instructor: OUT/similarity.csv and OUT/similarity.md (armlab_course.grading.similarity). shared_network: see
-    Grader."""
+    Grader. With written questions among the exercises: OUT/answers.csv, and OUT/rubric.csv and OUT/hand_grading.md
+    (armlab_course.grading.hand) to mark them by."""
+    from .hand import write_hand_grading
     from .report import write_reports
 
     submissions = Path(submissions)
@@ -601,6 +603,7 @@ def grade_class(submissions: Path | str, out: Path | str, reference: Path | str,
             graded = dict(zip(names, pool.map(one, students, names), strict=True))
         grader.verify_sources()
     write_reports(graded, out)
+    write_hand_grading(graded, out, reference)     # rubric.csv and hand_grading.md for the written questions
     _similarity.write_similarity(read.values(), reference, out, next(iter(graded.values())))
     return graded
 

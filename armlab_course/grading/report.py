@@ -133,15 +133,15 @@ def answers_csv(graded: dict[str, dict[str, ExerciseResult]]) -> str:
                     ([student, *(results[i].answer or "" for i in by_hand)] for student, results in graded.items()))
 
 
-_RESERVED = ("grades.csv", "answers.csv")
+_RESERVED = ("grades.csv", "answers.csv", "rubric.csv", "hand_grading.md", "similarity.csv", "similarity.md")
 _PLAIN = re.compile(r"[\w][\w .@+,-]{0,99}")
 
 
 def student_folder(student: str) -> str:
     """The folder of OUT that holds a student's results.json and feedback.md: the student's name when it is a
     plain one (letters, digits, space, . @ + , - _; not starting with a dot or a dash; not one of the grader's own
-    files grades.csv and answers.csv), else its plain characters followed by a short hash of the whole name (so two
-    odd names never share a folder)."""
+    files in OUT: grades.csv, answers.csv, rubric.csv, hand_grading.md, similarity.*), else its plain characters
+    followed by a short hash of the whole name (so two odd names never share a folder)."""
     if _PLAIN.fullmatch(student) and student.lower() not in _RESERVED and student.rstrip(" .") == student:
         return student
     plain = re.sub(r"[^\w.@+,-]+", "_", student).strip("._-")[:60] or "student"

@@ -201,14 +201,14 @@ print("the camera reports its factory intrinsics: fx =", station.camera.K[0, 0],
 # (darker-blue) patches; the arm at its sleep pose is in the picture too.
 
 # %%
-fig, (ax_rgb, ax_depth) = plt.subplots(1, 2, figsize=(9, 2.9))
+fig, (ax_rgb, ax_depth) = plt.subplots(1, 2, figsize=(9, 3.2))
 ax_rgb.imshow(frame.rgb)
-ax_rgb.set_title("RGB")
+ax_rgb.set_title("RGB: the board, blocks and arm")
 im = ax_depth.imshow(frame.depth, cmap="viridis", vmin=850, vmax=1100)
-ax_depth.set_title("depth (mm)")
-fig.colorbar(im, ax=ax_depth, fraction=0.03)
+ax_depth.set_title("depth: nearer is darker")
+fig.colorbar(im, ax=ax_depth, fraction=0.03, label="camera Z (mm)")
 for ax in (ax_rgb, ax_depth):
-    ax.axis("off")
+    ax.set(xlabel="u (px)", ylabel="v (px)", xticks=(0, 600, 1200))
 fig.tight_layout()
 
 # %% [markdown]

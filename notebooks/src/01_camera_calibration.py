@@ -31,6 +31,7 @@
 # | `calib.tag_homography` | `dlt_homography` (`armlab/calibration/homography.py`) | 6 | code | hidden points |
 # | `calib.tag_extrinsics` | `pose_from_corners` (`armlab/calibration/extrinsics.py`) | 8 | code | hidden poses |
 # | `calib.depth_plane` | `fit_depth_correction` (`armlab/calibration/depth.py`) | 4 | code | hidden depth images |
+# | `calib.q_views` | a written answer about the views-against-error figure (section 2) | 3 | written | by hand |
 # | `calib.q_reprojection` | a written answer about the homography error figure | 3 | written | by hand |
 #
 # A **Check** cell (`# CHECK <id>`) tests your work; cells marked *demonstration* show the kit and are not graded.
@@ -231,14 +232,15 @@ print(K_zhang.round(1) + 0.0)
 # %%
 intrinsics = cal.calibrate_intrinsics(views, tuple(meta["pattern_size"]), meta["square_mm"])
 print(intrinsics.summary())
-fig, axes = plt.subplots(1, 3, figsize=(9, 2.6))
+fig, axes = plt.subplots(1, 3, figsize=(9, 2.9))
 for ax, i in zip(axes[:2], (0, 7)):
     corners = cal.find_checkerboard(views[i], (9, 6))
     ax.imshow(views[i], cmap="gray")
     ax.plot(corners[:, 0], corners[:, 1], "r.", ms=3)
-    ax.set(title=f"view {i}: {len(corners)} corners", xticks=[], yticks=[])
+    ax.set(title=f"view {i}: {len(corners)} corners found", xlabel="u (px)", ylabel="v (px)", xticks=(0, 600, 1200))
 axes[2].bar(intrinsics.used_views, intrinsics.per_view_rms, color="tab:blue")
-axes[2].set(xlabel="view", ylabel="RMS reprojection (px)", title="per-view error")
+axes[2].set(xlabel="view (index)", ylabel="RMS reprojection (px)",
+            title=f"every view within {np.max(intrinsics.per_view_rms):.1f} px")
 fig.tight_layout()
 
 # %% [markdown]
@@ -261,11 +263,13 @@ print(f"lab report: checkerboard vs factory focal {rel['focal_rel_pct']:+.2f} %,
 print("distortion k1 k2 p1 p2 k3:", intrinsics.dist.round(4), " true:", np.round(meta["true_dist"], 4))
 
 # %% [markdown]
-# **More views, less error, down to a floor.** The closed form's error against the simulator's true $K$ as views
-# are added (in the order they were taken), next to the kit's `calibrate_intrinsics` on all of them (dashed), which
-# also fits the lens distortion and minimises the reprojection error instead of the algebraic error
-# $\lVert V b \rVert$. Three views leave the closed form tens of % off; from five on it levels out near 1 % and a
-# few px: the distortion it ignores, not the number of views, limits it then.
+# **More views: does the error keep falling?** The next figure plots your closed form's error against the
+# simulator's true $K$ as views are added (in the order they were taken), next to the kit's `calibrate_intrinsics` on
+# all of them (dashed), which also fits the lens distortion and minimises the reprojection error instead of the
+# algebraic error $\lVert V b \rVert$.
+#
+# *Predict before you run the cell* (write it at the top of your answer to `calib.q_views` below): with 3, 6 and 16
+# views, roughly how far off will the focal length (%) and the principal point (px) be?
 
 # %%
 counts = np.arange(3, len(homographies) + 1)
@@ -282,18 +286,37 @@ for ax, err, kit_err, what in [(axes[0], focal_err, kit_focal, "focal length err
     ax.axhline(kit_err, color="k", ls="--", lw=1)
     ax.text(counts[-1], kit_err * 1.25, "calibrate_intrinsics", ha="right", va="bottom", fontsize=9)
     ax.text(counts[0] + 0.3, err[0], "closed form", color="tab:blue", va="center", fontsize=9)
-    ax.set(xlabel="views used", ylabel=what, title=what.split(" (")[0] + " vs the true K")
+    ax.set(xlabel="views used (count)", ylabel=what, title=what.split(" (")[0] + " against views used")
 fig.tight_layout()
 print(f"closed form: {focal_err[0]:.0f} % / {centre_err[0]:.0f} px off the truth with 3 views, "
       f"{focal_err[-1]:.1f} % / {centre_err[-1]:.0f} px with {counts[-1]}; "
       f"calibrate_intrinsics: {kit_focal:.2f} % / {np.hypot(kit['dcx_px'], kit['dcy_px']):.1f} px")
 
 # %% [markdown]
+# **Exercise `calib.q_views` (3 points, written).** Compare the figure with your prediction. Describe how each of
+# the two errors changes from 3 to 16 views (read the numbers off the figure). Does adding views make the closed
+# form converge to the true $K$? Explain what limits each error, and why the principal point behaves differently
+# from the focal length. (Your prediction, then three to five sentences.)
+
+# %% [markdown]
+# <!-- BEGIN ANSWER calib.q_views -->
+# Prediction: both errors fall as views are added and settle somewhere.
+# Observed: the focal length error falls from 27 % with 3 views to about 1.6 % with 5 and then stays between 1 and 2 %
+# up to 16 views. The principal point error falls from 47 px to 1.3 px at 6 views, then jumps to 9 px at 8 views and
+# stays at 6-10 px (7 px with 16): it does not converge, and the good value at 6 views is chance. Both stay far above
+# calibrate_intrinsics (dashed: 0.01 % and 0.7 px). The closed form fits an undistorted pinhole to homographies of a
+# distorted lens, so every homography carries a bias; more views average out noise, not a bias, so the error stops
+# falling. The principal point is the parameter the views constrain least (it trades off against the board's tilt in
+# each view and against the radial distortion about the centre), so each new tilted view whose corners lie near the
+# image border, where the distortion is largest, moves it by px, while the focal length, set by the scale of every
+# view, moves by a fraction of a percent.
+# <!-- END ANSWER -->
+
+# %% [markdown]
 # **Check:** on exact homographies (the true camera at the 16 board poses `calibrate_intrinsics` found, each matrix
 # scaled by an arbitrary factor of either sign) your $K$ is the true one to 1e-6 px; on the photos' homographies it
-# is within 2 % in each focal length and 15 px in the principal point of `calibrate_intrinsics`' $K$. That tolerance
-# is loose on purpose: the closed form ignores the lens distortion (here $k_1 = 0.12$, $k_3 = 0.2$, which moves the
-# corners near the image border by several px) and fits an algebraic error; it measures about 1 % and 7 px here.
+# is within 2 % in each focal length and 15 px in the principal point of `calibrate_intrinsics`' $K$ (a loose
+# tolerance: your answer to `calib.q_views` says why it has to be).
 
 # %%
 # CHECK calib.zhang
@@ -363,7 +386,7 @@ ax.imshow(frame.rgb)
 for t in tags:
     ax.plot(*np.vstack([t.corners, t.corners[:1]]).T, "-", color="lime", lw=1)
     ax.annotate(str(t.tag_id), t.center + (15, -15), color="yellow", fontsize=10)
-ax.set(title="the board's AprilTags", xticks=[], yticks=[])
+ax.set(title="the board's four AprilTags, found with their ids", xlabel="u (px)", ylabel="v (px)")
 fig.tight_layout()
 print("tags found:", [(t.tag_id, t.hamming) for t in tags], "(id, corrected bits)")
 
@@ -415,9 +438,12 @@ print(f"OK: tag extrinsic {good['position_mm']:.1f} mm / {good['angle_deg']:.2f}
 #
 # The camera is tilted, so the rectangular board looks like a trapezoid. The lab report fixed this with a
 # homography $H$ (its eq. 3): your `dlt_homography` from the four tag centres in the image to where they
-# belong in a top-down view, then `cv2.warpPerspective`. A homography is exact for a pinhole camera looking at a
-# plane — but the lens is not a pinhole. `BoardView` instead projects every view pixel's board point through the
-# calibrated camera (distortion included) and samples there (`cv2.remap`).
+# belong in a top-down view, then `cv2.warpPerspective`. `BoardView` instead projects every view pixel's board
+# point through the whole calibrated camera model of section 2 and samples there (`cv2.remap`).
+#
+# *Predict before you run the cell* (write it at the top of your answer to `calib.q_reprojection` below): the
+# homography is fitted to the four tag centres only. Where on the board do you expect its error to be largest, and
+# roughly how large (mm)?
 
 # %%
 camera = Camera(intrinsics.K, intrinsics.dist, T_tags)      # the calibrated camera
@@ -430,27 +456,33 @@ grid_uv = truth.project(grid)          # where the image shows each grid point (
 mapped = view.to_world(cv2.perspectiveTransform(grid_uv.reshape(-1, 1, 2), H).reshape(-1, 2))
 err_h = np.linalg.norm(mapped - grid[:, :2], axis=1)
 err_b = np.linalg.norm(view.to_world(view.from_world(camera.pixel_to_plane(grid_uv))) - grid[:, :2], axis=1)
-fig, axes = plt.subplots(1, 3, figsize=(9, 3.2))
+fig = plt.figure(figsize=(9, 6.8))
+layout = fig.add_gridspec(2, 2)
+axes = [fig.add_subplot(layout[0, 0]), fig.add_subplot(layout[0, 1]), fig.add_subplot(layout[1, :])]
 extent = (*lab.board_x, *lab.board_y)
-for ax, img, title in [(axes[0], top_h, "four-tag homography"), (axes[1], top_b, "BoardView (with distortion)")]:
+for ax, img, title in [(axes[0], top_h, "by the four-tag homography"), (axes[1], top_b, "by BoardView")]:
     ax.imshow(img, extent=extent)
-    ax.set(title=title, xlabel="x (mm)", ylabel="y (mm)")
-sc = axes[2].scatter(grid[:, 0], grid[:, 1], c=err_h, cmap="viridis", marker="s", s=14)
-axes[2].set(xlabel="x (mm)", aspect="equal")
-axes[2].set_title("homography: board error\nat the grid points (mm)", pad=8)
-fig.colorbar(sc, ax=axes[2], location="bottom", shrink=0.9, pad=0.25)
+    ax.set(title=title, xlabel="x (mm)", ylabel="y (mm)", xticks=range(-400, 401, 200))
+sc = axes[2].scatter(grid[:, 0], grid[:, 1], c=err_h, cmap="viridis", marker="s", s=22, vmin=0)
+axes[2].plot(*np.array(list(lab.tags.centres_mm.values())).T[:2], "r+", ms=12, mew=2)
+axes[2].set(xlabel="x (mm)", ylabel="y (mm)", aspect="equal", xticks=range(-400, 401, 200),
+            yticks=range(-200, 401, 200),
+            title="homography: each grid point's error (+: the tag centres)")
+fig.colorbar(sc, ax=axes[2], label="board error (mm)")
 fig.tight_layout()
 print(f"homography error: {err_h.mean():.2f} mm mean, {err_h.max():.2f} mm max (at the borders); "
       f"BoardView: {err_b.max():.2f} mm max")
 
 # %% [markdown]
-# **Exercise `calib.q_reprojection` (3 points, written).** In the right-hand figure the four-tag homography is exact
-# at the four tags but its error grows toward the board's corners and borders. Why? Name the property of the camera
-# that a homography cannot represent, say why its effect grows away from the image centre, and why the error is
-# still zero at the tags. (Two or three sentences.)
+# **Exercise `calib.q_reprojection` (3 points, written).** Compare the error map (bottom) with your prediction.
+# Where is the homography exact, and where is it off most? Name the property of the camera that a homography cannot
+# represent, say why its effect grows where it does, and why the error vanishes where it does. (Your prediction, then
+# two or three sentences.)
 
 # %% [markdown]
 # <!-- BEGIN ANSWER calib.q_reprojection -->
+# Prediction: largest at the board's far corners, a few mm.
+# Observed: zero at the four tag centres, growing between and beyond them to about 4 mm at the board's near corners.
 # A homography is exact only for an ideal pinhole camera looking at a plane; the real lens adds radial (and
 # tangential) distortion, which is not a projective map. The radial term grows with the distance r from the image
 # centre (k1 r², k2 r⁴, ...), so points far out, at the board's corners, are displaced most. The homography is fit
@@ -460,7 +492,8 @@ print(f"homography error: {err_h.mean():.2f} mm mean, {err_h.max():.2f} mm max (
 
 # %% [markdown]
 # **Check:** the tags found again in the BoardView image sit where they are on the board (within 0.5 mm), and the
-# homography, exact at the tags, is off by more than 2 mm somewhere near the board's border.
+# homography's error map is the one the figure shows (more than 2 mm somewhere more than 400 mm from the board's
+# centre).
 
 # %%
 # CHECK calib.tag_homography
@@ -483,7 +516,7 @@ offset = max(np.abs(t.center - view.from_world([lab.tags.centres_mm[t.tag_id]])[
 far = np.linalg.norm(grid[:, :2] - [0, 150], axis=1) > 400
 assert [t.tag_id for t in again] == [1, 2, 3, 4], f"tags {[t.tag_id for t in again]} found in the BoardView image"
 assert offset < 0.5, f"BoardView tags {offset:.2f} mm from where they are on the board"
-assert err_h[far].max() > 2.0, "the tag homography is exact at the borders: it should not be (lens distortion)"
+assert err_h[far].max() > 2.0, "the tag homography is within 2 mm everywhere: is it the four-tag homography?"
 print(f"OK: BoardView tags within {offset:.2f} mm; homography off by up to {err_h[far].max():.1f} mm at the borders")
 
 # %% [markdown]
@@ -554,10 +587,12 @@ expected, on_board = cal.board_depth(camera, step=4)
 raw = frame.depth[::4, ::4] - expected
 fixed = correction.apply(frame.depth)[::4, ::4] - expected
 fig, axes = plt.subplots(1, 2, figsize=(9, 2.9))
-for ax, image, title in [(axes[0], raw, "measured - expected depth"), (axes[1], fixed, "after the correction")]:
-    im = ax.imshow(np.where(on_board, image, np.nan), cmap="coolwarm", vmin=-25, vmax=25)
-    ax.set(title=title, xticks=[], yticks=[])
-fig.colorbar(im, ax=axes, label="mm")
+for ax, image, title in [(axes[0], raw, "board depth error: a tilted plane"),
+                         (axes[1], fixed, "after the correction: flat")]:
+    im = ax.imshow(np.where(on_board, image, np.nan), cmap="coolwarm", vmin=-25, vmax=25,
+                   extent=(0, 4 * image.shape[1], 4 * image.shape[0], 0))
+    ax.set(title=title, xlabel="u (px)", ylabel="v (px)", xticks=(0, 600, 1200))
+fig.colorbar(im, ax=axes, label="depth error (mm)")
 print(f"bias plane: a = {correction.a:.4f} mm/px, b = {correction.b:.4f} mm/px, c = {correction.c:.1f} mm; "
       f"span {correction.span_mm(camera.image_shape):.1f} mm over the image; "
       f"residual {correction.residual_mm:.1f} mm RMS (sensor noise)")
@@ -610,19 +645,22 @@ for name, g in [("before", before), ("after", after)]:
           f"growth {g.border_growth():+.2f} mm per 100 mm from the centre")
 
 # %%
-fig, axes = plt.subplots(1, 3, figsize=(8.6, 3.2))
-for ax, g, title in [(axes[0], before, "before"), (axes[1], after, "after")]:
-    sc = ax.scatter(g.world[:, 0], g.world[:, 1], c=g.norm, cmap="magma", marker="s", s=22)
-    fig.colorbar(sc, ax=ax, label="world error (mm)")
+fig = plt.figure(figsize=(9, 6.6))
+grid_spec = fig.add_gridspec(2, 2)
+axes = [fig.add_subplot(grid_spec[0, 0]), fig.add_subplot(grid_spec[0, 1]), fig.add_subplot(grid_spec[1, :])]
+for ax, g, title in [(axes[0], before, "factory camera"), (axes[1], after, "calibrated")]:
+    sc = ax.scatter(g.world[:, 0], g.world[:, 1], c=g.norm, cmap="magma", marker="s", s=16, vmin=0)
+    fig.colorbar(sc, ax=ax, label="world error (mm)", shrink=0.8)
     ax.set(title=f"{title}: mean {g.mean_mm:.1f} mm", xlabel="x (mm)", ylabel="y (mm)", aspect="equal",
-           xlim=lab.board_x, ylim=lab.board_y)
+           xlim=lab.board_x, ylim=lab.board_y, xticks=range(-400, 401, 200))
 for g, name, where in [(before, "before", 0.93), (after, "after", 0.3)]:       # labels clear of the points
     r = g.distance_from_centre()
     dots, = axes[2].plot(r, g.norm, ".", ms=3)
     axes[2].plot(np.sort(r), np.polyval(np.polyfit(r, g.norm, 1), np.sort(r)), "k-", lw=1)
     axes[2].text(0.03, where, f"{name}: {g.border_growth():+.2f} mm per 100 mm", transform=axes[2].transAxes,
                  color=dots.get_color(), fontsize=9, va="top")
-axes[2].set(xlabel="distance from the board centre (mm)", ylabel="error (mm)", title="error vs distance")
+axes[2].set(xlabel="distance from the board centre (mm)", ylabel="world error (mm)",
+            title="before, the error grows towards the borders; after, it is flat and small")
 fig.tight_layout()
 
 # %% [markdown]

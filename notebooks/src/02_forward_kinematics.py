@@ -19,6 +19,7 @@
 # | `fk.dh_table` | `dh_table(h0, L1, beta, L2, Lt)`: frames and table | 8 | code | PoX at hidden poses, geometries |
 # | `fk.euler` | `euler_angles_from_T(T)`: ZYZ Euler angles | 5 | code | hidden poses, singular ones too |
 # | `fk.q_frames` | a written answer about your frames figure | 3 | written | by hand |
+# | `fk.q_table_error` | a written answer about the Table I error map (section 6) | 3 | written | by hand |
 #
 # A **Check** cell (`# CHECK <id>`) tests your work; cells marked *demonstration* show the kit and are not graded.
 # Restart the kernel after editing a package file.
@@ -165,7 +166,7 @@ ax.text(pts[3, 1] + 80, pts[3, 2] + 8, "L2 = 200", fontsize=9)
 ax.text(pts[4, 1] + 40, pts[4, 2] + 8, "Lt", fontsize=9)
 ax.text(-60, h0 / 2, "h0", fontsize=9)
 ax.set(title="the RX200 at home, side view: joints and axes (no frames: you place them)", xlabel="world y (mm)",
-       ylabel="world z (mm)", aspect="equal", xlim=(-80, 520), ylim=(-20, 380))
+       ylabel="world z (mm)", aspect="equal", xlim=(-80, 520), ylim=(-20, 380), yticks=range(0, 301, 100))
 fig.tight_layout()
 
 # %% [markdown]
@@ -259,7 +260,8 @@ for ax, (title, q) in zip(axes, poses.items()):
     ax.axhline(0, color="peru", lw=4, zorder=0)
     ax.set(title=f"{title}: q = {np.round(q, 2)} rad", ylabel="world z (mm)", aspect="equal", xlim=(-280, 540),
            ylim=(-30, 400))
-axes[-1].set_xlabel("world y (mm)")
+for ax in axes:
+    ax.set_xlabel("world y (mm)")
 fig.tight_layout()
 
 # %% [markdown]
@@ -444,24 +446,41 @@ for name, fk_report in report_models.items():
     print(f"{name}: top-down grasps on the board off by {np.nanmin(e):.1f} to {np.nanmax(e):.1f} mm "
           f"(mean {np.nanmean(e):.1f}); 1000 random poses: {e_any.min():.1f} to {e_any.max():.1f} mm")
 
+# %% [markdown]
+# *Predict before you run the next cell* (write it at the top of your answer to `fk.q_table_error` below): the
+# report's wrist-to-tool length is 6 mm shorter than the manufacturer's (the other reports' 15.6 mm longer). Over the
+# board, where will the tool point of a top-down grasp be off most, and by how much?
+
 # %%
-fig, axes = plt.subplots(1, 2, figsize=(9, 3.2))
+fig, axes = plt.subplots(1, 2, figsize=(9, 3.4), sharey=True)
 for ax, (name, e) in zip(axes, errors.items()):
-    im = ax.pcolormesh(X, Y, e, shading="nearest", cmap="viridis")
+    im = ax.pcolormesh(X, Y, e, shading="nearest", cmap="viridis", vmin=0, vmax=20)    # one scale for both
     ax.plot(0, 0, "r^", ms=8)
-    ax.set(title=f"{name}: |error| (mm)", xlabel="world x (mm)", ylabel="world y (mm)", aspect="equal")
-    fig.colorbar(im, ax=ax, shrink=0.8)
-fig.tight_layout()
+    ax.set(title=f"{name}: {np.nanmin(e):.1f}-{np.nanmax(e):.1f} mm", xlabel="world x (mm)", aspect="equal",
+           xticks=range(-400, 401, 200))
+axes[0].set_ylabel("world y (mm)")
+fig.colorbar(im, ax=axes, shrink=0.85, label="tool point error (mm)")
 
 # %% [markdown]
-# For top-down grasps the tool axis is vertical, so a wrong wrist-to-tool length shows up almost one-for-one as a
-# height error (6 mm short, or 15.6 mm long), combined with the 0.66 mm lower shoulder and the 0.4 mm shorter
-# hypotenuse (which move the tool the other way for the short variant: about 5 and 16.5 mm in all). A few millimetres
-# is half the clearance of a 25 mm block in the gripper: the model must use the manufacturer's numbers, and measured
-# corrections (gravity sag) belong on top of it, not in it.
+# **Exercise `fk.q_table_error` (3 points, written).** Compare the maps with your prediction. How does the error vary
+# over the board, and how large is it for each wrist-to-tool length? Explain, from the pose of a top-down grasp, why
+# it has this shape and why its size is not exactly the 6 (or 15.6) mm the length is off by. What does it mean for
+# grasping a 25 mm block? (Your prediction, then three or four sentences.)
 
 # %% [markdown]
-# *Demonstration* (the kit's numbers, not graded): the errors stay within the range the text states.
+# <!-- BEGIN ANSWER fk.q_table_error -->
+# Prediction: largest far from the base, where the arm is stretched.
+# Observed: the error is the same all over the board to within about 0.5 mm: 4.9 to 5.4 mm with 152.575 mm and
+# 16.2 to 16.7 mm with 174.15 mm (one colour scale, 0-20 mm). A top-down grasp holds the tool axis vertical wherever the
+# target is, so a wrong wrist-to-tool length moves the tool point straight up or down by the same amount everywhere;
+# the report's 0.66 mm lower shoulder and 0.4 mm shorter hypotenuse add a smaller error of nearly the same size
+# everywhere, which takes about 1 mm off the 6 mm and adds about 1 mm to the 15.6 mm. A few millimetres is half the
+# clearance of a 25 mm block in the fingers: the model must use the manufacturer's lengths, and measured corrections
+# (the gravity sag) go on top of it, not into it.
+# <!-- END ANSWER -->
+
+# %% [markdown]
+# *Demonstration* (the kit's numbers, not graded): the errors stay within the range the maps show.
 
 # %%
 e1, e2 = (errors[name] for name in report_models)

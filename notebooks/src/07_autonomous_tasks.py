@@ -53,8 +53,14 @@ readable()                                             # figure size and fonts r
 np.set_printoptions(precision=2, suppress=True)
 
 
+def stack_label(col) -> str:
+    """A stack's colours bottom to top by initial (R red, O orange, Y yellow, G green, B blue, V violet)."""
+    return "".join(o.color[0].upper() for o in col)
+
+
 def draw_board(ax, objects, title):
-    """Top view of the board: every object's footprint in its lab colour (distractors hatched), stacks labelled."""
+    """Top view of the board: every object's footprint in its lab colour (distractors hatched), each stack labelled
+    with its colours' initials, bottom first."""
     ax.add_patch(plt.Rectangle((-500, -175), 1000, 650, color="0.93", zorder=0))
     for col in columns(objects):
         for o in col:
@@ -62,9 +68,11 @@ def draw_board(ax, objects, title):
                 ax.add_patch(plt.Polygon(poly, closed=True, fc=np.array(LAB_RGB[o.color]) / 255,
                                          ec="k", lw=0.5, hatch=None if o.is_block else "///"))
         if len(col) > 1:
-            ax.annotate(str(len(col)), col[-1].position[:2], color="w", ha="center", va="center", fontsize=9)
+            ax.annotate(stack_label(col), col[-1].position[:2], xytext=(0, 14), textcoords="offset points",
+                        ha="center", va="bottom", fontsize=9.5, bbox=dict(boxstyle="round,pad=0.15", fc="w", ec="0.5"))
     ax.add_patch(plt.Rectangle((-55, -60), 110, 120, fc="0.4", zorder=1))   # the arm's base plate
-    ax.set(xlim=(-500, 500), ylim=(-175, 475), aspect="equal", title=title)
+    ax.set(xlim=(-500, 500), ylim=(-175, 475), aspect="equal", title=title, xlabel="x (mm)", ylabel="y (mm)",
+           xticks=range(-400, 401, 200))
 
 
 def draw_side(ax, objects, title):
@@ -77,21 +85,24 @@ def draw_side(ax, objects, title):
             e = o.edge
             ax.add_patch(plt.Rectangle((o.position[0] - e / 2, o.bottom_z), e, e,
                                        fc=np.array(LAB_RGB[o.color]) / 255, ec="k", lw=0.5))
-            ax.text(o.position[0], o.bottom_z + e / 2, o.color[0].upper(), ha="center", va="center", fontsize=8,
+            ax.text(o.position[0], o.bottom_z + e / 2, o.color[0].upper(), ha="center", va="center", fontsize=9.5,
                     color="k" if o.color == "yellow" else "w")
     ax.axhline(0, color="0.3", lw=1)
     ax.set(xlim=(-280, 280), ylim=(-5, 130), aspect="equal", xlabel="x (mm)", ylabel="z (mm)", title=title)
 
 
 def before_after(result, side=False):
-    """Top views of the board at the start and the end of a run; with side=True, the end also seen from the side."""
-    fig, axes = plt.subplots(1, 2, figsize=(9, 3.4))
+    """Top views of the board at the start and the end of a run (stacks labelled bottom first); with side=True, the
+    end also seen from the side."""
+    fig, axes = plt.subplots(1, 2, figsize=(9, 3.6), sharey=True)
     snaps = result.replay.snapshots
     draw_board(axes[0], objects_from_snapshot(snaps[0][2]), "start")
-    draw_board(axes[1], objects_from_snapshot(snaps[-1][2]), f"end ({result.time_s:.0f} s simulated)")
+    draw_board(axes[1], objects_from_snapshot(snaps[-1][2]),
+               f"end: {result.score.points:g}/{result.score.max_points} points, {result.time_s:.0f} s simulated")
+    axes[1].set_ylabel("")
     fig.tight_layout()
     if side:
-        fig, ax = plt.subplots(figsize=(7, 2.4))
+        fig, ax = plt.subplots(figsize=(8, 3.0))
         draw_side(ax, objects_from_snapshot(snaps[-1][2]), "the end seen from the front (red at the bottom)")
         fig.tight_layout()
 
@@ -225,17 +236,26 @@ for level, seed in ((2, 3), (3, 4)):
 # %% [markdown]
 # The replay holds the arm's joint angles every 0.1 s of simulated time (`result.replay.q`) and a snapshot of the
 # world after every move. `result.replay.to_viewer(Viewer())` plays it in meshcat (the demo saves it as
-# `out/replay.html`). The shaded bands are where the gripper is closed (holding a block):
+# `out/replay.html`). Below, the joints over the run: the shaded bands are where the gripper is closed (holding a
+# block), and each numbered dotted line is the end of a move (its description is printed under the figure).
 
 # %%
 r = sort3.replay
-fig, ax = plt.subplots(figsize=(9, 3.2))
+fig, ax = plt.subplots(figsize=(9, 4.0))
 for j, name in enumerate(JOINT_NAMES):
     ax.plot(r.times, r.q[:, j], lw=1, label=name)
 ax.fill_between(r.times, 0, 1, where=r.gripper < 50, transform=ax.get_xaxis_transform(), color="0.85", zorder=0)
-ax.set(xlabel="simulated time (s)", ylabel="joint angle (rad)")
-ax.legend(fontsize=9, ncol=5, loc="lower center", bbox_to_anchor=(0.5, 1.0), frameon=False)
+moves = [(t, label) for t, label, _ in r.snapshots if label not in ("start", "end")]
+for k, (t, _) in enumerate(moves, 1):
+    ax.axvline(t, color="0.3", ls=":", lw=0.8)
+    ax.text(t, 1.0, str(k), transform=ax.get_xaxis_transform(), ha="center", va="bottom", fontsize=9.5)
+ax.set(xlabel="simulated time (s)", ylabel="joint angle (rad)",
+       title="each move (numbered) is a pick and a place: shaded while a block is held", xlim=(0, r.times[-1]))
+ax.set_title(ax.get_title(), pad=18)
+ax.legend(ncol=5, loc="upper center", bbox_to_anchor=(0.5, -0.2), frameon=False)
 fig.tight_layout()
+for k, (t, label) in enumerate(moves, 1):
+    print(f"{k:2d}  {t:6.1f} s  {label}")
 
 # %% [markdown]
 # ## 3 · Line 'em up, level 3
@@ -282,12 +302,11 @@ print("highest tool point at the tower spot: "
 station = event_station("sky", seed=0)
 sky = run_event(start_session(station), "sky")
 tower = len(sky.score.lines)
-print(sky.summary())
 heights = [o.top_z for o in max(columns(station.world.objects), key=len)]
-print(f"tower: {tower} blocks, top at {heights[-1]:.0f} mm; {sky.score.points:g} points")
+print(f"tower: {tower} blocks, top at {heights[-1]:.0f} mm")
 
 # %%
-fig, ax = plt.subplots(figsize=(4.6, 4.6))
+fig, ax = plt.subplots(figsize=(5.8, 5.4))
 col = max(columns(station.world.objects), key=len)
 for o in col:
     ax.add_patch(plt.Rectangle((o.position[0] - 19, o.bottom_z), 38, 38, fc=np.array(LAB_RGB[o.color]) / 255,
@@ -295,10 +314,10 @@ for o in col:
 reach_z = highest_tool_z(TOWER_XY)
 ax.axhline(heights[-1], color="0.5", ls=":")
 ax.axhline(reach_z, color="C3", ls="--")
-ax.text(TOWER_XY[0] + 30, heights[-1] - 6, "top of the tower", ha="left", va="top", fontsize=8, color="0.3")
-ax.text(TOWER_XY[0] + 30, reach_z + 6, "highest tool point here", ha="left", va="bottom", fontsize=8, color="C3")
-ax.set(xlim=(TOWER_XY[0] - 60, TOWER_XY[0] + 200), ylim=(0, 560), aspect="equal", xlabel="x (mm)",
-       ylabel="z (mm)", title="the tower, side view")
+ax.text(TOWER_XY[0] + 30, heights[-1] - 6, "top of the tower", ha="left", va="top", fontsize=9.5, color="0.3")
+ax.text(TOWER_XY[0] + 30, reach_z + 6, "highest tool point here", ha="left", va="bottom", fontsize=9.5, color="C3")
+ax.set(xlim=(TOWER_XY[0] - 60, TOWER_XY[0] + 240), ylim=(0, 560), aspect="equal", xlabel="x (mm)",
+       ylabel="z (mm)", title="the tower, side view:\nthe room left above its top")
 fig.tight_layout()
 
 # %%
@@ -306,25 +325,28 @@ fig.tight_layout()
 assert tower >= 12, f"the tower has {tower} blocks (expected at least 12)"
 assert sky.score.points == scoring.sky_points(tower), "the score does not follow the sky rules"
 assert "out of reach" in sky.stopped, f"the tower stopped for another reason: {sky.stopped}"
-print(f"OK: to the sky: a stable tower of {tower} blocks ({sky.score.points:g} points); it stopped because the next "
-      f"level is out of the arm's reach")
+print(f"OK: to the sky: a stable tower of {tower} blocks, scored by the sky rules")
 
 # %% [markdown]
 # **Question `events.tower_question` (2 points, written).** Read the tower figure. How many points does this tower
-# earn under the to-the-sky rule (30 for each of the first 8 blocks, 50 for each one above; show the sum)? Between
-# the tower's top and the highest tool point there is still room: what else has to fit into it for the next block
-# to be put on (think of the held block, the clearance and the finger tips), and what would you change in the
-# strategy to gain one more block — at what risk?
+# earn under the to-the-sky rule (30 for each of the first 8 blocks, 50 for each one above; show the sum), and how
+# many fewer would the kit's default 50 mm clearance have earned? Between the tower's top and the highest tool point
+# there is still room: add up, in mm, what has to fit into it for the next block to be put on (read the heights off
+# the figure), and say what you would change in the strategy to gain one more block — at what risk, and what you
+# would measure on the real arm before trying it.
 
 # %% [markdown]
 # <!-- BEGIN ANSWER events.tower_question -->
-# 12 blocks: 8 x 30 + 4 x 50 = 440 points. The 13th block's bottom would go on the top at 456 mm; gripped at its
+# 12 blocks: 8 x 30 + 4 x 50 = 440 points; the default 50 mm clearance stops the tower at 11 blocks (section 4):
+# 8 x 30 + 3 x 50 = 390, 50 points fewer. The 13th block's bottom would go on the top at 456 mm; gripped at its
 # centre it hangs 19 mm below the tool point, so the tool must come down to about 477 mm, and it comes straight down
 # from a hover the held block's height plus the 15 mm clearance higher, about 511 mm: the very highest point the tool
 # reaches there, where the arm can no longer move it straight down at any pitch. For one more block: grip it higher
 # up (less of it below the tool: the same tower top needs a lower tool), carry it in with less clearance, or build at
 # the spot where the arm reaches highest while still coming down near-vertically. The risk: a grip off the centre
-# tilts the block in the pads, and less clearance lets a few mm of sag or detection error knock the tower over.
+# tilts the block in the pads, and less clearance lets a few mm of sag or detection error knock the tower over. On the
+# real arm, measure first the highest tool point reached straight down at the spot and the sag there with a block
+# held, and how far the block slips in the pads when gripped off centre.
 # <!-- END ANSWER -->
 
 # %% [markdown]

@@ -144,7 +144,8 @@ def test_gradescope_setup_picks_a_python_the_pins_can_install_on(tmp_path, minor
 def test_written_answers_reach_the_feedback_and_the_instructors_csv(tmp_path):
     """A written answer (kind "written") is read from the student's markdown cell: feedback.md and results.json show
     it (0 points there: graded by hand), grades.csv has an empty column for it headed with its points, answers.csv
-    holds the text; a blank answer says so. No notebook runs for it."""
+    holds the text, rubric.csv its point rubric and hand_grading.md the marking sheet; a blank answer says so. No
+    notebook runs for it."""
     import csv
     import json
 
@@ -178,6 +179,11 @@ def test_written_answers_reach_the_feedback_and_the_instructors_csv(tmp_path):
     answers = {r["student"]: r[written.id] for r in csv.DictReader((tmp_path / "out/answers.csv").open())}
     assert answers == {"ada": answer, "bob": ""}
     assert "not written" in (tmp_path / "out/bob/feedback.md").read_text()
+    rubric = list(csv.DictReader((tmp_path / "out/rubric.csv").open()))     # the point rubric to mark by
+    assert {r["exercise"] for r in rubric} == {written.id}
+    assert sum(float(r["points"]) for r in rubric) == written.points
+    sheet = (tmp_path / "out/hand_grading.md").read_text()
+    assert f"## {written.id}: " in sheet and answer in sheet and "**Model answer**" in sheet
 
 
 def test_csv_cells_that_read_as_formulas_are_neutralised():
