@@ -21,7 +21,8 @@ import numpy as np
 from armlab import planning
 from armlab.station.contract import EmergencyStopped
 
-from . import click, handling, perception, teach
+from . import teach
+from .port import command_work
 from .session import Session, as_session
 
 __all__ = ["STATES", "TaskMachine", "MachineBusy", "Transition", "latching_transition", "default_transition"]
@@ -130,39 +131,25 @@ class TaskMachine:
     def calibrate(self, intrinsics="checkerboard"):
         """Calibrate the camera again (tasks.perception.calibrate_camera); the session's calibration becomes the new
         one, which is returned."""
-        def action():
-            session = self._guarded()
-            session.calibration = perception.calibrate_camera(self.station, intrinsics, arm=session)
-            return session.calibration
-        return self._run("calibrate", action)
+        return self._run("calibrate", lambda: command_work(self._guarded(), "calibrate", intrinsics))
 
     def detect(self) -> list:
         """Look at the board (arm out of view) and return the detected blocks."""
-        return self._run("detect", lambda: handling.look(self._guarded()).blocks)
+        return self._run("detect", lambda: command_work(self._guarded(), "detect"))
 
     def execute(self, work) -> Any:
         """Run a planning.Plan through the session's executor (session.run: checked whole with what is held and known
         before its first command; returns planning.ExecutionResult) or a list of (block, place position) pairs: pick
         each block and place it (returns the list of pick answers)."""
-        def action():
-            session = self._guarded()
-            if isinstance(work, planning.Plan):
-                return session.run(work, "the state machine's plan")
-            out = []
-            for block, position in work:
-                out.append(handling.pick(session, block))
-                if out[-1]:
-                    handling.place(session, np.asarray(position, float))
-            return out
-        return self._run("execute", action)
+        return self._run("execute", lambda: command_work(self._guarded(), "execute", work))
 
     def click_grab(self, uv) -> bool:
         """Pick the block under pixel uv of the current frame (tasks.click_grab)."""
-        return self._run("click-grab", lambda: click.click_grab(self._guarded(), uv))
+        return self._run("click-grab", lambda: command_work(self._guarded(), "click-grab", uv))
 
     def click_drop(self, uv) -> bool:
         """Drop the held block on the surface under pixel uv of the current frame (tasks.click_drop)."""
-        return self._run("click-drop", lambda: click.click_drop(self._guarded(), uv))
+        return self._run("click-drop", lambda: command_work(self._guarded(), "click-drop", uv))
 
     def teach_start(self, name: str = "") -> None:
         """Enter "teach": torque off; pose the arm by hand and call teach_record() at each waypoint."""
