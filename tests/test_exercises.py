@@ -529,12 +529,15 @@ TWINS = {
 # - grab.move_path: the engine's own pick and place (tasks.pick / place, the events, click-to-grab) plan with
 #   planning.plan_pick / plan_place, which the release needs until the engine has a planner of another method;
 # - station.machine: the kit's panel runs TaskMachine, whose estop / reset / teach_* methods do what the exercise's
-#   press() does for those buttons (its transition is no longer the kit's: the release latches every failure).
+#   press() does for those buttons (its transition is no longer the kit's: the release latches every failure);
+# - grab.sequence: the kit's click-to-grab panel (ClickToGrab, the station panel) runs tasks.click_grab / click_drop,
+#   which decide what a click means by the kit's own rule (the nearest face centre) for the demonstrations.
 KNOWN_TWINS = {
     "grab.move_path": [("attr", "armlab.tasks.move_path", "kit_move_path"),
                        ("attr", "armlab.planning", "plan_pick"), ("attr", "armlab.planning", "plan_place")],
     "station.machine": [("attr", "armlab.tasks.machine", "TaskMachine.teach_start"),
                         ("attr", "armlab.tasks.machine", "TaskMachine.reset")],
+    "grab.sequence": [("attr", "armlab.tasks.click", "click_grab"), ("attr", "armlab.tasks.click", "click_drop")],
 }
 
 _LOOKUP = """

@@ -128,6 +128,13 @@ HIDDEN_WRONG = {   # per exercise: wrong answers its hidden checks must catch (a
         "the depth ignored (the first face containing the click)": _replaced(
             "grab.click_target", "return int(hit[np.argmin(height_gap)])", "return int(hit[0])"),
     },
+    "grab.sequence": {
+        "every block taken as hit (no test of the face)": _replaced(
+            "grab.sequence", "hit = [b for b in seen if b.is_block and under_click(b)]",
+            "hit = [b for b in seen if b.is_block]"),
+        "the held block never forgotten after a drop": _replaced(
+            "grab.sequence", "\n        elif ok:\n            self.held = None", ""),
+    },
     "grab.move_path": {
         "roll ignores the yaw": _replaced("grab.move_path",
                                           "roll = planning.tilted_roll(heading, float(pitch), float(yaw))",
@@ -170,7 +177,7 @@ HIDDEN_WRONG = {   # per exercise: wrong answers its hidden checks must catch (a
     },
 }
 # the exercises whose hidden checks run the simulator at length (tested apart: test_hidden_checks_open.py)
-OPEN_TASKS = ("events.sort_stack", "events.line_up", "events.sky", "grab.move_path", "teach.replay",
+OPEN_TASKS = ("events.sort_stack", "events.line_up", "events.sky", "grab.move_path", "grab.sequence", "teach.replay",
               "detect.segment")
 # exercises whose hidden checks call another exercise's region (pose_from_corners calls the student's dlt_homography;
 # kinematics.fk is the PoX model, so ik.numerical no longer calls dh_link_transform), so that the other one's wrong

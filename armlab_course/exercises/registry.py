@@ -148,6 +148,9 @@ CLICK_TARGET = Exercise("grab.click_target", "which detected block a click hit: 
                         "the surface the depth saw", 5, _NB["05"], _src("05"), ("click_target",))
 MOVE_PATH = Exercise("grab.move_path", "the report's move_path: the grasp and release motion as a plan", 10,
                      _NB["05"], "armlab/tasks/move_path.py", ("move_path",), kind="open")
+CLICK_SEQUENCE = Exercise("grab.sequence", "click to grab, click to drop: which block a click means, where the held "
+                          "block goes, what to believe after each move", 8, _NB["05"], _src("05"), ("ClickSequence",),
+                          kind="open")
 SAG_QUESTION = Exercise("grab.sag_question", "what the sag figure says about the report's flat offset", 2, _NB["05"],
                         _src("05"), ("the sag figure",), kind="written")
 # -- notebook 06: teach and repeat ------------------------------------------------------------------------------

@@ -325,6 +325,41 @@ def block_from_plain(plain: dict):
     return Block(**kwargs)
 
 
+_SEQUENCE: dict[str, object] = {}
+
+
+def _call_sequence(function, op, *args):
+    """The student's click sequence, driven by the judge's clicks: "start" makes ClickSequence(); "click" point (3,)
+    seen (plain detections) gives ["grab", index in seen], ["drop", position (3,), yaw] or ["refuse", why] (a
+    ClickRefused); "after" ok tells it the last action's outcome."""
+    from armlab.tasks import ClickRefused
+
+    if op == "start":
+        _SEQUENCE.clear()
+        _SEQUENCE["object"], _SEQUENCE["last"] = function(), None
+        return None
+    sequence = _SEQUENCE["object"]
+    if op == "click":
+        seen = [block_from_plain(b) for b in args[1]]
+        try:
+            action = sequence.on_click(np.asarray(args[0], float), seen)
+        except ClickRefused as e:
+            return ["refuse", str(e)[:200]]
+        _SEQUENCE["last"] = action
+        if action[0] == "grab":
+            index = next((i for i, b in enumerate(seen) if b is action[1]), None)
+            if index is None:
+                raise ValueError("a grab must name a block of `seen`")
+            return ["grab", index]
+        if action[0] == "drop":
+            return ["drop", np.asarray(action[1], float).tolist(), float(action[2])]
+        raise ValueError(f"unknown action {action[0]!r}")
+    if op == "after":
+        sequence.after(_SEQUENCE["last"], bool(args[0]))
+        return None
+    raise ValueError(f"unknown click request {op!r}")
+
+
 _STRATEGY: dict[str, object] = {}
 
 
