@@ -279,10 +279,10 @@ class LineUpStrategy:
 
     def next_move(self, seen):
         # BEGIN SOLUTION events.line_up
-        def slots_for(large_side, y):
-            """(size, colour) -> where its bottom face goes: both lines along x, red nearest the base."""
+        def slots_for(large_side, y, x0):
+            """(size, colour) -> where its bottom face goes: both lines along x from |x| = x0, red nearest the base."""
             pitch = {"large": 50.0, "small": 40.0}       # 5 * 50 + 38 = 288 mm, 5 * 40 + 25 = 225 mm: under 300
-            return {(size, c): np.array([side * (110.0 + k * pitch[size]), y, 0.0])
+            return {(size, c): np.array([side * (x0 + k * pitch[size]), y, 0.0])
                     for size, side in (("large", large_side), ("small", -large_side)) for k, c in enumerate(COLORS)}
 
         def blocks_slot(b, slot):
@@ -290,7 +290,9 @@ class LineUpStrategy:
             return np.hypot(*(np.asarray(b.position[:2]) - slot[:2])) < footprint_radius(b) + GRIPPER_RADIUS_MM
 
         if "slots" not in self.notes:        # the layout whose slots the fewest distractors (then blocks) stand on
-            layouts = [slots_for(side, y) for y in (-95.0, -80.0, 80.0, 95.0) for side in (1, -1)]
+            layouts = [slots_for(side, y, x0) for x0 in (110.0, 125.0)
+                       for y in (-95.0, -80.0, 80.0, 95.0, -110.0, -65.0, 65.0, 110.0) for side in (1, -1)
+                       if abs(y) < x0]     # |y| < |x| at every slot: the pads close across the line
             self.notes["slots"] = min(layouts, key=lambda slots: sum(
                 (1 if b.is_block else 100) for b in seen for slot in slots.values() if blocks_slot(b, slot)))
         slots = self.notes["slots"]

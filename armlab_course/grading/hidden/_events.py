@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["ChildStrategy", "run_with_child"]
+__all__ = ["ChildStrategy", "run_with_child", "seen_scored"]
 
 
 class ChildStrategy:
@@ -16,6 +16,7 @@ class ChildStrategy:
 
     def __init__(self, call, level: int):
         self.call, self.stopped = call, ""
+        self.seen_names: set[str] = set()      # "size colour" of every cube any look showed
         call("start", int(level))
 
     def next_move(self, seen):
@@ -23,6 +24,7 @@ class ChildStrategy:
 
         from ._replay import block_to_plain
 
+        self.seen_names |= {f"{b.size} {b.color}" for b in seen if b.is_block}
         got = self.call("next_move", [block_to_plain(b) for b in seen])
         if got[0] is None:
             self.stopped = str(got[1])[:200]
@@ -55,10 +57,22 @@ class ChildStrategy:
 def run_with_child(call, event: str, level: int, seed: int):
     """The event at `level` on the judge's own fresh station of `seed` (the supply's jitter seeded alike), run by the
     event's own runner with the student's strategy asked move by move in the child: the EventResult (scored by the
-    event's rules from the simulator's truth)."""
+    event's rules from the simulator's truth) and the ChildStrategy (what its looks showed)."""
     from armlab.tasks import start_session
     from armlab.tasks.events import event_station, run_event
 
     session = start_session(event_station(event, int(level), seed=int(seed)))
-    return run_event(session, event, int(level), seed=int(seed), strategy=ChildStrategy(call, int(level)),
-                     record=False)
+    strategy = ChildStrategy(call, int(level))
+    return run_event(session, event, int(level), seed=int(seed), strategy=strategy, record=False), strategy
+
+
+def seen_scored(score, seen_names: set[str]) -> list[float]:
+    """What a strategy working from what the robot sees can be held to, from the event's score lines: [every block
+    a look showed scored its points, every bonus line (a line's neatness) scored whose blocks all were seen]
+    (1.0 / 0.0). A block the detector never showed as a cube (hidden under a distractor, or taken for one) cannot
+    be asked of the strategy."""
+    blocks = [ln for ln in score.lines if ln.object_id is not None]
+    seen_ok = all(ln.points > 0 for ln in blocks if ln.what in seen_names)
+    bonus_ok = all(ln.points > 0 for ln in score.lines if ln.object_id is None
+                   and all(b.what in seen_names for b in blocks if ln.what.startswith(b.what.split()[0] + " ")))
+    return [float(seen_ok), float(bonus_ok)]

@@ -24,7 +24,7 @@ def _judge_sky(call, level, seed):
 
     from ._events import run_with_child
 
-    result = run_with_child(call, "sky", level, seed)
+    result, _ = run_with_child(call, "sky", level, seed)
     tower = len(result.score.lines)
     placed = sum(m.placed for m in result.moves)
     return [float(tower >= GOOD_TOWER), float(tower >= HIGH_TOWER),

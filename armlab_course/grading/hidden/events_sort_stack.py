@@ -17,7 +17,7 @@ def _judge_sort_stack(call, level, seed):
     within the time limit] (1.0 / 0.0)."""
     from ._events import run_with_child
 
-    result = run_with_child(call, "sort_stack", level, seed)
+    result, _ = run_with_child(call, "sort_stack", level, seed)
     return [float(result.score.full_marks), float(result.within_limit)]
 
 
