@@ -160,8 +160,8 @@ HIDDEN_WRONG = {   # per exercise: wrong answers its hidden checks must catch (a
     },
     "events.sky": {
         "carried at the default 50 mm clearance": _replaced("events.sky", '0.0, "tower", 15.0)', '0.0, "tower")'),
-        "tower out in front, where the arm reaches less high": _replaced(
-            "events.sky", "np.array([*TOWER_XY, self.notes", "np.array([0.0, 300.0, self.notes"),
+        "keeps trying after a level out of reach (never stops)": _replaced(
+            "events.sky", '        self.stopped = f"the next level is out of reach: {why}"\n', ""),
     },
     "station.machine": {
         "the torque left off after teaching": _replaced("station.machine", "            self.port.set_torque(True)\n",

@@ -47,9 +47,10 @@ class _ChildSequence:
             raise ClickRefused(str(got[1])[:200])
         if got[0] == "grab":
             index = got[1]
-            if isinstance(index, bool) or not isinstance(index, int) or not 0 <= index < len(seen):
+            if isinstance(index, bool) or not isinstance(index, (int, float)) or index != int(index) or \
+                    not 0 <= index < len(seen):
                 raise ValueError("the grab names no block of those seen")
-            return ("grab", seen[index])
+            return ("grab", seen[int(index)])
         if got[0] == "drop":
             return ("drop", np.asarray(got[1], float), float(got[2]))
         raise ValueError("an action is grab, drop or refuse")
