@@ -24,16 +24,9 @@ from armlab.station.contract import EmergencyStopped
 from . import teach
 from .port import command_work
 from .session import Session, as_session
+from .states import STATES, MachineBusy
 
 __all__ = ["STATES", "TaskMachine", "MachineBusy", "Transition", "latching_transition", "default_transition"]
-
-STATES: tuple[str, ...] = ("idle", "estop", "calibrate", "detect", "execute", "teach", "repeat", "click-grab",
-                           "click-drop")
-
-
-class MachineBusy(RuntimeError):
-    """A command arrived while another one (or teaching) is under way."""
-
 
 Transition = Callable[["TaskMachine", str, Callable[[], Any]], Any]
 

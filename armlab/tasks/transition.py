@@ -6,24 +6,21 @@ instead). The rules it follows are the module notes of armlab.tasks.machine.
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from armlab.station.contract import EmergencyStopped
 
-from .machine import MachineBusy
-
-if TYPE_CHECKING:
-    from .machine import TaskMachine
+from .states import MachineBusy
 
 __all__ = ["command_transition"]
 
 
-def command_transition(machine: TaskMachine, state: str, action: Callable[[], Any]) -> Any:
-    """The kit's transition of one command: from "idle" into `state`, run `action`, and back to "idle" with its
-    result; refused (EmergencyStopped) in "estop" and (MachineBusy) in any other state, with nothing entered; an
-    emergency stop during or at the end of the action leaves the machine in "estop" (entered once) and raises
-    EmergencyStopped; any other error returns to "idle" (or stays in "estop" when a stop was requested) and
-    propagates."""
+def command_transition(machine: Any, state: str, action: Callable[[], Any]) -> Any:
+    """The kit's transition of one command of `machine` (a tasks.machine.TaskMachine): from "idle" into `state`, run
+    `action`, and back to "idle" with its result; refused (EmergencyStopped) in "estop" and (MachineBusy) in any other
+    state, with nothing entered; an emergency stop during or at the end of the action leaves the machine in "estop"
+    (entered once) and raises EmergencyStopped; any other error returns to "idle" (or stays in "estop" when a stop was
+    requested) and propagates."""
     if machine.state != "idle":
         refused = EmergencyStopped if machine.state == "estop" else MachineBusy
         raise refused(f"{state} refused: the machine is in {machine.state!r}"
