@@ -150,6 +150,12 @@ def test_the_exercise_list_command():
         e = exercise(x["id"])
         assert (x["title"], x["points"], x["notebook"], x["kind"]) == (e.title, e.points, e.notebook, e.kind)
         assert x["solution_lines"] >= 1, f"{e.id}: no solution lines found in {e.where}"
+    # students design the robot's behaviour (issue 35): the station's machine, click-to-grab's sequence and a strategy
+    # per event, graded by outcome; at least 60 points so, and over 400 lines of student code in the lab
+    outcome = {x["id"]: x["points"] for x in listed if x["kind"] == "open"}
+    assert {"station.machine", "grab.sequence", "events.sort_stack", "events.line_up", "events.sky"} <= set(outcome)
+    assert sum(outcome.values()) >= 60, outcome
+    assert sum(x["solution_lines"] for x in listed if x["kind"] != "written") > 400
 
 
 @pytest.fixture(scope="module")
