@@ -25,7 +25,7 @@ from . import perception
 from .handling import look, pick, place
 from .session import Session, as_session
 
-__all__ = ["ClickRefused", "click_grab", "click_drop", "click_world", "current_view"]
+__all__ = ["ClickRefused", "click_grab", "click_drop", "click_with", "click_world", "current_view"]
 
 
 class ClickRefused(ValueError):
@@ -106,3 +106,30 @@ def click_drop(session: Session, uv, yaw: float = 0.0) -> bool:
         raise ClickRefused(f"cannot drop at ({p[0]:.0f}, {p[1]:.0f}, {p[2]:.0f}) mm: {e}") from None
     look(session)
     return done
+
+
+def click_with(session: Session, uv, sequence) -> tuple[str, bool]:
+    """One click run by a click-to-grab sequence of one's own (exercise grab.sequence, notebook 05): the world point
+    under pixel uv of the current frame (click_world) and the view's detections go to sequence.on_click(point, seen),
+    which returns ("grab", block) -- a block of `seen` -- or ("drop", position (3,) mm, yaw rad), or raises
+    ClickRefused; the kit then picks the block (tasks.pick) or places the held one with its bottom-face centre at
+    the position (tasks.place), looks again, and tells the sequence sequence.after(action, ok). Returns (what was
+    done, whether it worked: the block held / the place ran through). Any other answer is a ValueError, and nothing
+    moves."""
+    session = as_session(session, "tasks.click_with")
+    view = current_view(session)
+    point = click_world(session, _pixel(uv), view.frame)
+    action = sequence.on_click(point, list(view.blocks))
+    kind = action[0] if isinstance(action, (tuple, list)) and action else None
+    if kind == "grab" and len(action) == 2 and any(action[1] is b for b in view.blocks):
+        ok = bool(pick(session, action[1]))
+    elif kind == "drop" and len(action) == 3:
+        position = finite_array(action[1], "the drop's position", (3,), "world mm")
+        ok = bool(place(session, position, finite_float(action[2], "the drop's yaw", what="rad")))
+    else:
+        raise ValueError(f"a click's action is ('grab', a block of those seen) or ('drop', position, yaw), got "
+                         f"{plain(action)}")
+    look(session)
+    sequence.after(action, ok)
+    return kind, ok
+

@@ -21,62 +21,64 @@ import numpy as np
 from armlab import planning
 from armlab.station.contract import EmergencyStopped
 
-from . import click, handling, perception, teach
+from . import teach
+from .port import command_work
 from .session import Session, as_session
+from .states import STATES, MachineBusy
 
-__all__ = ["STATES", "TaskMachine", "MachineBusy", "Transition", "command_transition"]
-
-STATES: tuple[str, ...] = ("idle", "estop", "calibrate", "detect", "execute", "teach", "repeat", "click-grab",
-                           "click-drop")
-
-
-class MachineBusy(RuntimeError):
-    """A command arrived while another one (or teaching) is under way."""
-
+__all__ = ["STATES", "TaskMachine", "MachineBusy", "Transition", "latching_transition", "default_transition"]
 
 Transition = Callable[["TaskMachine", str, Callable[[], Any]], Any]
 
 
-def command_transition(machine: TaskMachine, state: str, action: Callable[[], Any]) -> Any:
-    """The kit's transition of one command: from "idle" into `state`, run `action`, and back to "idle" with its
-    result; refused (EmergencyStopped) in "estop" and (MachineBusy) in any other state, with nothing entered; an
-    emergency stop during or at the end of the action leaves the machine in "estop" (entered once) and raises
-    EmergencyStopped; any other error returns to "idle" (or stays in "estop" when a stop was requested) and
-    propagates."""
+def latching_transition(machine: TaskMachine, state: str, action: Callable[[], Any]) -> Any:
+    """The transition that stands in where the kit's own (armlab.tasks.transition, instructor only) is not installed:
+    from "idle" into `state`, run `action`, back to "idle" with its result; refused (EmergencyStopped in "estop",
+    MachineBusy elsewhere) with nothing entered; and ANY failure -- a stop, or any other error of the action --
+    latches the machine in "estop" until reset() and propagates (a stop at the end raises EmergencyStopped). It is
+    stricter than the lab's rule (module notes), which lets an ordinary error return to "idle": every failure needs
+    a reset here."""
     if machine.state != "idle":
         refused = EmergencyStopped if machine.state == "estop" else MachineBusy
-        raise refused(f"{state} refused: the machine is in {machine.state!r}"
-                      + ("; call reset() first" if refused is EmergencyStopped else ""))
+        raise refused(f"{state} refused: the machine is in {machine.state!r}")
     machine.enter(state)
-    ending = "estop"                         # unless the action ends, or fails, with no stop requested
+    failed = True
     try:
         result = action()
-        if machine.stop_requested:           # stopped between the last command and the end of the action
+        if machine.stop_requested:
             raise EmergencyStopped(f"{state} was emergency-stopped")
-        ending = "idle"
+        failed = False
         return result
-    except EmergencyStopped:
-        raise
-    except BaseException:
-        ending = "estop" if machine.stop_requested else "idle"
-        raise
     finally:
-        if machine.state != ending:          # estop() has entered "estop" already when it came from the button
+        ending = "estop" if failed else "idle"
+        if machine.state != ending:
             machine.enter(ending)
+
+
+def default_transition() -> Transition:
+    """The machine's transition when none is given: the kit's command_transition where it is installed (the
+    instructor's tree), latching_transition otherwise (the student release)."""
+    try:
+        from .transition import command_transition
+    except ModuleNotFoundError as e:
+        if e.name != f"{__package__}.transition":
+            raise
+        return latching_transition
+    return command_transition
 
 
 class TaskMachine:
     """The lab's state machine over a task session (tasks.start_session(station), sim or real). `transition` runs
-    each command through the states (module notes); replace it on an instance with your own function of the same
-    signature. `session` is the session driven, `station` its station."""
+    each command through the states (module notes; default: default_transition()); replace it on an instance with
+    your own function of the same signature. `session` is the session driven, `station` its station."""
 
-    def __init__(self, session: Session, transition: Transition = command_transition):
+    def __init__(self, session: Session, transition: Transition | None = None):
         self.session = as_session(session, "TaskMachine")
         self.station = self.session.station
         self.state = "idle"
         self.history: list[str] = ["idle"]
         self.program: teach.TeachProgram | None = None
-        self.transition = transition
+        self.transition = transition or default_transition()
         self._stop = False
         self._recorder: teach.Recorder | None = None
 
@@ -122,39 +124,25 @@ class TaskMachine:
     def calibrate(self, intrinsics="checkerboard"):
         """Calibrate the camera again (tasks.perception.calibrate_camera); the session's calibration becomes the new
         one, which is returned."""
-        def action():
-            session = self._guarded()
-            session.calibration = perception.calibrate_camera(self.station, intrinsics, arm=session)
-            return session.calibration
-        return self._run("calibrate", action)
+        return self._run("calibrate", lambda: command_work(self._guarded(), "calibrate", intrinsics))
 
     def detect(self) -> list:
         """Look at the board (arm out of view) and return the detected blocks."""
-        return self._run("detect", lambda: handling.look(self._guarded()).blocks)
+        return self._run("detect", lambda: command_work(self._guarded(), "detect"))
 
     def execute(self, work) -> Any:
         """Run a planning.Plan through the session's executor (session.run: checked whole with what is held and known
         before its first command; returns planning.ExecutionResult) or a list of (block, place position) pairs: pick
         each block and place it (returns the list of pick answers)."""
-        def action():
-            session = self._guarded()
-            if isinstance(work, planning.Plan):
-                return session.run(work, "the state machine's plan")
-            out = []
-            for block, position in work:
-                out.append(handling.pick(session, block))
-                if out[-1]:
-                    handling.place(session, np.asarray(position, float))
-            return out
-        return self._run("execute", action)
+        return self._run("execute", lambda: command_work(self._guarded(), "execute", work))
 
     def click_grab(self, uv) -> bool:
         """Pick the block under pixel uv of the current frame (tasks.click_grab)."""
-        return self._run("click-grab", lambda: click.click_grab(self._guarded(), uv))
+        return self._run("click-grab", lambda: command_work(self._guarded(), "click-grab", uv))
 
     def click_drop(self, uv) -> bool:
         """Drop the held block on the surface under pixel uv of the current frame (tasks.click_drop)."""
-        return self._run("click-drop", lambda: click.click_drop(self._guarded(), uv))
+        return self._run("click-drop", lambda: command_work(self._guarded(), "click-drop", uv))
 
     def teach_start(self, name: str = "") -> None:
         """Enter "teach": torque off; pose the arm by hand and call teach_record() at each waypoint."""

@@ -156,6 +156,9 @@ CLICK_TARGET = Exercise("grab.click_target", "which detected block a click hit: 
                         "the surface the depth saw", 5, _NB["05"], _src("05"), ("click_target",))
 MOVE_PATH = Exercise("grab.move_path", "the report's move_path: the grasp and release motion as a plan", 10,
                      _NB["05"], "armlab/tasks/move_path.py", ("move_path",), kind="open")
+CLICK_SEQUENCE = Exercise("grab.sequence", "click to grab, click to drop: which block a click means, where the held "
+                          "block goes, what to believe after each move", 8, _NB["05"], _src("05"), ("ClickSequence",),
+                          kind="open")
 SAG_QUESTION = Exercise("grab.sag_question", "what the sag figure says about the report's flat offset", 2, _NB["05"],
                         _src("05"), ("the sag figure",), kind="written")
 # -- notebook 06: teach and repeat ------------------------------------------------------------------------------
@@ -164,13 +167,20 @@ TEACH_REPLAY = Exercise("teach.replay", "teach by hand, then a time-scaled repla
 REPLAY_QUESTION = Exercise("teach.replay_question", "taught replay against move_path, from the joint-angle figure", 2,
                            _NB["06"], _src("06"), ("the joint-angle figure",), kind="written")
 # -- notebook 07: autonomous tasks ------------------------------------------------------------------------------
-SORT_STACK = Exercise("events.sort_stack", "a sort 'n stack strategy for levels 2 and 3 from what the robot sees",
+SORT_STACK = Exercise("events.sort_stack", "a sort 'n stack strategy for every level from what the robot sees",
                       12, _NB["07"], _src("07"), ("SortStackStrategy",), kind="open")
+LINE_UP = Exercise("events.line_up", "a line 'em up strategy for every level: the lines' layout, clearing the way, "
+                   "unstacking", 12, _NB["07"], _src("07"), ("LineUpStrategy",), kind="open")
+SKY = Exercise("events.sky", "a to-the-sky strategy: the tower's spot, the carry over its top and when to stop", 8,
+               _NB["07"], _src("07"), ("SkyStrategy",), kind="open")
 TOWER_QUESTION = Exercise("events.tower_question", "the tower's points and what stops it", 2, _NB["07"], _src("07"),
                           ("the tower figure",), kind="written")
 # -- notebook 08: the control station ---------------------------------------------------------------------------
 COMMAND_TRANSITION = Exercise("station.transition", "one transition of the station's state machine: a command from "
                               "idle and back", 6, _NB["08"], _src("08"), ("run_command",))
+STATION_MACHINE = Exercise("station.machine", "the station's whole state machine over the kit's port: the buttons, "
+                           "the E-STOP and reset, teach and repeat", 12, _NB["08"], _src("08"), ("StationMachine",),
+                           kind="open")
 
 EXERCISES: tuple[Exercise, ...] = tuple(v for v in dict(globals()).values() if isinstance(v, Exercise))
 

@@ -373,6 +373,123 @@ assert not held_unturned or abs(green_truth.yaw - yaw_before) > np.radians(5), "
 print("OK: misaligned wrist: roll 0 fails or shoves the block; the roll from the block's yaw grasps it")
 
 # %% [markdown]
+# ## Your click-to-grab sequence
+#
+# `move_path` plans one grasp or one release. What turns clicks into those is the **sequence**: the first click on
+# a block grabs it, the next click puts it down on the surface under the click (the board, or the top of another
+# block: a click on a block while holding one stacks on it), and a click that cannot be acted on is refused with
+# nothing moved. The kit runs one click with `tasks.click_with(session, uv, sequence)`: it finds the world point
+# under the pixel (`click_world`, on the corrected depth) and the current view's detections, asks your
+# `sequence.on_click(point, seen)` what to do, does it (the kit's pick or place, checked whole), looks again and
+# tells you `sequence.after(action, ok)`: whether the block is now held, or the place ran through. Think about:
+# - which detected block a click means (a click lands anywhere on a top face, up to its corners; the face is turned by
+#   its yaw) and what to say when it means none (`ClickRefused(why)`);
+# - what your sequence must remember between clicks, and what it must *not* believe until `after` says so (a pick
+#   that closes on nothing);
+# - where the held block's *bottom* face goes for a click on the board and on another block's top, and a click where
+#   the held block itself stood (the frame still shows it).
+#
+# **Exercise `grab.sequence`:** write `ClickSequence.on_click` and `ClickSequence.after`.
+
+# %%
+from armlab.blocks import block_edge
+from armlab.tasks import ClickRefused
+
+
+class ClickSequence:
+    """Click to grab, click to drop (see above): on_click(point, seen) -> ("grab", block) or ("drop", position, yaw)."""
+
+    def __init__(self):
+        self.held = None             # the detection of the block the gripper holds (None: it holds nothing)
+        self.notes = {}              # whatever else your sequence remembers
+
+    def on_click(self, point, seen):
+        # BEGIN SOLUTION grab.sequence
+        point = np.asarray(point, dtype=float)
+
+        def under_click(b):
+            """The click's offset in the top face's own axes is within half its edge (and 3 mm) both ways."""
+            c, s = np.cos(b.yaw), np.sin(b.yaw)
+            dx, dy = point[:2] - np.asarray(b.position[:2])
+            return max(abs(c * dx + s * dy), abs(-s * dx + c * dy)) <= b.edge_mm / 2 + 3.0
+
+        if self.held is None:
+            hit = [b for b in seen if b.is_block and under_click(b)]
+            if not hit:
+                raise ClickRefused(f"no block under the click at ({point[0]:.0f}, {point[1]:.0f}) mm")
+            return ("grab", max(hit, key=lambda b: b.position[2]))       # the top one of a stack
+        held = self.held
+        if under_click(held) and point[2] > held.position[2] - held.edge_mm / 2:
+            point[2] = held.position[2] - block_edge(held.size)           # where it stood: on what it stood on
+        return ("drop", point, 0.0)
+        # END SOLUTION
+
+    def after(self, action, ok):
+        # BEGIN SOLUTION grab.sequence
+        if action[0] == "grab":
+            self.held = action[1] if ok else None
+        elif ok:
+            self.held = None
+        # END SOLUTION
+
+
+def refuse_every_click(point, seen):
+    """The stand-in while your sequence is blank: every click is refused and nothing moves."""
+    raise ClickRefused("your click sequence is not written yet: nothing moves")
+
+
+clicks = ClickSequence()
+clicks.on_click = with_reference(clicks.on_click, "grab.sequence", refuse_every_click,
+                                 "every click is refused: nothing moves")
+demo_station = make_station("sim", seed=2, scene=SCENE)
+demo_session = tasks.start_session(demo_station)
+for where in ([-150.0, 200.0, 38.0], [-220.0, 60.0, 0.0]):              # the red block, then a free spot
+    uv = demo_station.camera.truth.project(np.array([where]))[0]
+    try:
+        print(f"click at ({uv[0]:.0f}, {uv[1]:.0f}) px:", tasks.click_with(demo_session, uv, clicks))
+    except ClickRefused as refused:
+        print(f"click at ({uv[0]:.0f}, {uv[1]:.0f}) px refused: {refused}")
+
+# %% [markdown]
+# ## Check: your sequence, click by click, on the simulator
+#
+# A fresh station with the same three blocks: a click on bare board (refused, nothing moves), the red block (held),
+# a free spot (it lands within 3 mm), the blue block near a corner of its face (held) and the green block's top (the
+# blue one lands on it, centred). The simulator's ground truth decides.
+
+# %%
+# CHECK grab.sequence
+seq_station = make_station("sim", seed=3, scene=SCENE)
+seq_session = tasks.start_session(seq_station)
+mine = ClickSequence()
+truth = {o.color: o for o in seq_station.world.blocks}
+
+
+def click_at(point):
+    return tasks.click_with(seq_session, seq_station.camera.truth.project(np.array([point], float))[0], mine)
+
+
+try:
+    click_at([0.0, 120.0, 0.0])
+    refused = False
+except ClickRefused:
+    refused = True
+assert refused and not seq_station.world.held, "a click on bare board was not refused"
+assert click_at([-150.0, 200.0, 38.0]) == ("grab", True) and truth["red"].id in seq_station.world.held, \
+    "the click on the red block did not grab it"
+assert click_at([-220.0, 60.0, 0.0]) == ("drop", True), "the drop on the board did not run"
+red_off = np.abs(truth["red"].position - [-220.0, 60.0, 19.0]).max()
+assert red_off < 3.0 and not seq_station.world.held, f"the red block landed {red_off:.1f} mm from the click"
+corner = np.array([200.0, 150.0]) + 9.0 * np.array([np.cos(0.3) + np.sin(0.3), np.sin(0.3) - np.cos(0.3)])
+assert click_at([*corner, 25.0]) == ("grab", True) and truth["blue"].id in seq_station.world.held, \
+    "a click near a corner of the blue block's face did not grab it"
+assert click_at([60.0, 300.0, 38.0]) == ("drop", True), "the drop on the green block did not run"
+blue_off = np.abs(truth["blue"].position - [60.0, 300.0, 38.0 + 12.5]).max()
+assert blue_off < 3.0, f"the blue block landed {blue_off:.1f} mm from the green block's top centre"
+print(f"OK: your click sequence refused bare board, grabbed and dropped the red block ({red_off:.1f} mm off) and "
+      f"stacked the blue one on the green ({blue_off:.1f} mm off)")
+
+# %% [markdown]
 # ## 6 · Click to grab, click to drop
 #
 # **Demonstration** of the kit's click-to-grab panel (it plans with the kit's planners, not your `move_path`).

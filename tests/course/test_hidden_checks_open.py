@@ -4,8 +4,18 @@ of their own): the reference passes them, plausible wrong answers fail them (tes
 
 from __future__ import annotations
 
-from wrong_answers import OPEN_TASKS, check_wrong_answers
+import pytest
+from wrong_answers import OPEN_TASKS, check_alone, check_wrong_answers
 
 
 def test_open_tasks_hidden_checks_pass_the_reference_and_fail_wrong_answers():
     check_wrong_answers(list(OPEN_TASKS))
+
+
+# the design exercises (issue 35): each on its own, the reference, the blank and both wrong answers
+DESIGN = ("events.line_up", "events.sky", "station.machine", "grab.sequence")
+
+
+@pytest.mark.parametrize("exercise_id", DESIGN)
+def test_a_design_exercise_passes_its_reference_and_fails_the_blank_and_each_wrong_answer(exercise_id):
+    check_alone(exercise_id)

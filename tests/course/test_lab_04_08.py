@@ -103,8 +103,9 @@ def test_move_path_refuses_bad_input_and_plans_a_straight_descent():
 
 def test_a_task_machine_runs_every_command_through_its_transition():
     from armlab.station.contract import EmergencyStopped
-    from armlab.tasks.machine import MachineBusy, TaskMachine, command_transition
+    from armlab.tasks.machine import MachineBusy, TaskMachine
     from armlab.tasks.session import Session
+    from armlab.tasks.transition import command_transition
 
     class Arm:
         def emergency_stop(self):

@@ -129,6 +129,13 @@ HIDDEN_WRONG = {   # per exercise: wrong answers its hidden checks must catch (a
         "the depth ignored (the first face containing the click)": _replaced(
             "grab.click_target", "return int(hit[np.argmin(height_gap)])", "return int(hit[0])"),
     },
+    "grab.sequence": {
+        "every block taken as hit (no test of the face)": _replaced(
+            "grab.sequence", "hit = [b for b in seen if b.is_block and under_click(b)]",
+            "hit = [b for b in seen if b.is_block]"),
+        "the held block never forgotten after a drop": _replaced(
+            "grab.sequence", "\n        elif ok:\n            self.held = None", ""),
+    },
     "grab.move_path": {
         "roll ignores the yaw": _replaced("grab.move_path",
                                           "roll = planning.tilted_roll(heading, float(pitch), float(yaw))",
@@ -146,6 +153,24 @@ HIDDEN_WRONG = {   # per exercise: wrong answers its hidden checks must catch (a
         "no unstacking": _replaced("events.sort_stack", "if standing_on_something:", "if False:"),
         "stack height not tracked": _replaced("events.sort_stack", "len(built[b.size]) * block_edge(b.size)", "0.0"),
     },
+    "events.line_up": {
+        "lines too long (50 mm pitch for both sizes, 60 for the large)": _replaced(
+            "events.line_up", 'pitch = {"large": 50.0, "small": 40.0}', 'pitch = {"large": 60.0, "small": 50.0}'),
+        "blocks keep their detected yaw (not square to the line)": _replaced(
+            "events.line_up", 'Move(b, slot.copy(), 0.0, "line")', 'Move(b, slot.copy(), float(b.yaw), "line")'),
+    },
+    "events.sky": {
+        "carried at the default 50 mm clearance": _replaced("events.sky", '0.0, "tower", 15.0)', '0.0, "tower")'),
+        "keeps trying after a level out of reach (never stops)": _replaced(
+            "events.sky", '        self.stopped = f"the next level is out of reach: {why}"\n', ""),
+    },
+    "station.machine": {
+        "the torque left off after teaching": _replaced("station.machine", "            self.port.set_torque(True)\n",
+                                                        ""),
+        "reset in any state": _replaced("station.machine",
+                                        'if self.state != "estop":\n                raise MachineBusy(f"reset',
+                                        'if False:\n                raise MachineBusy(f"reset'),
+    },
     "station.transition": {
         "no stop at the end of the work": _replaced("station.transition", "    if machine.stop_requested:\n",
                                                     "    if False:\n"),
@@ -153,12 +178,14 @@ HIDDEN_WRONG = {   # per exercise: wrong answers its hidden checks must catch (a
     },
 }
 # the exercises whose hidden checks run the simulator at length (tested apart: test_hidden_checks_open.py)
-OPEN_TASKS = ("events.sort_stack", "grab.move_path", "teach.replay", "detect.segment")
+OPEN_TASKS = ("events.sort_stack", "events.line_up", "events.sky", "grab.move_path", "grab.sequence", "teach.replay",
+              "detect.segment")
 # exercises whose hidden checks call another exercise's region, so that the other one's wrong answer fails them too;
-# the grader then runs the exercise again alone, the reference in place of the rest (Grader.grade). None is left:
-# kinematics.fk is the PoX model (ik.numerical no longer calls dh_link_transform), and the check of
-# calib.tag_extrinsics runs the kit's homography in place of the student's dlt_homography (adapters._call_initial_pose)
-DEPENDS: dict[str, set[str]] = {}
+# the grader then runs the exercise again alone, the reference in place of the rest (Grader.grade). Only the station's
+# machine is left (it runs the student's transition): kinematics.fk is the PoX model (ik.numerical no longer calls
+# dh_link_transform), and the check of calib.tag_extrinsics runs the kit's homography in place of the student's
+# dlt_homography (adapters._call_initial_pose)
+DEPENDS: dict[str, set[str]] = {"station.machine": {"station.transition"}}
 
 
 def wrong_sets(ids: list[str]) -> list[list[str]]:
@@ -228,3 +255,34 @@ def check_each_wrong_loses_only_its_own(grader, ids, round_: int) -> None:
         for other in ids:
             if other != wrong_id:
                 assert all(c.passed for c in got[other]), (other, label, [c.message for c in got[other]])
+
+
+def blank_bodies(exercise_id: str) -> list[str]:
+    """The exercise's regions as the student release holds them: each the stub, at its reference's indentation."""
+    from armlab_course.exercises.markers import stub_lines
+
+    out = []
+    for body in reference_bodies(exercise_id):
+        first = next(line for line in body.splitlines() if line.strip())
+        indent = first[:len(first) - len(first.lstrip())]
+        out.append("\n".join(indent + line for line in stub_lines(exercise_id)))
+    return out
+
+
+def check_alone(exercise_id: str, limits: Limits | None = None) -> None:
+    """The exercise's hidden checks with only its own region changed (every other at the reference): the reference
+    passes every one, the blank stub none, and each of its wrong answers (HIDDEN_WRONG) fails at least one."""
+    from armlab_course.grading.grade import Grader
+
+    grader = Grader(ROOT, limits or Limits(timeout_s=1200, cpu_s=600), [exercise_id])
+    try:
+        reference = grader.hidden_checks_together({exercise_id: reference_bodies(exercise_id)})[exercise_id]
+        assert len(reference) >= 2 and all(c.passed for c in reference), \
+            (exercise_id, [c.message for c in reference if not c.passed])
+        blank = grader.hidden_checks_together({exercise_id: blank_bodies(exercise_id)})[exercise_id]
+        assert blank and not any(c.passed for c in blank), (exercise_id, "blank", [c.passed for c in blank])
+        for label, bodies in HIDDEN_WRONG[exercise_id].items():
+            got = grader.hidden_checks_together({exercise_id: bodies})[exercise_id]
+            assert got and not all(c.passed for c in got), f"{exercise_id}, {label}: every hidden check passed"
+    finally:
+        grader.close()
