@@ -105,7 +105,7 @@ RUBRICS: dict[str, tuple[Criterion, ...]] = {
 
 # per question, phrases of its model answer that would answer it: none may stand beside the question in the release
 # (its text and code from the figure to the answer cell) or in the outputs a student sees there
-# (tests/test_written_questions.py)
+# (tests/course/test_written_questions.py)
 GIVEAWAYS: dict[str, tuple[str, ...]] = {
     "calib.q_reprojection": ("distortion", "not a projective map"),
     "calib.q_views": ("undistorted pinhole", "not a bias"),
@@ -120,9 +120,9 @@ GIVEAWAYS: dict[str, tuple[str, ...]] = {
     "events.tower_question": ("440", "390"),
 }
 
-# per question, numbers its model answer reads off the figure's cells: each must stand both in the model answer and in
-# the stored notebook's printed outputs (tests/test_written_questions.py), so a model answer follows the figure when
-# the notebook changes
+# per question, numbers its model answer reads off the figure's cells: each must stand both in the model answer and
+# in the stored notebook's printed outputs (tests/course/test_written_questions.py), so a model answer follows the
+# figure when the notebook changes
 FIGURE_FACTS: dict[str, tuple[str, ...]] = {
     "calib.q_views": ("27 %", "47 px", "7 px with 16"),
     "fk.q_table_error": ("4.9 to 5.4 mm", "16.2 to 16.7 mm"),

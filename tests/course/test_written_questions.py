@@ -22,7 +22,7 @@ from armlab_course.grading.hand import model_answers, write_hand_grading
 from armlab_course.grading.hidden._rubrics import FIGURE_FACTS, GIVEAWAYS, RUBRICS, rubric_of
 from armlab_course.grading.results import ExerciseResult
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 WRITTEN = [e for e in EXERCISES if e.kind == "written"]
 PROMPT = re.compile(r"\*\*(Exercise|Question) `(?P<id>[\w.]+)`")
 
@@ -151,4 +151,4 @@ def test_the_rubric_and_marking_sheet_are_exported_for_hand_grading(tmp_path):
 
 def test_the_rubrics_stay_with_the_instructor():
     assert not released("armlab_course/grading/hidden/_rubrics.py")
-    assert not released("tests/test_written_questions.py")
+    assert not released("tests/course/test_written_questions.py")

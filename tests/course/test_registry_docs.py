@@ -15,7 +15,7 @@ from armlab_course.exercises import exercises_json
 from armlab_course.exercises.registry import EXERCISES
 from armlab_course.exercises.registry_docs import BLOCK, disagreements, doc_files, refresh, render
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 ROWS = exercises_json(ROOT)
 DOCS = doc_files(ROOT)
 

@@ -16,7 +16,7 @@ from armlab_course.exercises import EXERCISES
 from armlab_course.exercises.registry import NOTEBOOKS
 from armlab_course.exercises.release import make_student_release, released
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 COURSE = ROOT / "docs" / "course"
 PAGES = ("README.md", "time-per-notebook.md", "real-arm-sessions.md", "competition.md", "report-template.md")
 WALKTHROUGH = "docs/course/instructor/walkthrough.md"
@@ -32,7 +32,7 @@ def test_the_course_pages_are_there_and_released_and_the_walkthrough_is_not():
         assert released(f"docs/course/{name}")
     assert (ROOT / WALKTHROUGH).is_file() and not released(WALKTHROUGH)
     assert not any(released(name) for name in ("tools/course-pictures", "tools/course-times",
-                                               "tests/test_course_docs.py"))
+                                               "tests/course/test_course_docs.py"))
     assert all(released(f"docs/course/img/{p.name}") for p in (COURSE / "img").glob("*.png"))
 
 

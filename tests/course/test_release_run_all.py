@@ -37,11 +37,11 @@ from armlab_course.exercises.markers import CHECK_LINE
 from armlab_course.exercises.release import RELEASE_MARKER, RUN_ALL_TAG
 from armlab_course.grading.run import code_cell_labels
 
-sys.path.insert(0, str(Path(__file__).parent))
+sys.path.insert(0, str(Path(__file__).parents[1]))     # tests/browser.py
 import browser  # noqa: E402
 from browser import poll  # noqa: E402
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 STEM = "02_forward_kinematics"
 
 
