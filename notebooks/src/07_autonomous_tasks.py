@@ -57,6 +57,24 @@ readable()                                             # figure size and fonts r
 np.set_printoptions(precision=2, suppress=True)
 
 
+def full_marks_runs(event, name, strategy, runs, world_scored=False):
+    """Run `strategy` (a class taking the level) on each (level, seed) of `runs`: each must earn the event's full
+    marks within its time limit (and, with world_scored, the score must be the world's as it stands); prints each
+    run's score and time under the event's `name`."""
+    for level, seed in runs:
+        st = event_station(event, level, seed=seed)
+        res = run_event(start_session(st), event, level, strategy=strategy(level), record=False)
+        lost = [f"{line.what}: {line.why}" for line in res.score.lines if line.points == 0]
+        assert res.score.full_marks, (f"level {level}, seed {seed}: your strategy scored {res.score.points:g}/"
+                                      f"{res.score.max_points} ({res.stopped}); lost: {lost}")
+        assert res.within_limit, \
+            f"level {level}, seed {seed}: it took {res.time_s:.0f} s (limit {res.time_limit_s:.0f} s)"
+        assert not world_scored or res.score == score_event(event, level, st.world.objects), \
+            "the score is not the world's"
+        print(f"OK: {name} level {level} (seed {seed}): {res.score.points:g}/{res.score.max_points} in "
+              f"{res.time_s:.0f} s of {res.time_limit_s:.0f} s")
+
+
 def stack_label(col) -> str:
     """A stack's colours bottom to top by initial (R red, O orange, Y yellow, G green, B blue, V violet)."""
     return "".join(o.color[0].upper() for o in col)
@@ -233,16 +251,7 @@ before_after(sort3, side=True)
 
 # %%
 # CHECK events.sort_stack
-for level, seed in ((1, 2), (2, 3), (3, 4)):
-    st = event_station("sort_stack", level, seed=seed)
-    res = run_event(start_session(st), "sort_stack", level, strategy=SortStackStrategy(level), record=False)
-    lost = [f"{line.what}: {line.why}" for line in res.score.lines if line.points == 0]
-    assert res.score.full_marks, (f"level {level}, seed {seed}: your strategy scored {res.score.points:g}/"
-                                  f"{res.score.max_points} ({res.stopped}); lost: {lost}")
-    assert res.within_limit, f"level {level}, seed {seed}: it took {res.time_s:.0f} s (limit {res.time_limit_s:.0f} s)"
-    assert res.score == score_event("sort_stack", level, st.world.objects), "the score is not the world's"
-    print(f"OK: sort 'n stack level {level} (seed {seed}): {res.score.points:g}/{res.score.max_points} in "
-          f"{res.time_s:.0f} s of {res.time_limit_s:.0f} s")
+full_marks_runs("sort_stack", "sort 'n stack", SortStackStrategy, ((1, 2), (2, 3), (3, 4)), world_scored=True)
 
 # %% [markdown]
 # The replay holds the arm's joint angles every 0.1 s of simulated time (`result.replay.q`) and a snapshot of the
@@ -356,15 +365,7 @@ before_after(line3)
 
 # %%
 # CHECK events.line_up
-for level, seed in ((1, 3), (2, 4)):
-    st = event_station("line_up", level, seed=seed)
-    res = run_event(start_session(st), "line_up", level, strategy=LineUpStrategy(level), record=False)
-    lost = [f"{line.what}: {line.why}" for line in res.score.lines if line.points == 0]
-    assert res.score.full_marks, (f"level {level}, seed {seed}: your strategy scored {res.score.points:g}/"
-                                  f"{res.score.max_points} ({res.stopped}); lost: {lost}")
-    assert res.within_limit, f"level {level}, seed {seed}: it took {res.time_s:.0f} s (limit {res.time_limit_s:.0f} s)"
-    print(f"OK: line 'em up level {level} (seed {seed}): {res.score.points:g}/{res.score.max_points} in "
-          f"{res.time_s:.0f} s of {res.time_limit_s:.0f} s")
+full_marks_runs("line_up", "line 'em up", LineUpStrategy, ((1, 3), (2, 4)))
 assert line3.score.full_marks and line3.within_limit, f"line 'em up level 3 (seed 0): {line3.summary()}"
 
 # %% [markdown]

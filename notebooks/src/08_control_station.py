@@ -314,6 +314,15 @@ m.press("reset")
 assert mine.arm.torque_enabled and m.history[-3:] == ["teach", "estop", "idle"], f"history {m.history[-4:]}"
 
 
+def raises(error, call, *args) -> bool:
+    """Whether call(*args) raises `error` (the check's own helper)."""
+    try:
+        call(*args)
+    except error:
+        return True
+    return False
+
+
 class ScriptedPort:
     """A port that records what the machine asks (its work returns the command's name)."""
 
@@ -338,34 +347,21 @@ for where in every:                  # a stop in every state (a command's state:
         m.press("estop")
     if where in ("calibrate", "repeat"):
         port.work = port.replay = lambda *a, m=m: m.press("estop")
-        try:
-            m.press(where)
-            heard = False
-        except EmergencyStopped:
-            heard = True
+        heard = raises(EmergencyStopped, m.press, where)
         assert heard, f"a stop during {where}: the caller did not hear EmergencyStopped"
     else:
         m.press("estop")
     assert m.state == "estop" and m.history.count("estop") == 1, f"a stop in {where}: history {m.history}"
     assert "halt" in port.log, f"a stop in {where}: the arm was not halted"
     for button in ("detect", "teach", "repeat", "record"):
-        try:
-            m.press(button)
-            refused = False
-        except EmergencyStopped:
-            refused = True
-        assert refused, f"after a stop in {where}: {button} was not refused"
+        assert raises(EmergencyStopped, m.press, button), f"after a stop in {where}: {button} was not refused"
     m.press("reset")
     assert m.state == "idle" and port.log[-1] == "restart", f"reset after a stop in {where}: {port.log}"
 m = StationMachine(ScriptedPort())
 m.press("teach")
 for button in ("detect", "teach", "repeat", "reset"):
-    try:
-        m.press(button)
-        busy = False
-    except MachineBusy:
-        busy = True
-    assert busy and m.state == "teach", f"{button} during teaching was not refused (state {m.state!r})"
+    assert raises(MachineBusy, m.press, button) and m.state == "teach", \
+        f"{button} during teaching was not refused (state {m.state!r})"
 print("OK: your machine detected, taught and repeated on the simulator, and a stop in every state halted the arm, "
       "refused every button but reset, and reset restarted it")
 
