@@ -20,6 +20,7 @@ import pytest
 from nbclient import NotebookClient
 
 from armlab_course.exercises import EXERCISES, exercise, find_regions, make_student_release
+from armlab_course.exercises.release import RUN_ALL_TAG
 
 REPO = Path(__file__).resolve().parents[1]
 CHECK_TAG = re.compile(r"^# CHECK (?P<ids>.+)$", re.M)
@@ -84,6 +85,16 @@ def test_only_exercise_and_check_cells_raise_and_each_names_its_exercise(blank_r
             elif named["id"] not in regions | tags:
                 wrong.append(f"{stem} cell {i} (exercises {sorted(regions | tags)}) raised for {named['id']}")
     assert not wrong, "cells that should run in the blank release:\n" + "\n".join(wrong)
+
+
+def test_every_cell_that_raises_is_tagged_so_run_all_goes_on(blank_run):
+    """Every cell that raised carries the release's RUN_ALL_TAG ("raises-exception"): JupyterLab's Run All, and
+    nbclient, go on past it to the notebook's end (issue 34: notebook 02 stopped at its third cell)."""
+    notebooks, _ = blank_run
+    untagged = [f"{stem} cell {i}: {cell.source.splitlines()[0]}" for stem, nb in notebooks.items()
+                for i, cell in enumerate(nb.cells) if cell.cell_type == "code" and _errors(cell)
+                and RUN_ALL_TAG not in cell.metadata.get("tags", [])]
+    assert not untagged, "cells that raise in the blank release and would stop Run All:\n" + "\n".join(untagged)
 
 
 def test_every_check_cell_fails_while_its_exercise_is_blank(blank_run):

@@ -77,6 +77,7 @@ def test_check_names_the_first_failing_check_and_does_not_charge_the_caller(stud
     lines = done.stdout.splitlines()
     homography = next(ln for ln in lines if ln.startswith(f"- {HOMOGRAPHY}:"))
     assert "01_camera_calibration cell" in homography and "Error: " in homography, done.stdout   # the cell's error
+    assert f"after Run All: # CHECK {HOMOGRAPHY}" in homography, homography     # the cell as JupyterLab numbers it
     pose = next(ln for ln in lines if ln.startswith(f"- {POSE}:"))
     assert f"it needs {HOMOGRAPHY}, which fails" in pose, done.stdout
     assert "2 written exercise(s) not yet passing" in done.stdout and "not written yet" in done.stdout
@@ -210,3 +211,52 @@ def test_odd_student_names_get_folders_of_their_own(tmp_path):
     assert len(folders) == len(names)
     scores = sorted(json.loads((f / "results.json").read_text())["score"] for f in folders)
     assert scores == list(range(len(names)))
+
+
+def test_one_total_on_stdout_in_grades_csv_and_in_the_feedback(tmp_path):
+    """`armlab grade` on a class of two (ada wrote the homography, bob nothing): the stdout line, the progress line,
+    grades.csv's total and max, feedback.md's total and results.json's score give one total per student, out of the
+    registry's automatic points, and each names the written answers' points as graded by hand."""
+    import csv
+    import re
+
+    from armlab_course.exercises.registry import EXERCISES
+
+    subs = tmp_path / "subs"
+    for name in ("ada", "bob"):
+        make_student_release(ROOT, subs / name)
+    write_regions(subs / "ada", HOMOGRAPHY, _reference(HOMOGRAPHY))
+    done = _armlab("grade", str(subs), "--out", str(tmp_path / "out"), "--reference", str(ROOT))
+    assert done.returncode == 0, done.stdout + done.stderr
+    auto = sum(e.points for e in EXERCISES if e.kind != "written")
+    by_hand = sum(e.points for e in EXERCISES if e.kind == "written")
+    assert 0 < by_hand and auto + by_hand == sum(e.points for e in EXERCISES)
+    rows = {r["student"]: r for r in csv.DictReader((tmp_path / "out/grades.csv").open())}
+    for student, score in (("ada", exercise(HOMOGRAPHY).points), ("bob", 0)):
+        said = f"{score:g} / {auto} automatic (+{by_hand} by hand: the written answers)"
+        assert f"{student}: {said}" in done.stdout.splitlines(), done.stdout
+        assert any(ln.startswith("[") and f"] {student}: {said} (" in ln for ln in done.stderr.splitlines()), \
+            done.stderr
+        assert float(rows[student]["total"]) == score and int(rows[student]["max"]) == auto, rows[student]
+        feedback = (tmp_path / "out" / student / "feedback.md").read_text()
+        assert f"Total: {said}" in feedback and re.search(rf"^total +{re.escape(said)}$", feedback, re.M), feedback
+        assert json.loads((tmp_path / "out" / student / "results.json").read_text())["score"] == score
+
+
+def test_a_check_cell_is_named_as_jupyterlab_numbers_it(tmp_path):
+    """A check cell's name: its position among all the notebook's cells (markdown included, from 1), the count
+    JupyterLab shows after Restart Kernel and Run All Cells (its place among the code cells, from 1) and its first
+    line (issue 34: 'cell 9' was a 0-based count of code cells)."""
+    import nbformat
+
+    from armlab_course.grading.run import check_cells, code_cell_labels
+
+    nb = nbformat.v4.new_notebook(cells=[
+        nbformat.v4.new_markdown_cell("# Title"), nbformat.v4.new_code_cell("x = 1"),
+        nbformat.v4.new_markdown_cell("text"), nbformat.v4.new_markdown_cell("more"),
+        nbformat.v4.new_code_cell("\n# CHECK fk.euler\nassert x == 1, 'x must be 1 ' + 'and ' * 30")])
+    path = tmp_path / "02_forward_kinematics.ipynb"
+    nbformat.write(nb, path)
+    assert check_cells(path) == {1: ("fk.euler",)}
+    assert code_cell_labels(path) == ["02_forward_kinematics cell 2 ([1] after Run All: x = 1)",
+                                      "02_forward_kinematics cell 5 ([2] after Run All: # CHECK fk.euler)"]

@@ -4,6 +4,7 @@ every exercise has them; the static check names a forbidden call; an open task's
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 from wrong_answers import HIDDEN_WRONG, OPEN_TASKS, check_wrong_answers, reference_bodies
 
@@ -48,18 +49,47 @@ def test_static_check_names_the_forbidden_call():
                           ("cv2.findHomography",)) == [("cv2.findHomography", 3)]
 
 
-@pytest.mark.parametrize("value, passed", [([1.0, 1.0], True), ([1.0, 0.0], False), ([0.5, 1.0], False),
-                                           ([], False)])
-def test_an_open_tasks_outcome_passes_only_when_every_criterion_is_met(value, passed):
+@pytest.mark.parametrize("value, said", [([1.0, 1.0], ""),
+                                         ([1.0, 0.0], "not met: within the time limit (1 of 2 criteria not met)"),
+                                         ([0.5, 1.0], "not met: full marks (1 of 2 criteria not met)"),
+                                         ([], "the result: empty")])
+def test_an_open_tasks_outcome_passes_only_when_every_criterion_is_met(value, said):
     """An outcome spec has no reference run: a result passes when every number of it is 1.0 (a criterion met), and
-    an empty one (no criterion at all) fails."""
+    an empty one (no criterion at all) fails; the message names the first criterion not met."""
     from armlab_course.grading.hidden import compare, specs_of
 
     spec = specs_of("events.sort_stack")[0]
     assert spec.outcome
     (ok, message), = compare(spec, [{"value": [1.0, 1.0]}, {"value": value}], None, [2])
-    assert ok == passed, message
-    assert passed or message == "hidden check 1, call 2: the result differs from the expected value"
+    assert ok == (not said) and message == (f"hidden check 1, call 2: {said}" if said else ""), message
+
+
+def test_a_failed_hidden_check_names_the_property_its_size_and_unit_not_the_inputs():
+    """Issue 34: 'the result differs from the expected value' told a student nothing. A miss names what was
+    compared, the part that misses most with its unit, the size (2 significant digits) and the tolerance; a
+    pass/fail result names its first criterion not met (and the block); another shape says both shapes."""
+    from armlab_course.exercises.registry import EXERCISES
+    from armlab_course.grading.hidden import compare, how_it_differs, specs_of
+
+    pixels = specs_of("calib.pinhole")[0]
+    (ok, message), = compare(pixels, [{"value": [[10.0, 20.0], [30.0, 41.25]]}],
+                             [{"value": [[10.0, 20.0], [30.0, 40.0]]}], [1])
+    assert not ok and message == ("hidden check 1, call 1: the projected pixels (u, v): off by up to 1.2 px "
+                                  "(tolerance 1e-06 px)"), message
+    euler = specs_of("fk.euler")[0]
+    said = how_it_differs(euler, np.array([1.0, 0.0, 0.5, 1.0, 0.0]), np.array([1.0, 0.0, 0.25, 1.0, 0.0]))
+    assert said == "the Euler angles (theta): off by up to 0.25 rad (tolerance 1e-07 rad)", said
+    moves = specs_of("grab.move_path")[0]
+    said = how_it_differs(moves, np.array([1.0, 1.0, 1.0, 0.0, 0.0, 0.0]), np.ones(6))
+    assert said == "block 2: not met: landed within 3 mm of its spot (3 of 6 criteria not met)", said
+    assert how_it_differs(pixels, np.zeros((3, 2)), np.zeros((4, 2))) == \
+        "the projected pixels (u, v): shape (3, 2), expected (4, 2)"
+    clicks = specs_of("grab.click_target")[0]
+    assert how_it_differs(clicks, np.array([1.0, 2.0, 3.0]), np.array([1.0, 0.0, 3.0])) == \
+        "the index of the block hit: 1 of its 3 numbers differ from the expected"
+    for e in EXERCISES:
+        for spec in specs_of(e.id):
+            assert spec.what != "the result" or spec.criteria, f"{e.id}: {spec.function} names no property"
 
 
 def test_the_wire_carries_plain_data_only():

@@ -2,12 +2,20 @@
 submit.
 
 - Every exercise region (armlab_course.exercises.markers) becomes a stub raising ExerciseNotWritten for its exercise,
-every
-  written answer its prompt line; notebooks lose their outputs and execution counts.
+  every written answer its prompt line; notebooks lose their outputs and execution counts.
+- The cells that raise while an exercise is blank -- the cells holding an exercise region and the check cells
+  (`# CHECK <id>`), the only ones (tests/test_blank_release_runs.py) -- carry the cell tag RUN_ALL_TAG
+  ("raises-exception", nbformat metadata), which JupyterLab's and Notebook 7's Run All and nbclient honour: the
+  error shows in the cell and the run goes on, so "Restart Kernel and Run All Cells…" runs a blank notebook to its
+  end, showing each exercise's not-written message. (The grader's and the self-check's nbval runs ignore the tag: a
+  check cell that raises fails there; armlab_course.grading.nbval_guard.)
 - Only student-facing files go in (RELEASE_EXCLUDES: no instructor README, benchmarks, CI, release tool, notebook
   sources, instructor-only tests); the student README (STUDENT_README) becomes README.md, and the marker file
   .student-release tells the Makefile which tests a release runs.
 - The notebooks are the one editable copy of every notebook exercise (their percent-format sources stay behind).
+- The Makefile loses its lines from `# BEGIN INSTRUCTOR ONLY` to `# END INSTRUCTOR ONLY` (the targets whose tools
+  the release does not ship: notebooks, bench, exercise-docs, student, autograder); its `make check` runs the
+  self-check.
 
     python tools/student-release OUT_DIR      # or: make student
 """
@@ -16,14 +24,19 @@ from __future__ import annotations
 
 import fnmatch
 import json
+import re
 import shutil
 import subprocess
 from pathlib import Path
 
-from .markers import blank_answers, find_answers, find_regions, stub_regions
+from .markers import CHECK_LINE, blank_answers, find_answers, find_regions, stub_regions
 
-__all__ = ["RELEASE_EXCLUDES", "STUDENT_README", "RELEASE_MARKER", "student_notebook", "make_student_release",
-           "released"]
+__all__ = ["RELEASE_EXCLUDES", "STUDENT_README", "RELEASE_MARKER", "RUN_ALL_TAG", "student_notebook",
+           "make_student_release", "released", "raises_while_blank", "without_instructor_lines"]
+
+RUN_ALL_TAG = "raises-exception"
+_INSTRUCTOR_ONLY = re.compile(r"^# BEGIN INSTRUCTOR ONLY\b.*?^# END INSTRUCTOR ONLY[^\n]*\n\n?",
+                              re.DOTALL | re.MULTILINE)
 
 STUDENT_README = "tools/student/README.md"
 RELEASE_MARKER = ".student-release"
@@ -59,9 +72,25 @@ def released(name: str) -> bool:
     return not any(fnmatch.fnmatch(name, pattern) for pattern in RELEASE_EXCLUDES)
 
 
+def without_instructor_lines(text: str) -> str:
+    """`text` (the Makefile) without its sections from a `# BEGIN INSTRUCTOR ONLY` line to the next
+    `# END INSTRUCTOR ONLY` line; ValueError when the markers do not pair up."""
+    out = _INSTRUCTOR_ONLY.sub("", text)
+    if "INSTRUCTOR ONLY" in out:
+        raise ValueError("an INSTRUCTOR ONLY marker without its pair")
+    return out
+
+
+def raises_while_blank(source: str, where: str = "<cell>") -> bool:
+    """Whether a code cell's source raises while its exercise is blank: it holds an exercise region or a check
+    cell's `# CHECK` line."""
+    return bool(find_regions(source, where)) or CHECK_LINE.search(source) is not None
+
+
 def student_notebook(nb: dict, where: str) -> dict:
-    """A notebook (nbformat 4 JSON) with its exercise regions stubbed, its written answers blanked and every output
-    and count cleared."""
+    """A notebook (nbformat 4 JSON) with its exercise regions stubbed, its written answers blanked, every output
+    and count cleared, and the cells that raise while an exercise is blank tagged RUN_ALL_TAG (Run All goes on past
+    them)."""
     nb = json.loads(json.dumps(nb))
     for cell in nb["cells"]:
         if cell["cell_type"] == "markdown":
@@ -74,6 +103,10 @@ def student_notebook(nb: dict, where: str) -> dict:
         text = "".join(cell["source"])
         if find_regions(text, where):
             cell["source"] = stub_regions(text, where).splitlines(keepends=True)
+        if raises_while_blank(text, where):
+            tags = cell.setdefault("metadata", {}).setdefault("tags", [])
+            if RUN_ALL_TAG not in tags:
+                tags.append(RUN_ALL_TAG)
         cell["outputs"], cell["execution_count"] = [], None
     return nb
 
@@ -97,6 +130,9 @@ def make_student_release(repo: Path | str, out: Path | str) -> list[str]:
             dst.write_text(json.dumps(student_notebook(nb, name), indent=1, ensure_ascii=False) + "\n")
             changed = any(find_regions("".join(c["source"]), name) for c in nb["cells"] if c["cell_type"] == "code") \
                 or bool(find_answers(["".join(c["source"]) for c in nb["cells"] if c["cell_type"] == "markdown"], name))
+        elif name == "Makefile":
+            dst.write_text(without_instructor_lines(src.read_text()))
+            changed = False
         elif name.endswith(".py") or name.startswith("tools/"):
             text = src.read_text()
             new_text = stub_regions(text, name)

@@ -25,7 +25,7 @@ from pathlib import Path
 from armlab_course.exercises.registry import EXERCISES, Exercise, exercise
 
 from .results import CheckResult, ExerciseResult, score_exercise
-from .run import DEFAULT_LIMITS, Limits, Runner, check_cells
+from .run import DEFAULT_LIMITS, Limits, Runner, check_cells, code_cell_labels
 from .sandbox import detect
 from .splice import build_worktree
 from .submission import read_submission
@@ -128,11 +128,12 @@ def self_check(checkout: Path | str = ".", limits: Limits = DEFAULT_LIMITS, unsa
                 code = [c for c in json.loads((tree / path).read_text())["cells"] if c["cell_type"] == "code"]
                 sources[name] = ["".join(c["source"]) for c in code]
                 runs[name] = (tags, runner.notebook(tree, path, lax=True))
+                labels = code_cell_labels(tree / path)
                 for ex in mine:
                     tags, run = runs[name]
-                    checks = [CheckResult(f"{ex.notebook} cell {i}", i in run.cells and run.cells[i].passed,
+                    checks = [CheckResult(labels[i], i in run.cells and run.cells[i].passed,
                                           run.cells[i].message if i in run.cells else run.problem or
-                                          "the cell did not run") for i, ids in tags.items() if ex.id in ids]
+                                          "the cell did not run", i) for i, ids in tags.items() if ex.id in ids]
                     tell(ex, score_exercise(ex.id, checks, run.problem))
     finally:
         runner.close()
@@ -141,7 +142,7 @@ def self_check(checkout: Path | str = ".", limits: Limits = DEFAULT_LIMITS, unsa
     failing = [e for e in written if results[e.id].score < results[e.id].max_score]
     for ex in failing:
         text = "\n".join(sub.bodies.get(ex.id, [])) + "\n".join(
-            sources[ex.notebook][int(c.name.rsplit(" ", 1)[-1])] for c in results[ex.id].checks if not c.passed)
+            sources[ex.notebook][c.cell] for c in results[ex.id].checks if not c.passed and c.cell is not None)
         earlier = [a for a in failing if EXERCISES.index(a) < EXERCISES.index(ex)]   # what ex may build on
         needed = next((a for a in earlier if _uses(a, text)), None)
         if needed is not None:

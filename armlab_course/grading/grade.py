@@ -42,7 +42,7 @@ from armlab_course.exercises.registry import EXERCISES, exercise
 from . import report as _report  # noqa: F401  (imported now: nothing of the grader is loaded after student code)
 from . import similarity as _similarity
 from .results import CheckResult, ExerciseResult, score_exercise
-from .run import DEFAULT_LIMITS, Limits, NotebookRun, Runner, check_cells
+from .run import DEFAULT_LIMITS, Limits, NotebookRun, Runner, check_cells, code_cell_labels
 from .sandbox import WORK, Sandbox, detect, owner_only, python_outside, refuse_shared_network
 from .splice import RegionRejected, build_worktree, check_body, splice_into
 from .static import STATIC_CHECK, static_check
@@ -320,10 +320,12 @@ class Grader:
         """Every check of the exercise: its public CHECK cells in `run`, its hidden checks, and a failed check for a
         forbidden call (in the region's text or seen at run time)."""
         ex = exercise(exercise_id)
-        tags = [i for i, ids in check_cells(tree / f"notebooks/{ex.notebook}.ipynb").items() if exercise_id in ids]
-        checks = [CheckResult(f"{ex.notebook} cell {i}", i in run.cells and run.cells[i].passed,
+        notebook = tree / f"notebooks/{ex.notebook}.ipynb"
+        tags = [i for i, ids in check_cells(notebook).items() if exercise_id in ids]
+        labels = code_cell_labels(notebook)
+        checks = [CheckResult(labels[i], i in run.cells and run.cells[i].passed,
                               self._redact(run.cells[i].message if i in run.cells else
-                                           run.problem or "the cell did not run")) for i in tags]
+                                           run.problem or "the cell did not run"), i) for i in tags]
         seen: list[str] = []
         if exercise_id in self._expected:
             outputs, problem = hidden

@@ -7,6 +7,8 @@ sandbox in pytest's own process, never in the kernel that runs student code:
 - After each cell that passed it sends the kernel a probe (a silent cell printing a fresh nonce): the kernel's guard
   (kernel_startup.py) fails the probe when the cell, or one before it, changed the checks' machinery, and a probe
   whose nonce does not come back means its code never ran as written. Either way the cell fails.
+- A cell that raises fails, whatever its tags or nbval comments say (the release tags its exercise and check cells
+  "raises-exception" so that JupyterLab's Run All goes on past them; nbval would count them passed when they raise).
 - A kernel that dies (os._exit, a signal, the CPU limit) fails the running cell at once instead of leaving nbval
   waiting for the cell timeout, and each stream output message is cut to OUTPUT_LIMIT characters.
 
@@ -114,6 +116,11 @@ def _probe(kernel) -> str:
 
 @pytest.hookimpl(wrapper=True)
 def pytest_runtest_call(item):
+    options = getattr(item, "options", None)
+    if _state and isinstance(options, dict):
+        # A cell that raises fails the grader's run whatever its tags say: the student release tags its exercise and
+        # check cells "raises-exception" (Run All goes on past them in JupyterLab), which nbval would count as passed.
+        options["check_exception"] = False
     result = yield
     kernel = getattr(getattr(item, "parent", None), "kernel", None)
     if _state and kernel is not None and _CELL.search(item.nodeid):

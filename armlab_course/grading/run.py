@@ -18,7 +18,6 @@ import hashlib
 import hmac
 import json
 import os
-import re
 import secrets
 import shutil
 import signal
@@ -30,12 +29,13 @@ from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from pathlib import Path
 
+from armlab_course.exercises.markers import CHECK_LINE
+
 from .sandbox import Limits, PidsGroup, Sandbox
 
-__all__ = ["DEFAULT_LIMITS", "Limits", "CellResult", "NotebookRun", "Runner", "check_cells", "verify_signed",
-           "CHILD_FILES"]
+__all__ = ["DEFAULT_LIMITS", "Limits", "CellResult", "NotebookRun", "Runner", "check_cells", "code_cell_labels",
+           "verify_signed", "CHILD_FILES"]
 
-_CHECK = re.compile(r"^\s*# CHECK[ \t]+(?P<ids>.+?)\s*$", re.MULTILINE)
 OUTPUT_TAIL = 20_000               # bytes of a run's console output kept (its end)
 _MAX_RESULTS_BYTES = 64 * 2**20     # a result file larger than this is refused unread
 _CONFIG = "[pytest]\naddopts =\nfilterwarnings =\n    ignore::DeprecationWarning\n"
@@ -68,13 +68,29 @@ class NotebookRun:
     problem: str = ""
 
 
+def code_cell_labels(notebook: Path) -> list[str]:
+    """Per code cell (nbval's 'Cell N', 0-based among the code cells), how a student finds it in JupyterLab: the
+    notebook, the cell's position among all its cells (1-based, markdown included), the execution count JupyterLab
+    shows once Restart Kernel and Run All Cells has run every cell, and the cell's first line, e.g.
+    '02_forward_kinematics cell 22 ([10] after Run All: # CHECK fk.euler)'."""
+    cells = json.loads(Path(notebook).read_text(encoding="utf-8"))["cells"]
+    labels = []
+    for position, cell in enumerate(cells, start=1):
+        if cell["cell_type"] != "code":
+            continue
+        first = next((line.strip() for line in "".join(cell["source"]).splitlines() if line.strip()), "(empty)")
+        first = first if len(first) <= 60 else first[:57] + "..."
+        labels.append(f"{Path(notebook).stem} cell {position} ([{len(labels) + 1}] after Run All: {first})")
+    return labels
+
+
 def check_cells(notebook: Path) -> dict[int, tuple[str, ...]]:
     """The notebook's CHECK-tagged code cells: code-cell index -> the exercise ids its '# CHECK' line names."""
     nb = json.loads(notebook.read_text(encoding="utf-8"))
     code = [c for c in nb["cells"] if c["cell_type"] == "code"]
     tags = {}
     for i, cell in enumerate(code):
-        found = _CHECK.search("".join(cell["source"]))
+        found = CHECK_LINE.search("".join(cell["source"]))
         if found:
             tags[i] = tuple(found["ids"].split())
     return tags

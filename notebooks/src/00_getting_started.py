@@ -296,7 +296,8 @@ print(f"OK: {len(tops)} block tops seen where they are: error {err.min():.0f}-{e
 #   exercises, points, kind, and whether each is still blank.
 # - Your instructor runs every notebook top to bottom with `pytest --nbval`, which re-executes each cell and compares
 #   its printed output with the stored one: keep outputs deterministic (seeded random numbers, no timings).
-# - `make test` runs the kit's own tests and all notebooks; `make lab` opens JupyterLab on `notebooks/`.
+# - `make check` runs the check cells of the exercises you have written (`python -m armlab check`), `make test` the
+#   kit's own tests; `make lab` opens JupyterLab on `notebooks/`.
 #
 # Next: **01 · camera calibration**.
 

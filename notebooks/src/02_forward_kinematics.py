@@ -104,7 +104,9 @@ by_motions = (homogeneous(rot_z(params[:, 0])) @ homogeneous(None, np.stack([zer
 assert A.shape == (500, 4, 4), f"dh_link_transform of 500 links gave shape {A.shape}, expected (500, 4, 4)"
 assert np.allclose(A[:, 3], [0, 0, 0, 1], atol=0), "the last row of a link transform must be (0, 0, 0, 1)"
 err = np.abs(A - by_motions).max()
-assert err < 1e-9, f"your link transforms differ from Rz Tz Tx Rx by up to {err:.2g}: check the order and the signs"
+off_mm, off_rot = np.abs(A - by_motions)[:, :3, 3].max(), np.abs(A - by_motions)[:, :3, :3].max()
+assert err < 1e-9, (f"your link transforms differ from Rz Tz Tx Rx by up to {off_mm:.2g} mm in position and "
+                    f"{off_rot:.2g} in a rotation matrix entry (unitless): check the order and the signs")
 print("OK: dh_link_transform equals Rz(theta) Tz(d) Tx(a) Rx(alpha) for 500 random links within 1e-9")
 
 # %% [markdown]
@@ -363,8 +365,11 @@ Q = random_q(300)
 angles = np.array([euler_angles_from_T(T) for T in kinematics.fk(Q)])
 assert angles.shape == (300, 3), f"euler_angles_from_T should return 3 angles, got shape {angles.shape[1:]}"
 rebuilt = matrix_from_euler_zyz(angles)
-err = np.abs(rebuilt - kinematics.fk(Q)[:, :3, :3]).max()
-assert err < 1e-9, f"Rz(phi) Ry(theta) Rz(psi) of your angles misses the tool's rotation by up to {err:.2g}"
+R_tool = kinematics.fk(Q)[:, :3, :3]
+err = np.abs(rebuilt - R_tool).max()
+turn = np.degrees(np.arccos(np.clip((np.einsum("nji,nji->n", rebuilt, R_tool) - 1) / 2, -1, 1))).max()
+assert err < 1e-9, (f"Rz(phi) Ry(theta) Rz(psi) of your angles misses the tool's rotation by up to {turn:.2g} deg "
+                    f"({err:.2g} in a rotation matrix entry, unitless)")
 assert np.all((angles[:, 1] >= 0) & (angles[:, 1] <= np.pi)), "theta must lie in [0, pi]"
 for a, flip in ((0.7, 0.0), (-2.0, np.pi)):                 # sin(theta) = 0: psi = 0, phi carries the rotation
     got = euler_angles_from_T(homogeneous(rot_z(a) @ rot_y(flip)))

@@ -555,7 +555,6 @@ print(f"OK: {m['blocks']} blocks in {len(cases)} frames: recall {m['recall']:.1%
 # Open: faces partly hidden by the arm are the hardest — the odd one is missed (too little of its outline is free to
 # prove it square). The yaw of a small face (about 22 px across) is near the image's limit: a side of 22 px that
 # turns by 2 deg moves less than a pixel end to end, so the worst small faces are off by about 2 deg.
-# `benchmarks/perception.py` scores a larger set.
 
 # %% [markdown]
 # ## Your table for this notebook

@@ -5,7 +5,7 @@
 # a pick and a place (IK, trajectories, clearance), **acts**, and looks again to check what happened. In this
 # notebook you write the strategy for one event at its harder levels and run it on the simulator.
 #
-# The events and their scoring are **the kit's rules** (the course's recent competitions, `reference/lab.md`); the
+# The events and their scoring are **the kit's rules** (the course's recent competitions); the
 # lab report does not state them (it says only that its arm met "basic expectations" in the competition):
 #
 # - **sort 'n stack** (180 s): small blocks left, large right, into $y<0$; levels 2–3: one stack per size, rainbow

@@ -67,5 +67,6 @@ def _judge_sort_stack(call, level, seed):
 
 
 SPECS = (HiddenSpec("SortStackStrategy", _sort_stack_seeds, atol=0, adapter="_call_strategy", judge=_judge_sort_stack,
-                    prelude="definitions", outcome=True),)
+                    prelude="definitions", outcome=True,
+                    criteria=("full marks", "within the time limit")),)
 FORBIDDEN = ("SortStack", "make_strategy", "sort_stack.EVENT")
