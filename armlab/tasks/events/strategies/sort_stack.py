@@ -53,18 +53,20 @@ class SortStack(Strategy):
             return any(self._at(b, xy) for xy in ROW_XY[b.size][:self.rows[b.size]])
         return self._at(b, STACK_XY[b.size])
 
-    def _check_stacks(self, cubes) -> None:
-        """Trust the detected stack tops over the belief when they say fewer blocks stand there."""
+    def _check_stacks(self, seen) -> None:
+        """Trust the detected stack tops over the belief when they say fewer blocks stand there. Every object seen
+        at a stack counts, a top the detector flags as a distractor too (a stack's top seen at an angle may be): the
+        belief is cut only when nothing stands as high as it says."""
         if self.level == 1:
             return
         for size, xy in STACK_XY.items():
-            tops = [b for b in cubes if self._at(b, xy)]
+            tops = [b for b in seen if self._at(b, xy)]
             levels = int(round(max((b.position[2] for b in tops), default=0.0) / block_edge(size)))
             del self.stack[size][levels:]
 
     def next_move(self, seen) -> Move | None:
         cubes = [b for b in seen if b.is_block]
-        self._check_stacks(cubes)
+        self._check_stacks(seen)
         todo = [b for b in cubes if not self.done(b)]
         if not todo:
             return None
