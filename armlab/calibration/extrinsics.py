@@ -78,9 +78,9 @@ def pose_from_corners(world_mm, pixels, K, dist, refine: bool = True) -> np.ndar
                          f"{np.abs(world[:, 2]).max():.3g} mm")
     normalised = cv2.undistortPoints(pixels.reshape(-1, 1, 2), K, dist).reshape(-1, 2)
     # BEGIN SOLUTION calib.tag_extrinsics
-    from armlab.calibration.homography import _opencv_homography
+    from armlab.calibration.homography import opencv_homography
 
-    H = _opencv_homography(world[:, :2], normalised)
+    H = opencv_homography(world[:, :2], normalised)
     scale = 2.0 / (np.linalg.norm(H[:, 0]) + np.linalg.norm(H[:, 1]))
     if H[2, 2] * scale < 0:                     # t_z = scale * H[2, 2] must be positive: the board is in front
         scale = -scale

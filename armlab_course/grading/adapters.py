@@ -34,7 +34,7 @@ def _call_initial_pose(function, world, pixels, K, dist):
     from armlab.calibration import homography
 
     students = homography.dlt_homography
-    homography.dlt_homography = homography._opencv_homography
+    homography.dlt_homography = homography.opencv_homography
     try:
         return function(*(np.asarray(a, float) for a in (world, pixels, K, dist)), refine=False)
     finally:

@@ -652,7 +652,7 @@ def test_the_stand_ins_give_another_methods_result():
     world = np.column_stack([rng.uniform(-400, 400, 12), rng.uniform(-150, 450, 12), np.zeros(12)])
     uv = (world @ T_cam[:3, :3].T + T_cam[:3, 3]) @ K.T
     pixels = uv[:, :2] / uv[:, 2:] + rng.normal(0, 0.3, (12, 2))
-    pairs["calib.tag_homography"] = (homography._opencv_homography(world[:, :2], pixels),
+    pairs["calib.tag_homography"] = (homography.opencv_homography(world[:, :2], pixels),
                                      homography.dlt_homography(world[:, :2], pixels), 1e-2)
     pairs["calib.tag_extrinsics"] = (extrinsics._opencv_pose(world, pixels, K, np.zeros(5), refine=False),
                                      extrinsics.pose_from_corners(world, pixels, K, np.zeros(5), refine=False), 5.0)

@@ -42,6 +42,7 @@ from armlab_course.grading.sandbox import (
 )
 
 ROOT = Path(__file__).resolve().parents[2]
+HERE = Path(__file__).resolve().parent          # tests/course: this module, imported by the unprivileged run
 SMALL = Limits(timeout_s=60, cpu_s=30, memory_mb=1200, max_procs=48, disk_mb=96, scratch_mb=48, max_files=2000)
 
 
@@ -644,7 +645,7 @@ def test_bubblewrap_as_an_unprivileged_user_stops_the_attacks_a_root_grader_stop
         os.chown(path, UNPRIVILEGED_UID, UNPRIVILEGED_UID)
     site = os.pathsep.join(p for p in sys.path if p.endswith("-packages") and os.path.isdir(p))
     env = {"PATH": os.environ.get("PATH", "/usr/bin:/bin"), "HOME": str(home), "TMPDIR": str(home),
-           "PYTHONPATH": os.pathsep.join([str(ROOT), str(ROOT / "tests"), site]), "GIT_CONFIG_COUNT": "1",
+           "PYTHONPATH": os.pathsep.join([str(ROOT), str(HERE), site]), "GIT_CONFIG_COUNT": "1",
            "GIT_CONFIG_KEY_0": "safe.directory", "GIT_CONFIG_VALUE_0": "*", "MPLBACKEND": "Agg"}
     drop = ["setpriv", f"--reuid={UNPRIVILEGED_UID}", f"--regid={UNPRIVILEGED_UID}", "--clear-groups", "--"]
     python = _python_for(drop, env, home)

@@ -49,7 +49,7 @@ print(json.dumps({"seen": sorted(set(watch.seen)), "wired": sorted(watch.names),
 '''
 
 ATTACKS = {      # name: (forbidden names, the student's function)
-    "built-up name": (["homography._opencv_homography"], '''
+    "built-up name": (["homography.opencv_homography"], '''
 def student(src, dst):
     import armlab.calibration.homography as m
     return getattr(m, "_opencv" + "_homo" + "graphy")(src, dst)
@@ -66,25 +66,25 @@ def student(src, dst):
     getattr(np, "__dict__")["__builtins__"]["ex" + "ec"]("import cv2\\nH = cv2.findHomography(s, d, 0)[0]", space)
     return space["H"]
 '''),
-    "a fresh copy of the kit module": (["homography._opencv_homography"], '''
+    "a fresh copy of the kit module": (["homography.opencv_homography"], '''
 def student(src, dst):
     import importlib.util, armlab.calibration.homography as h
     spec = importlib.util.spec_from_file_location("fresh_copy", h.__file__)
     fresh = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(fresh)
-    return fresh._opencv_homography(src, dst)
+    return fresh.opencv_homography(src, dst)
 '''),
-    "a reload": (["homography._opencv_homography"], '''
+    "a reload": (["homography.opencv_homography"], '''
 def student(src, dst):
     import importlib, armlab.calibration.homography as h
-    return importlib.reload(h)._opencv_homography(src, dst)
+    return importlib.reload(h).opencv_homography(src, dst)
 '''),
-    "the kit's source compiled under its own name": (["homography._opencv_homography"], '''
+    "the kit's source compiled under its own name": (["homography.opencv_homography"], '''
 def student(src, dst):
     import armlab.calibration.homography as h
     space = {"__name__": "armlab.calibration.homography"}
     exec(compile(open(h.__file__).read(), h.__file__, "exec"), space)
-    return space["_opencv_homography"](src, dst)
+    return space["opencv_homography"](src, dst)
 '''),
     "a module nothing had loaded yet": (["extrinsics._opencv_pose"], '''
 def student(src, dst):
@@ -107,9 +107,9 @@ HONEST = {
     "the kit's own call": (["cv2.findHomography"], '''
 def student(src, dst):
     import armlab.calibration.homography as h
-    return h._opencv_homography(src, dst)
+    return h.opencv_homography(src, dst)
 '''),
-    "plain code": (["cv2.findHomography", "homography._opencv_homography"], '''
+    "plain code": (["cv2.findHomography", "homography.opencv_homography"], '''
 def student(src, dst):
     import re
     re.compile("[0-9]+").findall("12 34")

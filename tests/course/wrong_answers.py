@@ -67,8 +67,8 @@ HIDDEN_WRONG = {   # per exercise: wrong answers its hidden checks must catch (a
     "calib.tag_extrinsics": {   # the refinement after the region would repair both: the adapter leaves it out
         "hard-coded": ["    R, t = np.diag([1.0, -1.0, -1.0]), np.array([0.0, 150.0, 1000.0])"],
         "pixels, not normalised points": _replaced("calib.tag_extrinsics",
-                                                   "_opencv_homography(world[:, :2], normalised)",
-                                                   "_opencv_homography(world[:, :2], pixels)"),
+                                                   "opencv_homography(world[:, :2], normalised)",
+                                                   "opencv_homography(world[:, :2], pixels)"),
     },
     "calib.depth_plane": {
         "one fit, no rejection": _replaced("calib.depth_plane", "range(iterations)", "range(1)"),

@@ -24,5 +24,5 @@ def _homographies(rng):
 SPECS: tuple[HiddenSpec, ...] = (HiddenSpec("armlab.calibration.homography.dlt_homography", _homographies, atol=1e-7,
                                             what="the homography's entries (unitless)"),)
 FORBIDDEN: tuple[str, ...] = (
-    "cv2.findHomography", "cv2.getPerspectiveTransform", "homography._opencv_homography"
+    "cv2.findHomography", "cv2.getPerspectiveTransform", "homography.opencv_homography"
 )
