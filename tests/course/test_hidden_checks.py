@@ -170,7 +170,7 @@ def test_the_judge_takes_only_this_runs_answers_in_turn(mode):
     if mode == "honest":
         assert (second, third, problem) == ({"value": 7}, {"value": 11}, "")
     elif mode == "raises":
-        assert second == {"error": "ValueError: the student's"} and third == {"value": 11} and not problem
+        assert second == {"error": "ValueError: the student's", "where": []} and third == {"value": 11} and not problem
         assert out[0]["forbidden"] == ["cv2.x"]
     else:
         assert problem and second == third == {"error": problem}, (mode, out, problem)

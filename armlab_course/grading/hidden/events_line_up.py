@@ -60,6 +60,7 @@ def _judge_line_up(call, level, seed):
 
 
 SPECS = (HiddenSpec("LineUpStrategy", _line_up_seeds, atol=0, adapter="_call_strategy", judge=_judge_line_up,
-                    prelude="definitions", outcome=True),)
+                    prelude="definitions", outcome=True,
+                    criteria=("every block a look showed in its line", "each line neat", "within the time limit")),)
 FORBIDDEN = ("LineUp", "line_slots", "make_strategy", "line_up.EVENT", "SearchStrategy",
              "armlab.tasks.events.strategies")

@@ -33,5 +33,8 @@ def _judge_sky(call, level, seed):
 
 
 SPECS = (HiddenSpec("SkyStrategy", _sky_seeds, atol=0, adapter="_call_strategy", judge=_judge_sky,
-                    prelude="definitions", outcome=True),)
+                    prelude="definitions", outcome=True,
+                    criteria=(f"a tower of {GOOD_TOWER} blocks or more", f"a tower of {HIGH_TOWER} blocks or more",
+                              "every placed block standing in the tower", "stopped only by a place out of reach",
+                              "within the time limit")),)
 FORBIDDEN = ("Sky", "make_strategy", "sky.EVENT", "SearchStrategy", "armlab.tasks.events.strategies")

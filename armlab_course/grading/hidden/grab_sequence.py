@@ -110,5 +110,8 @@ def _judge_sequence(call, seed, blocks, bare, spot, offsets):
 
 
 SPECS = (HiddenSpec("ClickSequence", _scenes, atol=0, adapter="_call_sequence", judge=_judge_sequence,
-                    prelude="definitions", outcome=True),)
+                    prelude="definitions", outcome=True,
+                    criteria=("the click on the bare board refused with nothing moved", "block A held",
+                              "block A landed within 3 mm of the spot clicked", "block B held",
+                              "block B landed within 3 mm of the point clicked on C's top")),)
 FORBIDDEN = ("click_grab", "click_drop", "ClickToGrab", "click_with", "current_view", "tasks.pick", "tasks.place")

@@ -52,5 +52,6 @@ def _sessions(rng):
     return checks
 
 
-SPECS = (HiddenSpec("StationMachine", _sessions, atol=1e-9, adapter="_call_machine", prelude="definitions"),)
+SPECS = (HiddenSpec("StationMachine", _sessions, atol=1e-9, adapter="_call_machine", prelude="definitions",
+                    what="each press's outcome and state, what the port was asked, the history and the program"),)
 FORBIDDEN = ("TaskMachine", "command_transition", "latching_transition", "armlab.tasks.transition")
