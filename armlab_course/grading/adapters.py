@@ -263,10 +263,17 @@ def _call_machine(function, script):
     """A scripted session of the student's StationMachine(port): per press [what it gave (0 a result, 1
     EmergencyStopped, 2 MachineBusy, 3 ValueError, 4 anything else), the result as a number (a command's: 1 when it
     is the work's; a vector's sum; a count; 0 for None), the state after (index in STATES, -1 another)], then the
-    port's log, the history (indices) and the program's length. A press is [button, outcome or argument]."""
-    from armlab.station.contract import EmergencyStopped
-    from armlab.tasks.machine import STATES, MachineBusy
+    port's log, the history (indices) and the program's length. A press is [button, outcome or argument].
 
+    The machine's commands run through the kit's stand-in transition (latching_transition) in place of the
+    notebook's run_command, the same for the reference and for the student: what exercise station.transition's
+    answer does (written, blank or wrong) changes nothing here, so a wrong transition costs its own exercise only."""
+    from armlab.station.contract import EmergencyStopped
+    from armlab.tasks.machine import STATES, MachineBusy, latching_transition
+
+    namespace = getattr(getattr(function, "press", None), "__globals__", None)
+    if isinstance(namespace, dict) and "run_command" in namespace:
+        namespace["run_command"] = latching_transition
     port = _ScriptedPort()
     machine = port.machine = function(port)
     out = []

@@ -25,7 +25,7 @@ from pathlib import Path
 from armlab_course.exercises.registry import EXERCISES, Exercise, exercise
 
 from .results import CheckResult, ExerciseResult, score_exercise
-from .run import DEFAULT_LIMITS, Limits, Runner, check_cells, code_cell_labels
+from .run import DEFAULT_LIMITS, Limits, Runner, check_cells, code_cell_labels, with_cell_labels
 from .sandbox import detect
 from .splice import build_worktree
 from .submission import read_submission
@@ -132,8 +132,9 @@ def self_check(checkout: Path | str = ".", limits: Limits = DEFAULT_LIMITS, unsa
                 for ex in mine:
                     tags, run = runs[name]
                     checks = [CheckResult(labels[i], i in run.cells and run.cells[i].passed,
-                                          run.cells[i].message if i in run.cells else run.problem or
-                                          "the cell did not run", i) for i, ids in tags.items() if ex.id in ids]
+                                          with_cell_labels(run.cells[i].message, tree / path, labels)
+                                          if i in run.cells else run.problem or "the cell did not run", i)
+                              for i, ids in tags.items() if ex.id in ids]
                     tell(ex, score_exercise(ex.id, checks, run.problem))
     finally:
         runner.close()

@@ -44,7 +44,7 @@ from armlab_course.exercises.registry import EXERCISES, exercise
 from . import report as _report  # noqa: F401  (imported now: nothing of the grader is loaded after student code)
 from . import similarity as _similarity
 from .results import CheckResult, ExerciseResult, score_exercise
-from .run import DEFAULT_LIMITS, Limits, NotebookRun, Runner, check_cells, code_cell_labels
+from .run import DEFAULT_LIMITS, Limits, NotebookRun, Runner, check_cells, code_cell_labels, with_cell_labels
 from .sandbox import WORK, Sandbox, detect, owner_only, python_outside, refuse_shared_network
 from .splice import RegionRejected, build_worktree, check_body, release_worktree, splice_into
 from .static import STATIC_CHECK, static_check
@@ -103,13 +103,13 @@ _NAMES = re.compile(r"[A-Za-z_]\w*")
 _BRACKETED = {"<module>", "<lambda>", "<listcomp>", "<genexpr>", "<dictcomp>", "<setcomp>"}
 
 
-def _at(exercise_id: str, where, bodies: Iterable[str]) -> str:
+def _at(exercise_id: str, where, bodies: Iterable[str], labels: list[str] | None = None) -> str:
     """Where a hidden check's call raised in the student's own code, for the feedback: " (in your code: <place>,
     line <n>, in <function>; ...)", innermost last, or ''. Of the frames the student's process sent (judge.where_of
     kept only plain triples), only those in the exercise's own notebook (its cells) or package file, in a function
     whose name the student's regions hold (or the exercise's function, <module>, <lambda>...), are shown: nothing
     else of the run, so no grader path or source, and no text of the run's choosing beyond its own names and line
-    numbers."""
+    numbers. A notebook cell is named by its label (`labels`, the notebook's code_cell_labels) where given."""
     ex = exercise(exercise_id)
     names = set(_NAMES.findall("\n".join(bodies))) | _BRACKETED
     names |= {spec.function.rsplit(".", 1)[-1] for spec in (_hidden.specs_of(exercise_id) if _hidden else ())}
@@ -119,7 +119,8 @@ def _at(exercise_id: str, where, bodies: Iterable[str]) -> str:
                                                                      place)
         if own and function in names:
             shown.append(f"{place}, line {line}, in {function}")
-    return f" (in your code: {'; '.join(shown)})" if shown else ""
+    text = f" (in your code: {'; '.join(shown)})" if shown else ""
+    return with_cell_labels(text, Path(ex.notebook), labels) if text and labels and not ex.in_package else text
 
 
 class GraderChanged(RuntimeError):
@@ -332,7 +333,8 @@ class Grader:
         says where in the student's own code (`bodies`) it was raised (_at)."""
         if outputs is not None:
             outputs = [job if job is None else {**job, "results": [
-                {**r, "at": _at(exercise_id, r.get("where"), bodies)} if isinstance(r, dict) and "error" in r else r
+                {**r, "at": _at(exercise_id, r.get("where"), bodies, self._labels(exercise_id))}
+                if isinstance(r, dict) and "error" in r else r
                 for r in job["results"]]} for job in outputs]
         checks: list[CheckResult] = []
         seen: list[str] = []
@@ -381,8 +383,17 @@ class Grader:
         tags = [i for i, ids in check_cells(notebook).items() if exercise_id in ids]
         labels = code_cell_labels(notebook)
         return [CheckResult(labels[i], i in run.cells and run.cells[i].passed,
-                            self._redact(run.cells[i].message if i in run.cells else
-                                         run.problem or "the cell did not run"), i) for i in tags]
+                            self._redact(with_cell_labels(run.cells[i].message, notebook, labels) if i in run.cells
+                                         else run.problem or "the cell did not run"), i) for i in tags]
+
+    def _labels(self, exercise_id: str) -> list[str] | None:
+        """The code-cell labels of the exercise's notebook in the student release (a region's body spliced in
+        changes no cell's place), or None for a package exercise."""
+        ex = exercise(exercise_id)
+        if ex.in_package:
+            return None
+        return self._once(("labels", ex.notebook),
+                          lambda: code_cell_labels(self._pristine / f"notebooks/{ex.notebook}.ipynb"))
 
     def _redact(self, message: str) -> str:
         """A message without the grader's own paths."""

@@ -18,6 +18,7 @@ import hashlib
 import hmac
 import json
 import os
+import re
 import secrets
 import shutil
 import signal
@@ -34,6 +35,7 @@ from armlab_course.exercises.markers import CHECK_LINE
 from .sandbox import Limits, PidsGroup, Sandbox
 
 __all__ = ["DEFAULT_LIMITS", "Limits", "CellResult", "NotebookRun", "Runner", "check_cells", "code_cell_labels",
+           "with_cell_labels",
            "verify_signed", "CHILD_FILES"]
 
 OUTPUT_TAIL = 20_000               # bytes of a run's console output kept (its end)
@@ -82,6 +84,20 @@ def code_cell_labels(notebook: Path) -> list[str]:
         first = first if len(first) <= 60 else first[:57] + "..."
         labels.append(f"{Path(notebook).stem} cell {position} ([{len(labels) + 1}] after Run All: {first})")
     return labels
+
+
+def with_cell_labels(message: str, notebook: Path, labels: list[str] | None = None) -> str:
+    """`message` with every frame's "<notebook> cell <i>, line" (i the code-cell index, as a run's frames name a
+    cell) written with the cell's label instead (code_cell_labels: how JupyterLab shows it, as the check names say);
+    an index past the notebook's code cells stays as it is."""
+    stem = Path(notebook).stem
+    labels = code_cell_labels(notebook) if labels is None else labels
+
+    def label(match: re.Match) -> str:
+        index = int(match[1])
+        return labels[index] if index < len(labels) else match[0]
+
+    return re.sub(rf"\b{re.escape(stem)} cell (\d{{1,4}})(?=, line )", label, message)
 
 
 def check_cells(notebook: Path) -> dict[int, tuple[str, ...]]:

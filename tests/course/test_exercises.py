@@ -85,16 +85,45 @@ def test_package_exercises_say_which_notebook_teaches_them():
                 f"{e.where}: {name}'s docstring must say 'Exercise {e.id} (notebook {e.notebook_number}: ...)'"
 
 
+def _asserting_helpers(cells: list[str]) -> set[str]:
+    """The names of the notebook's own functions whose body asserts (a check cell may call one: notebook 07's
+    full_marks_runs)."""
+    import ast
+
+    names = set()
+    for cell in cells:
+        try:
+            tree = ast.parse(cell)
+        except SyntaxError:                                   # IPython magics: not a helper's cell
+            continue
+        names |= {node.name for node in ast.walk(tree) if isinstance(node, ast.FunctionDef)
+                  and any(isinstance(inner, ast.Assert) for inner in ast.walk(node))}
+    return names
+
+
+def _calls(cell: str) -> set[str]:
+    import ast
+
+    try:
+        tree = ast.parse(cell)
+    except SyntaxError:
+        return set()
+    return {node.func.id for node in ast.walk(tree) if isinstance(node, ast.Call) and isinstance(node.func, ast.Name)}
+
+
 def test_every_exercise_is_graded_by_a_tagged_check_cell(git_checkout):
     tagged: dict[str, set[str]] = {}
     for path in sorted((REPO / "notebooks").glob("*.ipynb")):
-        for cell in notebook_code_cells(path.stem):
+        cells = notebook_code_cells(path.stem)
+        helpers = _asserting_helpers(cells)
+        for cell in cells:
             for m in CHECK_TAG.finditer(cell):
                 for exercise_id in m["ids"].split():
                     exercise(exercise_id)                     # KeyError for an unregistered id
                     tagged.setdefault(exercise_id, set()).add(path.stem)
-                assert "assert " in cell and "BEGIN SOLUTION" not in cell, f"{path.name}: a CHECK tag on a " \
-                                                                            f"cell that is not a check cell"
+                asserts = "assert " in cell or bool(_calls(cell) & helpers)
+                assert asserts and "BEGIN SOLUTION" not in cell, f"{path.name}: a CHECK tag on a cell that is " \
+                                                                 f"not a check cell (no assert, no asserting helper)"
     for e in EXERCISES:
         if e.kind == "written":
             assert e.id not in tagged, f"{e.id}: a written answer is graded by hand, not by a check cell"

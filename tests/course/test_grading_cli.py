@@ -61,7 +61,8 @@ def test_grade_has_a_version():
 
 @pytest.fixture(scope="module")
 def student(tmp_path_factory) -> Path:
-    """A release with a wrong homography (the normalisation not undone) and the reference pose that calls it."""
+    """A release with a wrong homography (the normalisation not undone) and the reference pose (whose check no longer
+    runs the student's homography, but shares a cell with the blank depth plane)."""
     folder = tmp_path_factory.mktemp("check") / "student"
     make_student_release(ROOT, folder)
     wrong = _reference(HOMOGRAPHY)[0].replace("np.linalg.solve(T_dst, H_normalised @ T_src)", "H_normalised")
@@ -79,8 +80,9 @@ def test_check_names_the_first_failing_check_and_does_not_charge_the_caller(stud
     assert "01_camera_calibration cell" in homography and "Error: " in homography, done.stdout   # the cell's error
     assert f"after Run All: # CHECK {HOMOGRAPHY}" in homography, homography     # the cell as JupyterLab numbers it
     pose = next(ln for ln in lines if ln.startswith(f"- {POSE}:"))
-    assert f"it needs {HOMOGRAPHY}, which fails" in pose, done.stdout
-    assert "2 written exercise(s) not yet passing" in done.stdout and "not written yet" in done.stdout
+    assert "it needs calib.depth_plane, which is not written yet" in pose, done.stdout    # waiting, not charged
+    assert HOMOGRAPHY not in pose, pose                            # the wrong homography costs its own exercise only
+    assert "1 written exercise(s) not yet passing" in done.stdout and "not written yet" in done.stdout
 
 
 def test_check_exits_0_only_when_nothing_is_blank_or_failing(tmp_path):

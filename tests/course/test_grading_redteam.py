@@ -302,19 +302,23 @@ def test_a_submission_ends_within_its_time_budget(monkeypatch, grader):
     assert any("time" in (r.reason + " ".join(c.message for c in r.checks)) for r in results.values())
 
 
-def _cell_and_line(grader, exercise_id: str, bodies: list[str], text: str) -> tuple[int, int]:
+def _cell_and_line(grader, exercise_id: str, bodies: list[str], text: str) -> tuple[str, int]:
     """The code cell of the exercise's notebook, with these bodies spliced into the release, whose source holds
-    `text`, and the line (from 1) it is on."""
+    `text`, as the feedback names it (its label: "02_forward_kinematics cell 21 ([9] after Run All: ...)"), and the
+    line (from 1) it is on."""
     import json
+
+    from armlab_course.grading.run import code_cell_labels
 
     tree = grader._spliced({exercise_id: bodies})
     try:
-        nb = json.loads((tree / f"notebooks/{exercise(exercise_id).notebook}.ipynb").read_text())
+        path = tree / f"notebooks/{exercise(exercise_id).notebook}.ipynb"
+        nb, labels = json.loads(path.read_text()), code_cell_labels(path)
     finally:
         grader._discard(tree)
     code = ["".join(c["source"]) for c in nb["cells"] if c["cell_type"] == "code"]
     cell = next(i for i, source in enumerate(code) if text in source)
-    return cell, next(n for n, line in enumerate(code[cell].splitlines(), 1) if text in line)
+    return labels[cell], next(n for n, line in enumerate(code[cell].splitlines(), 1) if text in line)
 
 
 LEAKS = ("inputs:", "array(", "/grader", "armlab_grader", "harness", "wire.py", "adapters", "/home/student",
@@ -331,13 +335,13 @@ def test_a_hidden_check_error_shows_its_type_and_frames_not_the_inputs(grader):
     checks = grader.hidden_checks(euler, bodies)
     failed = [c for c in checks if not c.passed]
     cell, line = _cell_and_line(grader, euler, bodies, "raise ValueError('inputs: '")
-    where = f"in your code: {exercise(euler).notebook} cell {cell}, line {line}, in euler_angles_from_T)"
+    where = f"in your code: {cell}, line {line}, in euler_angles_from_T)"
     assert failed and all("ValueError" in c.message and where in c.message for c in failed), checks
     assert not any(leak in c.message for c in checks for leak in LEAKS), checks
     assert exercise(euler).points > 0
 
 
-def _deep_helper(grader, message: str, depth: int) -> tuple[list[str], int, tuple[int, int, int]]:
+def _deep_helper(grader, message: str, depth: int) -> tuple[list[str], str, tuple[int, int, int]]:
     """fk.euler's bodies: a helper that recurses `depth` times, then raises ZeroDivisionError(`message`); with the
     code cell they land in and the lines of the call from the function, of the recursion and of the raise."""
     body = textwrap.indent(textwrap.dedent(f"""\
@@ -360,10 +364,9 @@ def test_an_error_deep_in_the_regions_own_helper_shows_each_of_its_frames(grader
     bodies, cell, (outer, recurse, raised) = _deep_helper(grader, '"leaked " + repr(m)', 2)
     checks = grader.hidden_checks(euler, bodies)
     failed = [c for c in checks if not c.passed]
-    notebook = exercise(euler).notebook
-    frames = [f"{notebook} cell {cell}, line {outer}, in euler_angles_from_T",
-              *[f"{notebook} cell {cell}, line {recurse}, in _deeper"] * 2,
-              f"{notebook} cell {cell}, line {raised}, in _deeper"]
+    frames = [f"{cell}, line {outer}, in euler_angles_from_T",
+              *[f"{cell}, line {recurse}, in _deeper"] * 2,
+              f"{cell}, line {raised}, in _deeper"]
     assert failed and all(f"(in your code: {'; '.join(frames)}): raised ZeroDivisionError (its message is not shown"
                           in c.message for c in failed), failed[0].message
     assert not any(leak in c.message or "leaked" in c.message for c in checks for leak in LEAKS), checks
@@ -377,8 +380,8 @@ def test_a_public_check_failing_deep_in_the_region_shows_the_regions_frames(grad
     bodies, cell, (outer, recurse, raised) = _deep_helper(grader, '"public " + str(k)', 1)
     result = grader.grade_exercise(euler, bodies)
     notebook = exercise(euler).notebook
-    inner = (f"{notebook} cell {cell}, line {outer}, in euler_angles_from_T; {notebook} cell {cell}, line {recurse}, "
-             f"in _deeper; {notebook} cell {cell}, line {raised}, in _deeper)")
+    inner = (f"{cell}, line {outer}, in euler_angles_from_T; {cell}, line {recurse}, in _deeper; {cell}, "
+             f"line {raised}, in _deeper)")
     public = [c for c in result.checks if c.name.startswith(f"{notebook} cell")]
     assert public and not any(c.passed for c in public), result
     for check in public:

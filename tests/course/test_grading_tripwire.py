@@ -52,7 +52,7 @@ ATTACKS = {      # name: (forbidden names, the student's function)
     "built-up name": (["homography.opencv_homography"], '''
 def student(src, dst):
     import armlab.calibration.homography as m
-    return getattr(m, "_opencv" + "_homo" + "graphy")(src, dst)
+    return getattr(m, "opencv" + "_homo" + "graphy")(src, dst)
 '''),
     "through a library's callback": (["cv2.findHomography"], '''
 def student(src, dst):
@@ -204,7 +204,7 @@ def test_the_reference_pasted_with_renamed_variables_is_flagged_for_every_exerci
 E2E = {   # calib.tag_homography's region: H from src, dst (N, 2); each evades the static check
     "built-up name": '''
     import armlab.calibration.homography as m
-    H = getattr(m, "_opencv" + "_homo" + "graphy")(src, dst)
+    H = getattr(m, "opencv" + "_homo" + "graphy")(src, dst)
 ''',
     "exec of a string": '''
     space = {"s": src, "d": dst}
@@ -217,7 +217,7 @@ E2E = {   # calib.tag_homography's region: H from src, dst (N, 2); each evades t
     spec = getattr(loads, "spec_from_" + "file_location")("fresh_copy", h.__file__)
     fresh = getattr(loads, "module_from_" + "spec")(spec)
     getattr(spec.loader, "exec_" + "module")(fresh)
-    H = getattr(fresh, "_opencv_" + "homography")(src, dst)
+    H = getattr(fresh, "opencv_" + "homography")(src, dst)
 ''',
 }
 

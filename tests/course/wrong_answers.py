@@ -181,11 +181,11 @@ HIDDEN_WRONG = {   # per exercise: wrong answers its hidden checks must catch (a
 OPEN_TASKS = ("events.sort_stack", "events.line_up", "events.sky", "grab.move_path", "grab.sequence", "teach.replay",
               "detect.segment")
 # exercises whose hidden checks call another exercise's region, so that the other one's wrong answer fails them too;
-# the grader then runs the exercise again alone, the reference in place of the rest (Grader.grade). Only the station's
-# machine is left (it runs the student's transition): kinematics.fk is the PoX model (ik.numerical no longer calls
-# dh_link_transform), and the check of calib.tag_extrinsics runs the kit's homography in place of the student's
-# dlt_homography (adapters._call_initial_pose)
-DEPENDS: dict[str, set[str]] = {"station.machine": {"station.transition"}}
+# the grader then runs the exercise again alone, the reference in place of the rest (Grader.grade). None is left:
+# kinematics.fk is the PoX model (ik.numerical no longer calls dh_link_transform), the check of calib.tag_extrinsics
+# runs the kit's homography in place of the student's dlt_homography (adapters._call_initial_pose), and the station's
+# machine runs the kit's stand-in transition in place of the student's run_command (adapters._call_machine)
+DEPENDS: dict[str, set[str]] = {}
 
 
 def wrong_sets(ids: list[str]) -> list[list[str]]:
@@ -215,7 +215,8 @@ def check_wrong_answers(ids: list[str]) -> None:
         reference = grader.hidden_checks_together({e: reference_bodies(e) for e in ids})
         for exercise_id in ids:
             checks = reference[exercise_id]
-            assert len(checks) >= 3 and all(c.passed for c in checks), (exercise_id, [c.message for c in checks])
+            # at least two hidden checks each (events.sky builds two towers: each is minutes of simulation)
+            assert len(checks) >= 2 and all(c.passed for c in checks), (exercise_id, [c.message for c in checks])
         used = {e: 0 for e in ids}
         dependents_failed = set()
         for wrong in wrong_sets(ids):
