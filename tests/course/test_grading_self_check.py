@@ -21,10 +21,18 @@ from armlab_course.grading.run import Limits
 from armlab_course.grading.splice import write_regions
 
 CODED = [e.id for e in EXERCISES if e.kind != "written"]
-CHEAP = ("fk.dh_link_transform", "fk.dh_table", "fk.euler", "calib.tag_homography")
+CHEAP = ("fk.dh_link_transform", "fk.dh_table", "fk.euler", "calib.tag_homography", "calib.pinhole", "calib.zhang",
+         "calib.depth_plane", "calib.tag_extrinsics")
 EVERY = os.environ.get("ARMLAB_SELF_CHECK_ALL") == "1"
 # (exercise, wrong answer) -> what the failing check's message says of the cause
 HINTS = {
+    ("calib.pinhole", "no translation"): "leaves out T_cam_world's translation",
+    ("calib.pinhole", "rotation not transposed"): "right with T_cam_world's rotation transposed",
+    ("calib.zhang", "rows of H for its columns"): "changes when the board's origin moves",
+    ("calib.zhang", "B's sign not fixed"): "refuses exact views it solves in smaller sets",
+    ("calib.depth_plane", "one fit, no rejection"): "the same after 1 round as after 6",
+    ("calib.depth_plane", "outliers kept"): "the same whatever inlier_mm",
+    ("calib.tag_extrinsics", "pixels, not normalised points"): "the same pose whatever K and dist",
     ("calib.tag_homography", "hard-coded"): "the same H whatever the points",
     ("calib.tag_homography", "normalisation not undone"): "undo the normalisation",
     ("fk.dh_link_transform", "d negated"): "right with d negated",
@@ -54,6 +62,13 @@ def test_every_hint_is_for_a_kept_wrong_answer():
     assert all(label in HIDDEN_WRONG[e] for e, label in HINTS), sorted(HINTS)
 
 
+def waits_for_another(check, exercise_id: str) -> bool:
+    """A check of two exercises (e.g. '# CHECK calib.tag_extrinsics calib.depth_plane') fails while the other one is
+    blank, as every other exercise is here: that is not the region's failure."""
+    blank = "ExerciseNotWritten: exercise "
+    return check.message.startswith(blank) and not check.message.startswith(f"{blank}{exercise_id} ")
+
+
 @pytest.mark.parametrize("exercise_id", [e if e in CHEAP or EVERY else
                                          pytest.param(e, marks=pytest.mark.skip("ARMLAB_SELF_CHECK_ALL=1 runs it"))
                                          for e in CODED])
@@ -68,7 +83,7 @@ def test_the_self_check_gives_the_graders_public_verdict(exercise_id, release, g
         public = grader.public_checks(exercise_id, bodies)
         assert public and [(c.name, c.passed) for c in mine.checks] == [(c.name, c.passed) for c in public], \
             (label, mine.checks, public)
-        verdicts[label] = all(c.passed for c in public)
+        verdicts[label] = all(c.passed or waits_for_another(c, exercise_id) for c in public)
         hint = HINTS.get((exercise_id, label))
         if hint:
             failed = [c.message for c in mine.checks if not c.passed]
