@@ -121,8 +121,14 @@ print(project_pinhole(lab.factory_K, T_hand, tag_centres).round(1))
 
 # %%
 # CHECK calib.pinhole
-reference = Camera(lab.factory_K, np.zeros(5), T_hand).project(tag_centres)
+camera_hand = Camera(lab.factory_K, np.zeros(5), T_hand)
+reference = camera_hand.project(tag_centres)
 err = np.abs(project_pinhole(lab.factory_K, T_hand, tag_centres) - reference).max()
+if not err < 1e-9:                     # name the cause where the check can tell it
+    moved = project_pinhole(lab.factory_K, T_hand, tag_centres - camera_hand.position)
+    if np.abs(moved - reference).max() < 1e-6:
+        raise AssertionError("project_pinhole leaves out T_cam_world's translation: it projects as if the camera "
+                             "sat at the world origin")
 assert err < 1e-9, f"project_pinhole is {err:.2g} px off Camera.project at the tag centres"
 print("OK: project_pinhole matches Camera.project on the 4 tag centres (within 1e-9 px)")
 
@@ -326,10 +332,31 @@ for rvec, tvec in zip(intrinsics.rvecs, intrinsics.tvecs):
     R = cv2.Rodrigues(np.asarray(rvec, dtype=float))[0]
     scale = rng.choice([-1.0, 1.0]) * 10.0 ** rng.uniform(-3, 3)
     exact.append(scale * K_true @ np.column_stack([R[:, 0], R[:, 1], tvec]))
-K_exact = np.asarray(intrinsics_from_homographies(exact, (1280, 720)), dtype=float)
+
+
+def exact_K_of(views):                 # your K from these exact views, or None when your function refuses them
+    try:
+        return np.asarray(intrinsics_from_homographies(views, (1280, 720)), dtype=float)
+    except ValueError:
+        return None
+
+
+try:
+    K_exact = np.asarray(intrinsics_from_homographies(exact, (1280, 720)), dtype=float)
+except ValueError:                     # name the cause where the check can tell it
+    fewer = (exact[:8], exact[8:], exact[::2], exact[1::2], exact[:2], exact[2:4])
+    if any(K is not None and K.shape == (3, 3) and np.abs(K - K_true).max() < 1e-6 for K in map(exact_K_of, fewer)):
+        raise AssertionError("intrinsics_from_homographies refuses exact views it solves in smaller sets: the SVD "
+                             "gives b with either sign, fix B's sign (B is positive definite)") from None
+    raise
 assert K_exact.shape == (3, 3), f"intrinsics_from_homographies returned shape {K_exact.shape}, not (3, 3)"
 assert abs(K_exact[2, 2] - 1.0) < 1e-9, f"K[2, 2] is {K_exact[2, 2]:.3g}: normalise K (B is known only up to scale)"
 exact_err = np.abs(K_exact - K_true).max()
+if not exact_err < 1e-6:               # the same camera, the board's origin moved in its plane
+    K_moved = exact_K_of([H @ np.array([[1.0, 0.0, 50.0], [0.0, 1.0, -30.0], [0.0, 0.0, 1.0]]) for H in exact])
+    if K_moved is not None and K_moved.shape == (3, 3) and np.abs(K_moved - K_exact).max() > 1e-6:
+        raise AssertionError("your K changes when the board's origin moves (H's third column), which says nothing "
+                             "of K: the two constraints use H's first two columns")
 assert exact_err < 1e-6, f"K is {exact_err:.3g} px off the true K on exact homographies: check the two constraints " \
                          "(columns of H), the sign of B and the conditioning"
 K_mine = np.asarray(intrinsics_from_homographies(homographies, (1280, 720)), dtype=float)
@@ -427,6 +454,16 @@ print("AprilTag T_cam_world (checkerboard K):\n", T_tags.round(3) + 0.0)
 require_written("calib.tag_extrinsics")
 good = cal.compare_extrinsics(T_tags, truth.T_cam_world)
 bad = cal.compare_extrinsics(extrinsics["factory K"].T_cam_world, truth.T_cam_world)
+if not (good["position_mm"] < 1.0 and good["angle_deg"] < 0.1):   # name the cause where the check can tell it
+    found = extrinsics["checkerboard K"].detections
+    world = np.concatenate([lab.tags.corners_world(t.tag_id) for t in found])
+    corners = np.concatenate([t.corners for t in found])
+    poses = [cal.extrinsics.pose_from_corners(world, uv, K, dist, refine=False) for uv, K, dist in
+             [(corners, intrinsics.K, intrinsics.dist), (corners, lab.factory_K, np.zeros(5)),
+              (corners + 3.0, intrinsics.K, intrinsics.dist)]]
+    if np.array_equal(poses[0], poses[1]) and not np.array_equal(poses[0], poses[2]):
+        raise AssertionError("your pose_from_corners gives the same pose whatever K and dist: find H from the "
+                             "normalised image points, not the pixels")
 assert good["position_mm"] < 1.0 and good["angle_deg"] < 0.1, \
     f"tag extrinsic {good['position_mm']:.1f} mm / {good['angle_deg']:.2f} deg off the truth: check the PnP inputs"
 assert bad["position_mm"] > 10.0, f"the factory K gave only {bad['position_mm']:.1f} mm of error (expected > 10 mm)"
@@ -566,6 +603,13 @@ round_trip = camera.pixel_to_world(camera.project(grid), camera.depth_of(grid))
 pinhole = Camera(intrinsics.K, np.zeros(5), T_tags)
 p = grid[100]
 mine = pixel_to_world_pinhole(pinhole.K, T_tags, pinhole.project(p)[0], pinhole.depth_of(p)[0])
+if not np.abs(mine - p).max() < 1e-6:  # name the cause where the check can tell it
+    transposed = T_tags.copy()
+    transposed[:3, :3] = T_tags[:3, :3].T
+    if np.abs(pixel_to_world_pinhole(pinhole.K, transposed, pinhole.project(p)[0], pinhole.depth_of(p)[0])
+              - p).max() < 1e-6:
+        raise AssertionError("pixel_to_world_pinhole is right with T_cam_world's rotation transposed: from the "
+                             "camera back to the world takes R's inverse, not R")
 assert np.abs(round_trip - grid).max() < 1e-6, f"the round trip misses by {np.abs(round_trip - grid).max():.2g} mm"
 assert np.abs(mine - p).max() < 1e-6, \
     f"pixel_to_world_pinhole is {np.abs(mine - p).max():.2g} mm off the grid point it should give back"
@@ -599,7 +643,8 @@ print(f"bias plane: a = {correction.a:.4f} mm/px, b = {correction.b:.4f} mm/px, 
 
 # %% [markdown]
 # **Check:** after the correction the board's median depth error is below 0.5 mm in every quarter of the image
-# (before: several mm), and the fitted plane matches the simulator's bias within 1 mm (simulation only).
+# (before: several mm), and the fitted plane matches the simulator's bias within 1 mm (simulation only), also with a
+# box 20 mm high lying on the board (nearer than 30 mm: only your rejection keeps it out of the fit).
 
 # %%
 # CHECK calib.depth_plane
@@ -611,13 +656,32 @@ def quarter_medians(residual):
                      for i in (0, 1) for j in (0, 1)])
 
 
+def plane(fit):
+    return fit.a, fit.b, fit.c
+
+
 bu, bv, b0 = station.camera.realism.depth_bias_mm
 vv, uu = np.mgrid[0:720:8, 0:1280:8]
 true_bias = bu * (uu / 1280 - 0.5) + bv * (vv / 720 - 0.5) + b0
 bias_err = np.abs(correction.bias(camera.image_shape)[::8, ::8] - true_bias).max()
 before_q, after_q = np.abs(quarter_medians(raw)), np.abs(quarter_medians(fixed))
+if not (after_q.max() < 0.5 and bias_err < 1.0):      # name the cause where the check can tell it
+    stricter = cal.fit_depth_correction(frame.depth, camera, inlier_mm=3.0)
+    if plane(stricter) == plane(correction) != plane(cal.fit_depth_correction(frame.depth, camera, iterations=1)):
+        raise AssertionError("your bias plane is the same whatever inlier_mm: drop the pixels farther than inlier_mm "
+                             "from each fit before refitting")
 assert after_q.max() < 0.5, f"after correction a quarter of the image is still {after_q.max():.2f} mm off the board"
 assert before_q.max() > 3.0 and bias_err < 1.0, f"the fitted bias plane is {bias_err:.2f} mm off the simulator's"
+boxed = frame.depth.copy()
+boxed[300:420, 500:700] -= 20.0                        # a box 20 mm high on part of the board
+box_fit = cal.fit_depth_correction(boxed, camera)
+box_err = np.abs(box_fit.bias(camera.image_shape)[::8, ::8] - true_bias).max()
+if not box_err < 1.0:                                  # name the cause where the check can tell it
+    one_round = cal.fit_depth_correction(boxed, camera, iterations=1)
+    if plane(one_round) == plane(box_fit) != plane(correction):
+        raise AssertionError("your bias plane is the same after 1 round as after 6 (iterations): reject the pixels "
+                             "far from each fit, then fit again")
+assert box_err < 1.0, f"a box 20 mm high on the board moves your bias plane {box_err:.2f} mm off the simulator's"
 print(f"OK: quarter medians {before_q.max():.1f} mm -> {after_q.max():.2f} mm; bias plane within {bias_err:.2f} mm "
       f"of the simulator's")
 

@@ -3,7 +3,7 @@ plausible wrong answers (tests/course/wrong_answers.py), `self_check(only=EXERCI
 region passes and fails the same public CHECK cells, with the same names, as the grader's run of that exercise's
 notebook does for the same region (Grader.public_checks). Where a check can tell a wrong answer's cause, its message
 names it (HINTS). Each case costs a notebook run on both sides: the cheap notebooks' exercises run by default
-(CHEAP), the others with ARMLAB_SELF_CHECK_ALL=1."""
+(CHEAP), the others with ARMLAB_SELF_CHECK_ALL=1; their hints are tested by the self-check alone by default."""
 
 from __future__ import annotations
 
@@ -25,6 +25,13 @@ CHEAP = ("fk.dh_link_transform", "fk.dh_table", "fk.euler", "calib.tag_homograph
 EVERY = os.environ.get("ARMLAB_SELF_CHECK_ALL") == "1"
 # (exercise, wrong answer) -> what the failing check's message says of the cause
 HINTS = {
+    ("calib.pinhole", "no translation"): "leaves out T_cam_world's translation",
+    ("calib.pinhole", "rotation not transposed"): "right with T_cam_world's rotation transposed",
+    ("calib.zhang", "rows of H for its columns"): "changes when the board's origin moves",
+    ("calib.zhang", "B's sign not fixed"): "refuses exact views it solves in smaller sets",
+    ("calib.depth_plane", "one fit, no rejection"): "the same after 1 round as after 6",
+    ("calib.depth_plane", "outliers kept"): "the same whatever inlier_mm",
+    ("calib.tag_extrinsics", "pixels, not normalised points"): "the same pose whatever K and dist",
     ("calib.tag_homography", "hard-coded"): "the same H whatever the points",
     ("calib.tag_homography", "normalisation not undone"): "undo the normalisation",
     ("fk.dh_link_transform", "d negated"): "right with d negated",
@@ -54,6 +61,13 @@ def test_every_hint_is_for_a_kept_wrong_answer():
     assert all(label in HIDDEN_WRONG[e] for e, label in HINTS), sorted(HINTS)
 
 
+def waits_for_another(check, exercise_id: str) -> bool:
+    """A check of two exercises (e.g. '# CHECK calib.tag_extrinsics calib.depth_plane') fails while the other one is
+    blank, as every other exercise is here: that is not the region's failure."""
+    blank = "ExerciseNotWritten: exercise "
+    return check.message.startswith(blank) and not check.message.startswith(f"{blank}{exercise_id} ")
+
+
 @pytest.mark.parametrize("exercise_id", [e if e in CHEAP or EVERY else
                                          pytest.param(e, marks=pytest.mark.skip("ARMLAB_SELF_CHECK_ALL=1 runs it"))
                                          for e in CODED])
@@ -68,9 +82,23 @@ def test_the_self_check_gives_the_graders_public_verdict(exercise_id, release, g
         public = grader.public_checks(exercise_id, bodies)
         assert public and [(c.name, c.passed) for c in mine.checks] == [(c.name, c.passed) for c in public], \
             (label, mine.checks, public)
-        verdicts[label] = all(c.passed for c in public)
+        verdicts[label] = all(c.passed or waits_for_another(c, exercise_id) for c in public)
         hint = HINTS.get((exercise_id, label))
         if hint:
             failed = [c.message for c in mine.checks if not c.passed]
             assert failed and hint in failed[0], (label, failed)
     assert verdicts["reference"], f"{exercise_id}: the reference fails its own public checks"
+
+
+@pytest.mark.parametrize("exercise_id, label", [pytest.param(e, label, id=f"{e}: {label}") for e, label in HINTS
+                                                if e not in CHEAP and not EVERY])
+def test_the_self_check_names_the_cause_of_a_kept_wrong_answer(exercise_id, label, release, tmp_path):
+    """The hints of the exercises whose verdicts the test above compares with the grader's only under
+    ARMLAB_SELF_CHECK_ALL=1 (each costs two notebook runs per answer): the self-check alone (its notebook cut after
+    the exercise's last check cell, about 10 s) fails the wrong answer with the hint in its first failed check."""
+    student = tmp_path / "student"
+    shutil.copytree(release, student)
+    write_regions(student, exercise_id, HIDDEN_WRONG[exercise_id][label])
+    mine = self_check(student, LIMITS, only=exercise_id).results[exercise_id]
+    failed = [c.message for c in mine.checks if not c.passed and not waits_for_another(c, exercise_id)]
+    assert failed and HINTS[(exercise_id, label)] in failed[0], (label, failed)
