@@ -15,7 +15,8 @@ known:  p_meas - fk(q_cmd) = J(q_cmd) dq(q_cmd; a, b, o).
 
 Measuring p_meas: in simulation, arm.tool_pose_true() (ground truth). On the real arm: touch-off with the fingertips
 on a ruler/grid point (x, y from the printed 50 mm grid, z from a height gauge), about a dozen poses spread over reach
-and height; 1 mm reading errors still give a fit good to about 1 mm (see notebook 05 and benchmarks/manipulation.py).
+and height; 1 mm reading errors still give a fit good to about 1 mm (see notebook 05; the instructor's manipulation
+benchmark measures it).
 
 Compensation: to put the PHYSICAL joints at q (what IK asked for), command q_cmd with q_cmd + dq(q_cmd) = q, solved by
 fixed-point iteration (the deflection changes little with q: 3 iterations reach 1e-6 rad). The kit's own straight-line

@@ -15,7 +15,8 @@ submit.
 - The notebooks are the one editable copy of every notebook exercise (their percent-format sources stay behind).
 - The Makefile loses its lines from `# BEGIN INSTRUCTOR ONLY` to `# END INSTRUCTOR ONLY` (the targets whose tools
   the release does not ship: notebooks, bench, exercise-docs, student, autograder); its `make check` runs the
-  self-check.
+  self-check. A markdown page loses its `<!-- BEGIN INSTRUCTOR ONLY -->` ... `<!-- END INSTRUCTOR ONLY -->` parts
+  (what cites the instructor's tools, tests and benchmarks), and the instructor's pages stay out.
 
     python tools/student-release OUT_DIR      # or: make student
 """
@@ -35,7 +36,7 @@ __all__ = ["RELEASE_EXCLUDES", "STUDENT_README", "RELEASE_MARKER", "RUN_ALL_TAG"
            "make_student_release", "released", "raises_while_blank", "without_instructor_lines"]
 
 RUN_ALL_TAG = "raises-exception"
-_INSTRUCTOR_ONLY = re.compile(r"^# BEGIN INSTRUCTOR ONLY\b.*?^# END INSTRUCTOR ONLY[^\n]*\n\n?",
+_INSTRUCTOR_ONLY = re.compile(r"^(?:# |<!-- )BEGIN INSTRUCTOR ONLY\b.*?^(?:# |<!-- )END INSTRUCTOR ONLY[^\n]*\n\n?",
                               re.DOTALL | re.MULTILINE)
 
 STUDENT_README = "tools/student/README.md"
@@ -49,6 +50,12 @@ RELEASE_EXCLUDES = (
     "tools/figure_recorder.py",    # build-notebook's kernel startup: records each figure for the figure test
     "tests/test_notebook_figures.py",   # reads the figures stored in the instructor's executed notebooks
     "docs/course/instructor/*",    # the walkthrough of every solution, for the instructor
+    # the instructor's pages: grading (the hidden checks, the judge), hubs, the release, the exercises' scaffolding
+    # and wrong answers, notebooks 04-08's hidden checks; the maintainers' (the architecture, the numerics, the
+    # Python versions, the benchmarks: they cite the instructor's tests, sources and benchmarks); and the history,
+    # which cites files of earlier versions. The student README says how to check and submit.
+    "docs/grading.md", "docs/hub.md", "docs/release.md", "docs/course-scaffolding.md", "docs/lab-04-08.md",
+    "docs/architecture.md", "docs/numerics.md", "docs/python-versions.md", "docs/benchmarks.md", "CHANGELOG.md",
     "tools/course-pictures",       # renders docs/course/img/ (the instructor's, from the solved kit)
     "tools/course-times",          # reads the notebook sources (not in the release) for the time table
     "tools/student-release",
@@ -57,6 +64,7 @@ RELEASE_EXCLUDES = (
                               # and pieces of solutions, and look for what the instructor's tree has
     "tools/student/*",
     "tests/test_packaging.py",     # builds wheels of the instructor's checkout
+    "tests/test_package_table.py",     # reads docs/architecture.md (a maintainers' page, not shipped)
     "tests/test_repeatable.py",    # teaches by hand (the teach.record exercise) to test the simulator's rounding
     "tests/test_notebook_outputs.py",   # checks the instructor's executed notebooks (the release's have no outputs)
     "armlab_course/grading/hidden.py",    # the grader's hidden checks (fresh inputs per exercise)
@@ -86,8 +94,9 @@ def released(name: str) -> bool:
 
 
 def without_instructor_lines(text: str) -> str:
-    """`text` (the Makefile) without its sections from a `# BEGIN INSTRUCTOR ONLY` line to the next
-    `# END INSTRUCTOR ONLY` line; ValueError when the markers do not pair up."""
+    """`text` (the Makefile, or a markdown page) without its sections from a `# BEGIN INSTRUCTOR ONLY` line to the
+    next `# END INSTRUCTOR ONLY` line (in markdown `<!-- BEGIN INSTRUCTOR ONLY -->` ... `<!-- END INSTRUCTOR ONLY
+    -->`, invisible where the page is rendered); ValueError when the markers do not pair up."""
     out = _INSTRUCTOR_ONLY.sub("", text)
     if "INSTRUCTOR ONLY" in out:
         raise ValueError("an INSTRUCTOR ONLY marker without its pair")
@@ -143,7 +152,7 @@ def make_student_release(repo: Path | str, out: Path | str) -> list[str]:
             dst.write_text(json.dumps(student_notebook(nb, name), indent=1, ensure_ascii=False) + "\n")
             changed = any(find_regions("".join(c["source"]), name) for c in nb["cells"] if c["cell_type"] == "code") \
                 or bool(find_answers(["".join(c["source"]) for c in nb["cells"] if c["cell_type"] == "markdown"], name))
-        elif name == "Makefile":
+        elif name == "Makefile" or name.endswith(".md"):
             dst.write_text(without_instructor_lines(src.read_text()))
             changed = False
         elif name.endswith(".py") or name.startswith("tools/"):

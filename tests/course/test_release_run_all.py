@@ -16,7 +16,10 @@ The release is true about itself (its .student-release said to run `make check`,
 kept targets whose tools it does not ship; notebooks cited reference/lab.md and benchmarks/perception.py, which
 neither the release nor the repository has): its Makefile has `make check` (the self-check) and none of the
 instructor's targets; every `make X` its README, marker file and notebooks name is a target of it; every file a
-recipe runs is in it; every repository path its README, notebooks and the docs they link to cite is in it.
+recipe runs is in it; every repository path its README, notebooks and every markdown page it ships cite is in it
+(the instructor's and maintainers' pages stay out, and a shipped page's instructor-only parts -- between
+`<!-- BEGIN INSTRUCTOR ONLY -->` and `<!-- END INSTRUCTOR ONLY -->` -- go), and so is every path the package's
+docstrings and comments cite.
 """
 
 from __future__ import annotations
@@ -150,6 +153,7 @@ TOP = ("armlab", "armlab_course", "notebooks", "tests", "tools", "benchmarks", "
 CITED = re.compile(rf"(?<![\w/.-])((?:{'|'.join(TOP)})/[\w./-]*[\w/])")
 LINK = re.compile(r"\]\(([^)#:\s]+)(?:#[^)]*)?\)")
 MAKE = re.compile(r"`make ([a-z][\w-]*)`")
+MADE = {"docs/api", "docs/api/index.html"}      # written by the release's `make docs` (docs/api.md says so)
 
 
 def targets(makefile: Path) -> set[str]:
@@ -157,15 +161,15 @@ def targets(makefile: Path) -> set[str]:
 
 
 def texts(release: Path) -> dict[str, str]:
-    """What a student reads: the README, the marker file, the Makefile, every notebook's cells (markdown and code)
-    and the docs the README or a notebook links to."""
+    """What a student reads: the README, the marker file, the Makefile, every notebook's cells (markdown and code),
+    every markdown page the release ships, and the package's Python sources (docstrings and comments cite files)."""
     out = {name: (release / name).read_text() for name in ("README.md", RELEASE_MARKER, "Makefile")}
     for path in sorted((release / "notebooks").glob("*.ipynb")):
         out[f"notebooks/{path.name}"] = "\n".join("".join(c["source"]) for c in json.loads(path.read_text())["cells"])
-    linked = {m for text in list(out.values()) for m in CITED.findall(text) if re.fullmatch(r"docs/[\w.-]+\.md", m)}
-    for name in sorted(linked):
-        if (release / name).is_file():
-            out[name] = (release / name).read_text()
+    for path in sorted(release.rglob("*.md")):
+        out.setdefault(str(path.relative_to(release)), path.read_text())
+    for path in sorted((release / "armlab").rglob("*.py")):
+        out[str(path.relative_to(release))] = path.read_text()
     return out
 
 
@@ -193,7 +197,7 @@ def test_every_path_the_release_cites_is_in_it(release):
         if name == "Makefile":          # what its recipes run: the test above (the rest are its outputs: docs/api)
             continue
         for cited in set(CITED.findall(text)):
-            if not (release / cited.rstrip("/.")).exists():
+            if not (release / cited.rstrip("/.")).exists() and cited.rstrip("/.") not in MADE:
                 missing.append(f"{name} cites {cited}")
         if name.endswith(".md"):
             for link in set(LINK.findall(text)):
