@@ -202,12 +202,13 @@ def wrong_sets(ids: list[str]) -> list[list[str]]:
     return [[e for e, half in zip(ids, halves, strict=True) if run in half] for run in range(k)]
 
 
-def check_wrong_answers(ids: list[str]) -> None:
+def check_wrong_answers(ids: list[str], blank: list[str] = ()) -> None:
     """The hidden checks of these exercises: the reference (in one harness run after the one computing the expected
     values) passes every one; then, in the runs of wrong_sets (each exercise wrong in half of them, its wrong answers
     in turn), each wrong answer fails at least one of its exercise's checks (a hard-coded one every check), and every
     exercise at its reference passes all of its checks unless it calls (DEPENDS) an exercise that is wrong in that
-    run: a wrong answer costs its own exercise only. Each declared dependency is seen failing once (DEPENDS is true)."""
+    run: a wrong answer costs its own exercise only. Each declared dependency is seen failing once (DEPENDS is true).
+    The exercises of `blank` fail every hidden check with their blank stubs (in one run)."""
     from armlab_course.grading.grade import Grader
 
     grader = Grader(ROOT, Limits(timeout_s=300, cpu_s=200), ids)
@@ -217,6 +218,11 @@ def check_wrong_answers(ids: list[str]) -> None:
             checks = reference[exercise_id]
             # at least two hidden checks each (events.sky builds two towers: each is minutes of simulation)
             assert len(checks) >= 2 and all(c.passed for c in checks), (exercise_id, [c.message for c in checks])
+        if blank:
+            got = grader.hidden_checks_together({e: blank_bodies(e) for e in blank})
+            for exercise_id in blank:
+                assert got[exercise_id] and not any(c.passed for c in got[exercise_id]), \
+                    (exercise_id, "blank", [c.passed for c in got[exercise_id]])
         used = {e: 0 for e in ids}
         dependents_failed = set()
         for wrong in wrong_sets(ids):
