@@ -1,7 +1,11 @@
 """The station's state machine (the lab's GUI states): idle, estop, calibrate, detect, execute, teach, repeat,
 click-grab, click-drop.
 
-Every command runs from "idle" and returns there; "teach" lasts from teach_start() to teach_finish(). The
+Every command runs from "idle" and returns there; "teach" lasts from teach_start() to teach_finish(); a teaching
+button pressed out of turn (teach_start outside "idle", teach_record / teach_finish outside "teach") goes to the
+machine's refusal (default_refusal(): the kit's armlab.tasks.buttons.refuse_out_of_turn in the instructor's tree, which
+refuses it and changes nothing; left out of the student release, where with the kit's transition it answers exercise
+station.machine, and the release's latching_refusal stops the station instead). The
 emergency stop is honoured at every step: estop() (safe to call from another thread or a callback while a command
 runs) halts the arm at once (arm.emergency_stop()), and the guarded arm the commands move through
 (tasks.GuardedArm) refuses every further command, so the running command ends with EmergencyStopped and the machine
@@ -14,7 +18,7 @@ its commands move the session's guarded arm, whose stop request is the machine's
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any
+from typing import Any, NoReturn
 
 import numpy as np
 
@@ -26,9 +30,11 @@ from .port import command_work
 from .session import Session, as_session
 from .states import STATES, MachineBusy
 
-__all__ = ["STATES", "TaskMachine", "MachineBusy", "Transition", "latching_transition", "default_transition"]
+__all__ = ["STATES", "TaskMachine", "MachineBusy", "Transition", "latching_transition", "default_transition",
+           "Refusal", "latching_refusal", "default_refusal"]
 
 Transition = Callable[["TaskMachine", str, Callable[[], Any]], Any]
+Refusal = Callable[["TaskMachine", str, str], NoReturn]
 
 
 def latching_transition(machine: TaskMachine, state: str, action: Callable[[], Any]) -> Any:
@@ -67,10 +73,34 @@ def default_transition() -> Transition:
     return command_transition
 
 
+def latching_refusal(machine: TaskMachine, button: str, wanted: str) -> NoReturn:
+    """The refusal that stands in where the kit's own (armlab.tasks.buttons, instructor only) is not installed: a
+    teaching button (`button`) pressed while the machine is not in the state it needs (`wanted`) stops the station
+    (machine.estop(): the arm halts, the machine latches in "estop" until reset()) and raises EmergencyStopped. It is
+    stricter than the lab's rule, which refuses such a button and changes nothing."""
+    was = machine.state
+    machine.estop()
+    raise EmergencyStopped(f"{button} pressed in {was!r} (it needs {wanted!r}): the student release's machine stops "
+                           f"the station on a button out of turn; call reset() first")
+
+
+def default_refusal() -> Refusal:
+    """The machine's refusal of a teaching button out of turn: the kit's refuse_out_of_turn where it is installed (the
+    instructor's tree), latching_refusal otherwise (the student release)."""
+    try:
+        from .buttons import refuse_out_of_turn
+    except ModuleNotFoundError as e:
+        if e.name != f"{__package__}.buttons":
+            raise
+        return latching_refusal
+    return refuse_out_of_turn
+
+
 class TaskMachine:
     """The lab's state machine over a task session (tasks.start_session(station), sim or real). `transition` runs
     each command through the states (module notes; default: default_transition()); replace it on an instance with
-    your own function of the same signature. `session` is the session driven, `station` its station."""
+    your own function of the same signature; `refuse` likewise for a teaching button out of turn (default:
+    default_refusal()). `session` is the session driven, `station` its station."""
 
     def __init__(self, session: Session, transition: Transition | None = None):
         self.session = as_session(session, "TaskMachine")
@@ -79,6 +109,7 @@ class TaskMachine:
         self.history: list[str] = ["idle"]
         self.program: teach.TeachProgram | None = None
         self.transition = transition or default_transition()
+        self.refuse = default_refusal()
         self._stop = False
         self._recorder: teach.Recorder | None = None
 
@@ -146,23 +177,21 @@ class TaskMachine:
 
     def teach_start(self, name: str = "") -> None:
         """Enter "teach": torque off; pose the arm by hand and call teach_record() at each waypoint."""
-        if self.state == "estop":
-            raise EmergencyStopped("teach refused: the station is emergency-stopped; call reset() first")
         if self.state != "idle":
-            raise MachineBusy(f"teach refused: the machine is in {self.state!r}")
+            self.refuse(self, "teach", "idle")
         self._recorder = teach.Recorder(self.station.arm, name)
         self._enter("teach")
 
     def teach_record(self, gripper: str = "open") -> np.ndarray:
         """Record the arm's joints (5,) rad with the gripper state wanted there."""
         if self.state != "teach" or self._recorder is None:
-            raise MachineBusy(f"teach_record refused: the machine is in {self.state!r}, not 'teach'")
+            self.refuse(self, "teach_record", "teach")
         return self._recorder.record(gripper)
 
     def teach_finish(self) -> teach.TeachProgram:
         """Torque back on, leave "teach"; the recorded program becomes `program` (and is returned)."""
         if self.state != "teach" or self._recorder is None:
-            raise MachineBusy(f"teach_finish refused: the machine is in {self.state!r}, not 'teach'")
+            self.refuse(self, "teach_finish", "teach")
         rec, self._recorder = self._recorder, None
         try:
             self.program = rec.finish()

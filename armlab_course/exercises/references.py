@@ -177,8 +177,9 @@ def ik_by_least_squares(T_target, q0, weight_mm: float = 100.0, tol_mm: float = 
 
 
 def click_target_by_kit(click, tops, yaws, edges, margin_mm: float = 3.0) -> int:
-    """grab.click_target's reference: the kit's click rule (armlab.tasks.click_grab): the detected top-face centre
-    nearest the click in x and y, if it is within one block edge; -1 otherwise (yaw, margin and depth not used)."""
+    """grab.click_target's reference: the nearest-centre rule (the kit's click-to-grab panel's in the instructor's
+    tree): the detected top-face centre nearest the click in x and y, if it is within one block edge; -1 otherwise
+    (yaw, margin and depth not used)."""
     click, tops, edges = np.asarray(click, float), np.asarray(tops, float).reshape(-1, 3), np.asarray(edges, float)
     if not len(tops):
         return -1

@@ -83,6 +83,10 @@ RELEASE_EXCLUDES = (
     # -- the kit's twins of exercises: instructor-only code and data that compute an exercise's answer
     "armlab/data/rx200_dh.csv",    # fk.dh_table: the DH table (the engine runs on the PoX model without it)
     "armlab/tasks/transition.py",  # station.transition: the kit's transition (the release latches every failure)
+    "armlab/tasks/buttons.py",     # station.machine: the kit's refusal of a teaching button out of turn (the
+                                   # release's machine stops the station instead: machine.latching_refusal)
+    "armlab/tasks/click_rule.py",  # grab.sequence: the kit's click rule (the release grabs only at a block's centre
+                                   # and refuses a drop on the held block's old place: click.centre_click_block)
     "armlab/tasks/events/strategies/*",   # events.*: the kit's strategies (the release's events run the search)
     "tests/test_event_strategies.py",     # their tests
 )

@@ -83,8 +83,8 @@ print("clicked the red block at pixel", np.round(red.pixel, 1), "-> world", p, "
 # * **the depth.** Seen from above, faces can overlap: a small block stacked off-centre on a large one sits inside the
 #   large one's square. The click's height $p_z$ tells which surface was under the pointer.
 #
-# The kit's rule (`tasks.click_grab`: the nearest face centre within one block edge) ignores both: near the corner of
-# a turned block, or on the bare board just beside one, it can pick the wrong block or one that was not clicked.
+# The nearest-centre rule (the nearest face centre within one block edge) ignores both: near the corner of a turned
+# block, or on the bare board just beside one, it can pick the wrong block or one that was not clicked.
 #
 # **Exercise `grab.click_target` (5 points, code):** write `click_target(click, tops, yaws, edges, margin_mm=3.0)`:
 # `click` the world point (3,) mm, `tops` (n, 3) the top-face centres (world mm), `yaws` (n,) rad, `edges` (n,) mm;
@@ -494,8 +494,10 @@ print(f"OK: your click sequence refused bare board, grabbed and dropped the red 
 #
 # **Demonstration** of the kit's click-to-grab panel (it plans with the kit's planners, not your `move_path`).
 # `tasks.click_grab(session, (u, v))` and `tasks.click_drop(session, (u, v))` do all of the above from a pixel of the
-# current frame (`session.last.frame`). Clicks off the board, on the robot, on bare board or out of
-# reach raise `tasks.ClickRefused` and nothing moves.
+# current frame (`session.last.frame`), by the kit's click rule. Clicks off the board, on the robot, on bare board or
+# out of reach raise `tasks.ClickRefused` and nothing moves. In the student release that rule is a lesser stand-in
+# for your sequence: a click grabs only within a few pixels of a block's detected centre, and a drop where the held
+# block was seen is refused; your `ClickSequence` runs through `tasks.click_with` (above).
 #
 # In a live notebook you click the image itself: `ClickToGrab(session).widget()` shows the current frame
 # (downscaled to $w \times h = 640 \times 360$ px to keep it light) and listens to its clicks with `ipyevents`. The

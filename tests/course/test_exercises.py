@@ -558,21 +558,25 @@ TWINS = {
                    ("text", "notebooks/07_autonomous_tasks.ipynb", "run_event(start_session(station), \"sky\")")],
     "station.transition": [("file", "armlab/tasks/transition.py"),
                            ("attr", "armlab.tasks.machine", "command_transition")],
+    # the kit's refusal of a teaching button out of turn (the release's machine stops the station instead); the
+    # machine's estop / reset stay: the engine's stop and restart (the port's halt / restart), which a stop must go
+    # through, never student code; the engine's reset restarts from any state, the exercise's refuses outside estop
+    "station.machine": [("file", "armlab/tasks/buttons.py"), ("attr", "armlab.tasks.buttons", "refuse_out_of_turn"),
+                        ("text", "armlab/tasks/machine.py", "raise MachineBusy(")],
+    # the kit's click rule (the release grabs only at a block's centre pixel, and refuses a drop on the held block's
+    # old place); the student's sequence runs through tasks.click_with
+    "grab.sequence": [("file", "armlab/tasks/click_rule.py"), ("attr", "armlab.tasks.click_rule", "grab_target"),
+                      ("attr", "armlab.tasks.click_rule", "drop_point"),
+                      ("text", "armlab/tasks/click.py", "held.position[2] - block_edge(held.size)"),
+                      ("text", "armlab/tasks/click.py", "b.position[:2] - point[:2]")],
 }
 # Twins still in the release (issue 32): each must still be found, so that the list is kept honest; moving one out
 # makes its test fail until it is moved up into TWINS.
 # - grab.move_path: the engine's own pick and place (tasks.pick / place, the events, click-to-grab) plan with
 #   planning.plan_pick / plan_place, which the release needs until the engine has a planner of another method;
-# - station.machine: the kit's panel runs TaskMachine, whose estop / reset / teach_* methods do what the exercise's
-#   press() does for those buttons (its transition is no longer the kit's: the release latches every failure);
-# - grab.sequence: the kit's click-to-grab panel (ClickToGrab, the station panel) runs tasks.click_grab / click_drop,
-#   which decide what a click means by the kit's own rule (the nearest face centre) for the demonstrations.
 KNOWN_TWINS = {
     "grab.move_path": [("attr", "armlab.tasks.move_path", "kit_move_path"),
                        ("attr", "armlab.planning", "plan_pick"), ("attr", "armlab.planning", "plan_place")],
-    "station.machine": [("attr", "armlab.tasks.machine", "TaskMachine.teach_start"),
-                        ("attr", "armlab.tasks.machine", "TaskMachine.reset")],
-    "grab.sequence": [("attr", "armlab.tasks.click", "click_grab"), ("attr", "armlab.tasks.click", "click_drop")],
 }
 
 _LOOKUP = """
@@ -652,6 +656,51 @@ except ValueError as e:
     lines = dict(line.split(" ", 1) for line in run.stdout.splitlines())
     assert lines["ik"] == lines["pox"] and lines["colours"] == "(1, 6)"
     assert "no DH table" in lines["dh:"]
+
+
+def test_the_release_machine_and_click_rule_are_another_methods():
+    """station.machine and grab.sequence: the release's stand-ins (machine.latching_refusal, click.centre_click_block /
+    standin_drop_point) agree with the kit's (instructor only) where the lab's rule is plain and differ where the
+    exercise's rule decides: a teaching button out of turn stops the station instead of being refused; a click off a
+    face's centre is refused instead of grabbing; a drop on the held block's old place is refused instead of landing
+    on what it stood on."""
+    import numpy as np
+
+    from armlab import make_station, tasks
+    from armlab.detection.types import Block
+    from armlab.station.contract import EmergencyStopped
+    from armlab.tasks import buttons, click, click_rule, machine
+
+    assert machine.default_refusal() is buttons.refuse_out_of_turn         # the instructor's tree runs the kit's
+    station = make_station("sim", seed=0, scene={"objects": []})
+    outcomes = {}
+    for name, refusal in (("kit", buttons.refuse_out_of_turn), ("stand-in", machine.latching_refusal)):
+        m = tasks.TaskMachine(tasks.Session(station, tasks.GuardedArm(station.arm)))
+        m.refuse = refusal
+        try:
+            m.teach_record("open")
+            raised = None
+        except (tasks.MachineBusy, EmergencyStopped) as e:
+            raised = type(e).__name__
+        outcomes[name] = (raised, m.state, m.stop_requested)
+        m.reset()
+    assert outcomes == {"kit": ("MachineBusy", "idle", False), "stand-in": ("EmergencyStopped", "estop", True)}
+
+    block = Block("red", "large", np.array([0.0, 250.0, 38.0]), 0.3, (640.0, 400.0), 38.0)
+    assert click.click_rule() == (click_rule.grab_target, click_rule.drop_point)
+    centre = block.position.copy()
+    for rule in (click_rule.grab_target, click.centre_click_block):          # a click on the centre: both grab
+        assert rule([block], centre, np.array([641.0, 399.0])) is block
+    off = block.position + [0.3 * 38.0, 0.2 * 38.0, 0.0]                   # on the face, off its centre
+    assert click_rule.grab_target([block], off, np.array([652.0, 392.0])) is block
+    with pytest.raises(click.ClickRefused, match="centre"):
+        click.centre_click_block([block], off, np.array([652.0, 392.0]))
+    where_it_stood = block.position + [2.0, -1.0, 0.0]                      # the frame still shows the held block
+    np.testing.assert_allclose(click_rule.drop_point(block, where_it_stood), [2.0, 249.0, 0.0])
+    with pytest.raises(click.ClickRefused, match="held red block"):
+        click.standin_drop_point(block, where_it_stood)
+    free = np.array([-200.0, 80.0, 0.0])
+    np.testing.assert_array_equal(click_rule.drop_point(block, free), click.standin_drop_point(block, free))
 
 
 def test_the_stand_ins_give_another_methods_result():

@@ -114,4 +114,5 @@ SPECS = (HiddenSpec("ClickSequence", _scenes, atol=0, adapter="_call_sequence", 
                     criteria=("the click on the bare board refused with nothing moved", "block A held",
                               "block A landed within 3 mm of the spot clicked", "block B held",
                               "block B landed within 3 mm of the point clicked on C's top")),)
-FORBIDDEN = ("click_grab", "click_drop", "ClickToGrab", "click_with", "current_view", "tasks.pick", "tasks.place")
+FORBIDDEN = ("click_grab", "click_drop", "ClickToGrab", "click_with", "current_view", "tasks.pick", "tasks.place",
+             "armlab.tasks.click_rule", "click_rule.grab_target", "click_rule.drop_point")

@@ -57,4 +57,5 @@ def _sessions(rng):
 SPECS = (HiddenSpec("StationMachine", _sessions, atol=1e-9, adapter="_call_machine", prelude="definitions",
                     what="each press's outcome and state, what the port was asked, the history and the program"),)
 # latching_transition is not forbidden: the checks put it in place of run_command (adapters._call_machine)
-FORBIDDEN = ("TaskMachine", "command_transition", "armlab.tasks.transition")
+FORBIDDEN = ("TaskMachine", "command_transition", "armlab.tasks.transition", "armlab.tasks.buttons",
+             "refuse_out_of_turn")
