@@ -28,6 +28,7 @@ from armlab import motion_safety
 from armlab.arguments import finite_array, finite_float, plain
 from armlab.blocks import block_edge
 from armlab.kinematics import Unreachable
+from armlab.slots import kit_or_standin
 
 from . import perception
 from .handling import look, pick, place
@@ -72,13 +73,9 @@ def click_rule() -> tuple[GrabRule, DropRule]:
     """(grab rule, drop rule) of click_grab / click_drop: the kit's own (armlab.tasks.click_rule.grab_target /
     drop_point) where it is installed (the instructor's tree), the release's stand-ins centre_click_block /
     standin_drop_point otherwise (module notes)."""
-    try:
-        from . import click_rule as kit
-    except ModuleNotFoundError as e:
-        if e.name != f"{__package__}.click_rule":
-            raise
-        return centre_click_block, standin_drop_point
-    return kit.grab_target, kit.drop_point
+    kit = f"{__package__}.click_rule"
+    return (kit_or_standin(kit, "grab_target", centre_click_block),
+            kit_or_standin(kit, "drop_point", standin_drop_point))
 
 
 def click_world(session: Session, uv, frame=None) -> np.ndarray:

@@ -23,6 +23,7 @@ from typing import Any, NoReturn
 import numpy as np
 
 from armlab import planning
+from armlab.slots import kit_or_standin
 from armlab.station.contract import EmergencyStopped
 
 from . import teach
@@ -64,13 +65,7 @@ def latching_transition(machine: TaskMachine, state: str, action: Callable[[], A
 def default_transition() -> Transition:
     """The machine's transition when none is given: the kit's command_transition where it is installed (the
     instructor's tree), latching_transition otherwise (the student release)."""
-    try:
-        from .transition import command_transition
-    except ModuleNotFoundError as e:
-        if e.name != f"{__package__}.transition":
-            raise
-        return latching_transition
-    return command_transition
+    return kit_or_standin(f"{__package__}.transition", "command_transition", latching_transition)
 
 
 def latching_refusal(machine: TaskMachine, button: str, wanted: str) -> NoReturn:
@@ -87,13 +82,7 @@ def latching_refusal(machine: TaskMachine, button: str, wanted: str) -> NoReturn
 def default_refusal() -> Refusal:
     """The machine's refusal of a teaching button out of turn: the kit's refuse_out_of_turn where it is installed (the
     instructor's tree), latching_refusal otherwise (the student release)."""
-    try:
-        from .buttons import refuse_out_of_turn
-    except ModuleNotFoundError as e:
-        if e.name != f"{__package__}.buttons":
-            raise
-        return latching_refusal
-    return refuse_out_of_turn
+    return kit_or_standin(f"{__package__}.buttons", "refuse_out_of_turn", latching_refusal)
 
 
 class TaskMachine:

@@ -632,7 +632,8 @@ def test_the_twins_still_in_the_release_are_declared(release, exercise_id):
 
 def test_the_released_engine_runs_without_the_instructors_twins(release):
     """The kit's own code in the release needs none of the left-out twins: the robot model loads without its DH table,
-    the kit's IK and detection's colour check run, and the DH chain says how to chain the student's table."""
+    the kit's IK and detection's colour check run, the DH chain says how to chain the student's table, and the
+    machine and click-to-grab run their stand-ins."""
     out, _ = release
     code = """
 import numpy as np
@@ -649,6 +650,9 @@ try:
     kinematics.fk_dh(robot.home)
 except ValueError as e:
     print("dh:", e)
+from armlab.tasks import click, machine
+print("stand-ins", click.click_rule() == (click.centre_click_block, click.standin_drop_point),
+      machine.default_refusal() is machine.latching_refusal)
 """
     env = {"PYTHONPATH": str(out), "PATH": "/usr/bin:/bin", "MPLBACKEND": "Agg"}
     run = subprocess.run([sys.executable, "-c", code], cwd=out, env=env, capture_output=True, text=True)
@@ -656,6 +660,7 @@ except ValueError as e:
     lines = dict(line.split(" ", 1) for line in run.stdout.splitlines())
     assert lines["ik"] == lines["pox"] and lines["colours"] == "(1, 6)"
     assert "no DH table" in lines["dh:"]
+    assert lines["stand-ins"] == "True True", "the release's machine or click rule is not its stand-in"
 
 
 def test_the_release_machine_and_click_rule_are_another_methods():

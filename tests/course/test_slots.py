@@ -178,3 +178,16 @@ def test_slot_not_written_crosses_processes_and_names_its_slot():
         slots.SlotNotWritten("")
     with pytest.raises(TypeError):
         slots.standin(None, print, "")
+
+
+def test_kit_or_standin_takes_the_kits_where_installed_and_the_standin_otherwise(tmp_path, monkeypatch):
+    """The instructor's tree finds the kit's code that answers an exercise; without its module (the student release)
+    the stand-in answers; an import error inside an installed module is not taken for a missing module."""
+    from armlab.tasks import buttons
+
+    assert slots.kit_or_standin("armlab.tasks.buttons", "refuse_out_of_turn", print) is buttons.refuse_out_of_turn
+    assert slots.kit_or_standin("armlab.tasks.no_such_kit_module", "anything", print) is print
+    (tmp_path / "kit_breaks_inside.py").write_text("import no_such_dependency_of_the_kit\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    with pytest.raises(ModuleNotFoundError, match="no_such_dependency_of_the_kit"):
+        slots.kit_or_standin("kit_breaks_inside", "anything", print)
