@@ -536,7 +536,8 @@ def test_the_rubric_is_the_students_own_table(release, capsys):
 # -- no twin in the release ----------------------------------------------------------------------------------------
 # Per exercise, the instructor's code and data that compute its answer: none of it may exist in the student release.
 # ("file", path): a file; ("attr", module, dotted name): a module-level name or a class's attribute, looked up by
-# importing the release's module; ("text", path, snippet): source text in a released file (a notebook's code cells).
+# importing the release's module (absent when the module is); ("text", path, snippet): source text in a released file
+# (a notebook's code cells).
 TWINS = {
     "fk.dh_table": [("file", "armlab/data/rx200_dh.csv"),
                     ("text", "notebooks/02_forward_kinematics.ipynb", "def kit_table"),
@@ -583,7 +584,12 @@ _LOOKUP = """
 import importlib, json, sys
 found = []
 for module, name in json.loads(sys.argv[1]):
-    obj = importlib.import_module(module)
+    try:
+        obj = importlib.import_module(module)
+    except ModuleNotFoundError as e:      # the module itself left out (an error inside it would be a broken release)
+        if e.name != module:
+            raise
+        obj = None
     for part in name.split("."):
         obj = getattr(obj, part, None)
     found.append(obj is not None)
