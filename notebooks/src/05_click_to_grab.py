@@ -497,7 +497,8 @@ print(f"OK: your click sequence refused bare board, grabbed and dropped the red 
 # current frame (`session.last.frame`), by the kit's click rule. Clicks off the board, on the robot, on bare board or
 # out of reach raise `tasks.ClickRefused` and nothing moves. In the student release that rule is a lesser stand-in
 # for your sequence: a click grabs only within a few pixels of a block's detected centre, and a drop where the held
-# block was seen is refused; your `ClickSequence` runs through `tasks.click_with` (above).
+# block was seen is refused; your `ClickSequence` runs through `tasks.click_with` (above), and
+# `ClickToGrab(session, sequence=ClickSequence())` puts it behind the live panel instead of the kit's rule.
 #
 # In a live notebook you click the image itself: `ClickToGrab(session).widget()` shows the current frame
 # (downscaled to $w \times h = 640 \times 360$ px to keep it light) and listens to its clicks with `ipyevents`. The
