@@ -370,8 +370,9 @@ print("OK: your machine detected, taught and repeated on the simulator, and a st
 #
 # The panel drives the kit's `TaskMachine`. In the student release its teaching buttons are a lesser stand-in for
 # your `StationMachine`: a *teach*, *record* or *finish* pressed out of turn stops the station (press *reset* to go
-# on) instead of being refused. The emergency stop is the kit's own in both: it halts the arm through the guarded
-# arm, whatever a machine does.
+# on) instead of being refused. `station_panel(session, machine=OwnMachine(session, StationMachine))` (from
+# `armlab.tasks.port`) puts your machine behind the panel instead. The emergency stop is the kit's own either way:
+# it halts the arm through the guarded arm first, whatever a machine does.
 #
 # The view shows the camera image, its depth or the last detections; hovering shows the world point under the
 # pointer; a click grabs the block under it or drops the held one there. The buttons run the machine's commands

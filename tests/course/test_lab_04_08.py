@@ -155,3 +155,50 @@ def test_the_segmentation_score_names_a_bad_label_image():
         score_segmentation(case, np.zeros((10, 10), int), board)
     nothing = score_segmentation(case, np.full(case.rgb.shape[:2], -1), board)
     assert nothing.pairs and nothing.face_accuracy == 0.0 and nothing.board_labelled == 0.0
+
+
+class _CommandsOnly:
+    """A partial machine of one's own (commands, a stop and a reset; no teaching, no refusal rules) for the panel."""
+
+    def __init__(self, port, hears_the_stop=True):
+        self.port, self.hears_the_stop = port, hears_the_stop
+        self.state, self.history, self.program = "idle", ["idle"], None
+
+    def press(self, button, *args):
+        if button == "estop" and not self.hears_the_stop:
+            raise RuntimeError("this machine's estop is broken")
+        if button in ("estop", "reset"):
+            getattr(self.port, "halt" if button == "estop" else "restart")()
+        else:
+            self.history.append(button)
+            try:
+                return self.port.work(button, *args)
+            finally:
+                self.history.append("idle")
+        self.state = "estop" if button == "estop" else "idle"
+        self.history.append(self.state)
+        return None
+
+
+def test_a_machine_of_ones_own_drives_the_panel_and_the_estop_never_goes_through_it():
+    """station_panel(session, machine=OwnMachine(session, StationMachine)) presses the machine's buttons (a move is its
+    "execute"; a button it does not know is refused in the log); the E-STOP halts the arm through the port first, so
+    a machine whose estop raises still stops the station: the next move is refused by the guarded arm, nothing moves."""
+    from armlab import make_station, tasks
+    from armlab.tasks.port import OwnMachine
+    from armlab.ui import station_panel
+
+    station = make_station("sim", seed=0, scene={"objects": []})
+    session = tasks.start_session(station, "factory", sag=tasks.SagModel())     # no sag fit, no checkerboard: faster
+    panel = station_panel(session, machine=OwnMachine(session, _CommandsOnly), look=False)
+    panel.home()
+    assert "moved to" in panel.wait(), panel.messages
+    assert panel.machine.history[-2:] == ["execute", "idle"]
+    assert "teach refused" in panel.teach() and panel.machine.state == "idle"
+    broken = station_panel(session, machine=OwnMachine(session, lambda port: _CommandsOnly(port, False)), look=False)
+    q = station.arm.joint_positions().copy()
+    broken.estop()
+    assert isinstance(broken.machine.estop_error, RuntimeError) and broken.machine.stop_requested
+    broken.sleep()
+    assert "EmergencyStopped" in broken.wait(), broken.messages
+    np.testing.assert_allclose(station.arm.joint_positions(), q, atol=0.005)     # encoder readings jitter
