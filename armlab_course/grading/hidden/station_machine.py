@@ -58,4 +58,4 @@ SPECS = (HiddenSpec("StationMachine", _sessions, atol=1e-9, adapter="_call_machi
                     what="each press's outcome and state, what the port was asked, the history and the program"),)
 # latching_transition is not forbidden: the checks put it in place of run_command (adapters._call_machine)
 FORBIDDEN = ("TaskMachine", "command_transition", "armlab.tasks.transition", "armlab.tasks.buttons",
-             "refuse_out_of_turn")
+             "refuse_out_of_turn", "latching_refusal", "OwnMachine")
