@@ -7,7 +7,8 @@ STAMP   := .venv/.installed
 NBVAL   := --nbval --nbval-sanitize-with tests/nbval_sanitize.cfg --nbval-cell-timeout=600
 # Test files run in parallel, one process per core (at most 4); the tests of one file, and the cells of one notebook
 # (one kernel), stay together in one process (pytest-xdist's loadfile), the longest files first (conftest.py's
-# START_FIRST, in place of xdist's order by number of tests, which handed the longest file out last).
+# START_FIRST, in place of xdist's order by number of tests, which handed the longest file out last). `make test`
+# lists its 25 slowest steps at the end (a test's call, or a module fixture's setup), for keeping the suite in budget.
 PAR     := -n auto --maxprocesses 4 --dist loadfile --no-loadscope-reorder
 LINT_MORE :=
 # BEGIN INSTRUCTOR ONLY (the student release leaves these lines out: armlab_course.exercises.release)
@@ -46,7 +47,7 @@ demo: $(STAMP)
 ## checkout also every notebook under nbval, natively and under other CPUs' numerics
 test: $(STAMP) browser camera sandbox lint
 ifeq ($(RELEASE),)
-	$(PY) -m pytest -q $(PAR) tests notebooks $(NBVAL)
+	$(PY) -m pytest -q $(PAR) --durations=25 tests notebooks $(NBVAL)
 	bash tools/nbval-numerics $(PY) $(PAR) $(NBVAL)
 else
 	MPLBACKEND=Agg $(PY) -m pytest -q $(PAR) tests

@@ -190,21 +190,24 @@ DEPENDS: dict[str, set[str]] = {}
 
 def wrong_sets(ids: list[str]) -> list[list[str]]:
     """Runs of the hidden checks, each a set of exercises given a wrong answer (the rest the reference), such that
-    for every ordered pair (x, y) of `ids` some run has x wrong and y not: each exercise is wrong in a different half
-    of the runs (an antichain of k/2-subsets of range(k), k the fewest runs with C(k, k/2) >= len(ids))."""
+    every wrong answer of HIDDEN_WRONG runs (each exercise is wrong in as many runs as it has wrong answers, or more)
+    and, for every ordered pair (x, y) of `ids`, some run has x wrong and y not: the exercises' sets of runs are
+    distinct s-subsets of range(k), which no two contain one another, for the fewest runs k (s < k)."""
     from itertools import combinations
     from math import comb
 
-    k = 2
-    while comb(k, k // 2) < len(ids):
-        k += 2
-    halves = list(combinations(range(k), k // 2))[:len(ids)]
-    return [[e for e, half in zip(ids, halves, strict=True) if run in half] for run in range(k)]
+    least = max(len(HIDDEN_WRONG[e]) for e in ids)
+    k = least + 1
+    while not any(comb(k, s) >= len(ids) for s in range(least, k)):
+        k += 1
+    s = next(s for s in range(least, k) if comb(k, s) >= len(ids))
+    chosen = list(combinations(range(k), s))[:len(ids)]
+    return [[e for e, runs in zip(ids, chosen, strict=True) if run in runs] for run in range(k)]
 
 
 def check_wrong_answers(ids: list[str], blank: list[str] = ()) -> None:
     """The hidden checks of these exercises: the reference (in one harness run after the one computing the expected
-    values) passes every one; then, in the runs of wrong_sets (each exercise wrong in half of them, its wrong answers
+    values) passes every one; then, in the runs of wrong_sets (each exercise wrong in some of them, its wrong answers
     in turn), each wrong answer fails at least one of its exercise's checks (a hard-coded one every check), and every
     exercise at its reference passes all of its checks unless it calls (DEPENDS) an exercise that is wrong in that
     run: a wrong answer costs its own exercise only. Each declared dependency is seen failing once (DEPENDS is true).
