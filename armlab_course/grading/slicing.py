@@ -1,0 +1,491 @@
+"""The cells a notebook's public checks need: a conservative backward slice over its top-level code cells, computed
+statically with `ast` (nothing runs), so that the grader and the self-check run only those cells of a notebook
+(armlab_course.grading.run.Runner.notebook, `keep`) and give the verdict of the notebook run from the top.
+
+Per code cell, at the notebook's top level (a function's parameters and locals are its own):
+
+- *defs*: the names the cell binds (assignments, imports, def/class, for/with/except targets, walrus);
+- *reads*: the names whose value from an earlier cell the cell may read -- every name loaded before the cell binds
+  it unconditionally (a name bound in an `if`, a loop or a `try` stays read afterwards; a for loop's target is
+  fresh only inside its body), and every name a function, lambda, class or comprehension of the cell loads without
+  binding it (it may run later, reading whatever value is there then). A read of an object may mutate it.
+
+A cell joins the slice when it binds a name that a later cell of the slice reads (it may be the definition that
+reaches it), or when it reads a name that some cell of the slice binds or reads (it may mutate an object the slice
+uses, through any name that object has there). The slice is the fixed point from the target cells (the check cells),
+over the cells up to the last target. Besides:
+
+- A cell that cannot be analysed -- not Python (an IPython magic, a shell escape), `global`/`nonlocal`, a star
+  import, or reaching the namespace or the interpreter by other means than names (`exec`, `eval`, `globals()`,
+  `setattr`, `__dict__`, `__import__`, `importlib`, `sys`, `os`, `builtins`, `get_ipython`...) -- joins, with every
+  cell before it.
+- Global random state (the `random` module, `np.random.<function>` other than making a generator of one's own) is
+  one shared name, "<random state>", read and written by every cell touching it; so is the file system, "<files>",
+  for every cell that names a file API (open, Path, tempfile, save/load...).
+- A name bound only by `import` (a module, a library's function or class) or a builtin is shared state only through
+  the cells that write into it (an attribute or item assignment, np.set_printoptions, a seed...): a cell that only
+  reads it (np.array, cv2.cvtColor, make_station) does not join through it, but it needs the cells that import it.
+
+What the slice cannot see is state hidden inside a library call of a cell left out (a cache a kit function fills,
+a singleton two calls share). The kit keeps run state in the objects a notebook names (a station, a session), which
+the slice follows; tests/course/test_grading_slicing.py holds the rules.
+"""
+
+from __future__ import annotations
+
+import ast
+import builtins
+import json
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+__all__ = ["CellNames", "cell_names", "public_slice", "slice_notebook", "UNKNOWN", "RANDOM_STATE", "FILES"]
+
+UNKNOWN = "<unknown>"             # a cell that cannot be analysed: it joins, with every cell before it
+RANDOM_STATE = "<random state>"
+FILES = "<files>"
+# reaching the namespace or the interpreter by other ways than names
+_OPAQUE = {"exec", "eval", "compile", "globals", "locals", "vars", "setattr", "delattr", "__import__", "__builtins__",
+           "builtins", "importlib", "sys", "os", "get_ipython", "input", "breakpoint", "ctypes", "gc", "inspect"}
+_FILE_NAMES = {"open", "Path", "PurePath", "tempfile", "shutil", "pathlib", "glob", "pickle", "json", "savefig",
+               "save", "savez", "savez_compressed", "savetxt", "load", "loadtxt", "genfromtxt", "fromfile", "tofile",
+               "write_text", "read_text", "write_bytes", "read_bytes", "imwrite", "imread", "mkdtemp", "mkstemp",
+               "NamedTemporaryFile", "TemporaryDirectory", "to_viewer", "unlink", "mkdir", "rmtree", "csv"}
+# calls that change a library's global state although they only read the library's name
+_SETTERS = {"seed", "set_printoptions", "setLogLevel", "setNumThreads", "rc", "rcParams", "rcdefaults", "use",
+            "filterwarnings", "simplefilter", "resetwarnings", "seterr", "set_state", "setUseOptimized",
+            "setRNGSeed", "register", "patch", "update", "clear", "append", "extend", "insert", "pop", "remove",
+            "setdefault", "popitem", "add", "discard"}
+# np.random / random functions that make a generator of one's own (no global state)
+_OWN_RNG = {"default_rng", "Generator", "RandomState", "SeedSequence", "PCG64", "PCG64DXSM", "Philox", "SFC64",
+            "MT19937", "BitGenerator", "Random"}
+
+
+@dataclass
+class CellNames:
+    """What one cell shares with others (see the module's text): `defs`, `reads`, `imports` (names it binds by
+    import), `written` (names whose object it writes into through an attribute, an item or a setter call)."""
+
+    defs: set[str] = field(default_factory=set)
+    reads: set[str] = field(default_factory=set)
+    imports: set[str] = field(default_factory=set)
+    written: set[str] = field(default_factory=set)
+    pure: set[str] = field(default_factory=set)
+
+    @property
+    def opaque(self) -> bool:
+        return UNKNOWN in self.reads
+
+
+def _chain(node: ast.AST) -> list[str]:
+    """a.b.c -> ['a', 'b', 'c'] (a Name at the base, subscripts and calls looked through), else []."""
+    parts = []
+    while isinstance(node, (ast.Attribute, ast.Subscript, ast.Call)):
+        if isinstance(node, ast.Attribute):
+            parts.append(node.attr)
+            node = node.value
+        elif isinstance(node, ast.Subscript):
+            node = node.value
+        else:
+            node = node.func
+    return [node.id, *reversed(parts)] if isinstance(node, ast.Name) else []
+
+
+def _targets(node: ast.AST) -> set[str]:
+    """The plain names a binding target binds (a, (a, b), [a, *b]); an attribute or item target binds none."""
+    if isinstance(node, ast.Name):
+        return {node.id}
+    if isinstance(node, (ast.Tuple, ast.List)):
+        return set().union(*(_targets(e) for e in node.elts)) if node.elts else set()
+    if isinstance(node, ast.Starred):
+        return _targets(node.value)
+    return set()
+
+
+_SCOPES = (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda, ast.ClassDef, ast.ListComp, ast.SetComp,
+           ast.DictComp, ast.GeneratorExp)
+
+
+def _free(scope: ast.AST) -> set[str]:
+    """The names a nested scope (function, lambda, class, comprehension) loads and does not bind itself: the
+    module-level names it may read whenever it runs (over-approximated: a name bound anywhere inside counts as
+    bound)."""
+    loaded, bound = set(), set()
+    for node in ast.walk(scope):
+        if isinstance(node, ast.Name):
+            (loaded if isinstance(node.ctx, ast.Load) else bound).add(node.id)
+        elif isinstance(node, ast.arg):
+            bound.add(node.arg)
+        elif isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)) and node is not scope:
+            bound.add(node.name)
+        elif isinstance(node, (ast.Import, ast.ImportFrom)):
+            bound |= {a.asname or a.name.split(".")[0] for a in node.names}
+        elif isinstance(node, ast.ExceptHandler) and node.name:
+            bound.add(node.name)
+    if isinstance(scope, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+        bound.discard(scope.name)
+        # decorators, defaults and bases are evaluated where the def is, but reading them counts just the same
+    return loaded - bound
+
+
+_CONSTANTS = (ast.Constant,)
+
+
+def _constant(node: ast.AST | None) -> bool:
+    """An immutable literal (a number, a string, None, a tuple of them)."""
+    if node is None or isinstance(node, ast.Constant):
+        return True
+    if isinstance(node, ast.Tuple):
+        return all(_constant(e) for e in node.elts)
+    if isinstance(node, ast.UnaryOp):
+        return _constant(node.operand)
+    return False
+
+
+def _pure(s: ast.stmt) -> bool:
+    """A def or class statement whose object holds no state of its own: no decorator, only constant default
+    arguments, and for a class, a body of methods, docstrings and constant attributes, with no method reaching the
+    class through `__class__` or `type(...)` (instances hold their own state; a free name a method reads is read by
+    every call, see public_slice)."""
+    if s.decorator_list:
+        return False
+    if isinstance(s, ast.ClassDef):
+        if s.keywords:
+            return False
+        for b in s.body:
+            if isinstance(b, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                if not _pure(b) and any(not isinstance(d, ast.Name) or d.id not in ("staticmethod", "classmethod",
+                                                                                    "property")
+                                        for d in b.decorator_list):
+                    return False
+                if b.decorator_list and not all(_constant(d) for d in b.args.defaults + b.args.kw_defaults):
+                    return False
+            elif isinstance(b, ast.Expr) and isinstance(b.value, ast.Constant):
+                continue
+            elif isinstance(b, (ast.Assign, ast.AnnAssign)) and _constant(b.value):
+                continue
+            else:
+                return False
+        return not any((isinstance(n, ast.Attribute) and n.attr == "__class__") or
+                       (isinstance(n, ast.Name) and n.id in ("type", "super") and False) for n in ast.walk(s)) and \
+            not any(isinstance(n, ast.Call) and isinstance(n.func, ast.Name) and n.func.id == "type"
+                    for n in ast.walk(s))
+    args = s.args
+    return all(_constant(d) for d in args.defaults + args.kw_defaults)
+
+
+class _Cell:
+    """Walks one cell's top-level statements in order (see the module's text)."""
+
+    def __init__(self) -> None:
+        self.names = CellNames()
+        self.sure: set[str] = set()          # bound unconditionally so far at the top level
+
+    def loads(self, node: ast.AST, fresh: set[str] = frozenset()) -> None:
+        """Record what evaluating `node` at the top level reads (names in `fresh` are bound by then)."""
+        stack = [node]
+        while stack:
+            n = stack.pop()
+            if isinstance(n, _SCOPES):
+                self.names.reads |= _free(n)
+                self._marks(n)
+                continue
+            if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Load) and n.id not in self.sure | set(fresh):
+                self.names.reads.add(n.id)
+            self._mark(n)
+            stack.extend(ast.iter_child_nodes(n))
+
+    def _marks(self, scope: ast.AST) -> None:
+        for n in ast.walk(scope):
+            self._mark(n)
+
+    def _mark(self, n: ast.AST) -> None:
+        """The pseudo-names, opaque uses and writes of one node."""
+        r, w = self.names.reads, self.names.written
+        if isinstance(n, (ast.Global, ast.Nonlocal)):
+            r.add(UNKNOWN)
+        elif isinstance(n, ast.Name) and n.id in _OPAQUE:
+            r.add(UNKNOWN)
+        elif isinstance(n, ast.Name) and n.id in _FILE_NAMES:
+            r.add(FILES)
+        elif isinstance(n, ast.Name) and n.id == "random":
+            r.add(RANDOM_STATE)
+        elif isinstance(n, ast.Attribute):
+            chain = _chain(n)
+            if n.attr in _OPAQUE:
+                r.add(UNKNOWN)
+            if n.attr in _FILE_NAMES:
+                r.add(FILES)
+            if chain and "random" in chain[:-1] and n.attr not in _OWN_RNG:
+                r.add(RANDOM_STATE)
+            if chain and (isinstance(n.ctx, (ast.Store, ast.Del)) or n.attr in _SETTERS):
+                w.add(chain[0])
+        elif isinstance(n, ast.Subscript) and isinstance(n.ctx, (ast.Store, ast.Del)):
+            chain = _chain(n.value)
+            if chain:
+                w.add(chain[0])
+        elif isinstance(n, ast.AugAssign):
+            chain = _chain(n.target)
+            if chain:
+                w.add(chain[0])
+        elif isinstance(n, (ast.Import, ast.ImportFrom)):
+            for alias in n.names:
+                top = (n.module if isinstance(n, ast.ImportFrom) and n.module else alias.name).split(".")[0]
+                if alias.name == "*" or top in _OPAQUE or alias.name in _OPAQUE:
+                    r.add(UNKNOWN)
+                if top in _FILE_NAMES or alias.name in _FILE_NAMES:
+                    r.add(FILES)
+                if "random" in (top, alias.name.split(".")[-1]):
+                    r.add(RANDOM_STATE)
+
+    def bind(self, names: set[str], sure: bool) -> None:
+        self.names.defs |= names
+        if sure:
+            self.sure |= names
+
+    def statement(self, s: ast.stmt, sure: bool = True) -> None:
+        """One statement; `sure`: it runs whenever the cell does (not inside an if, a loop or a try)."""
+        if isinstance(s, (ast.Assign, ast.AnnAssign)):
+            if s.value is not None:
+                self.loads(s.value)
+            targets = s.targets if isinstance(s, ast.Assign) else [s.target]
+            for t in targets:
+                if not isinstance(t, ast.Name):
+                    self.loads(t)          # a.b = ..., a[i] = ...: reads a (and writes into it)
+                self._marks(t)
+            self.bind(set().union(*(_targets(t) for t in targets)), sure and s.value is not None)
+        elif isinstance(s, ast.AugAssign):
+            self.loads(s.target.value if not isinstance(s.target, ast.Name) else s.target)
+            if isinstance(s.target, ast.Name):
+                self.names.reads.add(s.target.id)
+            self.loads(s.value)
+            self._mark(s)
+            self.bind(_targets(s.target), sure)
+        elif isinstance(s, (ast.Import, ast.ImportFrom)):
+            self._mark(s)
+            bound = {a.asname or a.name.split(".")[0] for a in s.names if a.name != "*"}
+            self.names.imports |= bound
+            self.bind(bound, sure)
+        elif isinstance(s, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+            self.loads(s)
+            self.bind({s.name}, sure)
+            if _pure(s):
+                self.names.pure.add(s.name)
+        elif isinstance(s, (ast.For, ast.AsyncFor)):
+            self.loads(s.iter)
+            self._marks(s.target)
+            fresh = _targets(s.target)
+            inner = _Cell()
+            inner.names, inner.sure = self.names, self.sure | fresh
+            for b in s.body + s.orelse:
+                inner.statement(b, sure=False)
+            self.bind(fresh, False)
+            self.names.defs |= inner.names.defs
+        elif isinstance(s, (ast.With, ast.AsyncWith)):
+            for item in s.items:
+                self.loads(item.context_expr)
+                if item.optional_vars is not None:
+                    self._marks(item.optional_vars)
+                    self.bind(_targets(item.optional_vars), sure)
+            for b in s.body:
+                self.statement(b, sure=False)
+        elif isinstance(s, (ast.If, ast.While)):
+            self.loads(s.test)
+            for b in s.body + s.orelse:
+                self.statement(b, sure=False)
+        elif isinstance(s, ast.Try) or type(s).__name__ == "TryStar":
+            for b in s.body + s.orelse + s.finalbody:
+                self.statement(b, sure=False)
+            for h in s.handlers:
+                if h.type is not None:
+                    self.loads(h.type)
+                if h.name:
+                    self.bind({h.name}, False)
+                for b in h.body:
+                    self.statement(b, sure=False)
+        elif isinstance(s, ast.Delete):
+            for t in s.targets:
+                self.loads(t)
+                self._marks(t)
+                self.names.reads |= _targets(t)
+            self.bind(set().union(*(_targets(t) for t in s.targets)), False)
+        else:                             # expressions, assert, return, raise, pass, match...
+            self.loads(s)
+            for n in ast.walk(s):         # a walrus binds at the top level too
+                if isinstance(n, ast.NamedExpr):
+                    self.bind(_targets(n.target), False)
+        if isinstance(s, ast.Match):
+            for n in ast.walk(s):
+                if isinstance(n, (ast.MatchAs, ast.MatchStar)) and n.name:
+                    self.bind({n.name}, False)
+                if isinstance(n, ast.MatchMapping) and n.rest:
+                    self.bind({n.rest}, False)
+
+
+def cell_names(source: str) -> CellNames:
+    """The names of one code cell (see the module's text); a cell that cannot be analysed reads UNKNOWN."""
+    try:
+        tree = ast.parse(source)
+        cell = _Cell()
+        for s in tree.body:
+            cell.statement(s)
+    except (SyntaxError, ValueError, RecursionError, MemoryError):
+        return CellNames(reads={UNKNOWN})
+    return cell.names
+
+
+def _units(source: str) -> list[tuple[int, int, CellNames]] | None:
+    """A cell's top-level statements as (first line, last line, their names), 1-based and inclusive, decorators
+    included, statements sharing a line merged into one; None for a cell that cannot be parsed."""
+    try:
+        tree = ast.parse(source)
+    except (SyntaxError, ValueError, RecursionError, MemoryError):
+        return None
+    spans: list[list] = []
+    for s in tree.body:
+        first = min([s.lineno] + [d.lineno for d in getattr(s, "decorator_list", [])])
+        if spans and first <= spans[-1][1]:
+            spans[-1][1] = max(spans[-1][1], s.end_lineno)
+            spans[-1][2].append(s)
+        else:
+            spans.append([first, s.end_lineno, [s]])
+    out = []
+    for first, last, statements in spans:
+        cell = _Cell()
+        try:
+            for s in statements:
+                cell.statement(s)
+        except (RecursionError, MemoryError):
+            return None
+        out.append((first, last, cell.names))
+    return out
+
+
+def public_slice(sources: Sequence[str], targets: Iterable[int], explain: list[str] | None = None) -> dict[int, str]:
+    """What of the code cells (`sources`, the notebook's code cells in order) the target cells need: per code cell
+    up to the last target, its source as the slice runs it -- whole, "" when none of it is needed, or with the
+    top-level statements not needed blanked (their lines emptied, so every kept line keeps its number). The target
+    cells are kept whole, and so is a cell that cannot be parsed. Empty for no target."""
+    targets = set(targets)
+    if not targets:
+        return {}
+    last = max(targets)
+    units: list[tuple[int, int, int, CellNames]] = []      # (cell, first line, last line, names), in run order
+    for i, source in enumerate(sources[:last + 1]):
+        parsed = _units(source)
+        if parsed is None or i in targets:
+            names = CellNames(reads={UNKNOWN}) if parsed is None else cell_names(source)
+            units.append((i, 1, max(1, len(source.splitlines())), names))
+        else:
+            units += [(i, first, end, names) for first, end, names in parsed]
+    reasons: dict[int, str] = {}
+    kept = _fixed_point([u[3] for u in units], {k for k, u in enumerate(units) if u[0] in targets}, reasons)
+    if explain is not None:
+        for k in sorted(kept):
+            reason = reasons.get(k, "a target, or before an opaque unit")
+            explain.append(f"cell {units[k][0]} lines {units[k][1]}-{units[k][2]}: {reason}")
+    out = {}
+    for i, source in enumerate(sources[:last + 1]):
+        mine = [k for k, u in enumerate(units) if u[0] == i]
+        if all(k in kept for k in mine):
+            out[i] = source
+        elif not any(k in kept for k in mine):
+            out[i] = ""
+        else:
+            lines = source.splitlines()
+            for k in mine:
+                if k not in kept:
+                    _, first, end, _ = units[k]
+                    lines[first - 1:end] = [""] * (end - first + 1)
+            out[i] = "\n".join(lines) + "\n"
+    return out
+
+
+def _fixed_point(cells: list[CellNames], targets: set[int], why: dict[int, str] | None = None) -> set[int]:
+    """The units (in run order) the target units need (the module's text); `why`, if given, gets per unit joined
+    the reason."""
+    why = {} if why is None else why
+    if not targets:
+        return set()
+    last = max(targets)
+    cells = cells[:last + 1]
+    opaque = [i for i, c in enumerate(cells) if c.opaque]
+    keep = set(targets) | set(range(max(opaque) + 1 if opaque else 0))
+    # names bound by import only, and builtins: shared only through the cells that bind or write into them
+    rebound = set().union(*(c.defs - c.imports for c in cells))
+    library = (set().union(*(c.imports for c in cells)) | set(dir(builtins))) - rebound
+    definers: dict[str, set[int]] = {}
+    for i, c in enumerate(cells):
+        for n in (c.imports | c.written) & library:
+            definers.setdefault(n, set()).add(i)
+    # names bound only by a stateless def or class (_pure): reading one reads what its body reads (free names, found
+    # in its definition's reads), and needs its definition; it is no object through which state is shared
+    bound_by = {}
+    for i, c in enumerate(cells):
+        for n in c.defs:
+            bound_by.setdefault(n, set()).add(i)
+    written = set().union(*(c.written for c in cells))
+    pure = {n for n, units in bound_by.items() if n not in written and all(n in cells[i].pure for i in units)}
+
+    def expanded(i: int) -> set[str]:
+        out, todo = set(), list(cells[i].reads)
+        while todo:
+            n = todo.pop()
+            if n in out:
+                continue
+            out.add(n)
+            if n in pure:
+                todo += [m for j in bound_by[n] for m in cells[j].reads]
+        return out
+
+    reads = [expanded(i) - library - pure for i in range(len(cells))]
+    defs = [c.defs - library - pure for c in cells]
+    for n in pure:
+        definers[n] = bound_by[n]
+    library |= pure
+    while True:
+        touched = set().union(*(reads[k] | defs[k] for k in keep))
+        more = set()
+        for i in range(last + 1):
+            if i in keep:
+                for n in expanded(i) & library:
+                    for j in definers.get(n, ()):
+                        if j < i and j not in keep:
+                            more.add(j)
+                            why.setdefault(j, f"binds or writes {n}, read by unit {i}")
+                continue
+            later = set().union(*(reads[k] for k in keep if k > i))
+            if defs[i] & later or reads[i] & touched:
+                more.add(i)
+                why.setdefault(i, f"binds {sorted(defs[i] & later)} read later" if defs[i] & later else
+                               f"reads {sorted(reads[i] & touched)}, which the slice uses")
+        if not more - keep:
+            return keep
+        keep |= more
+
+
+def slice_notebook(path: Path, exercise_ids: Iterable[str]) -> None:
+    """Rewrite the notebook at `path` (a run's own copy) to what the public checks of `exercise_ids` need
+    (public_slice over its CHECK cells of those exercises): the code cells up to the last of them, each whole,
+    emptied or with its unneeded statements blanked, every cell keeping its place (nbval's 'Cell N' and the
+    messages' cell numbers are the notebook's). A notebook with none of their check cells is left as it is."""
+    from .run import check_cells
+
+    ids = set(exercise_ids)
+    targets = [i for i, tagged in check_cells(path).items() if ids & set(tagged)]
+    if not targets:
+        return
+    nb = json.loads(path.read_text(encoding="utf-8"))
+    code = [c for c in nb["cells"] if c["cell_type"] == "code"]
+    sources = public_slice(["".join(c["source"]) for c in code], targets)
+    last = code[max(targets)]
+    cells = []
+    for cell in nb["cells"]:
+        cells.append(cell)
+        if cell is last:
+            break
+    for i, cell in enumerate(c for c in cells if c["cell_type"] == "code"):
+        cell["source"] = sources[i].splitlines(keepends=True)
+    nb["cells"] = cells
+    path.write_text(json.dumps(nb, indent=1, ensure_ascii=False) + "\n", encoding="utf-8")
