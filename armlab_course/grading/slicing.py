@@ -72,6 +72,8 @@ class CellNames:
     imports: set[str] = field(default_factory=set)
     written: set[str] = field(default_factory=set)
     pure: set[str] = field(default_factory=set)
+    functions: set[str] = field(default_factory=set)  # bound by a def or class statement
+    kills: set[str] = field(default_factory=set)      # bound whenever the cell runs: an earlier value is gone
 
     @property
     def opaque(self) -> bool:
@@ -270,6 +272,7 @@ class _Cell:
         elif isinstance(s, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
             self.loads(s)
             self.bind({s.name}, sure)
+            self.names.functions.add(s.name)
             if _pure(s):
                 self.names.pure.add(s.name)
         elif isinstance(s, (ast.For, ast.AsyncFor)):
@@ -332,6 +335,7 @@ def cell_names(source: str) -> CellNames:
             cell.statement(s)
     except (SyntaxError, ValueError, RecursionError, MemoryError):
         return CellNames(reads={UNKNOWN})
+    cell.names.kills = cell.sure & cell.names.defs
     return cell.names
 
 
@@ -358,6 +362,7 @@ def _units(source: str) -> list[tuple[int, int, CellNames]] | None:
                 cell.statement(s)
         except (RecursionError, MemoryError):
             return None
+        cell.names.kills = cell.sure & cell.names.defs
         out.append((first, last, cell.names))
     return out
 
@@ -404,7 +409,9 @@ def public_slice(sources: Sequence[str], targets: Iterable[int], explain: list[s
 
 def _fixed_point(cells: list[CellNames], targets: set[int], why: dict[int, str] | None = None) -> set[int]:
     """The units (in run order) the target units need (the module's text); `why`, if given, gets per unit joined
-    the reason."""
+    the reason. An object is a name with the units whose binding of it may reach a point (the last unit binding it
+    whenever it runs, and any binding it only maybe after that): two units share an object when they name it with
+    a common reaching unit."""
     why = {} if why is None else why
     if not targets:
         return set()
@@ -419,31 +426,42 @@ def _fixed_point(cells: list[CellNames], targets: set[int], why: dict[int, str] 
     for i, c in enumerate(cells):
         for n in (c.imports | c.written) & library:
             definers.setdefault(n, set()).add(i)
-    # names bound only by a stateless def or class (_pure): reading one reads what its body reads (free names, found
-    # in its definition's reads), and needs its definition; it is no object through which state is shared
-    bound_by = {}
+    # names bound only by a stateless def or class (_pure) are no object through which state is shared: reading one
+    # needs its definitions (and, as for every function, reads what its body reads: expanded)
+    bound_by: dict[str, list[int]] = {}
     for i, c in enumerate(cells):
         for n in c.defs:
-            bound_by.setdefault(n, set()).add(i)
+            bound_by.setdefault(n, []).append(i)
     written = set().union(*(c.written for c in cells))
     pure = {n for n, units in bound_by.items() if n not in written and all(n in cells[i].pure for i in units)}
 
     def expanded(i: int) -> set[str]:
+        """What unit i reads, with what every function or class it reads reads when called (stateless or not)."""
         out, todo = set(), list(cells[i].reads)
         while todo:
             n = todo.pop()
             if n in out:
                 continue
             out.add(n)
-            if n in pure:
-                todo += [m for j in bound_by[n] for m in cells[j].reads]
+            todo += [m for j in bound_by.get(n, ()) if n in cells[j].functions for m in cells[j].reads]
         return out
 
-    reads = [expanded(i) - library - pure for i in range(len(cells))]
-    defs = [c.defs - library - pure for c in cells]
     for n in pure:
-        definers[n] = bound_by[n]
+        definers[n] = set(bound_by[n])
     library |= pure
+
+    def reaching(i: int, n: str) -> frozenset:
+        """The units whose binding of n may be the one unit i sees (-1: none, n comes from nowhere earlier)."""
+        out = set()
+        for j in reversed(bound_by.get(n, [])):
+            if j < i:
+                out.add(j)
+                if n in cells[j].kills:
+                    return frozenset(out)
+        return frozenset(out | {-1})
+
+    reads = [{(n, j) for n in expanded(i) - library for j in reaching(i, n)} for i in range(len(cells))]
+    defs = [{(n, i) for n in c.defs - library} for i, c in enumerate(cells)]
     while True:
         touched = set().union(*(reads[k] | defs[k] for k in keep))
         more = set()
@@ -455,11 +473,10 @@ def _fixed_point(cells: list[CellNames], targets: set[int], why: dict[int, str] 
                             more.add(j)
                             why.setdefault(j, f"binds or writes {n}, read by unit {i}")
                 continue
-            later = set().union(*(reads[k] for k in keep if k > i))
-            if defs[i] & later or reads[i] & touched:
+            if defs[i] & touched or reads[i] & touched:
                 more.add(i)
-                why.setdefault(i, f"binds {sorted(defs[i] & later)} read later" if defs[i] & later else
-                               f"reads {sorted(reads[i] & touched)}, which the slice uses")
+                why.setdefault(i, f"binds {sorted(n for n, _ in defs[i] & touched)} read later" if defs[i] & touched
+                               else f"reads {sorted(n for n, _ in reads[i] & touched)}, which the slice uses")
         if not more - keep:
             return keep
         keep |= more

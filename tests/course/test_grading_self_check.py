@@ -2,8 +2,8 @@
 and each of its plausible wrong answers (tests/course/wrong_answers.py), `self_check(only=EXERCISE)` in a student
 release holding that region passes and fails the same public CHECK cells, with the same names and messages, as the
 grader's run of that exercise's notebook does for the same region (Grader.public_checks: both run
-armlab_course.grading.public); a blank region is blank for both. Where a check can tell a wrong answer's cause, its message
-names it (HINTS). Each case costs a notebook run on both sides: the cheap notebooks' exercises run by default
+armlab_course.grading.public); a blank region is blank for both. Where a check can tell a wrong answer's cause, its
+message names it (HINTS). Each case costs a notebook run on both sides: the cheap notebooks' exercises run by default
 (CHEAP), the others with ARMLAB_SELF_CHECK_ALL=1; their hints are tested by the self-check alone by default."""
 
 from __future__ import annotations
