@@ -73,6 +73,10 @@ class CellNames:
     written: set[str] = field(default_factory=set)
     pure: set[str] = field(default_factory=set)
     functions: set[str] = field(default_factory=set)  # bound by a def or class statement
+    mutated: set[str] = field(default_factory=set)    # names whose object the cell may change (_effects)
+    linked: set[str] = field(default_factory=set)     # names whose objects the cell may tie together (_effects)
+    iterated: set[str] = field(default_factory=set)   # names whose objects it iterates over (uses up an iterator)
+    containers: set[str] = field(default_factory=set)  # names it binds to a fresh list, tuple, dict or set
     kills: set[str] = field(default_factory=set)      # bound whenever the cell runs: an earlier value is gone
 
     @property
@@ -177,6 +181,120 @@ def _pure(s: ast.stmt) -> bool:
     return all(_constant(d) for d in args.defaults + args.kw_defaults)
 
 
+# calls that change none of their arguments, and return a fresh value holding none of them
+_NEW_VALUE = {"len", "str", "repr", "int", "float", "bool", "complex", "isinstance", "issubclass", "hash", "id", "abs",
+              "round", "format", "chr", "ord", "hex", "bin", "oct", "divmod", "pow", "print", "any", "all", "callable",
+              "hasattr"}
+# builtins that change none of their arguments (they may return one, or a container holding them)
+_PURE_BUILTINS = _NEW_VALUE | {"list", "tuple", "set", "frozenset", "dict", "sorted", "min", "max", "sum", "type",
+                               "enumerate", "zip", "range", "reversed", "slice", "getattr"}
+# numpy's and math's functions change none of their arguments, but these (and any call given out=)
+_NUMPY_MUTATORS = {"copyto", "put", "place", "putmask", "fill_diagonal", "put_along_axis", "shuffle", "seed"}
+_PURE_MODULES = {"np", "numpy", "math"}
+# methods that change nothing of their object (numpy arrays, str, dict, list reads)
+_PURE_METHODS = {"copy", "sum", "mean", "max", "min", "std", "var", "round", "astype", "reshape", "tolist", "item",
+                 "any", "all", "argmax", "argmin", "argsort", "nonzero", "dot", "transpose", "ravel", "flatten",
+                 "cumsum", "prod", "squeeze", "get", "keys", "values", "items", "count", "index", "startswith",
+                 "endswith", "format", "join", "split", "splitlines", "strip", "rstrip", "lstrip", "lower", "upper",
+                 "isdigit", "isalpha"}
+
+
+def _objects(node: ast.AST | None) -> set[str]:
+    """The names whose objects the value of expression `node` may be or hold (what binding it to a name aliases)."""
+    if node is None or isinstance(node, (ast.Constant, ast.JoinedStr, ast.Compare)):
+        return set()
+    if isinstance(node, ast.Name):
+        return {node.id}
+    if isinstance(node, (ast.Attribute, ast.Subscript, ast.Starred, ast.Await, ast.FormattedValue)):
+        return _objects(node.value)
+    if isinstance(node, ast.UnaryOp):
+        return set() if isinstance(node.op, ast.Not) else _objects(node.operand)
+    if isinstance(node, ast.Call):
+        if isinstance(node.func, ast.Name) and node.func.id in _NEW_VALUE:
+            return set()
+        out = _objects(node.func)
+        for a in [*node.args, *(k.value for k in node.keywords)]:
+            out |= _objects(a)
+        return out
+    if isinstance(node, _SCOPES):
+        return _free(node)
+    return set().union(*(_objects(c) for c in ast.iter_child_nodes(node)))
+
+
+def _pure_call(node: ast.Call) -> bool:
+    """A call that changes none of its arguments (a builtin, numpy's or math's functions)."""
+    if any(k.arg == "out" for k in node.keywords):
+        return False
+    if isinstance(node.func, ast.Name):
+        return node.func.id in _PURE_BUILTINS
+    chain = _chain(node.func)
+    return len(chain) >= 2 and chain[0] in _PURE_MODULES and chain[-1] not in _NUMPY_MUTATORS and \
+        "random" not in chain
+
+
+_CONTAINER_CALLS = {"list", "tuple", "dict", "set", "sorted", "frozenset"}
+
+
+def _container(node: ast.AST | None) -> bool:
+    """A fresh list, tuple, dict or set (a display, a comprehension, list(...), a sum of them): iterating over it uses
+    nothing up."""
+    if isinstance(node, (ast.List, ast.Tuple, ast.Dict, ast.Set, ast.ListComp, ast.DictComp, ast.SetComp)):
+        return True
+    if isinstance(node, ast.BinOp):
+        return _container(node.left) and _container(node.right)
+    return isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id in _CONTAINER_CALLS
+
+
+def _effects(statement: ast.stmt) -> tuple[set[str], set[str], set[str]]:
+    """(mutated, linked, iterated) of one top-level statement: the names whose objects it may change -- by a method
+    call or any call they go into (but _pure_call), an attribute or item written, an augmented assignment, a `with`
+    -- the names whose objects it may tie together (what it binds, and what goes into one call), and the names whose
+    objects it iterates over (an iterator is used up: a change, unless the object is a fresh container,
+    public_slice). Function and class bodies run when called: a call reads their free names (public_slice)."""
+    mutated, linked, iterated = set(), set(), set()
+    stack = [statement]
+    if isinstance(statement, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):   # what runs at the def
+        stack = [*statement.decorator_list, *getattr(statement, "bases", []),
+                 *(k.value for k in getattr(statement, "keywords", []))]
+        if not isinstance(statement, ast.ClassDef):
+            stack += [*statement.args.defaults, *(d for d in statement.args.kw_defaults if d is not None)]
+    while stack:
+        n = stack.pop()
+        if isinstance(n, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef, ast.Lambda)) and n is not statement:
+            linked |= _objects(n) if isinstance(n, ast.Lambda) else set()
+            continue
+        if isinstance(n, ast.Call):
+            func = n.func
+            pure = _pure_call(n)
+            if isinstance(func, ast.Attribute):
+                if func.attr not in _PURE_METHODS and not pure:
+                    mutated |= _objects(func.value)
+            elif not (isinstance(func, ast.Name) and func.id in _PURE_BUILTINS):
+                mutated |= _objects(func)
+            if not pure:
+                for a in [*n.args, *(k.value for k in n.keywords)]:
+                    mutated |= _objects(a)
+            linked |= _objects(n)
+        elif isinstance(n, (ast.Attribute, ast.Subscript)) and isinstance(n.ctx, (ast.Store, ast.Del)):
+            mutated |= _objects(n.value)
+        elif isinstance(n, ast.AugAssign):
+            mutated |= _objects(n.target)
+            linked |= _objects(n.value) | _objects(n.target)
+        elif isinstance(n, (ast.For, ast.AsyncFor, ast.comprehension)):
+            if isinstance(n.iter, (ast.Name, ast.Attribute, ast.Subscript)):
+                iterated |= _objects(n.iter)
+            else:
+                mutated |= _objects(n.iter)
+            linked |= _objects(n.iter)
+        elif isinstance(n, ast.withitem):
+            mutated |= _objects(n.context_expr)
+            linked |= _objects(n.context_expr)
+        elif isinstance(n, (ast.Assign, ast.AnnAssign, ast.NamedExpr)):
+            linked |= _objects(n.value)
+        stack.extend(ast.iter_child_nodes(n))
+    return mutated, linked | mutated, iterated
+
+
 class _Cell:
     """Walks one cell's top-level statements in order (see the module's text)."""
 
@@ -248,6 +366,14 @@ class _Cell:
 
     def statement(self, s: ast.stmt, sure: bool = True) -> None:
         """One statement; `sure`: it runs whenever the cell does (not inside an if, a loop or a try)."""
+        if sure:                       # a top-level statement: its effects, nested statements included
+            mutated, linked, iterated = _effects(s)
+            self.names.mutated |= mutated
+            self.names.linked |= linked | iterated
+            self.names.iterated |= iterated
+            if isinstance(s, ast.Assign) and _container(s.value):
+                self.names.containers |= set().union(*(_targets(t) for t in s.targets)) if len(s.targets) == 1 and \
+                    isinstance(s.targets[0], ast.Name) else set()
         if isinstance(s, (ast.Assign, ast.AnnAssign)):
             if s.value is not None:
                 self.loads(s.value)
@@ -326,6 +452,15 @@ class _Cell:
                     self.bind({n.rest}, False)
 
 
+def _module_level(names: CellNames) -> None:
+    """Keep of what a cell changes and ties together only the notebook's names (a comprehension's or a function's
+    own names are not), and the shared pseudo-names it touches."""
+    module = names.reads | names.defs
+    names.mutated &= module
+    names.linked &= module
+    names.iterated &= module
+
+
 def cell_names(source: str) -> CellNames:
     """The names of one code cell (see the module's text); a cell that cannot be analysed reads UNKNOWN."""
     try:
@@ -336,6 +471,7 @@ def cell_names(source: str) -> CellNames:
     except (SyntaxError, ValueError, RecursionError, MemoryError):
         return CellNames(reads={UNKNOWN})
     cell.names.kills = cell.sure & cell.names.defs
+    _module_level(cell.names)
     return cell.names
 
 
@@ -363,6 +499,7 @@ def _units(source: str) -> list[tuple[int, int, CellNames]] | None:
         except (RecursionError, MemoryError):
             return None
         cell.names.kills = cell.sure & cell.names.defs
+        _module_level(cell.names)
         out.append((first, last, cell.names))
     return out
 
@@ -460,10 +597,34 @@ def _fixed_point(cells: list[CellNames], targets: set[int], why: dict[int, str] 
                     return frozenset(out)
         return frozenset(out | {-1})
 
-    reads = [{(n, j) for n in expanded(i) - library for j in reaching(i, n)} for i in range(len(cells))]
+    def objects(i: int, names: Iterable[str]) -> set[tuple[str, int]]:
+        return {(n, j) for n in set(names) - library for j in reaching(i, n)}
+
+    shared = {RANDOM_STATE, FILES}
+    reads = [objects(i, expanded(i)) for i in range(len(cells))]
+    # what a unit may change: what it mutates, what the functions it calls read (they may change it), and the
+    # random state and the files it touches
+    muts = [objects(i, c.mutated | (expanded(i) - c.reads) | (c.reads & shared)) |
+            {(n, j) for n, j in objects(i, c.iterated) if j < 0 or n not in cells[j].containers}
+            for i, c in enumerate(cells)]
     defs = [{(n, i) for n in c.defs - library} for i, c in enumerate(cells)]
+    # objects tied together (an alias, a container, a call given both): one component
+    parent: dict = {}
+
+    def find(x):
+        parent.setdefault(x, x)
+        while parent[x] != x:
+            parent[x] = parent[parent[x]]
+            x = parent[x]
+        return x
+
+    for i, c in enumerate(cells):
+        group = list(defs[i] | muts[i] | objects(i, c.linked))
+        for x in group[1:]:
+            parent[find(x)] = find(group[0])
     while True:
-        touched = set().union(*(reads[k] | defs[k] for k in keep))
+        needed = set().union(*(reads[k] for k in keep))
+        roots = {find(x) for x in needed}
         more = set()
         for i in range(last + 1):
             if i in keep:
@@ -473,10 +634,13 @@ def _fixed_point(cells: list[CellNames], targets: set[int], why: dict[int, str] 
                             more.add(j)
                             why.setdefault(j, f"binds or writes {n}, read by unit {i}")
                 continue
-            if defs[i] & touched or reads[i] & touched:
+            if defs[i] & needed:
                 more.add(i)
-                why.setdefault(i, f"binds {sorted(n for n, _ in defs[i] & touched)} read later" if defs[i] & touched
-                               else f"reads {sorted(n for n, _ in reads[i] & touched)}, which the slice uses")
+                why.setdefault(i, f"binds {sorted(n for n, _ in defs[i] & needed)}, which the slice reads")
+            elif any(find(x) in roots for x in muts[i]):
+                more.add(i)
+                why.setdefault(i, f"may change {sorted(n for n, j in muts[i] if find((n, j)) in roots)}, which "
+                                  f"the slice uses")
         if not more - keep:
             return keep
         keep |= more

@@ -57,6 +57,14 @@ def kept(cells: list[str], target: int | None = None) -> list[int]:
     (["open('x', 'w').write('1')", "y = 2", "assert open('x').read() == '1'"], [0, 2]),
     # a name that comes from nowhere earlier still ties the cells that use it
     (["undefined_here.append(1)", "assert undefined_here"], [0, 1]),
+    # a cell that only reads an object (a pure builtin, numpy, a plain expression) does not join; one that hands it
+    # to a call that may change it does
+    (["a = [1]", "print(len(a), a[0] + 1, np.mean(a))", "assert a == [1]"], [0, 2]),
+    (["a = [1]", "touch(a)", "assert a == [1]"], [0, 1, 2]),
+    (["a = [1]", "b = {'k': a}", "b['k'].append(2)", "assert a == [1]"], [0, 1, 2, 3]),
+    # iterating over a fresh list uses nothing up; over anything else (a generator) it may
+    (["a = [1, 2]", "for x in a:\n    print(x)", "assert sum(a) == 3"], [0, 2]),
+    (["a = (x for x in [1, 2])", "for x in a:\n    print(x)", "assert sum(a) == 0"], [0, 1, 2]),
     # a check cell after the target never joins
     (["a = 1", "assert a", "a = 2"], [0, 1]),
 ])
