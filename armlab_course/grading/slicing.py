@@ -1,34 +1,42 @@
-"""The cells a notebook's public checks need: a conservative backward slice over its top-level code cells, computed
-statically with `ast` (nothing runs), so that the grader and the self-check run only those cells of a notebook
-(armlab_course.grading.run.Runner.notebook, `keep`) and give the verdict of the notebook run from the top.
+"""The cells a notebook's public checks need: a conservative backward slice over its top-level statements, computed
+statically with `ast` (nothing runs), so that the grader and the self-check run only those statements of a notebook
+(armlab_course.grading.public.run_public) and give the verdict of the notebook run from the top.
 
-Per code cell, at the notebook's top level (a function's parameters and locals are its own):
+The units are the top-level statements of the code cells up to the last target (a check cell is one unit, kept
+whole). Per unit, at the notebook's top level (a function's parameters and locals are its own):
 
-- *defs*: the names the cell binds (assignments, imports, def/class, for/with/except targets, walrus);
-- *reads*: the names whose value from an earlier cell the cell may read -- every name loaded before the cell binds
-  it unconditionally (a name bound in an `if`, a loop or a `try` stays read afterwards; a for loop's target is
-  fresh only inside its body), and every name a function, lambda, class or comprehension of the cell loads without
-  binding it (it may run later, reading whatever value is there then). A read of an object may mutate it.
+- *defs*: the names it binds (assignments, imports, def/class, for/with/except targets, walrus);
+- *reads*: the names whose value from an earlier unit it may read -- every name loaded before the unit binds it
+  unconditionally, and every name a function, lambda, class or comprehension of it loads without binding it (it may
+  run later); calling a function of the notebook reads what its body reads;
+- *changes* (_effects): the names whose objects it may change -- a method call on it, a call it goes into (but a
+  builtin's that changes nothing, numpy's or math's), an attribute or item written, an augmented assignment, a
+  `with`, iteration over anything but a fresh list, tuple, dict or set (an iterator is used up); a function of the
+  notebook it calls may change whatever its body reads;
+- *links*: names whose objects it may tie together (what it binds and what the value holds, what goes into one
+  call): their objects form one component.
 
-A cell joins the slice when it binds a name that a later cell of the slice reads (it may be the definition that
-reaches it), or when it reads a name that some cell of the slice binds or reads (it may mutate an object the slice
-uses, through any name that object has there). The slice is the fixed point from the target cells (the check cells),
-over the cells up to the last target. Besides:
+An object is a name with the units whose binding of it may reach a point (the last unit binding it whenever it
+runs, and any binding it only maybe after that). A unit joins the slice when it binds an object a unit of the slice
+reads, or when it may change an object in the component of one a unit of the slice reads. The slice is the fixed
+point from the target units. Besides:
 
-- A cell that cannot be analysed -- not Python (an IPython magic, a shell escape), `global`/`nonlocal`, a star
+- A unit that cannot be analysed -- not Python (an IPython magic, a shell escape), `global`/`nonlocal`, a star
   import, or reaching the namespace or the interpreter by other means than names (`exec`, `eval`, `globals()`,
-  `setattr`, `__dict__`, `__import__`, `importlib`, `sys`, `os`, `builtins`, `get_ipython`...) -- joins, with every
-  cell before it.
+  `setattr`, `__import__`, `importlib`, `sys`, `os`, `builtins`, `get_ipython`...) -- joins, with every unit before
+  it.
 - Global random state (the `random` module, `np.random.<function>` other than making a generator of one's own) is
-  one shared name, "<random state>", read and written by every cell touching it; so is the file system, "<files>",
-  for every cell that names a file API (open, Path, tempfile, save/load...).
+  one shared object, "<random state>", changed by every unit touching it; so is the file system, "<files>", for every
+  unit that names a file API (open, Path, tempfile, save/load...).
 - A name bound only by `import` (a module, a library's function or class) or a builtin is shared state only through
-  the cells that write into it (an attribute or item assignment, np.set_printoptions, a seed...): a cell that only
-  reads it (np.array, cv2.cvtColor, make_station) does not join through it, but it needs the cells that import it.
+  the units that write into it (an attribute or item assignment, np.set_printoptions, a seed...): a unit that only
+  uses it (np.array, cv2.cvtColor, make_station) does not join through it, but it needs the units that import it.
+  So is a function or class of the notebook that holds no state of its own (_pure).
 
-What the slice cannot see is state hidden inside a library call of a cell left out (a cache a kit function fills,
-a singleton two calls share). The kit keeps run state in the objects a notebook names (a station, a session), which
-the slice follows; tests/course/test_grading_slicing.py holds the rules.
+What the slice cannot see is state hidden inside a library call of a unit left out (a cache a kit function fills,
+a singleton two calls share): a kit function given no object of the slice is taken to change none. The kit keeps
+run state in the objects a notebook names (a station, a session), which the slice follows.
+tests/course/test_grading_slicing.py holds the rules.
 """
 
 from __future__ import annotations
@@ -135,9 +143,6 @@ def _free(scope: ast.AST) -> set[str]:
     return loaded - bound
 
 
-_CONSTANTS = (ast.Constant,)
-
-
 def _constant(node: ast.AST | None) -> bool:
     """An immutable literal (a number, a string, None, a tuple of them)."""
     if node is None or isinstance(node, ast.Constant):
@@ -174,9 +179,8 @@ def _pure(s: ast.stmt) -> bool:
             else:
                 return False
         return not any((isinstance(n, ast.Attribute) and n.attr == "__class__") or
-                       (isinstance(n, ast.Name) and n.id in ("type", "super") and False) for n in ast.walk(s)) and \
-            not any(isinstance(n, ast.Call) and isinstance(n.func, ast.Name) and n.func.id == "type"
-                    for n in ast.walk(s))
+                       (isinstance(n, ast.Call) and isinstance(n.func, ast.Name) and n.func.id == "type")
+                       for n in ast.walk(s))
     args = s.args
     return all(_constant(d) for d in args.defaults + args.kw_defaults)
 
