@@ -48,7 +48,7 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
-__all__ = ["CellNames", "cell_names", "public_slice", "slice_notebook", "UNKNOWN", "RANDOM_STATE", "FILES"]
+__all__ = ["CellNames", "cell_names", "public_slice", "slice_notebook", "explain", "UNKNOWN", "RANDOM_STATE", "FILES"]
 
 UNKNOWN = "<unknown>"             # a cell that cannot be analysed: it joins, with every cell before it
 RANDOM_STATE = "<random state>"
@@ -529,7 +529,7 @@ def public_slice(sources: Sequence[str], targets: Iterable[int], explain: list[s
     kept = _fixed_point([u[3] for u in units], {k for k, u in enumerate(units) if u[0] in targets}, reasons)
     if explain is not None:
         for k in sorted(kept):
-            reason = reasons.get(k, "a target, or before an opaque unit")
+            reason = reasons[k]
             explain.append(f"cell {units[k][0]} lines {units[k][1]}-{units[k][2]}: {reason}")
     out = {}
     for i, source in enumerate(sources[:last + 1]):
@@ -560,6 +560,8 @@ def _fixed_point(cells: list[CellNames], targets: set[int], why: dict[int, str] 
     cells = cells[:last + 1]
     opaque = [i for i, c in enumerate(cells) if c.opaque]
     keep = set(targets) | set(range(max(opaque) + 1 if opaque else 0))
+    for i in keep:
+        why.setdefault(i, "a check cell" if i in targets else "at or before a statement that cannot be analysed")
     # names bound by import only, and builtins: shared only through the cells that bind or write into them
     rebound = set().union(*(c.defs - c.imports for c in cells))
     library = (set().union(*(c.imports for c in cells)) | set(dir(builtins))) - rebound
@@ -674,3 +676,24 @@ def slice_notebook(path: Path, exercise_ids: Iterable[str]) -> None:
         cell["source"] = sources[i].splitlines(keepends=True)
     nb["cells"] = cells
     path.write_text(json.dumps(nb, indent=1, ensure_ascii=False) + "\n", encoding="utf-8")
+
+
+def explain(path: Path, exercise_ids: Iterable[str]) -> list[str]:
+    """Why each statement of the notebook at `path` is in the slice of the public checks of `exercise_ids`, one line
+    each ("cell <code-cell index> lines <a>-<b>: <reason>"): for a notebook's author shortening a check's slice."""
+    from .run import check_cells
+
+    ids = set(exercise_ids)
+    targets = [i for i, tagged in check_cells(path).items() if ids & set(tagged)]
+    code = [c for c in json.loads(path.read_text(encoding="utf-8"))["cells"] if c["cell_type"] == "code"]
+    lines: list[str] = []
+    public_slice(["".join(c["source"]) for c in code], targets, lines)
+    return lines
+
+
+if __name__ == "__main__":        # python -m armlab_course.grading.slicing NOTEBOOK EXERCISE...
+    import sys
+
+    if len(sys.argv) < 3:
+        sys.exit("usage: python -m armlab_course.grading.slicing NOTEBOOK.ipynb EXERCISE [EXERCISE...]")
+    print("\n".join(explain(Path(sys.argv[1]), sys.argv[2:])))

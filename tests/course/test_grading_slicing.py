@@ -9,7 +9,7 @@ import json
 
 import pytest
 
-from armlab_course.grading.slicing import cell_names, public_slice, slice_notebook
+from armlab_course.grading.slicing import cell_names, explain, public_slice, slice_notebook
 
 
 def kept(cells: list[str], target: int | None = None) -> list[int]:
@@ -102,3 +102,12 @@ def test_slice_notebook_keeps_every_cell_in_its_place(tmp_path):
     assert ["".join(c["source"]) for c in out] == ["import numpy as np\n\n", "a = np.ones(2)", "", code[3]]
     slice_notebook(path, ["ex.other"])           # no check cell of it: left as it is
     assert [c for c in json.loads(path.read_text())["cells"] if c["cell_type"] == "code"] == out
+
+
+def test_explain_says_why_each_statement_is_kept(tmp_path):
+    code = ["x = 1\ny = 2", "# CHECK ex.one\nassert x == 1"]
+    cells = [{"cell_type": "code", "metadata": {}, "source": s, "outputs": [], "execution_count": None} for s in code]
+    path = tmp_path / "nb.ipynb"
+    path.write_text(json.dumps({"cells": cells, "metadata": {}, "nbformat": 4, "nbformat_minor": 5}))
+    assert explain(path, ["ex.one"]) == ["cell 0 lines 1-1: binds ['x'], which the slice reads",
+                                         "cell 1 lines 1-2: a check cell"]
