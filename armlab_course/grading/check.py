@@ -6,9 +6,10 @@ and sandbox (the same nbval plugin, kernel, sanitize file and limits), each mess
 and message of each check cell are the grader's for the same regions; what the student changed outside the
 regions of a notebook counts for neither. No hidden checks: those are the instructor's.
 
-Each notebook runs once, for the exercises asked for; one exercise of notebooks 04-08 takes seconds where its check
-builds what it checks. Each exercise is reported as soon as its notebook has run (progress(exercise id, result,
-status)), as "written" (every check passes), "failing", "blank" or "by hand".
+Each notebook runs once, for the exercises asked for: a check that builds what it checks (notebook 08's, notebook
+02's) runs little besides itself; one that reads what a demonstration built runs that demonstration. Each exercise
+is reported as soon as its notebook has run (progress(exercise id, result, status)), as "written" (every check
+passes), "failing", "blank" or "by hand".
 
 Each exercise is scored by its own CHECK cells. A check cell of exercise B that fails while an exercise A it uses (B's
 region or check cell names A's function) fails too is reported as "not checked: it needs A, which fails" instead
@@ -74,15 +75,16 @@ def _public_copy(checkout: Path, name: str, dest: Path, bodies: dict[str, list[s
     with the checkout's regions of every written exercise of that notebook spliced in (`bodies`). '' or what
     went wrong."""
     shipped = checkout / PUBLIC_NOTEBOOKS / f"{name}.ipynb"
+    instructors = (checkout / "armlab_course/grading/hidden").is_dir() and not (checkout / RELEASE_MARKER).exists()
     if shipped.is_file():
         shutil.copy2(shipped, dest)
-    elif (checkout / RELEASE_MARKER).is_file():
-        return (f"this release has no {PUBLIC_NOTEBOOKS}/{name}.ipynb (the notebook the public checks run): ask "
-                f"for a release made with this version of the kit")
-    else:
+    elif instructors:                 # its notebooks hold the stored outputs the release's copies are made from
         own = checkout / f"notebooks/{name}.ipynb"
         nb = public_notebook(json.loads(own.read_text(encoding="utf-8")), f"notebooks/{name}.ipynb")
         dest.write_text(json.dumps(nb, indent=1, ensure_ascii=False) + "\n", encoding="utf-8")
+    else:
+        return (f"this release has no {PUBLIC_NOTEBOOKS}/{name}.ipynb (the notebook the public checks run, with "
+                f"the instructor's check outputs): ask for a release made with this version of the kit")
     tree = dest.parents[1]
     for ex in EXERCISES:
         if not ex.in_package and ex.notebook == name and ex.id in bodies:
