@@ -32,8 +32,9 @@ from pathlib import Path
 
 from .markers import CHECK_LINE, blank_answers, find_answers, find_regions, stub_regions
 
-__all__ = ["RELEASE_EXCLUDES", "STUDENT_README", "RELEASE_MARKER", "RUN_ALL_TAG", "student_notebook",
-           "make_student_release", "released", "raises_while_blank", "without_instructor_lines"]
+__all__ = ["RELEASE_EXCLUDES", "STUDENT_README", "RELEASE_MARKER", "RUN_ALL_TAG", "PUBLIC_NOTEBOOKS",
+           "student_notebook", "public_notebook", "make_student_release", "released", "raises_while_blank",
+           "without_instructor_lines"]
 
 RUN_ALL_TAG = "raises-exception"
 _INSTRUCTOR_ONLY = re.compile(r"^(?:# |<!-- )BEGIN INSTRUCTOR ONLY\b.*?^(?:# |<!-- )END INSTRUCTOR ONLY[^\n]*\n\n?",
@@ -41,6 +42,9 @@ _INSTRUCTOR_ONLY = re.compile(r"^(?:# |<!-- )BEGIN INSTRUCTOR ONLY\b.*?^(?:# |<!
 
 STUDENT_README = "tools/student/README.md"
 RELEASE_MARKER = ".student-release"
+# the release's copy of each notebook as the public checks run it (public_notebook): the self-check splices the
+# student's regions into it, as the grader does into the release it builds, whatever else the student's copy holds
+PUBLIC_NOTEBOOKS = "armlab_course/grading/public_notebooks"
 RELEASE_EXCLUDES = (
     "README.md",              # the instructor's (STUDENT_README takes its place)
     ".ci/*",
@@ -137,6 +141,19 @@ def student_notebook(nb: dict, where: str) -> dict:
     return nb
 
 
+def public_notebook(nb: dict, where: str) -> dict:
+    """The notebook the public checks run (the grader's and the self-check's, armlab_course.grading.public): the
+    student notebook of `nb` (student_notebook) with the stored outputs and counts of `nb`'s CHECK cells put back,
+    what strict nbval compares a check cell's output with. No other cell gets its outputs back (they would show
+    the reference's values to the student's code)."""
+    out = student_notebook(nb, where)
+    for cell, original in zip(out["cells"], nb["cells"], strict=True):
+        if cell["cell_type"] == "code" and CHECK_LINE.search("".join(original["source"])):
+            cell["outputs"] = original.get("outputs", [])
+            cell["execution_count"] = original.get("execution_count")     # nbval: a cell never run has none
+    return out
+
+
 def make_student_release(repo: Path | str, out: Path | str) -> list[str]:
     """Write the student release of the git checkout `repo` into the new folder `out`; returns the files that hold
     exercises. Refuses to write into an existing folder."""
@@ -154,6 +171,10 @@ def make_student_release(repo: Path | str, out: Path | str) -> list[str]:
         if name.endswith(".ipynb"):
             nb = json.loads(src.read_text())
             dst.write_text(json.dumps(student_notebook(nb, name), indent=1, ensure_ascii=False) + "\n")
+            if any(CHECK_LINE.search("".join(c["source"])) for c in nb["cells"] if c["cell_type"] == "code"):
+                public = out / PUBLIC_NOTEBOOKS / Path(name).name
+                public.parent.mkdir(parents=True, exist_ok=True)
+                public.write_text(json.dumps(public_notebook(nb, name), indent=1, ensure_ascii=False) + "\n")
             changed = any(find_regions("".join(c["source"]), name) for c in nb["cells"] if c["cell_type"] == "code") \
                 or bool(find_answers(["".join(c["source"]) for c in nb["cells"] if c["cell_type"] == "markdown"], name))
         elif name == "Makefile" or name.endswith(".md"):

@@ -43,9 +43,10 @@ from armlab_course.exercises.registry import EXERCISES, exercise
 
 from . import report as _report  # noqa: F401  (imported now: nothing of the grader is loaded after student code)
 from . import similarity as _similarity
+from .public import public_results, redacted, run_public
 from .results import CheckResult, ExerciseResult, score_exercise
 from .run import DEFAULT_LIMITS, Limits, NotebookRun, Runner, check_cells, code_cell_labels, with_cell_labels
-from .sandbox import WORK, Sandbox, detect, owner_only, python_outside, refuse_shared_network
+from .sandbox import Sandbox, detect, owner_only, python_outside, refuse_shared_network
 from .splice import RegionRejected, build_worktree, check_body, release_worktree, splice_into
 from .static import STATIC_CHECK, static_check
 from .submission import Submission, exercise_file, read_submission, regions_of, source_texts
@@ -249,9 +250,11 @@ class Grader:
                                 cpu_s=int(min(self.limits.cpu_s * exercises, left + 10)))
         return runner
 
-    def _notebook(self, tree: Path, name: str, deadline: Deadline | None = None) -> NotebookRun:
-        """The notebook's run on a fresh copy of `tree`; a run that could not start, or whose results could not be
-        read, is a NotebookRun with the reason (never an exception: one submission never stops the class)."""
+    def _notebook(self, tree: Path, name: str, deadline: Deadline | None = None,
+                  exercise_ids: Iterable[str] = ()) -> NotebookRun:
+        """The notebook's run on a fresh copy of `tree` for the public checks of `exercise_ids` (only the cells they
+        need: public.run_public, as the self-check runs them); a run that could not start, or whose results could
+        not be read, is a NotebookRun with the reason (never an exception: one submission never stops the class)."""
         if self._bounded(deadline) is None:
             return NotebookRun({}, deadline.spent())
         run_tree = self._fresh(tree)
@@ -261,7 +264,7 @@ class Grader:
                 return NotebookRun({}, deadline.spent())
             with self._guard:
                 self.runs += 1
-            return runner.notebook(run_tree, f"notebooks/{name}.ipynb")
+            return run_public(runner, run_tree, name, exercise_ids)
         except (OSError, ValueError, TypeError, KeyError, AttributeError, RecursionError, MemoryError) as e:
             return NotebookRun({}, f"the notebook run's results could not be read ({type(e).__name__})")
         finally:
@@ -378,13 +381,11 @@ class Grader:
 
     def _public(self, exercise_id: str, run: NotebookRun, tree: Path) -> list[CheckResult]:
         """The exercise's public CHECK cells in the notebook run `run` of `tree`."""
-        ex = exercise(exercise_id)
-        notebook = tree / f"notebooks/{ex.notebook}.ipynb"
-        tags = [i for i, ids in check_cells(notebook).items() if exercise_id in ids]
-        labels = code_cell_labels(notebook)
-        return [CheckResult(labels[i], i in run.cells and run.cells[i].passed,
-                            self._redact(with_cell_labels(run.cells[i].message, notebook, labels) if i in run.cells
-                                         else run.problem or "the cell did not run"), i) for i in tags]
+        return public_results(exercise_id, run, tree, self._paths())
+
+    def _paths(self) -> dict[str, str]:
+        """The grader's own paths, as a message shows them."""
+        return {str(self._root): "<grader>", str(self.reference): "<reference>"}
 
     def _labels(self, exercise_id: str) -> list[str] | None:
         """The code-cell labels of the exercise's notebook in the student release (a region's body spliced in
@@ -397,9 +398,7 @@ class Grader:
 
     def _redact(self, message: str) -> str:
         """A message without the grader's own paths."""
-        for path, name in ((str(self._root), "<grader>"), (str(self.reference), "<reference>"), (WORK, "<work>")):
-            message = message.replace(path, name)
-        return message
+        return redacted(message, self._paths())
 
     # -- grading ----------------------------------------------------------------------------------------------
     def _once(self, key: tuple, compute: Callable[[], object]) -> object:
@@ -433,7 +432,7 @@ class Grader:
         tree = self._spliced({exercise_id: bodies})
         try:
             ex = exercise(exercise_id)
-            return self._public(exercise_id, self._notebook(tree, ex.notebook), tree)
+            return self._public(exercise_id, self._notebook(tree, ex.notebook, None, [exercise_id]), tree)
         finally:
             self._discard(tree)
 
@@ -478,8 +477,9 @@ class Grader:
         checks, the longest, first), none past `deadline`."""
         with ThreadPoolExecutor(max_workers=self.parallel) as pool:
             hidden = pool.submit(self._harness, tree, self._with_specs(exercise_ids), False, deadline)
-            runs = dict(zip(notebooks, pool.map(lambda name: self._notebook(tree, name, deadline), notebooks),
-                            strict=True))
+            runs = dict(zip(notebooks, pool.map(lambda name: self._notebook(
+                tree, name, deadline, [e for e in exercise_ids if exercise(e).notebook == name]), notebooks),
+                strict=True))
             return runs, hidden.result()
 
     def _reference_bodies(self, exercise_id: str) -> list[str]:

@@ -247,17 +247,17 @@ class Runner:
             out = tail_of(log)
         return done, out, proc.returncode
 
-    def notebook(self, worktree: Path, notebook: str, lax: bool = False) -> NotebookRun:
-        """Run `notebook` (relative to `worktree`) under nbval with the instructor's sanitize file; per-cell results.
-        lax: --nbval-lax (a cell fails only by raising; for a student's own notebooks, which hold no stored
-        outputs)."""
+    def notebook(self, worktree: Path, notebook: str) -> NotebookRun:
+        """Run `notebook` (relative to `worktree`) under strict nbval with the instructor's sanitize file (a cell
+        passes when it raises nothing and its output matches the stored one: the release's CHECK cells hold the
+        instructor's, release.public_notebook); per-cell results."""
         work = self.sandbox.inside(worktree)
         private = worktree / ".grader"
         private.mkdir(exist_ok=True)
         (private / "pytest.ini").write_text(_CONFIG)
         results = private / "results.json"
         cmd = [sys.executable, "-m", "pytest", "-q", "-c", f"{work}/.grader/pytest.ini", "--rootdir", work,
-               "-p", "no:cacheprovider", notebook, "--nbval-lax" if lax else "--nbval",
+               "-p", "no:cacheprovider", notebook, "--nbval",
                "-p", "armlab_grader.nbval_guard", "--nbval-sanitize-with", "tests/nbval_sanitize.cfg",
                f"--nbval-cell-timeout={int(self.limits.timeout_s)}", f"--nbval-kernel-name={KERNEL_NAME}",
                "--nbval-kernel-startup-timeout=300", f"--armlab-results={work}/.grader/results.json"]

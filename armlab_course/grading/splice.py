@@ -13,7 +13,6 @@ from pathlib import Path
 from armlab_course.exercises.markers import find_regions
 from armlab_course.exercises.registry import exercise
 
-from .run import check_cells
 from .submission import exercise_file
 
 __all__ = ["RegionRejected", "tracked_files", "check_body", "splice_text", "write_regions", "build_worktree",
@@ -109,28 +108,17 @@ def build_worktree(reference: Path, dest: Path, exercise_id: str | None = None,
 def release_worktree(instructor: Path, dest: Path) -> Path:
     """The student release of `instructor` (a private copy of the instructor's tracked files, as build_worktree makes
     it; a git index is made in it when it has none) written into the new folder `dest` by the release builder
-    (armlab_course.exercises.release: every region a stub, no instructor-only file), with the stored outputs of
-    the instructor's CHECK cells (and their counts) put back into its notebooks: what nbval compares a check cell's
-    output with. No other cell gets its outputs back (they would show the reference's values to the student's
-    code)."""
-    from armlab_course.exercises.release import make_student_release
+    (armlab_course.exercises.release: every region a stub, no instructor-only file), its notebooks those the public
+    checks run (release.public_notebook: the instructor's CHECK cells' stored outputs put back, what nbval compares
+    a check cell's output with), which the release also ships for the self-check (PUBLIC_NOTEBOOKS)."""
+    from armlab_course.exercises.release import PUBLIC_NOTEBOOKS, make_student_release
 
     if not (instructor / ".git").exists():
         for cmd in (["init", "-q"], ["add", "-A"]):
             subprocess.run(["git", "-C", str(instructor), *cmd], capture_output=True, check=True)
     make_student_release(instructor, dest)
-    for released in sorted((dest / "notebooks").glob("*.ipynb")):
-        original = instructor / "notebooks" / released.name
-        if not original.is_file():
-            continue
-        checks = check_cells(original)
-        theirs = [c for c in json.loads(original.read_text(encoding="utf-8"))["cells"] if c["cell_type"] == "code"]
-        nb = json.loads(released.read_text(encoding="utf-8"))
-        ours = [c for c in nb["cells"] if c["cell_type"] == "code"]
-        for i in checks:
-            ours[i]["outputs"] = theirs[i].get("outputs", [])
-            ours[i]["execution_count"] = theirs[i].get("execution_count")     # nbval: a cell never run has none
-        released.write_text(json.dumps(nb, indent=1, ensure_ascii=False) + "\n", encoding="utf-8")
+    for public in sorted((dest / PUBLIC_NOTEBOOKS).glob("*.ipynb")):
+        shutil.copy2(public, dest / "notebooks" / public.name)
     return dest
 
 

@@ -1,8 +1,9 @@
-"""The self-check is the grader's public verdict (issues 32 and 37): for every exercise graded by code and each of its
-plausible wrong answers (tests/course/wrong_answers.py), `self_check(only=EXERCISE)` in a student release holding that
-region passes and fails the same public CHECK cells, with the same names, as the grader's run of that exercise's
-notebook does for the same region (Grader.public_checks). Where a check can tell a wrong answer's cause, its message
-names it (HINTS). Each case costs a notebook run on both sides: the cheap notebooks' exercises run by default
+"""The self-check is the grader's public verdict (issues 32 and 37): for every exercise graded by code, its reference
+and each of its plausible wrong answers (tests/course/wrong_answers.py), `self_check(only=EXERCISE)` in a student
+release holding that region passes and fails the same public CHECK cells, with the same names and messages, as the
+grader's run of that exercise's notebook does for the same region (Grader.public_checks: both run
+armlab_course.grading.public); a blank region is blank for both. Where a check can tell a wrong answer's cause, its
+message names it (HINTS). Each case costs a notebook run on both sides: the cheap notebooks' exercises run by default
 (CHEAP), the others with ARMLAB_SELF_CHECK_ALL=1; their hints are tested by the self-check alone by default."""
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ from armlab_course.grading.check import self_check
 from armlab_course.grading.grade import Grader
 from armlab_course.grading.run import Limits
 from armlab_course.grading.splice import write_regions
+from armlab_course.grading.submission import read_submission
 
 CODED = [e.id for e in EXERCISES if e.kind != "written"]
 CHEAP = ("fk.dh_link_transform", "fk.dh_table", "fk.euler", "calib.tag_homography")
@@ -57,6 +59,15 @@ def grader():
         yield own
 
 
+def test_a_blank_release_is_blank_for_both(release, grader):
+    """Nothing runs for a blank region, on either side: the same result (no check, the same reason) per exercise."""
+    mine = self_check(release, LIMITS).results
+    graded = grader.grade(read_submission(release, ROOT))
+    assert {e: (r.score, r.reason, r.checks) for e, r in mine.items() if e in CODED} == \
+        {e: (r.score, r.reason, r.checks) for e, r in graded.items()}
+    assert all(r.reason == "not written (blank region)" for r in graded.values())
+
+
 def test_every_hint_is_for_a_kept_wrong_answer():
     assert all(label in HIDDEN_WRONG[e] for e, label in HINTS), sorted(HINTS)
 
@@ -80,8 +91,8 @@ def test_the_self_check_gives_the_graders_public_verdict(exercise_id, release, g
         write_regions(student, exercise_id, bodies)
         mine = self_check(student, LIMITS, only=exercise_id).results[exercise_id]
         public = grader.public_checks(exercise_id, bodies)
-        assert public and [(c.name, c.passed) for c in mine.checks] == [(c.name, c.passed) for c in public], \
-            (label, mine.checks, public)
+        assert public and [(c.name, c.passed, c.message) for c in mine.checks] == \
+            [(c.name, c.passed, c.message) for c in public], (label, mine.checks, public)
         verdicts[label] = all(c.passed or waits_for_another(c, exercise_id) for c in public)
         hint = HINTS.get((exercise_id, label))
         if hint:
