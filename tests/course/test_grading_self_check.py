@@ -1,24 +1,30 @@
-"""The self-check is the grader's public verdict (issues 32 and 37): for every exercise graded by code, its reference
-and each of its plausible wrong answers (tests/course/wrong_answers.py), `self_check(only=EXERCISE)` in a student
-release holding that region passes and fails the same public CHECK cells, with the same names and messages, as the
-grader's run of that exercise's notebook does for the same region (Grader.public_checks: both run
-armlab_course.grading.public); a blank region is blank for both. Where a check can tell a wrong answer's cause, its
-message names it (HINTS). Each case costs a notebook run on both sides: the cheap notebooks' exercises run by default
-(CHEAP), the others with ARMLAB_SELF_CHECK_ALL=1; their hints are tested by the self-check alone by default."""
+"""The self-check is the grader's public verdict (issues 32 and 37), for every exercise graded by code, its reference
+and each of its plausible wrong answers (tests/course/wrong_answers.py):
+- for all of them, `self_check(only=EXERCISE)` in a student release holding that region gives nbval the very run the
+  grader's does for the same region (Grader.public_checks; both run armlab_course.grading.public): the same sliced
+  notebook and tree, byte for byte, the same limits and sandbox (recorded, not run: a fraction of a second each);
+- for the cheap notebooks' exercises (CHEAP; every one with ARMLAB_SELF_CHECK_ALL=1), both are run: the same CHECK
+  cells pass and fail with the same names and messages; a blank region is blank for both.
+Where a check can tell a wrong answer's cause, its message names it (HINTS)."""
 
 from __future__ import annotations
 
+import hashlib
 import os
+import re
 import shutil
+from dataclasses import dataclass
+from pathlib import Path
 
 import pytest
 from wrong_answers import HIDDEN_WRONG, ROOT, reference_bodies
 
 from armlab_course.exercises import make_student_release
-from armlab_course.exercises.registry import EXERCISES
+from armlab_course.exercises.registry import EXERCISES, exercise
+from armlab_course.grading import check, grade, public
 from armlab_course.grading.check import self_check
 from armlab_course.grading.grade import Grader
-from armlab_course.grading.run import Limits
+from armlab_course.grading.run import Limits, NotebookRun, Runner
 from armlab_course.grading.splice import write_regions
 from armlab_course.grading.submission import read_submission
 
@@ -70,6 +76,77 @@ def test_a_blank_release_is_blank_for_both(release, grader):
 
 def test_every_hint_is_for_a_kept_wrong_answer():
     assert all(label in HIDDEN_WRONG[e] for e, label in HINTS), sorted(HINTS)
+
+
+@dataclass(frozen=True)
+class RunInput:
+    """What one public-check run is given: the notebook run (its path and bytes after slicing), every other file of
+    the run's tree but the notebooks not run (path -> sha256), the notebook the cell labels are read from (before
+    slicing), the limits and the kind of sandbox: nbval's command line is made from these alone (Runner.notebook)."""
+
+    notebook: str
+    run: str
+    tree: tuple[tuple[str, str], ...]
+    labelled: str
+    limits: Limits
+    sandbox: str
+
+
+NOTEBOOK = re.compile(r"notebooks/[^/]+\.ipynb")
+
+
+def _digest(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def recorded_runs(monkeypatch) -> list[RunInput]:
+    """Record, instead of running, what each public-check run (Runner.notebook, then public_results) is given."""
+    seen: list[RunInput] = []
+    runs: list[tuple] = []
+
+    def notebook(runner, worktree: Path, path: str) -> NotebookRun:
+        files = [(p, p.relative_to(worktree).as_posix()) for p in sorted(worktree.rglob("*")) if p.is_file()]
+        tree = tuple((name, _digest(p)) for p, name in files
+                     if not name.startswith(".grader/") and not NOTEBOOK.fullmatch(name))
+        runs.append((path, _digest(worktree / path), tree, runner.limits, runner.sandbox.kind))
+        return NotebookRun({}, "recorded, not run")
+
+    def results(exercise_id, run, tree, paths):
+        path, ran, files, limits, kind = runs.pop()
+        labelled = _digest(tree / f"notebooks/{exercise(exercise_id).notebook}.ipynb")
+        seen.append(RunInput(path, ran, files, labelled, limits, kind))
+        return public.public_results(exercise_id, run, tree, paths)
+
+    monkeypatch.setattr(Runner, "notebook", notebook)
+    for module in (check, grade):
+        monkeypatch.setattr(module, "public_results", results)
+    return seen
+
+
+@pytest.mark.parametrize("exercise_id", CODED)
+def test_the_self_check_runs_what_the_grader_runs(exercise_id, release, grader, tmp_path, monkeypatch):
+    """For the reference and each kept wrong answer of every exercise graded by code: the self-check of a checkout
+    holding that region and the grader's public checks of it give nbval the same run: the same notebook, sliced to
+    the same cells, byte for byte, in a tree whose every file (package, data, configuration) is the same, under the
+    same limits and sandbox, labelled from the same notebook. (The notebooks not run differ: the self-check's tree
+    holds the student's own.) Such a run gives the same verdict and message, as the runs compared by the test below
+    show for CHEAP; each case here costs a fraction of a second, as no notebook runs."""
+    seen = recorded_runs(monkeypatch)
+    answers = {"reference": reference_bodies(exercise_id), **HIDDEN_WRONG[exercise_id]}
+    for label, bodies in answers.items():
+        student = tmp_path / label.replace(" ", "_").replace("'", "")
+        shutil.copytree(release, student)
+        write_regions(student, exercise_id, bodies)
+        seen.clear()
+        self_check(student, LIMITS, only=exercise_id)
+        grader.public_checks(exercise_id, bodies)
+        assert len(seen) == 2, (label, seen)
+        mine, graders = seen
+        assert mine.notebook == graders.notebook == f"notebooks/{exercise(exercise_id).notebook}.ipynb"
+        assert (mine.run, mine.labelled, mine.limits, mine.sandbox) == \
+            (graders.run, graders.labelled, graders.limits, graders.sandbox), label
+        differ = sorted(set(mine.tree) ^ set(graders.tree))
+        assert not differ, (label, differ[:6])
 
 
 def waits_for_another(check, exercise_id: str) -> bool:
