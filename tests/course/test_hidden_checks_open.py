@@ -1,6 +1,6 @@
-"""The hidden checks of the open tasks (OPEN_TASKS: an event strategy, the grasp and release plan, teach and repeat,
-the tuned segmentation; each runs the simulator at length, so they run apart from test_hidden_checks.py, on a worker
-of their own): the reference passes them, plausible wrong answers fail them (tests/course/wrong_answers.py)."""
+"""The hidden checks of the open tasks (OPEN_TASKS: an event strategy, the grasp and release plan, teach and repeat;
+each runs the simulator at length, so they run apart from test_hidden_checks.py, on a worker of their own): the
+reference passes them, plausible wrong answers fail them (tests/course/wrong_answers.py)."""
 
 from __future__ import annotations
 

@@ -177,9 +177,10 @@ HIDDEN_WRONG = {   # per exercise: wrong answers its hidden checks must catch (a
         "errors always back to idle": _replaced("station.transition", "if not machine.stop_requested:\n", "if True:\n"),
     },
 }
-# the exercises whose hidden checks run the simulator at length (tested apart: test_hidden_checks_open.py)
-OPEN_TASKS = ("events.sort_stack", "events.line_up", "events.sky", "grab.move_path", "grab.sequence", "teach.replay",
-              "detect.segment")
+# the exercises whose hidden checks run the simulator at length (tested apart: test_hidden_checks_open.py). Each run
+# of check_wrong_answers runs every one of them, so its cost is the number of runs (wrong_sets: 4 for these 6; the
+# tuned segmentation, 3 s a run, is held by test_hidden_checks.py, where it adds no run: a 7th here made it 5)
+OPEN_TASKS = ("events.sort_stack", "events.line_up", "events.sky", "grab.move_path", "grab.sequence", "teach.replay")
 # exercises whose hidden checks call another exercise's region, so that the other one's wrong answer fails them too;
 # the grader then runs the exercise again alone, the reference in place of the rest (Grader.grade). None is left:
 # kinematics.fk is the PoX model (ik.numerical no longer calls dh_link_transform), the check of calib.tag_extrinsics
