@@ -37,6 +37,7 @@ __all__ = ["RELEASE_EXCLUDES", "STUDENT_README", "RELEASE_MARKER", "RUN_ALL_TAG"
            "without_instructor_lines"]
 
 RUN_ALL_TAG = "raises-exception"
+CHECK_VERDICT_TAG = "nbval-ignore-output"      # nbval: the cell's output is not compared (public_notebook)
 _INSTRUCTOR_ONLY = re.compile(r"^(?:# |<!-- )BEGIN INSTRUCTOR ONLY\b.*?^(?:# |<!-- )END INSTRUCTOR ONLY[^\n]*\n\n?",
                               re.DOTALL | re.MULTILINE)
 
@@ -143,14 +144,20 @@ def student_notebook(nb: dict, where: str) -> dict:
 
 def public_notebook(nb: dict, where: str) -> dict:
     """The notebook the public checks run (the grader's and the self-check's, armlab_course.grading.public): the
-    student notebook of `nb` (student_notebook) with the stored outputs and counts of `nb`'s CHECK cells put back,
-    what strict nbval compares a check cell's output with. No other cell gets its outputs back (they would show
-    the reference's values to the student's code)."""
+    student notebook of `nb` (student_notebook) with the stored outputs and counts of `nb`'s CHECK cells put back
+    (nbval runs a cell that has them) and each CHECK cell tagged CHECK_VERDICT_TAG: its asserts are its verdict, not
+    its printout. A valid answer prints other figures than the reference did (an open task's run time, a tower's
+    height, a measured error), so a check cell passes when it raises nothing, whatever it prints; a cell that raises
+    fails whatever its tags say (armlab_course.grading.nbval_guard). No other cell gets its outputs back (they would
+    show the reference's values to the student's code)."""
     out = student_notebook(nb, where)
     for cell, original in zip(out["cells"], nb["cells"], strict=True):
         if cell["cell_type"] == "code" and CHECK_LINE.search("".join(original["source"])):
             cell["outputs"] = original.get("outputs", [])
             cell["execution_count"] = original.get("execution_count")     # nbval: a cell never run has none
+            tags = cell.setdefault("metadata", {}).setdefault("tags", [])
+            if CHECK_VERDICT_TAG not in tags:
+                tags.append(CHECK_VERDICT_TAG)
     return out
 
 

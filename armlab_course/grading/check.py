@@ -1,10 +1,10 @@
 """The student's self-check (`python -m armlab check [EXERCISE]`): the public CHECK cells of the written exercises,
 run as the grader runs them (armlab_course.grading.public: one path): each notebook as the release holds it
-(release.PUBLIC_NOTEBOOKS, with the instructor's stored check outputs) with the checkout's regions spliced in, cut
-to the cells its check cells need (armlab_course.grading.slicing), run under strict nbval by the grader's own runner
-and sandbox (the same nbval plugin, kernel, sanitize file and limits), each message redacted alike. So the verdict
-and message of each check cell are the grader's for the same regions; what the student changed outside the
-regions of a notebook counts for neither. No hidden checks: those are the instructor's.
+(release.PUBLIC_NOTEBOOKS: each CHECK cell judged by its asserts, not by what it prints) with the checkout's regions
+spliced in, cut to the cells its check cells need (armlab_course.grading.slicing), run under strict nbval by the
+grader's own runner and sandbox (the same nbval plugin, kernel, sanitize file and limits), each message redacted
+alike. So the verdict and message of each check cell are the grader's for the same regions; what the student
+changed outside the regions of a notebook counts for neither. No hidden checks: those are the instructor's.
 
 Each notebook runs once, for the exercises asked for: a check that builds what it checks (notebook 08's, notebook
 02's) runs little besides itself; one that reads what a demonstration built runs that demonstration. Each exercise

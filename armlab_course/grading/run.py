@@ -249,8 +249,8 @@ class Runner:
 
     def notebook(self, worktree: Path, notebook: str) -> NotebookRun:
         """Run `notebook` (relative to `worktree`) under strict nbval with the instructor's sanitize file (a cell
-        passes when it raises nothing and its output matches the stored one: the release's CHECK cells hold the
-        instructor's, release.public_notebook); per-cell results."""
+        passes when it raises nothing and its output matches the stored one; a CHECK cell of a public notebook is
+        tagged to be judged by its asserts alone, release.public_notebook); per-cell results."""
         work = self.sandbox.inside(worktree)
         private = worktree / ".grader"
         private.mkdir(exist_ok=True)

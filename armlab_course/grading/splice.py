@@ -109,8 +109,8 @@ def release_worktree(instructor: Path, dest: Path) -> Path:
     """The student release of `instructor` (a private copy of the instructor's tracked files, as build_worktree makes
     it; a git index is made in it when it has none) written into the new folder `dest` by the release builder
     (armlab_course.exercises.release: every region a stub, no instructor-only file), its notebooks those the public
-    checks run (release.public_notebook: the instructor's CHECK cells' stored outputs put back, what nbval compares
-    a check cell's output with), which the release also ships for the self-check (PUBLIC_NOTEBOOKS)."""
+    checks run (release.public_notebook: the CHECK cells as the instructor ran them, each judged by its asserts,
+    not by what it prints), which the release also ships for the self-check (PUBLIC_NOTEBOOKS)."""
     from armlab_course.exercises.release import PUBLIC_NOTEBOOKS, make_student_release
 
     if not (instructor / ".git").exists():
