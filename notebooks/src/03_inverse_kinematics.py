@@ -158,6 +158,9 @@ T = kinematics.fk(Q)
 P, approach = T[:, :3, 3], T[:, :3, 0]
 radial = P[:, :2] / np.linalg.norm(P[:, :2], axis=1, keepdims=True)
 pitches = np.arctan2(-approach[:, 2], np.sum(approach[:, :2] * radial, axis=1))
+first, second = (kinematics.ik_branches(P[i], pitches[i], Q[i, 4])[:, :4] for i in (0, 1))
+assert not np.array_equal(first, second, equal_nan=True), \
+    "ik_branches gives the same first four joints whatever the target: compute them from the target and the pitch"
 worst, found = 0.0, 0
 for p, pitch, q in zip(P, pitches, Q):
     cand = kinematics.ik_branches(p, pitch, q[4])

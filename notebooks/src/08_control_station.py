@@ -304,7 +304,9 @@ assert not mine.arm.torque_enabled, "teaching: the torque must be off"
 for q, g in (([0.3, -0.2, 0.1, 0.9, 0.0], "open"), ([-0.3, -0.1, 0.2, 0.8, 0.0], "closed")):
     mine.arm.move_by_hand(np.array(q))
     m.press("record", g)
-assert m.press("finish") == 2 and mine.arm.torque_enabled and m.state == "idle", f"finish: state {m.state!r}"
+taught = m.press("finish")
+assert mine.arm.torque_enabled, "finish: the torque is still off: teaching ends with the arm holding its pose again"
+assert taught == 2 and m.state == "idle", f"finish: {taught} waypoints taught (2 recorded), state {m.state!r}"
 m.press("repeat")
 assert np.abs(mine.arm.joint_positions() - [-0.3, -0.1, 0.2, 0.8, 0.0]).max() < 0.02, "the repeat did not end there"
 m.press("teach")

@@ -5,7 +5,7 @@ and each of its plausible wrong answers (tests/course/wrong_answers.py):
   notebook and tree, byte for byte, the same limits and sandbox (recorded, not run: a fraction of a second each);
 - for the cheap notebooks' exercises (CHEAP; every one with ARMLAB_SELF_CHECK_ALL=1), both are run: the same CHECK
   cells pass and fail with the same names and messages; a blank region is blank for both.
-Where a check can tell a wrong answer's cause, its message names it (HINTS)."""
+What each kept wrong answer's public checks say (a cause named, none, or a pass): test_grading_hints.py."""
 
 from __future__ import annotations
 
@@ -18,6 +18,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
+from public_verdicts import CHEAP, HIDDEN_ONLY, HINTS, waits_for_another
 from wrong_answers import HIDDEN_WRONG, ROOT, reference_bodies
 
 from armlab_course.exercises import make_student_release
@@ -31,26 +32,7 @@ from armlab_course.grading.splice import write_regions
 from armlab_course.grading.submission import read_submission
 
 CODED = [e.id for e in EXERCISES if e.kind != "written"]
-CHEAP = ("fk.dh_link_transform", "fk.dh_table", "fk.euler")   # notebook 02: a sliced run is ~3 s
 EVERY = os.environ.get("ARMLAB_SELF_CHECK_ALL") == "1"
-# (exercise, wrong answer) -> what the failing check's message says of the cause
-HINTS = {
-    ("calib.pinhole", "no translation"): "leaves out T_cam_world's translation",
-    ("calib.pinhole", "rotation not transposed"): "right with T_cam_world's rotation transposed",
-    ("calib.zhang", "rows of H for its columns"): "changes when the board's origin moves",
-    ("calib.zhang", "B's sign not fixed"): "refuses exact views it solves in smaller sets",
-    ("calib.depth_plane", "one fit, no rejection"): "the same after 1 round as after 6",
-    ("calib.depth_plane", "outliers kept"): "the same whatever inlier_mm",
-    ("calib.tag_extrinsics", "pixels, not normalised points"): "the same pose whatever K and dist",
-    ("calib.tag_homography", "hard-coded"): "the same H whatever the points",
-    ("calib.tag_homography", "normalisation not undone"): "undo the normalisation",
-    ("fk.dh_link_transform", "d negated"): "right with d negated",
-    ("fk.dh_link_transform", "theta and alpha swapped in row 0"): "first in row 0",
-    ("fk.dh_table", "alpha1's sign slipped"): "row 1's alpha negated",
-    ("fk.dh_table", "the L's tilt added, not taken off"): "row 2's theta offset is off by 2 beta",
-    ("fk.euler", "psi's sign slipped"): "right with psi mirrored",
-    ("fk.euler", "no singular case"): "a singular case of its own",
-}
 LIMITS = Limits(timeout_s=400, cpu_s=400)
 
 
@@ -74,10 +56,6 @@ def test_a_blank_release_is_blank_for_both(release, grader):
     assert {e: (r.score, r.reason, r.checks) for e, r in mine.items() if e in CODED} == \
         {e: (r.score, r.reason, r.checks) for e, r in graded.items()}
     assert all(r.reason == "not written (blank region)" for r in graded.values())
-
-
-def test_every_hint_is_for_a_kept_wrong_answer():
-    assert all(label in HIDDEN_WRONG[e] for e, label in HINTS), sorted(HINTS)
 
 
 @dataclass(frozen=True)
@@ -151,13 +129,6 @@ def test_the_self_check_runs_what_the_grader_runs(exercise_id, release, grader, 
         assert not differ, (label, differ[:6])
 
 
-def waits_for_another(check, exercise_id: str) -> bool:
-    """A check of two exercises (e.g. '# CHECK calib.tag_extrinsics calib.depth_plane') fails while the other one is
-    blank, as every other exercise is here: that is not the region's failure."""
-    blank = "ExerciseNotWritten: exercise "
-    return check.message.startswith(blank) and not check.message.startswith(f"{blank}{exercise_id} ")
-
-
 @pytest.mark.parametrize("exercise_id", [e if e in CHEAP or EVERY else
                                          pytest.param(e, marks=pytest.mark.skip("ARMLAB_SELF_CHECK_ALL=1 runs it"))
                                          for e in CODED])
@@ -174,24 +145,12 @@ def test_the_self_check_gives_the_graders_public_verdict(exercise_id, release, g
             [(c.name, c.passed, c.message) for c in public], (label, mine.checks, public)
         verdicts[label] = all(c.passed or waits_for_another(c, exercise_id) for c in public)
         hint = HINTS.get((exercise_id, label))
+        failed = [c.message for c in mine.checks if not c.passed]
         if hint:
-            failed = [c.message for c in mine.checks if not c.passed]
             assert failed and hint in failed[0], (label, failed)
+        elif label != "reference" and (exercise_id, label) not in HIDDEN_ONLY:
+            assert failed, (label, "passed its public checks")
     assert verdicts["reference"], f"{exercise_id}: the reference fails its own public checks"
-
-
-@pytest.mark.parametrize("exercise_id, label", [pytest.param(e, label, id=f"{e}: {label}") for e, label in HINTS
-                                                if e not in CHEAP and not EVERY])
-def test_the_self_check_names_the_cause_of_a_kept_wrong_answer(exercise_id, label, release, tmp_path):
-    """The hints of the exercises whose verdicts the test above compares with the grader's only under
-    ARMLAB_SELF_CHECK_ALL=1 (each costs two notebook runs per answer): the self-check alone (its notebook cut after
-    the exercise's last check cell, about 10 s) fails the wrong answer with the hint in its first failed check."""
-    student = tmp_path / "student"
-    shutil.copytree(release, student)
-    write_regions(student, exercise_id, HIDDEN_WRONG[exercise_id][label])
-    mine = self_check(student, LIMITS, only=exercise_id).results[exercise_id]
-    failed = [c.message for c in mine.checks if not c.passed and not waits_for_another(c, exercise_id)]
-    assert failed and HINTS[(exercise_id, label)] in failed[0], (label, failed)
 
 
 def test_a_check_cell_is_judged_by_its_asserts_not_by_what_it_prints(release, tmp_path):
