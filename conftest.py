@@ -39,7 +39,8 @@ _state: dict[str, ServerProcess | None] = {"server": None}
 # first four on a loaded 2-core machine, 130-280 s for the rest); every other file follows in collection order.
 # Only the order depends on this list: a stale entry costs time, never a result.
 START_FIRST = ("tests/course/test_grading.py", "tests/course/test_hidden_checks_open.py",
-               "tests/course/test_blank_release_runs.py", "tests/course/test_grading_attacks.py",
+               "tests/course/test_grading_hints.py", "tests/course/test_blank_release_runs.py",
+               "tests/course/test_grading_attacks.py",
                "tests/test_hub_image.py", "tests/course/test_lab_04_08.py", "tests/test_place_fuzz.py",
                "tests/course/test_grading_self_check.py", "tests/test_station_contract.py",
                "tests/course/test_hidden_checks.py", "tests/course/test_grading_redteam.py",
