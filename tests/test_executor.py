@@ -176,7 +176,7 @@ def test_a_release_off_the_board_is_refused_by_the_placement_rule(holding):
     """drop_with (a student's move_path) and a taught program's open both go through the placement rule."""
     s = holding.session
     message = assert_refused_before_moving(
-        holding, lambda: move_path.drop_with(s, [0.0, 20.0, 0.0], path=move_path.kit_move_path), "drop_with")
+        holding, lambda: move_path.drop_with(s, [0.0, 20.0, 0.0], path=move_path.default_path()[0]), "drop_with")
     assert "base plate" in message, message
 
 

@@ -92,6 +92,8 @@ RELEASE_EXCLUDES = (
                                    # release's machine stops the station instead: machine.latching_refusal)
     "armlab/tasks/click_rule.py",  # grab.sequence: the kit's click rule (the release grabs only at a block's centre
                                    # and refuses a drop on the held block's old place: click.centre_click_block)
+    "armlab/tasks/kit_move_path.py",   # grab.move_path: the kit's planners with move_path's arguments (the release's
+                                       # notebooks plan with the lab report's fixed-height plan: report_move_path)
     "armlab/tasks/events/strategies/*",   # events.*: the kit's strategies (the release's events run the search)
     "tests/test_event_strategies.py",     # their tests
 )

@@ -570,14 +570,22 @@ TWINS = {
                       ("attr", "armlab.tasks.click_rule", "drop_point"),
                       ("text", "armlab/tasks/click.py", "held.position[2] - block_edge(held.size)"),
                       ("text", "armlab/tasks/click.py", "b.position[:2] - point[:2]")],
+    # the kit's planners with move_path's arguments, which stood in for a blank move_path in notebooks 05 and 06 (the
+    # release's notebooks plan with the lab report's fixed-height plan, move_path.report_move_path)
+    "grab.move_path": [("file", "armlab/tasks/kit_move_path.py"),
+                       ("attr", "armlab.tasks.kit_move_path", "kit_move_path"),
+                       ("attr", "armlab.tasks.move_path", "kit_move_path")],
 }
 # Twins still in the release (issue 32): each must still be found, so that the list is kept honest; moving one out
 # makes its test fail until it is moved up into TWINS.
 # - grab.move_path: the engine's own pick and place (tasks.pick / place, the events, click-to-grab) plan with
-#   planning.plan_pick / plan_place, which the release needs until the engine has a planner of another method;
+#   planning.plan_pick / plan_place (the grasp's pitch: choose_grasp, the steepest one whose straight descent the arm
+#   can make), which the release needs until the engine has a planner of another method: the release's public checks
+#   of grab.sequence, station.* and events.* run its picks and places with move_path blank and compare their outputs
+#   (to 0.1 mm; the sky tower's 12 blocks or more), which a lesser planner would not reproduce;
 KNOWN_TWINS = {
-    "grab.move_path": [("attr", "armlab.tasks.move_path", "kit_move_path"),
-                       ("attr", "armlab.planning", "plan_pick"), ("attr", "armlab.planning", "plan_place")],
+    "grab.move_path": [("attr", "armlab.planning", "plan_pick"), ("attr", "armlab.planning", "plan_place"),
+                       ("attr", "armlab.planning", "plan_pick_place"), ("attr", "armlab.planning", "choose_grasp")],
 }
 
 _LOOKUP = """
@@ -639,7 +647,7 @@ def test_the_twins_still_in_the_release_are_declared(release, exercise_id):
 def test_the_released_engine_runs_without_the_instructors_twins(release):
     """The kit's own code in the release needs none of the left-out twins: the robot model loads without its DH table,
     the kit's IK and detection's colour check run, the DH chain says how to chain the student's table, and the
-    machine and click-to-grab run their stand-ins."""
+    machine, click-to-grab and the notebooks' move_path run their stand-ins."""
     out, _ = release
     code = """
 import numpy as np
@@ -656,9 +664,9 @@ try:
     kinematics.fk_dh(robot.home)
 except ValueError as e:
     print("dh:", e)
-from armlab.tasks import click, machine
+from armlab.tasks import click, machine, move_path
 print("stand-ins", click.click_rule() == (click.centre_click_block, click.standin_drop_point),
-      machine.default_refusal() is machine.latching_refusal)
+      machine.default_refusal() is machine.latching_refusal, move_path.default_path()[0] is move_path.report_move_path)
 """
     env = {"PYTHONPATH": str(out), "PATH": "/usr/bin:/bin", "MPLBACKEND": "Agg"}
     run = subprocess.run([sys.executable, "-c", code], cwd=out, env=env, capture_output=True, text=True)
@@ -666,7 +674,7 @@ print("stand-ins", click.click_rule() == (click.centre_click_block, click.standi
     lines = dict(line.split(" ", 1) for line in run.stdout.splitlines())
     assert lines["ik"] == lines["pox"] and lines["colours"] == "(1, 6)"
     assert "no DH table" in lines["dh:"]
-    assert lines["stand-ins"] == "True True", "the release's machine or click rule is not its stand-in"
+    assert lines["stand-ins"] == "True True True", "the release's machine, click rule or move_path is not its stand-in"
 
 
 def test_the_release_machine_and_click_rule_are_another_methods():
@@ -712,6 +720,43 @@ def test_the_release_machine_and_click_rule_are_another_methods():
         click.standin_drop_point(block, where_it_stood)
     free = np.array([-200.0, 80.0, 0.0])
     np.testing.assert_array_equal(click_rule.drop_point(block, free), click.standin_drop_point(block, free))
+
+
+def test_the_release_move_path_is_another_methods():
+    """grab.move_path: the release's stand-in (move_path.report_move_path, the lab report's plan) and the kit's
+    (kit_move_path, instructor only) reach the same grasp point of a block square to the board, but the stand-in comes
+    down by a joint move (its tool bows off the vertical), meets a turned block square to the board, not to the block,
+    and refuses what the report's heights and top-down pitch cannot do, where the kit's plans."""
+    import numpy as np
+
+    from armlab import kinematics, planning
+    from armlab.kinematics import Unreachable
+    from armlab.tasks import move_path
+    from armlab.tasks.kit_move_path import kit_move_path
+
+    assert move_path.default_path()[0] is kit_move_path                     # the instructor's tree runs the kit's
+
+    def descent(plan):
+        """The tool points (n, 3) mm along the move just before the plan's close, and the joints at its end."""
+        i = next(k for k, s in enumerate(plan.steps) if isinstance(s, planning.GripperStep) and s.action == "close")
+        move = plan.steps[i - 1].trajectory
+        q, _ = move.sample(np.linspace(0.0, move.duration, 41))
+        return kinematics.fk(q)[:, :3, 3], q[-1]
+
+    q0 = planning.CAMERA_CLEAR_POSE
+    square = {f.__name__: descent(f(q0, [-150.0, 200.0, 38.0], 0.0, 38.0, "grasp"))
+              for f in (kit_move_path, move_path.report_move_path)}
+    (kit_tool, kit_end), (report_tool, report_end) = square["kit_move_path"], square["report_move_path"]
+    np.testing.assert_allclose(report_end, kit_end, atol=1e-9)                # the same grasp of a square block
+    off_vertical = [np.hypot(*(p[:, :2] - p[-1, :2]).T).max() for p in (kit_tool, report_tool)]
+    assert off_vertical[0] < 0.5 < 5.0 < off_vertical[1], off_vertical       # straight down; a joint move's bow
+    turned = [descent(f(q0, [-150.0, 200.0, 38.0], 0.4, 38.0, "grasp"))[1][4] for f in (kit_move_path,
+                                                                                     move_path.report_move_path)]
+    assert abs(turned[0] - kit_end[4] + 0.4) < 1e-9 and turned[1] == report_end[4], turned   # the wrist: yaw or not
+    for target, why in (([0.0, 420.0, 38.0], "top-down only"), ([0.0, 250.0, 152.0], "a stack that tall")):
+        assert kit_move_path(q0, target, 0.2, 38.0, "grasp").steps
+        with pytest.raises(Unreachable, match=why):
+            move_path.report_move_path(q0, target, 0.2, 38.0, "grasp")
 
 
 def test_the_stand_ins_give_another_methods_result():
