@@ -581,8 +581,9 @@ TWINS = {
 # - grab.move_path: the engine's own pick and place (tasks.pick / place, the events, click-to-grab) plan with
 #   planning.plan_pick / plan_place (the grasp's pitch: choose_grasp, the steepest one whose straight descent the arm
 #   can make), which the release needs until the engine has a planner of another method: the release's public checks
-#   of grab.sequence, station.* and events.* run its picks and places with move_path blank and compare their outputs
-#   (to 0.1 mm; the sky tower's 12 blocks or more), which a lesser planner would not reproduce;
+#   of grab.sequence, station.* and events.* run its picks and places with move_path blank and assert what they
+#   build (a turned block stacked on a turned one, the sky tower's 12 blocks or more), which a lesser planner (the
+#   report's fixed-height plan) cannot build;
 KNOWN_TWINS = {
     "grab.move_path": [("attr", "armlab.planning", "plan_pick"), ("attr", "armlab.planning", "plan_place"),
                        ("attr", "armlab.planning", "plan_pick_place"), ("attr", "armlab.planning", "choose_grasp")],
