@@ -10,6 +10,13 @@ other's code built), which then holds the reference while the first one's wrong 
 
 from __future__ import annotations
 
+from pathlib import Path
+
+from armlab_course.grading.run import Limits
+
+# the limits of the self-check runs of these tests (a notebook 07 or 04 slice under load takes up to a minute)
+LIMITS = Limits(timeout_s=400, cpu_s=400)
+
 HINTS = {
     ("calib.pinhole", "no translation"): "leaves out T_cam_world's translation",
     ("calib.pinhole", "rotation not transposed"): "right with T_cam_world's rotation transposed",
@@ -109,3 +116,14 @@ def rounds(exercise_ids: list[str], wrong: dict[str, dict[str, list[str]]]) -> l
                 out.append({**{NEEDS[e]: None for e in group},
                             **{e: list(wrong[e])[r] for e in group if r < len(wrong[e])}})
     return out
+
+
+def built_release(tmp_path_factory, name: str) -> Path:
+    """A student release of this checkout, built in a new temporary folder `name`."""
+    from wrong_answers import ROOT
+
+    from armlab_course.exercises import make_student_release
+
+    folder = tmp_path_factory.mktemp(name) / "release"
+    make_student_release(ROOT, folder)
+    return folder

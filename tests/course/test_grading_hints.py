@@ -11,24 +11,19 @@ from __future__ import annotations
 import shutil
 
 import pytest
-from public_verdicts import CAUSE_UNTOLD, CHEAP, HIDDEN_ONLY, HINTS, rounds, waits_for_another
-from wrong_answers import HIDDEN_WRONG, ROOT, reference_bodies
+from public_verdicts import CAUSE_UNTOLD, CHEAP, HIDDEN_ONLY, HINTS, LIMITS, built_release, rounds, waits_for_another
+from wrong_answers import HIDDEN_WRONG, reference_bodies
 
-from armlab_course.exercises import make_student_release
 from armlab_course.exercises.registry import exercise
 from armlab_course.grading.check import self_check
-from armlab_course.grading.run import Limits
 from armlab_course.grading.splice import write_regions
 
 ROUNDS = rounds([e for e in HIDDEN_WRONG if e not in CHEAP], HIDDEN_WRONG)
-LIMITS = Limits(timeout_s=400, cpu_s=400)
 
 
 @pytest.fixture(scope="module")
 def release(tmp_path_factory):
-    folder = tmp_path_factory.mktemp("hints") / "release"
-    make_student_release(ROOT, folder)
-    return folder
+    return built_release(tmp_path_factory, "hints")
 
 
 def test_every_kept_wrong_answer_has_one_declared_public_verdict():

@@ -18,10 +18,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
-from public_verdicts import CHEAP, HIDDEN_ONLY, HINTS, waits_for_another
+from public_verdicts import CHEAP, HIDDEN_ONLY, HINTS, LIMITS, built_release, waits_for_another
 from wrong_answers import HIDDEN_WRONG, ROOT, reference_bodies
 
-from armlab_course.exercises import make_student_release
 from armlab_course.exercises.registry import EXERCISES, exercise
 from armlab_course.exercises.release import PUBLIC_NOTEBOOKS
 from armlab_course.grading import check, grade, public
@@ -33,14 +32,11 @@ from armlab_course.grading.submission import read_submission
 
 CODED = [e.id for e in EXERCISES if e.kind != "written"]
 EVERY = os.environ.get("ARMLAB_SELF_CHECK_ALL") == "1"
-LIMITS = Limits(timeout_s=400, cpu_s=400)
 
 
 @pytest.fixture(scope="module")
 def release(tmp_path_factory):
-    folder = tmp_path_factory.mktemp("self-check") / "release"
-    make_student_release(ROOT, folder)
-    return folder
+    return built_release(tmp_path_factory, "self-check")
 
 
 @pytest.fixture(scope="module")
