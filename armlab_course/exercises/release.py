@@ -146,17 +146,14 @@ def student_notebook(nb: dict, where: str) -> dict:
 
 def public_notebook(nb: dict, where: str) -> dict:
     """The notebook the public checks run (the grader's and the self-check's, armlab_course.grading.public): the
-    student notebook of `nb` (student_notebook) with the stored outputs and counts of `nb`'s CHECK cells put back
-    (nbval runs a cell that has them) and each CHECK cell tagged CHECK_VERDICT_TAG: its asserts are its verdict, not
-    its printout. A valid answer prints other figures than the reference did (an open task's run time, a tower's
-    height, a measured error), so a check cell passes when it raises nothing, whatever it prints; a cell that raises
-    fails whatever its tags say (armlab_course.grading.nbval_guard). No other cell gets its outputs back (they would
-    show the reference's values to the student's code)."""
+    student notebook of `nb` (student_notebook: no cell holds an output or a count), each CHECK cell tagged
+    CHECK_VERDICT_TAG. A check cell's asserts are its verdict, not its printout: a valid answer prints other figures
+    than the reference did (an open task's run time, a tower's height, a measured error), so nbval compares no
+    output of a check cell, and a cell that raises fails whatever its tags say (armlab_course.grading.nbval_guard).
+    No stored output is shipped: nothing of the instructor's run reaches the student's checkout."""
     out = student_notebook(nb, where)
-    for cell, original in zip(out["cells"], nb["cells"], strict=True):
-        if cell["cell_type"] == "code" and CHECK_LINE.search("".join(original["source"])):
-            cell["outputs"] = original.get("outputs", [])
-            cell["execution_count"] = original.get("execution_count")     # nbval: a cell never run has none
+    for cell in out["cells"]:
+        if cell["cell_type"] == "code" and CHECK_LINE.search("".join(cell["source"])):
             tags = cell.setdefault("metadata", {}).setdefault("tags", [])
             if CHECK_VERDICT_TAG not in tags:
                 tags.append(CHECK_VERDICT_TAG)
