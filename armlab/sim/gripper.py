@@ -13,6 +13,7 @@ runs into an object shoves it aside (squaring its face against the pad, as a fla
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -95,27 +96,39 @@ def close_on(world: World, T_tool, geometry: GripperGeometry, opening_mm: float)
     return GraspOutcome(o, o.edge, "held")
 
 
+@functools.lru_cache(maxsize=16)
+def _pad_reach(g: GripperGeometry) -> float:
+    """How far (mm) a pad's corners reach from its centre: the norm of its half extents."""
+    return np.linalg.norm(g.half_extents)
+
+
 def push_with_pads(world: World, T_tool, geometry: GripperGeometry, opening_mm: float) -> list[ObjectState]:
     """Shove every free object a finger pad runs into out of the pad's way (along the closing direction, away from
     the pad), squaring its face against the pad; returns the objects moved."""
     g = geometry
     T = np.asarray(T_tool, dtype=float)
     R = T[:3, :3]
-    centres = g.pad_centres(T, opening_mm)
-    reach = np.linalg.norm(g.half_extents)
-    free = [o for o in world.objects if o.id not in world.held]
+    held = world.held
+    free = [o for o in world.objects if o.id not in held]
     if not free:
         return []
-    bound = reach + 0.87 * np.array([o.edge for o in free])
+    centres = g.pad_centres(T, opening_mm)
+    bound = _pad_reach(g) + 0.87 * np.array([o.edge for o in free])
+    positions = None                           # the free objects' centres (N, 3), taken again after a shove
 
     def near(k: int) -> list[ObjectState]:
         """The free objects within touching distance of pad k (a vectorised test: most steps touch nothing)."""
-        gap = np.linalg.norm(np.array([o.position for o in free]) - centres[k], axis=-1)
-        return [o for o, close in zip(free, gap <= bound, strict=True) if close]
+        nonlocal positions
+        if positions is None:
+            positions = np.array([o.position for o in free])
+        gap = np.linalg.norm(positions - centres[k], axis=-1)
+        return [o for o, close in zip(free, (gap <= bound).tolist(), strict=True) if close]
 
     corners = None
     moved = []
     for k in range(2):
+        if moved:
+            positions = None
         for o in near(k):                      # after pad 0's shoves, pad 1 sees where they left the objects
             if not boxes_overlap(centres[k], R, g.half_extents, *_object_box(o), margin=_PUSH_MARGIN_MM):
                 continue
