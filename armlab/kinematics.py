@@ -36,6 +36,7 @@ __all__ = [
     "dh_frames",
     "link_frames",
     "joint_positions",
+    "frame_points",
     "jacobian",
     "tool_orientation",
     "ik",
@@ -228,13 +229,21 @@ def joint_positions(q, robot: RobotModel | None = None) -> np.ndarray:
     top and the wrist_rotate joint carried with link frames 1 and 4 (RobotModel.points_home, data/rx200_pox.csv).
     """
     robot = robot or rx200()
-    frames = _link_frames(check_joints(q, robot, check_limits=False), robot)
-    base = np.zeros(frames.shape[:-3] + (3,))
+    return frame_points(_link_frames(check_joints(q, robot, check_limits=False), robot), robot)
+
+
+def frame_points(frames: np.ndarray, robot: RobotModel | None = None) -> np.ndarray:
+    """joint_positions' points (..., 7, 3) world mm from the link frames (..., 7, 4, 4) link_frames gave for the same
+    joints: for callers that need both the frames and the points (one product of exponentials, not two)."""
+    robot = robot or rx200()
     on_link1, on_link4 = robot.points_on_links
-    waist_top = frames[..., 1, :3, :3] @ on_link1 + frames[..., 1, :3, 3]
-    wrist_rotate = frames[..., 4, :3, :3] @ on_link4 + frames[..., 4, :3, 3]
-    return np.stack([base, waist_top, frames[..., 1, :3, 3], frames[..., 2, :3, 3], frames[..., 3, :3, 3],
-                     wrist_rotate, frames[..., 6, :3, 3]], axis=-2)
+    out = np.empty(frames.shape[:-3] + (7, 3))
+    out[..., 0, :] = 0.0                                                          # the base
+    out[..., 1, :] = frames[..., 1, :3, :3] @ on_link1 + frames[..., 1, :3, 3]   # the waist top
+    out[..., 2:5, :] = frames[..., 1:4, :3, 3]                                   # shoulder, elbow, wrist
+    out[..., 5, :] = frames[..., 4, :3, :3] @ on_link4 + frames[..., 4, :3, 3]   # the wrist_rotate joint
+    out[..., 6, :] = frames[..., 6, :3, 3]                                       # the tool point
+    return out
 
 
 def jacobian(q, robot: RobotModel | None = None, step: float = 1e-6) -> np.ndarray:

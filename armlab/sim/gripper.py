@@ -27,6 +27,7 @@ from armlab.transforms import rot_z
 __all__ = ["GripperGeometry", "GraspOutcome", "close_on", "push_with_pads"]
 
 _PUSH_MARGIN_MM = 0.05       # pads touching a face (closed on a cube) do not count as pushing it
+_PREFILTER_MARGIN_MM = 1.0   # push_with_pads' quick test from the tool point leaves this much to spare
 
 
 @dataclass
@@ -112,9 +113,14 @@ def push_with_pads(world: World, T_tool, geometry: GripperGeometry, opening_mm: 
     free = [o for o in world.objects if o.id not in held]
     if not free:
         return []
-    centres = g.pad_centres(T, opening_mm)
+    positions = np.array([o.position for o in free])    # the free objects' centres (N, 3), again after a shove
     bound = _pad_reach(g) + 0.87 * np.array([o.edge for o in free])
-    positions = None                           # the free objects' centres (N, 3), taken again after a shove
+    # Most steps touch nothing: a pad's centre is `off` from the tool point, so an object farther than its bound + off
+    # (+ a margin far above any rounding) from the tool point is beyond its bound from both pads.
+    off = (opening_mm / 2 + g.pad_thickness_mm / 2) * np.linalg.norm(T[:3, 1])
+    if np.all(np.linalg.norm(positions - T[:3, 3], axis=-1) > bound + (off + _PREFILTER_MARGIN_MM)):
+        return []
+    centres = g.pad_centres(T, opening_mm)
 
     def near(k: int) -> list[ObjectState]:
         """The free objects within touching distance of pad k (a vectorised test: most steps touch nothing)."""
