@@ -15,8 +15,8 @@ Each workload also yields a digest: sha256 over the exact bytes of the arm's phy
 objects' poses, the final score and time. With --against REF, the kit at REF (`git archive`, into a temporary
 folder first on the path) runs the same workloads in a subprocess, alternating with this checkout's, `--rounds`
 times each; the table gives the least CPU time of each side (process time: less sensitive than wall time to the
-other jobs of a shared machine) and their ratio, and says whether the digests are equal (they must be: a speed-up
-may not change a single bit of what the simulator computes).
+other jobs of a shared machine), their ratio, the least wall times, and whether the digests are equal (they must
+be: a speed-up may not change a single bit of what the simulator computes).
 
 Measured 2026-12-07 on the shared 2-core machine (simspeed branch against main 612fe96): see docs/benchmarks.md.
 """
@@ -163,12 +163,14 @@ def main(argv=None) -> None:
             runs["new"].append(_worker(None, names))
     print(f"this checkout ({here}, with its uncommitted changes) against {args.against} ({other}); least CPU s of "
           f"{args.rounds} alternating runs each")
-    print(f"{'workload':<9} {'steps':>6} {'old CPU s':>10} {'new CPU s':>10} {'old/new':>8}  same bits")
+    print(f"{'workload':<9} {'steps':>6} {'old CPU s':>10} {'new CPU s':>10} {'old/new':>8} {'old wall s':>11} "
+          f"{'new wall s':>11}  same bits")
     for name in names:
         old, new = (min(r[name]["cpu_s"] for r in runs[side]) for side in ("old", "new"))
+        old_wall, new_wall = (min(r[name]["wall_s"] for r in runs[side]) for side in ("old", "new"))
         digests = {r[name]["digest"] for side in runs.values() for r in side}
         steps = runs["new"][0][name]["steps"]
-        print(f"{name:<9} {steps:>6} {old:10.2f} {new:10.2f} {old / new:8.2f}  "
+        print(f"{name:<9} {steps:>6} {old:10.2f} {new:10.2f} {old / new:8.2f} {old_wall:11.2f} {new_wall:11.2f}  "
               f"{'yes' if len(digests) == 1 else 'NO: ' + ', '.join(sorted(digests))}")
 
 
