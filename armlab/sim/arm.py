@@ -167,7 +167,7 @@ class SimArm:
         self._held: list[tuple[object, np.ndarray]] = []    # (object, its pose in the tool frame)
         self._told: tuple[motion_safety.HeldBlock, ...] = ()  # what the task layer says it holds (set_held_blocks)
         self.gripper_opening_mm = self.gripper_geometry.max_opening_mm
-        self._pose_memo: tuple | None = None                # (what the pose depends on, q_true, tool pose): _pose
+        self._pose_memo: tuple | None = None    # (key, realism, robot, q_true, tool pose): _pose
         self._q_true = self._physical(self._motor)
         world.add_listener(self._on_time)
 
@@ -242,11 +242,13 @@ class SimArm:
         link state, torque and load. What they depend on is the key of a one-entry memo: the clock's steps while
         the arm stands (a gripper's second, a look) would compute the very same numbers again. The arrays are the
         memo's own: read them, never write into them."""
-        key = (self._motor.tobytes(), self._link.tobytes(), self._torque, self._payload_kg(), self.realism)
-        if self._pose_memo is None or self._pose_memo[0] != key:
+        key = (self._motor.tobytes(), self._link.tobytes(), self._torque, self._payload_kg())
+        memo = self._pose_memo
+        if memo is None or memo[0] != key or memo[1] is not self.realism or memo[2] is not self.robot:
             q = self._physical(self._motor)
-            self._pose_memo = (key, q, kinematics.fk_pox(q, self.robot, check_limits=False))
-        return self._pose_memo[1], self._pose_memo[2]
+            memo = self._pose_memo = (key, self.realism, self.robot, q,
+                                      kinematics.fk_pox(q, self.robot, check_limits=False))
+        return memo[3], memo[4]
 
     # -- readings -------------------------------------------------------------------------------------------
     def joint_positions(self) -> np.ndarray:
