@@ -292,12 +292,21 @@ def test_grade_command_on_a_blank_class(tmp_path, monkeypatch):
     assert main(["grade", str(tmp_path / "missing"), "--out", str(tmp_path / "out")]) == 2   # one line, exit 2
 
 
-def test_regrading_gives_the_same_scores(graded):
-    """A fresh Grader (no shared cache) on the class's tampered submission: the same scores and checks."""
+@pytest.fixture(scope="module")
+def fresh_grader():
+    """A Grader of the class's exercises and limits, apart from the one grade_class made (no shared cache): made
+    once for the two tests below (each made its own: the instructor's tree copied, the release built and the expected
+    values computed twice)."""
     from armlab_course.grading.grade import Grader
 
+    with Grader(ROOT, Limits(timeout_s=240, cpu_s=25), GRADED) as made:
+        yield made
+
+
+def test_regrading_gives_the_same_scores(graded, fresh_grader):
+    """A fresh Grader (no shared cache) on the class's tampered submission: the same scores and checks."""
     results, out = graded
-    grader = Grader(ROOT, Limits(timeout_s=240, cpu_s=25), GRADED)
+    grader = fresh_grader
     for student in ("tampered",):
         again = grader.grade(read_submission(out.parent / "submissions" / student, ROOT))
         for exercise_id in GRADED:
@@ -307,13 +316,10 @@ def test_regrading_gives_the_same_scores(graded):
     assert grader.runs == 1
 
 
-def test_a_hard_coded_answer_fails_the_hidden_checks():
+def test_a_hard_coded_answer_fails_the_hidden_checks(fresh_grader):
     """fk.euler as the public check's one singular case, hard-coded: the hidden checks' other poses fail it."""
-    from armlab_course.grading.grade import Grader
-
     lookup = "    return np.array([0.7, 0.0, 0.0])"
-    with Grader(ROOT, Limits(timeout_s=240, cpu_s=60), ["fk.euler"]) as grader:
-        checks = grader.hidden_checks("fk.euler", [lookup])
+    checks = fresh_grader.hidden_checks("fk.euler", [lookup])
     assert checks and not any(c.passed for c in checks)
     assert all("the Euler angles (" in c.message and "): off by up to " in c.message
                for c in checks), [c.message for c in checks]
