@@ -91,9 +91,10 @@ def graded(tmp_path_factory) -> tuple[dict, Path]:
     write_regions(student("loop"), "fk.dh_table", ["    while True:\n        pass"])
     corrupt = student("corrupt")
     (corrupt / "notebooks/02_forward_kinematics.ipynb").write_text('{"cells": [ not json')
-    edited_only = subs / "edited_only"     # only the edited file, the rest not submitted
-    (edited_only / "armlab").mkdir(parents=True)
-    shutil.copy2(full / "armlab/kinematics.py", edited_only / "armlab")
+    edited_only = subs / "edited_only"     # only the edited files, the rest not submitted: wrong_link's two (the
+    for name in ("armlab/kinematics.py", "notebooks/03_inverse_kinematics.ipynb"):   # Grader shares their runs)
+        (edited_only / name).parent.mkdir(parents=True, exist_ok=True)
+        shutil.copy2(wrong_link / name, edited_only / name)
     for name, prefix in CONTAINED.items():   # each then runs the reference: only the limits can make it score 0
         write_regions(student(name), "fk.euler", [prefix + reference_bodies("fk.euler")[0]])   # called 300 times
         write_regions(subs / name, "fk.dh_table", reference_bodies("fk.dh_table"))
