@@ -91,9 +91,10 @@ def graded(tmp_path_factory) -> tuple[dict, Path]:
     write_regions(student("loop"), "fk.dh_table", ["    while True:\n        pass"])
     corrupt = student("corrupt")
     (corrupt / "notebooks/02_forward_kinematics.ipynb").write_text('{"cells": [ not json')
-    edited_only = subs / "edited_only"     # only the edited file, the rest not submitted
-    (edited_only / "armlab").mkdir(parents=True)
-    shutil.copy2(full / "armlab/kinematics.py", edited_only / "armlab")
+    edited_only = subs / "edited_only"     # only the edited files, the rest not submitted: wrong_link's two (the
+    for name in ("armlab/kinematics.py", "notebooks/03_inverse_kinematics.ipynb"):   # Grader shares their runs)
+        (edited_only / name).parent.mkdir(parents=True, exist_ok=True)
+        shutil.copy2(wrong_link / name, edited_only / name)
     for name, prefix in CONTAINED.items():   # each then runs the reference: only the limits can make it score 0
         write_regions(student(name), "fk.euler", [prefix + reference_bodies("fk.euler")[0]])   # called 300 times
         write_regions(subs / name, "fk.dh_table", reference_bodies("fk.dh_table"))
@@ -292,12 +293,21 @@ def test_grade_command_on_a_blank_class(tmp_path, monkeypatch):
     assert main(["grade", str(tmp_path / "missing"), "--out", str(tmp_path / "out")]) == 2   # one line, exit 2
 
 
-def test_regrading_gives_the_same_scores(graded):
-    """A fresh Grader (no shared cache) on the class's tampered submission: the same scores and checks."""
+@pytest.fixture(scope="module")
+def fresh_grader():
+    """A Grader of the class's exercises and limits, apart from the one grade_class made (no shared cache): made
+    once for the two tests below (each made its own: the instructor's tree copied, the release built and the expected
+    values computed twice)."""
     from armlab_course.grading.grade import Grader
 
+    with Grader(ROOT, Limits(timeout_s=240, cpu_s=25), GRADED) as made:
+        yield made
+
+
+def test_regrading_gives_the_same_scores(graded, fresh_grader):
+    """A fresh Grader (no shared cache) on the class's tampered submission: the same scores and checks."""
     results, out = graded
-    grader = Grader(ROOT, Limits(timeout_s=240, cpu_s=25), GRADED)
+    grader = fresh_grader
     for student in ("tampered",):
         again = grader.grade(read_submission(out.parent / "submissions" / student, ROOT))
         for exercise_id in GRADED:
@@ -307,13 +317,10 @@ def test_regrading_gives_the_same_scores(graded):
     assert grader.runs == 1
 
 
-def test_a_hard_coded_answer_fails_the_hidden_checks():
+def test_a_hard_coded_answer_fails_the_hidden_checks(fresh_grader):
     """fk.euler as the public check's one singular case, hard-coded: the hidden checks' other poses fail it."""
-    from armlab_course.grading.grade import Grader
-
     lookup = "    return np.array([0.7, 0.0, 0.0])"
-    with Grader(ROOT, Limits(timeout_s=240, cpu_s=60), ["fk.euler"]) as grader:
-        checks = grader.hidden_checks("fk.euler", [lookup])
+    checks = fresh_grader.hidden_checks("fk.euler", [lookup])
     assert checks and not any(c.passed for c in checks)
     assert all("the Euler angles (" in c.message and "): off by up to " in c.message
                for c in checks), [c.message for c in checks]

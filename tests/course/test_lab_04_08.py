@@ -20,10 +20,14 @@ MINE = ("detect.segment", "detect.face", "grab.click_target", "grab.move_path", 
 CHEAP = ("detect.face", "grab.click_target", "station.transition")      # hidden checks without a simulator run
 
 
-def _grader(ids):
+@pytest.fixture(scope="module")
+def grader():
+    """One Grader of MINE and detect.stacks for the whole file: the expected values of all seven exercises from one
+    harness run on the instructor's copy (each test made its own Grader: five, two of them the same twice)."""
     from armlab_course.grading.grade import Grader
 
-    return Grader(ROOT, Limits(timeout_s=600, cpu_s=400), list(ids))
+    with Grader(ROOT, Limits(timeout_s=600, cpu_s=400), [*MINE, "detect.stacks"]) as made:
+        yield made
 
 
 def _blank(exercise_id: str) -> list[str]:
@@ -32,33 +36,41 @@ def _blank(exercise_id: str) -> list[str]:
     return ["\n".join("    " + line for line in stub_lines(exercise_id))] * len(_reference_bodies(exercise_id))
 
 
-def test_the_blank_stubs_fail_every_hidden_check():
-    got = _grader(MINE).hidden_checks_together({e: _blank(e) for e in MINE})
+def test_the_blank_stubs_fail_every_hidden_check(grader):
+    got = grader.hidden_checks_together({e: _blank(e) for e in MINE})
     for exercise_id in MINE:
         assert got[exercise_id] and not any(c.passed for c in got[exercise_id]), (exercise_id, got[exercise_id])
 
 
 @pytest.mark.parametrize("round_", [0, 1])
-def test_a_wrong_answer_loses_its_own_exercise_only(round_):
+def test_a_wrong_answer_loses_its_own_exercise_only(grader, round_):
     """Each cheap exercise wrong in turn (its round_-th wrong answer of wrong_answers.HIDDEN_WRONG) while the other
     holds the reference: the wrong one fails a hidden check, the other passes every one."""
     from wrong_answers import check_each_wrong_loses_only_its_own
 
-    check_each_wrong_loses_only_its_own(_grader(CHEAP), CHEAP, round_)
+    check_each_wrong_loses_only_its_own(grader, CHEAP, round_)
+
+
+@pytest.fixture(scope="module")
+def blank_stacks(grader):
+    """The hidden checks of detect.stacks blank beside detect.face's reference: the same run for both rounds below."""
+    from wrong_answers import reference_bodies as _reference_bodies
+
+    return grader.hidden_checks_together({"detect.stacks": _blank("detect.stacks"),
+                                          "detect.face": _reference_bodies("detect.face")})
 
 
 @pytest.mark.parametrize("round_", [0, 1])
-def test_a_wrong_stack_answer_loses_detect_stacks_only(round_):
+def test_a_wrong_stack_answer_loses_detect_stacks_only(grader, blank_stacks, round_):
     """detect.stacks (section 6 of notebook 04) blank or wrong (its round_-th wrong answer) while detect.face, another
     cheap exercise of the notebook, holds the reference: detect.stacks fails a hidden check (blank: every one),
     detect.face passes every one."""
     from wrong_answers import HIDDEN_WRONG
     from wrong_answers import reference_bodies as _reference_bodies
 
-    grader = _grader(("detect.stacks", "detect.face"))
     label, bodies = list(HIDDEN_WRONG["detect.stacks"].items())[round_]
-    for what, stacks in ((label, bodies), ("blank", _blank("detect.stacks"))):
-        got = grader.hidden_checks_together({"detect.stacks": stacks, "detect.face": _reference_bodies("detect.face")})
+    wrong = grader.hidden_checks_together({"detect.stacks": bodies, "detect.face": _reference_bodies("detect.face")})
+    for what, got in ((label, wrong), ("blank", blank_stacks)):
         assert got["detect.stacks"] and not all(c.passed for c in got["detect.stacks"]), what
         if what == "blank":
             assert not any(c.passed for c in got["detect.stacks"]), got["detect.stacks"]
