@@ -83,8 +83,8 @@ def _public_copy(checkout: Path, name: str, dest: Path, bodies: dict[str, list[s
         nb = public_notebook(json.loads(own.read_text(encoding="utf-8")), f"notebooks/{name}.ipynb")
         dest.write_text(json.dumps(nb, indent=1, ensure_ascii=False) + "\n", encoding="utf-8")
     else:
-        return (f"this release has no {PUBLIC_NOTEBOOKS}/{name}.ipynb (the notebook the public checks run, with "
-                f"the instructor's check outputs): ask for a release made with this version of the kit")
+        return (f"this release has no {PUBLIC_NOTEBOOKS}/{name}.ipynb (the notebook the public checks run, as "
+                f"the release holds it): ask for a release made with this version of the kit")
     tree = dest.parents[1]
     for ex in EXERCISES:
         if not ex.in_package and ex.notebook == name and ex.id in bodies:
