@@ -13,6 +13,10 @@ method on the PoX planar chain), 04 36.8 / 37.8 (1.03; 1.67 before the colour lo
 06 7.9 / 9.8 (1.24), 07 42.0 / 32.6 (0.78; 1.7 before: the blank strategy makes no move), 08 12.3 / 13.9 (1.13).
 2026-12-07, move_path's stand-in the lab report's plan (report_move_path) instead of the kit's planners: 05 19.5 /
 15.2 (0.78), 06 8.1 / 9.2 (1.13).
+2026-12-07, the release's planners on a joint chord (planning.descent), a helper's physics work sharing the cores:
+05 18.4 / 12.5 (0.68), 06 5.3 / 5.5 (1.05), 07 25.2 / 11.7 (0.46), 08 7.3 / 7.8 (1.07); the others then: 00 4.2 / 4.2
+(1.01), 01 6.1 / 6.2 (1.02), 01_going_further 4.1 / 4.6 (1.14), 02 2.5 / 2.2 (0.89), 03 3.7 / 4.2 (1.15), 04 20.0 /
+21.2 (1.06).
 """
 
 from __future__ import annotations

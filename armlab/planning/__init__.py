@@ -2,10 +2,12 @@
 
 Pure and kinematic: nothing here talks to a station; `execute(plan, arm)` runs a plan on any armlab Arm.
 Units: mm, rad, s; world (board) frame. Modules: timing (time scaling), trajectory (joint moves, Cartesian lines),
-grasp (wrist roll and pitch for a block), transit (obstacles and clearance), plan (Plan, execute, sampling, plots),
-pickplace (pick, place and camera-clear plans).
+descent (how the kit's plans come down to a block: the seam with exercise grab.move_path), grasp (wrist roll and pitch
+for a block), straightness (how straight a plan comes down), transit (obstacles and clearance), plan (Plan, execute,
+sampling, plots), pickplace (pick, place and camera-clear plans).
 """
 
+from .descent import approach_reachable, descend
 from .grasp import (
     LIMIT_MARGIN_RAD,
     MAX_CLOSING_TILT_RAD,
@@ -42,14 +44,18 @@ from .plan import (
     plot_plan,
     sample_plan,
 )
+from .straightness import STRAIGHT_TOLERANCE_MM, approach_deviation
 from .timing import SCALINGS, moving_time, time_scaling
 from .trajectory import (
     CartesianSegment,
+    JointChord,
     JointTrajectory,
     PiecewiseTrajectory,
+    ToolSegment,
     Trajectory,
     Waypoint,
     cartesian_line,
+    joint_chord,
     joint_move,
     reverse,
 )
@@ -64,7 +70,8 @@ __all__ = [
     "GRIPPER_TIME_S", "ExecutionResult", "GripperStep", "MoveStep", "Plan", "PlanSample", "execute", "plot_plan",
     "sample_plan", "joint_moves",
     "SCALINGS", "moving_time", "time_scaling",
-    "CartesianSegment", "JointTrajectory", "PiecewiseTrajectory", "Trajectory", "Waypoint", "cartesian_line",
-    "joint_move", "reverse",
+    "CartesianSegment", "JointChord", "JointTrajectory", "PiecewiseTrajectory", "ToolSegment", "Trajectory", "Waypoint",
+    "cartesian_line", "joint_chord", "joint_move", "reverse", "descend", "approach_reachable",
+    "STRAIGHT_TOLERANCE_MM", "approach_deviation",
     "DEFAULT_CLEARANCE_MM", "Clearance", "Obstacle", "as_obstacles", "transit_clearance",
 ]

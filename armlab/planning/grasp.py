@@ -49,6 +49,8 @@ from armlab.kinematics import Unreachable
 from armlab.robot import RobotModel, rx200
 from armlab.transforms import wrap_quarter
 
+from . import descent
+
 __all__ = ["GraspPose", "face_roll", "tilted_roll", "face_misalignment", "choose_grasp", "TOP_DOWN",
            "LIMIT_MARGIN_RAD", "MAX_CLOSING_TILT_RAD", "PAD_CLEARANCE_MM", "pad_clearance", "inner_limits",
            "steepest_pitch_inside"]
@@ -58,7 +60,6 @@ LIMIT_MARGIN_RAD = 0.01         # planned poses keep this far inside the positio
 PAD_CLEARANCE_MM = 5.0          # an open pad this close to a neighbour takes the other pair of faces if it is freer
 MAX_CLOSING_TILT_RAD = np.radians(5.0)   # a tilted grasp's closing direction stays this close to horizontal
 _PITCH_STEP = np.radians(1.0)   # fallback pitches are tried from the steepest downwards in this step
-_SEGMENT_STEP_MM = 5.0          # spacing of the reachability check along the vertical approach
 
 
 @dataclass(frozen=True)
@@ -148,23 +149,14 @@ def steepest_pitch_inside(position, roll: float = 0.0, max_pitch: float = TOP_DO
         return kinematics.steepest_pitch(position, roll, max_pitch=max_pitch, robot=robot), robot
 
 
-def _vertical_ok(position: np.ndarray, top_z: float, pitch: float, roll: float, robot: RobotModel) -> bool:
-    """True when every point from `position` straight up to top_z is reachable at pitch/roll on one IK branch."""
-    n = max(2, int(np.ceil((top_z - position[2]) / _SEGMENT_STEP_MM)) + 1)
-    pts = np.repeat(position[None], n, axis=0)
-    pts[:, 2] = np.linspace(position[2], max(top_z, position[2]), n)
-    res = kinematics.ik_batch(pts, pitch, roll, robot=robot)
-    return bool(res.success.all() and np.all(res.branch == res.branch[0]))
-
-
 def choose_grasp(position, yaw: float, approach_z: float | None = None,
                  robot: RobotModel | None = None, obstacles=()) -> GraspPose:
     """Grasp (or release) pose for a block whose tool point goes to `position` (3,) world mm, block yaw `yaw` rad.
 
-    Top-down (pitch = pi/2, roll = face_roll) when the tool can go straight down from approach_z (world mm, default:
-    the position's own height) to the position; else the steepest pitch (from kinematics.steepest_pitch, then in
-    1 deg steps down) at which that whole vertical approach is reachable, with roll = tilted_roll (or 0 where only
-    that is reachable; see the module notes).
+    Top-down (pitch = pi/2, roll = face_roll) when the kit's descent (planning.descent.approach_reachable) can come
+    from approach_z (world mm, default: the position's own height) down to the position; else the steepest pitch
+    (from kinematics.steepest_pitch, then in 1 deg steps down) at which it can, with roll = tilted_roll (or 0 where
+    only that is reachable; see the module notes).
     obstacles: the neighbours (planning Obstacles) the open pads of a top-down grasp keep clear of by choosing the
     pair of faces (module notes); default none.
     Raises Unreachable saying why when no pitch works, ValueError for bad input.
@@ -191,7 +183,7 @@ def choose_grasp(position, yaw: float, approach_z: float | None = None,
     steepest = None
     for model in (inner_limits(robot), robot):          # with the margin from the limits first (module notes)
         for r in rolls:
-            if _vertical_ok(p, top_z, TOP_DOWN, r, model):
+            if descent.approach_reachable(p, top_z, TOP_DOWN, r, model):
                 return GraspPose(p, heading, TOP_DOWN, r, True, face_misalignment(heading, TOP_DOWN, r, yaw))
         try:
             steepest = kinematics.steepest_pitch(p, robot=model)
@@ -201,9 +193,10 @@ def choose_grasp(position, yaw: float, approach_z: float | None = None,
             continue
         for pitch in np.arange(min(steepest, TOP_DOWN - _PITCH_STEP), -1e-9, -_PITCH_STEP):
             for r in dict.fromkeys((tilted_roll(heading, pitch, yaw), 0.0)):   # square to the faces, else level
-                # a turned wrist must also keep one branch within the limits themselves, where the straight line
-                # (trajectory.cartesian_line) picks its branch
-                if _vertical_ok(p, top_z, pitch, r, model) and (r == 0.0 or _vertical_ok(p, top_z, pitch, r, robot)):
+                # a turned wrist must also keep one branch within the limits themselves, where the descent
+                # (planning.descent) picks its branch
+                reachable = descent.approach_reachable(p, top_z, pitch, r, model)
+                if reachable and (r == 0.0 or descent.approach_reachable(p, top_z, pitch, r, robot)):
                     return GraspPose(p, heading, float(pitch), r, False, face_misalignment(heading, pitch, r, yaw))
     raise Unreachable(f"the tool reaches ({p[0]:.1f}, {p[1]:.1f}, {p[2]:.1f}) mm (pitch up to "
                       f"{np.degrees(steepest):.1f} deg) but cannot come straight down to it from z = {top_z:.1f} mm "

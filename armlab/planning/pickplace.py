@@ -1,4 +1,4 @@
-"""Pick and place plans: transit above the target, open, descend in a straight line, grasp or release, lift.
+"""Pick and place plans: transit above the target, open, descend, grasp or release, lift.
 
 Heights (world mm):
 - grasp: the tool point (the centre of the finger pads) `grasp_depth` below the block's top face: at the block's
@@ -14,8 +14,9 @@ Heights (world mm):
   sampled transit clears every obstacle near the path (transit.transit_clearance: wrist and tool points
   `clearance` above the tops of the obstacles they pass, a held block lifted over them). A height out of reach is
   refused with Unreachable naming the obstacle.
-The descent and lift are Cartesian segments (trajectory.cartesian_line) at the grasp's pitch and roll
-(grasp.choose_grasp: top-down with the roll across the block's faces, or the steepest reachable pitch).
+The descent and lift are the kit's descent (planning.descent: a straight line in the instructor's kit, a joint chord
+in the student release) at the grasp's pitch and roll (grasp.choose_grasp: top-down with the roll across the block's
+faces, or the steepest pitch the descent can be made at).
 
 Camera clear: the arm stands upright over its base (CAMERA_CLEAR_POSE: elbow -90 deg, gripper pointing up). Seen from
 the overhead camera (about 1 m up at y = 337 mm), everything in that pose projects onto the board behind the
@@ -33,6 +34,7 @@ from armlab.gripper_geometry import GRIPPER
 from armlab.kinematics import Unreachable
 from armlab.robot import RobotModel, rx200
 
+from .descent import descend
 from .grasp import choose_grasp, steepest_pitch_inside
 from .plan import GripperStep, MoveStep, Plan
 from .trajectory import cartesian_line, check_point, joint_move, reverse
@@ -46,7 +48,7 @@ FINGERTIP_MM = GRIPPER.fingertip_mm   # finger tips beyond the tool point along 
 TIP_MARGIN_MM = 10.0        # finger tips at least this far above what the grasped block stands on
 _MAX_RAISES = 8
 LOW_HOVER_MM = GRIPPER.fingertip_mm + 7.0   # a place may hover this little above the placed block's top (finger tips
-                                            # 7 mm over it after the lift) to come straight down with the yaw
+                                            # 7 mm over it after the lift) to come down with the yaw
 _LOW_HOVER_STEP_MM = 5.0
 _OWN_COLUMN_MM = 5.0        # obstacles centred this close to a pick's target are the picked block's own column
 
@@ -135,10 +137,10 @@ def tilted_release_lift(edge: float, pitch: float) -> float:
 
 
 def _line_or_none(p0: np.ndarray, p1: np.ndarray, grasp, robot: RobotModel):
-    """The straight descent p0 -> p1 (mm) at the grasp's pitch and roll, or None where it cannot be made (it would
-    switch IK branch on the way, e.g. where choose_grasp's branch is one the limits with a margin allow)."""
+    """The descent p0 -> p1 (mm) at the grasp's pitch and roll (planning.descent), or None where it cannot be made (it
+    would switch IK branch on the way, e.g. where choose_grasp's branch is one the limits with a margin allow)."""
     try:
-        return cartesian_line(p0, p1, grasp.pitch, grasp.roll, robot=robot)
+        return descend(p0, p1, grasp.pitch, grasp.roll, robot=robot)
     except Unreachable:
         return None
 
@@ -150,7 +152,7 @@ def _approach(q_start, target: np.ndarray, yaw: float, floor_z: float, held_belo
 
     floor_z: the top (mm) the empty tool must clear at the hover point when the plan ends (the picked block's top, or
     the placed block's top); held_below: how far a held block hangs below the tool point during the transit.
-    low_hover: when the straight descent from the transit height cannot be top-down, the lowest hover height (mm)
+    low_hover: when the descent from the transit height cannot be top-down, the lowest hover height (mm)
     from which shorter descents are tried (in _LOW_HOVER_STEP_MM steps): the first top-down one, else the steepest.
     own_column: the obstacles standing at the target (the block being picked, the stack under it) only keep the
     transit's tool from going lower over them than the hover point it ends at (the others: `clearance`), so a low
@@ -178,7 +180,7 @@ def _approach(q_start, target: np.ndarray, yaw: float, floor_z: float, held_belo
             neighbours = others if action == "close" else ()      # a pick's open pads keep clear of them
             grasp = choose_grasp(target, yaw, approach_z=z_t, robot=robot, obstacles=neighbours)
             down = None
-            if not grasp.top_down and low_hover is not None:       # a shorter straight descent keeps the yaw
+            if not grasp.top_down and low_hover is not None:       # a shorter descent keeps the yaw
                 for z in np.arange(z_t - _LOW_HOVER_STEP_MM, low_hover - 1e-9, -_LOW_HOVER_STEP_MM):
                     low = choose_grasp(target, yaw, approach_z=z, robot=robot, obstacles=neighbours)
                     if low.pitch > grasp.pitch + 1e-9:             # steeper: less tilt, more of the yaw kept
@@ -188,7 +190,7 @@ def _approach(q_start, target: np.ndarray, yaw: float, floor_z: float, held_belo
                             if low.top_down:
                                 break
             if down is None:
-                down = cartesian_line(hover, target, grasp.pitch, grasp.roll, robot=robot)
+                down = descend(hover, target, grasp.pitch, grasp.roll, robot=robot)
             rise = _rise(q0, z_t, scaling, robot)
         except Unreachable as e:
             raise Unreachable(f"{what}: cannot move straight up or down to the transit height {z_t:.1f} mm: "
@@ -220,8 +222,9 @@ def plan_pick(q_start, top, yaw: float, edge: float, obstacles=(), clearance: fl
               robot: RobotModel | None = None) -> Plan:
     """Plan to pick the block whose top-face centre is `top` (3,) world mm, yaw rad, cube edge mm, from q_start (5,).
 
-    Steps: transit (joint move) to the hover point, open, descend (Cartesian) to the grasp height, close, lift
-    (Cartesian) back to the hover point. obstacles: everything standing on the board (the target may be included).
+    Steps: transit (joint move) to the hover point, open, descend (planning.descent) to the grasp height, close,
+    lift (the descent reversed) back to the hover point. obstacles: everything standing on the board (the target may
+    be included).
     Where the descent from the transit height cannot be top-down (at long reach), a lower hover (down to
     LOW_HOVER_MM above the block's top) that comes down top-down, or else steeper, is preferred, as for plan_place:
     the steeper the grasp, the more of the block's yaw the pads can meet square (grasp.tilted_roll).
@@ -242,13 +245,13 @@ def plan_place(q_start, position, edge: float, yaw: float = 0.0, obstacles=(),
     of reach) raises MotionRefused before anything is planned.
 
     Steps: transit to the hover point (the held block lifted `clearance` over everything near the path), descend
-    (Cartesian) until the tool point is at place_tool_height, open, lift. obstacles: everything on the board except the
-    held block. The yaw is reached exactly for top-down placing, so when the descent from the transit height cannot be
-    top-down a shorter one from a lower hover point (down to LOW_HOVER_MM above the placed block, the transit still
-    checked against every obstacle) is preferred; only when none works is the place tilted, which leaves the block
+    (planning.descent) until the tool point is at place_tool_height, open, lift. obstacles: everything on the board
+    except the held block. The yaw is reached exactly for top-down placing, so when the descent from the transit height
+    cannot be top-down a shorter one from a lower hover point (down to LOW_HOVER_MM above the placed block, the transit
+    still checked against every obstacle) is preferred; only when none works is the place tilted, which leaves the block
     square to the fingers: yaw = heading (mod 90 deg), up to 45 deg from the requested yaw (grasp module notes), and
-    releases it tilted_release_lift(edge, pitch) higher, so that its lowest edge, not its bottom face's centre,
-    comes down no lower than position's height.
+    releases it tilted_release_lift(edge, pitch) higher, so that its lowest edge, not its bottom face's centre, comes
+    down no lower than position's height.
     held_in_tool: the held cube's pose in the tool frame T_tool_block (4, 4) mm (its centre), as the grasp left it
     (e.g. tilted with the tool of a tilted pick); when given, the release is aimed with it instead: the plan is
     redone with the tool target shifted until, at the end of the planned descent, the cube's centre is over

@@ -26,8 +26,9 @@ from armlab.robot import RobotModel, rx200
 
 from .timing import check_scaling, default_accel_time, moving_time, peak_rate, quintic_fraction, time_scaling
 
-__all__ = ["Waypoint", "Trajectory", "JointTrajectory", "PiecewiseTrajectory", "CartesianSegment", "joint_move",
-           "cartesian_line", "reverse", "DEFAULT_LINE_SPEED", "LINE_TOLERANCE_MM"]
+__all__ = ["Waypoint", "Trajectory", "JointTrajectory", "PiecewiseTrajectory", "ToolSegment", "CartesianSegment",
+           "JointChord", "joint_move", "cartesian_line", "joint_chord", "reverse", "DEFAULT_LINE_SPEED",
+           "LINE_TOLERANCE_MM"]
 
 DEFAULT_LINE_SPEED = 80.0    # mm/s: mean tool speed of the final approach and lift (the lab descended slowly)
 LINE_TOLERANCE_MM = 0.5      # how far the tool may stray from a Cartesian line between knots
@@ -136,14 +137,25 @@ class PiecewiseTrajectory(Trajectory):
         return [Waypoint(q, float(dt), 0.0) for q, dt in zip(self.knots[1:], dts)]
 
 
-class CartesianSegment(PiecewiseTrajectory):
-    """A PiecewiseTrajectory whose tool point runs on the straight line p0 -> p1 (world mm) at a fixed pitch and
-    roll (rad); max_deviation_mm is the largest distance from the line found at the middles of the pieces."""
+class ToolSegment(PiecewiseTrajectory):
+    """A PiecewiseTrajectory that takes the tool point from p0 to p1 (world mm), posed at pitch and roll (rad) at both
+    ends; max_deviation_mm is the largest distance from the straight line p0 -> p1 found at the middles of the
+    pieces. How it goes between the ends is the subclass's: CartesianSegment, JointChord."""
 
     def __init__(self, knots, times, p0, p1, pitch: float, roll: float, max_deviation_mm: float):
         super().__init__(knots, times)
         self.p0, self.p1 = np.array(p0, float), np.array(p1, float)
         self.pitch, self.roll, self.max_deviation_mm = float(pitch), float(roll), float(max_deviation_mm)
+
+
+class CartesianSegment(ToolSegment):
+    """A ToolSegment whose tool point runs on the straight line p0 -> p1 at the fixed pitch and roll all the way
+    (cartesian_line: within its tolerance of the line)."""
+
+
+class JointChord(ToolSegment):
+    """A ToolSegment moving in joint space, on a straight line between the two ends' joints (joint_chord): the tool
+    is at p0 and p1 at the pitch and roll there, and bows off the line between them by up to max_deviation_mm."""
 
 
 def joint_move(q_from, q_to, scaling: str = "trapezoid", duration: float | None = None,
@@ -271,15 +283,52 @@ def cartesian_line(p0, p1, pitch: float, roll: float = 0.0, current=None, scalin
             raise Unreachable(f"straight line {_fmt(P0)} -> {_fmt(P1)}: the tool strays {deviation:.2f} mm from "
                               f"the line even with {n} knots (near a singularity)")
         n *= 2
-    joint_bound = float(np.max(np.abs(np.diff(knots, axis=0)) / robot.velocity)) * n
-    duration = max(MIN_MOVING_TIME_S, length / speed, joint_bound)
-    return CartesianSegment(knots, tau * duration, P0, P1, pitch, roll, deviation)
+    return CartesianSegment(knots, tau * _segment_duration(knots, length, speed, robot), P0, P1, pitch, roll,
+                            deviation)
+
+
+def _segment_duration(knots: np.ndarray, length: float, speed: float, robot: RobotModel) -> float:
+    """A tool segment's duration (s): the longest of length / speed (mean tool speed), the lab's minimum moving time
+    and what keeps every joint's speed between the equally timed knots within its velocity limit."""
+    joint_bound = float(np.max(np.abs(np.diff(knots, axis=0)) / robot.velocity)) * (len(knots) - 1)
+    return max(MIN_MOVING_TIME_S, length / speed, joint_bound)
+
+
+def joint_chord(p0, p1, pitch: float, roll: float = 0.0, current=None, speed: float = DEFAULT_LINE_SPEED,
+                robot: RobotModel | None = None) -> JointChord:
+    """Move the tool from p0 to p1 (world mm), posed at pitch and roll (rad) at both ends, in joint space: the joints
+    solved at each end (kinematics.ik_batch, one IK branch, the best for `current`) and interpolated linearly between
+    them with a quintic time scaling. Cheaper than cartesian_line and not straight: the tool bows off the line
+    between the ends (max_deviation_mm). Timed as cartesian_line (mean tool speed, the lab's minimum, the velocity
+    limits). Raises Unreachable naming the end the arm cannot reach, or when the ends need two IK branches."""
+    robot = robot or rx200()
+    P0, P1 = check_point(p0, "p0"), check_point(p1, "p1")
+    for name, v in (("pitch", pitch), ("roll", roll), ("speed", speed)):
+        if not np.isfinite(v):
+            raise ValueError(f"{name} must be finite, got {v}")
+    if speed <= 0:
+        raise ValueError(f"speed must be positive, got {speed} mm/s")
+    if current is not None:
+        current = kinematics.check_joints(current, robot, check_limits=False)
+    res = kinematics.ik_batch(np.array([P0, P1]), pitch, roll, current=current, robot=robot)
+    for i, P in enumerate((P0, P1)):
+        if not res.success[i]:
+            raise Unreachable(f"joint chord {_fmt(P0)} -> {_fmt(P1)}: {_fmt(P)} is out of reach at pitch "
+                              f"{np.degrees(pitch):.1f} deg")
+    if res.branch[0] != res.branch[1]:
+        raise Unreachable(f"joint chord {_fmt(P0)} -> {_fmt(P1)}: its ends need two IK branches")
+    length = float(np.linalg.norm(P1 - P0))
+    n = max(2, int(np.ceil(length / 10.0)))
+    tau = np.linspace(0.0, 1.0, n + 1)
+    knots = res.q[0] + quintic_fraction(tau)[0][:, None] * (res.q[1] - res.q[0])
+    duration = _segment_duration(knots, length, speed, robot)
+    return JointChord(knots, tau * duration, P0, P1, pitch, roll, _line_deviation(knots, P0, P1, robot))
 
 
 def reverse(segment: PiecewiseTrajectory) -> PiecewiseTrajectory:
-    """The same path run backwards in the mirrored timing (a Cartesian segment stays a CartesianSegment)."""
+    """The same path run backwards in the mirrored timing (a tool segment stays one of its kind)."""
     knots, times = segment.knots[::-1], segment.duration - segment.times[::-1]
-    if isinstance(segment, CartesianSegment):
-        return CartesianSegment(knots, times, segment.p1, segment.p0, segment.pitch, segment.roll,
-                                segment.max_deviation_mm)
+    if isinstance(segment, ToolSegment):
+        return type(segment)(knots, times, segment.p1, segment.p0, segment.pitch, segment.roll,
+                             segment.max_deviation_mm)
     return PiecewiseTrajectory(knots, times)

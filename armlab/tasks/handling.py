@@ -103,18 +103,18 @@ def pose_at(plan: planning.Plan, action: str) -> np.ndarray:
 
 def put_back(session: Session) -> bool:
     """Put the held block back where it was picked from (after a place that could not be done): a joint move to the
-    top of the pick's own straight descent (where the pick's lift ended), down that line (the path the block came up
-    in the gripper, checked whole with it then) to RELEASE_GAP_MM above the grasp, open, and up again. Run through
-    the executor like every plan (the held block's own column, the stack it came from, is not an obstacle to it);
-    raises ValueError when nothing picked is held and MotionRefused with nothing sent when even this is refused.
+    top of the pick's own descent (where the pick's lift ended), down the same way (planning.descent: the path the block
+    came up in the gripper, checked whole with it then) to RELEASE_GAP_MM above the grasp, open, and up again. Run
+    through the executor like every plan (the held block's own column, the stack it came from, is not an obstacle to
+    it); raises ValueError when nothing picked is held and MotionRefused with nothing sent when even this is refused.
     True when done."""
     session = as_session(session, "tasks.put_back")
     if session.held is None or session.picked_down is None:
         raise ValueError("put_back needs a block picked with tasks.pick in the gripper")
     picked, block, edge = session.picked_down, session.held, session.held_edge
-    # the same straight line, stopping RELEASE_GAP_MM short of the grasp (the block drops that little, as in place)
-    down = planning.cartesian_line(picked.p0, picked.p1 + [0.0, 0.0, RELEASE_GAP_MM], picked.pitch, picked.roll,
-                                   current=picked.start, robot=session.arm.robot)
+    # the same descent, stopping RELEASE_GAP_MM short of the grasp (the block drops that little, as in place)
+    down = planning.descend(picked.p0, picked.p1 + [0.0, 0.0, RELEASE_GAP_MM], picked.pitch, picked.roll,
+                            current=picked.start, robot=session.arm.robot)
     q = session.arm.joint_positions()
     plan = planning.Plan((planning.MoveStep(planning.joint_move(q, down.start), "back over the pick spot"),
                           planning.MoveStep(down, "descend"), planning.GripperStep("open", "release"),

@@ -51,7 +51,7 @@ class Session:
             plans avoid.
         last: the last look (perception.Observation), None before the first.
         held_in_tool: T_tool_block (4, 4) mm of the held block as planned at its grasp, or None.
-        picked_down: the held block's pick descent (its straight line down), for put_back, or None.
+        picked_down: the held block's pick descent (a planning.ToolSegment), for put_back, or None.
     """
 
     station: Station
@@ -78,7 +78,7 @@ class Session:
 
     def picked(self, block, held: bool, held_in_tool: np.ndarray | None = None, descent=None) -> None:
         """Record a pick of `block` (a detection Block) that ran: it leaves the known blocks, and when `held` it is
-        the held block, with its pose in the tool frame T_tool_block (4, 4) mm and the pick's straight descent."""
+        the held block, with its pose in the tool frame T_tool_block (4, 4) mm and the pick's descent."""
         self.known = [k for k in self.known if not same_spot(k, block)]
         if held:
             self.held, self.held_in_tool, self.picked_down = block, held_in_tool, descent

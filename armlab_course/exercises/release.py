@@ -94,6 +94,8 @@ RELEASE_EXCLUDES = (
                                    # and refuses a drop on the held block's old place: click.centre_click_block)
     "armlab/tasks/kit_move_path.py",   # grab.move_path: the kit's planners with move_path's arguments (the release's
                                        # notebooks plan with the lab report's fixed-height plan: report_move_path)
+    "armlab/planning/straight_descent.py",   # grab.move_path: the kit's straight descent at the steepest pitch that
+                                             # makes it (the release's planners come down on a joint chord)
     "armlab/tasks/events/strategies/*",   # events.*: the kit's strategies (the release's events run the search)
     "tests/test_event_strategies.py",     # their tests
 )

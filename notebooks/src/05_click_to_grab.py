@@ -229,8 +229,10 @@ fig.tight_layout()
 #
 # A fresh station with the same three blocks: each is clicked (its detected top-face centre), grabbed with your plan
 # and dropped with your plan at a free spot. The simulator's ground truth decides: the block is in the gripper after
-# the grasp, and after the release it rests within 3 mm of the spot. Every plan passes the kit's safety check first
-# (a plan that would touch the board, another block or a joint limit raises `MotionRefused` and nothing moves).
+# the grasp, and after the release it rests within 3 mm of the spot. Every plan must come straight down: its last move
+# before the gripper acts stays within `planning.STRAIGHT_TOLERANCE_MM` of the vertical
+# (`planning.approach_deviation`). And every plan passes the kit's safety check first (a plan that would touch the
+# board, another block or a joint limit raises `MotionRefused` and nothing moves).
 
 # %%
 # CHECK grab.move_path
@@ -239,17 +241,28 @@ check_station = make_station("sim", seed=1, scene=SCENE)
 check_session = tasks.start_session(check_station)
 spots = {"red": [-250.0, 80.0, 0.0], "blue": [250.0, 60.0, 0.0], "green": [0.0, 220.0, 0.0]}
 landed = {}
+
+
+def straight_move_path(q_start, target, yaw, edge, action):
+    """Your move_path, its final approach measured before the plan runs."""
+    checked = move_path(q_start, target, yaw, edge, action)
+    bow = planning.approach_deviation(checked, "close" if action == "grasp" else "open")
+    assert bow <= planning.STRAIGHT_TOLERANCE_MM, \
+        f"your {action} plan's last move strays {bow:.1f} mm from the vertical: it does not come straight down"
+    return checked
+
+
 for block in tasks.look(check_session).blocks:
     block_truth = next(o for o in check_station.world.blocks if o.color == block.color)
-    assert grab_with(check_session, block, path=move_path) and block_truth.id in check_station.world.held, \
+    assert grab_with(check_session, block, path=straight_move_path) and block_truth.id in check_station.world.held, \
         f"your plan did not grasp the {block.color} block (the gripper closed on nothing)"
-    drop_with(check_session, np.array(spots[block.color]), 0.0, path=move_path)
+    drop_with(check_session, np.array(spots[block.color]), 0.0, path=straight_move_path)
     assert not check_station.world.held, f"the {block.color} block is still held after your release plan"
     bottom = block_truth.position - [0, 0, block_truth.edge / 2]
     landed[block.color] = np.abs(bottom - spots[block.color]).max()
     assert landed[block.color] < 3.0, f"the {block.color} block landed {landed[block.color]:.1f} mm from its spot"
-print("OK: move_path: your plans grabbed all 3 blocks and dropped each within 3 mm of its spot, every plan passing "
-      "the safety check")
+print("OK: move_path: your plans came straight down, grabbed all 3 blocks and dropped each within 3 mm of its spot, "
+      "every plan passing the safety check")
 
 # %% [markdown]
 # ## 3 · Where the arm really goes: sag

@@ -562,3 +562,16 @@ def test_a_region_looking_for_the_hidden_inputs_generator_finds_none(judge_grade
     body = _as_region(LOOK_FOR_INPUTS, _reference("fk.dh_link_transform")[0])
     checks = judge_grader.hidden_checks("fk.dh_link_transform", [body])
     assert checks and all("raised LookupError" in c.message for c in checks), [c.message for c in checks]
+
+
+def test_a_move_path_that_comes_down_like_the_releases_planners_earns_nothing(judge_grader):
+    """The release's own pick and place planners come down on a joint chord (planning.descent, issue 32): a region
+    that copies the reference but comes down the kit's way (planning.descend instead of cartesian_line: nothing
+    forbidden is called) still grasps and lands every block on the simulator, yet earns nothing, because the judge
+    asks for the exercise's method, a straight descent, and says so."""
+    (body,) = _reference("grab.move_path")
+    assert body.count("planning.cartesian_line(") == 1
+    checks = judge_grader.hidden_checks("grab.move_path", [body.replace("planning.cartesian_line(",
+                                                                        "planning.descend(")])
+    assert checks and not any(c.passed for c in checks), [(c.passed, c.message) for c in checks]
+    assert all("block 1: not met: came straight down" in c.message for c in checks), [c.message for c in checks]

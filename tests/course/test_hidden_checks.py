@@ -82,7 +82,8 @@ def test_a_failed_hidden_check_names_the_property_its_size_and_unit_not_the_inpu
     assert said == "the Euler angles (theta): off by up to 0.25 rad (tolerance 1e-07 rad)", said
     moves = specs_of("grab.move_path")[0]
     said = how_it_differs(moves, np.array([1.0, 1.0, 1.0, 0.0, 0.0, 0.0]), np.ones(6))
-    assert said == "block 2: not met: landed within 3 mm of its spot (3 of 6 criteria not met)", said
+    assert said == ("block 2: not met: came straight down and landed within 3 mm of its spot (3 of 6 criteria not "
+                    "met)"), said
     assert how_it_differs(pixels, np.zeros((3, 2)), np.zeros((4, 2))) == \
         "the projected pixels (u, v): shape (3, 2), expected (4, 2)"
     clicks = specs_of("grab.click_target")[0]
