@@ -447,26 +447,35 @@ print("AprilTag T_cam_world (checkerboard K):\n", T_tags.round(3) + 0.0)
 
 # %% [markdown]
 # **Check:** with the checkerboard intrinsics the tag extrinsic puts the camera within 1 mm and 0.1° of the truth;
-# with the factory intrinsics it is more than 10 mm off.
+# with the factory intrinsics it is more than 10 mm off; and your own pose, before the kit refines it, is within 5 mm
+# and 0.5°.
 
 # %%
 # CHECK calib.tag_extrinsics
 require_written("calib.tag_extrinsics")
 good = cal.compare_extrinsics(T_tags, truth.T_cam_world)
 bad = cal.compare_extrinsics(extrinsics["factory K"].T_cam_world, truth.T_cam_world)
+found = extrinsics["checkerboard K"].detections
+world = np.concatenate([lab.tags.corners_world(t.tag_id) for t in found])
+corners = np.concatenate([t.corners for t in found])
+# your own pose, before the kit refines it (pose_from_corners(..., refine=False)), which would hide a pose not
+# computed from the corners: from the corners found, with the factory K, and from the corners moved by 3 px
+own, factory, moved = (cal.extrinsics.pose_from_corners(world, uv, K, dist, refine=False) for uv, K, dist in
+                       [(corners, intrinsics.K, intrinsics.dist), (corners, lab.factory_K, np.zeros(5)),
+                        (corners + 3.0, intrinsics.K, intrinsics.dist)])
 if not (good["position_mm"] < 1.0 and good["angle_deg"] < 0.1):   # name the cause where the check can tell it
-    found = extrinsics["checkerboard K"].detections
-    world = np.concatenate([lab.tags.corners_world(t.tag_id) for t in found])
-    corners = np.concatenate([t.corners for t in found])
-    poses = [cal.extrinsics.pose_from_corners(world, uv, K, dist, refine=False) for uv, K, dist in
-             [(corners, intrinsics.K, intrinsics.dist), (corners, lab.factory_K, np.zeros(5)),
-              (corners + 3.0, intrinsics.K, intrinsics.dist)]]
-    if np.array_equal(poses[0], poses[1]) and not np.array_equal(poses[0], poses[2]):
+    if np.array_equal(own, factory) and not np.array_equal(own, moved):
         raise AssertionError("your pose_from_corners gives the same pose whatever K and dist: find H from the "
                              "normalised image points, not the pixels")
 assert good["position_mm"] < 1.0 and good["angle_deg"] < 0.1, \
     f"tag extrinsic {good['position_mm']:.1f} mm / {good['angle_deg']:.2f} deg off the truth: check the PnP inputs"
 assert bad["position_mm"] > 10.0, f"the factory K gave only {bad['position_mm']:.1f} mm of error (expected > 10 mm)"
+if np.array_equal(own, moved):
+    raise AssertionError("your pose_from_corners gives the same pose whatever the corners: compute it from them")
+unrefined = cal.compare_extrinsics(own, truth.T_cam_world)
+assert unrefined["position_mm"] < 5.0 and unrefined["angle_deg"] < 0.5, \
+    f"your pose before the kit's refinement is {unrefined['position_mm']:.1f} mm / {unrefined['angle_deg']:.2f} deg " \
+    f"off the truth"
 print(f"OK: tag extrinsic {good['position_mm']:.1f} mm / {good['angle_deg']:.2f} deg from the truth with the "
       f"checkerboard K ({bad['position_mm']:.0f} mm with the factory K)")
 

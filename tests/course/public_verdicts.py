@@ -25,6 +25,7 @@ HINTS = {
     ("calib.depth_plane", "one fit, no rejection"): "the same after 1 round as after 6",
     ("calib.depth_plane", "outliers kept"): "the same whatever inlier_mm",
     ("calib.tag_extrinsics", "pixels, not normalised points"): "the same pose whatever K and dist",
+    ("calib.tag_extrinsics", "hard-coded"): "the same pose whatever the corners",
     ("calib.tag_homography", "hard-coded"): "the same H whatever the points",
     ("calib.tag_homography", "normalisation not undone"): "undo the normalisation",
     ("fk.dh_link_transform", "d negated"): "right with d negated",
@@ -69,8 +70,6 @@ CAUSE_UNTOLD = {
                                                               "strategy's choices can cost a level",
 }
 HIDDEN_ONLY = {
-    ("calib.tag_extrinsics", "hard-coded"): "the kit refines the region's initial pose before the public checks "
-                                            "look; the hidden checks call the region alone",
     ("ik.numerical", "finite differences, not the exact Jacobian"): "close to 1e-8: the public check's tolerance",
     ("detect.classify", "per-class spreads ignored"): "right on the public frames; the hidden ones tell",
     ("detect.classify", "margin to the farthest class"): "right on the public frames; the hidden ones tell",
