@@ -297,9 +297,13 @@ def test_sky_tower_grows_as_high_as_the_arm_reaches_over_the_best_spot():
     result = run_event(session, "sky", record=False)
     tower = len(result.score.lines)
     e = block_edge("large")
-    assert tower >= 12 and result.score.points == sky_points(tower)   # 11 with the default 50 mm clearance
+    # With contact physics a block released tilted (levels above ~6) lands a few mm off and turned, and the one the
+    # arm releases at about 50 deg over a tower of nine topples off it (seed 0: 9 levels; the geometric world, which
+    # laid every released block flat, gave 12).
+    assert tower >= 8 and result.score.points == sky_points(tower)
+    assert station.world.would_move() == []                          # what is scored stands by the physics
     assert "out of reach" in result.stopped
-    # the next level's hover (top + release gap + up to e/2 for a tilted block's lowest edge + edge + clearance) is
-    # above what the arm reaches there, the last one's was not: the tower is as tall as straight-down placing allows
+    # the last standing level's hover (top + release gap + up to e/2 for a tilted block's lowest edge + edge +
+    # clearance) is within what the arm reaches there (the levels it released higher up fell off)
     hover = lambda level: level * e + RELEASE_GAP_MM + e / 2 + e + SKY_CLEARANCE_MM    # noqa: E731
-    assert hover(tower - 1) <= highest_tool_z(TOWER_XY) < hover(tower)
+    assert hover(tower - 1) <= highest_tool_z(TOWER_XY)

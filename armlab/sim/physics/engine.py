@@ -1,0 +1,135 @@
+"""A compiled MuJoCo model of the objects on the board, with its state: load the objects' poses, push one, step until
+everything rests, read the poses back.
+
+Units: the kit's world mm and rad at this module's interface, SI (m, kg, s) inside MuJoCo. Deterministic: MuJoCo's
+step is a pure function of the model and the state (one thread, no randomness), so the same objects give the same
+result; the compiled model is cached by the objects' shapes and sizes (mjcf.scene_mjcf does not depend on poses).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from functools import lru_cache
+
+import mujoco
+import numpy as np
+
+from armlab.blocks import ObjectState
+from armlab.sim.physics.materials import CONTACT, WOOD, ContactSettings, Wood
+from armlab.sim.physics.mjcf import PARK_Z_M, PUSHER_HALF_M, scene_mjcf
+from armlab.sim.physics.rest import object_rotation
+from armlab.transforms import matrix_from_rpy
+
+__all__ = ["Physics", "PhysicsError", "REST_SPEED_MM_S", "REST_SPIN_RAD_S"]
+
+REST_SPEED_MM_S = 2.0        # every body slower than this (and REST_SPIN_RAD_S) for REST_HOLD_S counts as at rest
+REST_SPIN_RAD_S = 0.02
+REST_HOLD_S = 0.05
+PUSH_SPEED_MM_S = 100.0      # how fast the pusher plate advances (a pad's pace)
+_PUSH_GAP_MM = 0.2           # the pusher starts this far behind the object's face
+
+
+class PhysicsError(RuntimeError):
+    """The physics did not come to rest, or was given a state it cannot simulate (names the problem)."""
+
+
+@lru_cache(maxsize=64)
+def _model(shapes: tuple[tuple[str, float], ...], settings: ContactSettings, wood: Wood) -> mujoco.MjModel:
+    return mujoco.MjModel.from_xml_string(scene_mjcf(shapes, settings, wood))
+
+
+def _quat(R: np.ndarray) -> np.ndarray:
+    q = np.zeros(4)
+    mujoco.mju_mat2Quat(q, np.ascontiguousarray(R, dtype=float).ravel())
+    return q
+
+
+class Physics:
+    """The objects (ObjectState, world mm) as free MuJoCo bodies on the board, loaded at their present poses at rest.
+
+    Attributes:
+        objects: the objects simulated, in body order; model, data: MuJoCo's compiled model and state;
+        time_s: physics time simulated so far (s).
+    """
+
+    def __init__(self, objects: Sequence[ObjectState], settings: ContactSettings = CONTACT, wood: Wood = WOOD):
+        self.objects = list(objects)
+        shapes = tuple((o.shape, float(o.edge)) for o in self.objects)
+        self.model = _model(shapes, settings, wood)
+        self.data = mujoco.MjData(self.model)
+        self._body0 = self.model.body("object0").id if self.objects else 0
+        for k, o in enumerate(self.objects):
+            self.data.qpos[7 * k:7 * k + 3] = np.asarray(o.position, float) / 1000.0
+            self.data.qpos[7 * k + 3:7 * k + 7] = _quat(object_rotation(o))
+        self._park()
+        mujoco.mj_forward(self.model, self.data)
+        self.time_s = 0.0
+
+    def _park(self) -> None:
+        self.data.mocap_pos[0] = (0.0, 0.0, PARK_Z_M)
+        self.data.mocap_quat[0] = (1.0, 0.0, 0.0, 0.0)
+
+    # -- stepping -------------------------------------------------------------------------------------------
+    def step(self, n: int = 1) -> None:
+        """Advance the physics by n steps of the model's timestep."""
+        mujoco.mj_step(self.model, self.data, nstep=int(n))
+        self.time_s += n * self.model.opt.timestep
+
+    def at_rest(self) -> bool:
+        """True when every body moves slower than REST_SPEED_MM_S and turns slower than REST_SPIN_RAD_S."""
+        if not self.objects:
+            return True
+        v = self.data.qvel.reshape(-1, 6)
+        return bool(np.all(np.linalg.norm(v[:, :3], axis=1) * 1000.0 < REST_SPEED_MM_S)
+                    and np.all(np.linalg.norm(v[:, 3:], axis=1) < REST_SPIN_RAD_S))
+
+    def run_to_rest(self, max_s: float = 5.0) -> float:
+        """Step until every body has rested for REST_HOLD_S; returns the physics time taken (s). PhysicsError when
+        something still moves after max_s of physics time (or the state blew up)."""
+        dt = self.model.opt.timestep
+        hold = max(1, int(round(REST_HOLD_S / dt)))
+        start, still = self.time_s, 0
+        while self.time_s - start < max_s:
+            self.step()
+            if not np.all(np.isfinite(self.data.qpos)):
+                raise PhysicsError("the physics state became non-finite (objects placed inside one another?)")
+            still = still + 1 if self.at_rest() else 0
+            if still >= hold:
+                return self.time_s - start
+        moving = [o.id for o, v in zip(self.objects, self.data.qvel.reshape(-1, 6), strict=True)
+                  if np.linalg.norm(v[:3]) * 1000.0 >= REST_SPEED_MM_S or np.linalg.norm(v[3:]) >= REST_SPIN_RAD_S]
+        raise PhysicsError(f"objects {moving} still move after {max_s:.1f} s of physics")
+
+    # -- pushing --------------------------------------------------------------------------------------------
+    def push(self, k: int, direction, distance_mm: float, speed_mm_s: float = PUSH_SPEED_MM_S) -> None:
+        """Drive the pusher plate (mjcf.PUSHER_HALF_M) against object k's side from behind, low on it, along the
+        horizontal `direction` (2,) for distance_mm (the object moves that far if nothing holds it; speed_mm_s is the
+        mean speed of a smooth start and stop), then park it."""
+        d = np.asarray(direction, dtype=float)[:2]
+        d = d / np.linalg.norm(d)
+        o = self.objects[k]
+        pos, R = self.pose(k)
+        corners = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)]) * o.edge / 2
+        reach = float(np.max(-(corners @ R.T)[:, :2] @ d))          # how far the object extends behind its centre
+        bottom = float(np.min((corners @ R.T)[:, 2])) + pos[2]
+        half = np.array(PUSHER_HALF_M) * 1000.0
+        start = pos[:2] - d * (reach + half[0] + _PUSH_GAP_MM)
+        z = bottom + 1.0 + half[2]
+        self.data.mocap_quat[0] = _quat(matrix_from_rpy(np.array([0.0, 0.0, np.arctan2(d[1], d[0])])))
+        dt = self.model.opt.timestep
+        n = max(1, int(np.ceil((distance_mm + _PUSH_GAP_MM) / (speed_mm_s * dt))))
+        for i in range(1, n + 1):
+            u = i / n                                                # a smooth start and stop, as a servo moves
+            xy = start + d * (distance_mm + _PUSH_GAP_MM) * (3 * u ** 2 - 2 * u ** 3)
+            self.data.mocap_pos[0] = np.array([xy[0], xy[1], z]) / 1000.0
+            self.step()
+        back = start + d * (distance_mm - 5.0)                      # step back off the face before parking
+        self.data.mocap_pos[0] = np.array([back[0], back[1], z]) / 1000.0
+        self.step()
+        self._park()
+
+    # -- reading --------------------------------------------------------------------------------------------
+    def pose(self, k: int) -> tuple[np.ndarray, np.ndarray]:
+        """Object k's centre (3,) world mm and rotation (3, 3)."""
+        b = self._body0 + k
+        return self.data.xpos[b] * 1000.0, self.data.xmat[b].reshape(3, 3).copy()
