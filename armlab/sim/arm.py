@@ -435,7 +435,8 @@ class SimArm:
 
     # -- gripper --------------------------------------------------------------------------------------------
     def open_gripper(self) -> None:
-        """Open the pads fully; a held block drops onto whatever is below it (or tips off it)."""
+        """Open the pads fully; a held block falls onto whatever is below it and settles by the world's physics
+        (it topples off when the centre of mass of what it carries is not over what bears it)."""
         self._check_ready("opening the gripper")
         self.wait()
         with self.world.lock:
