@@ -28,6 +28,7 @@ from armlab.gripper_geometry import GRIPPER
 from armlab.profile import trapezoid_fraction
 from armlab.robot import RobotModel, rx200
 from armlab.sim.gripper import GripperGeometry, close_on, push_with_pads
+from armlab.sim.physics.materials import WOOD
 from armlab.sim.world import World, describe_object
 from armlab.station.contract import EmergencyStopped, MotionRefused, StationClosed
 from armlab.station.parking import park_and_close
@@ -64,7 +65,7 @@ class ArmRealism:
     upper_arm_kg: float = 0.30
     forearm_kg: float = 0.20
     gripper_kg: float = 0.25
-    block_density_kg_m3: float = 600.0
+    block_density_kg_m3: float = WOOD.density_kg_m3     # the physics world's wood (armlab.sim.physics)
     backlash_rad: float = 0.003
     joint_offset_std_rad: float = 0.002
     encoder_noise_rad: float = 0.0005

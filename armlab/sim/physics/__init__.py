@@ -8,6 +8,10 @@ Modules, one job each:
 
 The world (armlab.sim.world.World) keeps the objects as ObjectState and calls the engine whenever something moves
 them (a release, a push, a scene's dropped blocks); the objects' poses feed the kit's own renderer as before.
+
+Not modelled yet: the arm's links and the gripper's pads as bodies. A grasp still follows the geometric grasp rule
+of armlab.sim.gripper and a held block is carried kinematically; where a pad runs into an object, the push it gives
+runs here (World.shove). Contact grasps (pads squeezing, friction holding) are the next step.
 """
 
 from armlab.sim.physics.engine import Physics, PhysicsError

@@ -1,10 +1,10 @@
 """The blocks' material and the contact model's settings.
 
-Wood: the kit's blocks are hardwood cubes (reference/lab.md: large 38 mm, small 25 mm). The density is the one the
-simulated arm already uses for a held block's weight (600 kg/m^3, in the 500-750 kg/m^3 of pine to beech), so a large
-block weighs 32.9 g and a small one 9.4 g. Friction: dry wood on wood is 0.25-0.5 (engineering tables give 0.25-0.5
-sliding, higher static); 0.4 is used for every pair (MuJoCo takes the larger of two geoms' coefficients). The board
-is printed paper on wood, taken as the same.
+Wood: the kit's blocks are wooden cubes (reference/lab.md: large 38 mm, small 25 mm). The density (also the
+simulated arm's, for a held block's weight: ArmRealism.block_density_kg_m3) is 600 kg/m^3, within the 500-750 kg/m^3
+of pine to beech, so a large block weighs 32.9 g and a small one 9.4 g; an assumed value, not weighed on the bench.
+Friction: dry wood on wood slides at 0.25-0.5 in engineering tables; 0.4 is used for every pair (MuJoCo takes the
+larger of two geoms' coefficients). The board (printed paper on wood) is taken as the same.
 
 Contact settings (MuJoCo option and geom attributes), chosen by measurement (2026-12-06, MuJoCo 3.17.0): towers of
 large blocks placed exactly in contact, each level shifted s mm further out (+x), run for 3 s of physics; the figure
