@@ -7,10 +7,15 @@ STAMP   := .venv/.installed
 NBVAL   := --nbval --nbval-sanitize-with tests/nbval_sanitize.cfg --nbval-cell-timeout=600
 # Test files run in parallel, one process per core (at most 4); the tests of one file, and the cells of one notebook
 # (one kernel), stay together in one process (pytest-xdist's loadfile), the longest files first (conftest.py's
-# START_FIRST, in place of xdist's order by number of tests, which handed the longest file out last).
+# START_FIRST, in place of xdist's order by number of tests, which handed the longest file out last). `make test`
+# lists its 25 slowest steps at the end (a test's call, or a module fixture's setup), for keeping the suite in budget.
 PAR     := -n auto --maxprocesses 4 --dist loadfile --no-loadscope-reorder
+LINT_MORE :=
+# BEGIN INSTRUCTOR ONLY (the student release leaves these lines out: armlab_course.exercises.release)
+LINT_MORE := benchmarks tools/build-notebook tools/student-release tools/exercise-docs
+# END INSTRUCTOR ONLY
 
-.PHONY: demo test lint unit notebooks lab bench browser camera sandbox student autograder docs clean
+.PHONY: demo test check lint unit lab browser camera sandbox docs clean
 
 # The first install (80-106 s) says what it does: a line as each step starts and one with its time when it ends;
 # the long step (requirements.txt) also shows pip's "Collecting" line per package and the count it installs.
@@ -38,25 +43,26 @@ $(STAMP): requirements.txt pyproject.toml
 demo: $(STAMP)
 	MPLBACKEND=Agg $(PY) -m armlab demo
 
-## make test: lint + unit tests + every notebook under nbval, natively and under other CPUs' numerics
-## (installs headless Chromium for the browser checks)
+## make test: lint + the kit's tests (installs headless Chromium for the browser checks); in the instructor's
+## checkout also every notebook under nbval, natively and under other CPUs' numerics
 test: $(STAMP) browser camera sandbox lint
 ifeq ($(RELEASE),)
-	$(PY) -m pytest -q $(PAR) tests notebooks $(NBVAL)
+	$(PY) -m pytest -q $(PAR) --durations=25 tests notebooks $(NBVAL)
 	bash tools/nbval-numerics $(PY) $(PAR) $(NBVAL)
 else
 	MPLBACKEND=Agg $(PY) -m pytest -q $(PAR) tests
 endif
 
+## make check: the public checks of the exercises written in this folder, in the grader's sandbox, a line per
+## exercise as it goes (python -m armlab check; check one with: .venv/bin/python -m armlab check fk.euler)
+check: $(STAMP) sandbox
+	$(PY) -m armlab check
+
 lint: $(STAMP)
-	$(PY) -m ruff check armlab armlab_course tests notebooks $(wildcard benchmarks tools/build-notebook tools/student-release tools/api-docs)
+	$(PY) -m ruff check armlab armlab_course tests notebooks tools/api-docs $(LINT_MORE)
 
 unit: $(STAMP) camera sandbox
 	MPLBACKEND=Agg $(PY) -m pytest -q $(PAR) tests
-
-notebooks: $(STAMP)
-	$(PY) -m pytest -q $(PAR) notebooks $(NBVAL)
-	bash tools/nbval-numerics $(PY) $(PAR) $(NBVAL)
 
 browser:
 	bash tools/ensure-chromium
@@ -72,14 +78,35 @@ sandbox:
 lab: $(STAMP)
 	$(PY) -m jupyter lab --notebook-dir=notebooks --allow-root --no-browser
 
-## make bench: speed and accuracy tables
-bench: $(STAMP)
-	MPLBACKEND=Agg $(PY) benchmarks/run_all.py
-
 ## make docs: the API reference from the docstrings (pdoc) in docs/api/index.html
 docs: $(STAMP)
 	rm -rf docs/api
 	$(PY) tools/api-docs docs/api
+
+# BEGIN INSTRUCTOR ONLY (the student release leaves these lines out: armlab_course.exercises.release)
+.PHONY: test-engine test-course
+## make test-engine / make test-course: the library's tests alone (tests/, without tests/course/), or the course's
+## (tests/course/: exercises, release, grader; minutes each for the grading files)
+test-engine: $(STAMP) camera sandbox
+	MPLBACKEND=Agg $(PY) -m pytest -q $(PAR) tests --ignore=tests/course
+
+test-course: $(STAMP) camera sandbox
+	MPLBACKEND=Agg $(PY) -m pytest -q $(PAR) tests/course
+
+.PHONY: notebooks bench exercise-docs student autograder
+
+notebooks: $(STAMP)
+	$(PY) -m pytest -q $(PAR) notebooks $(NBVAL)
+	bash tools/nbval-numerics $(PY) $(PAR) $(NBVAL)
+
+## make bench: speed and accuracy tables
+bench: $(STAMP)
+	MPLBACKEND=Agg $(PY) benchmarks/run_all.py
+
+## make exercise-docs: the docs' exercise counts, points and tables, generated from the registry
+## (python -m armlab exercises --json; tools/exercise-docs --check only lists what is stale or contradicted)
+exercise-docs: $(STAMP)
+	$(PY) tools/exercise-docs
 
 ## make student: the student release (exercise regions stubbed, notebook outputs cleared) in dist/student
 student: $(STAMP)
@@ -91,6 +118,8 @@ student: $(STAMP)
 autograder: $(STAMP)
 	rm -rf dist/autograder dist/autograder.zip
 	$(PY) -m armlab_course.grading.autograder build dist/autograder
+
+# END INSTRUCTOR ONLY
 
 clean:
 	rm -rf .venv out dist

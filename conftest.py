@@ -21,10 +21,10 @@ from pathlib import Path
 
 import pytest
 
+from armlab.viz.server import ZMQ_ENV, ServerProcess, start_server
 from armlab_course.exercises import exercise
 from armlab_course.exercises.markers import is_blank
 from armlab_course.exercises.release import RELEASE_MARKER
-from armlab.viz.server import ZMQ_ENV, ServerProcess, start_server
 
 ROOT = Path(__file__).resolve().parent
 
@@ -38,11 +38,15 @@ _state: dict[str, ServerProcess | None] = {"server": None}
 # The files that take minutes, longest first (test time per file in a make test of 2026-12-03: 395-590 s for the
 # first four on a loaded 2-core machine, 130-280 s for the rest); every other file follows in collection order.
 # Only the order depends on this list: a stale entry costs time, never a result.
-START_FIRST = ("tests/test_grading.py", "tests/test_hidden_checks_open.py", "tests/test_blank_release_runs.py",
-               "tests/test_grading_attacks.py", "tests/test_hub_image.py", "tests/test_lab_04_08.py",
-               "tests/test_place_fuzz.py", "tests/test_grading_self_check.py", "tests/test_station_contract.py",
-               "tests/test_hidden_checks.py", "tests/test_grading_redteam.py", "tests/test_grading_fuzz.py",
-               "notebooks/07_autonomous_tasks.ipynb", "tests/test_station_panel_browser.py")
+START_FIRST = ("tests/course/test_grading.py", "tests/course/test_hidden_checks_open.py",
+               "tests/course/test_grading_hints.py", "tests/course/test_blank_release_runs.py",
+               "tests/course/test_grading_attacks.py",
+               "tests/test_hub_image.py", "tests/course/test_lab_04_08.py", "tests/test_place_fuzz.py",
+               "tests/course/test_grading_self_check.py", "tests/test_station_contract.py",
+               "tests/course/test_hidden_checks.py", "tests/course/test_grading_redteam.py",
+               "tests/course/test_grading_fuzz.py", "notebooks/07_autonomous_tasks.ipynb",
+               "tests/test_station_panel_browser.py", "tests/course/test_release_run_all.py",
+               "tests/course/test_grading_tripwire.py", "tests/course/test_written_questions.py")
 
 
 def _ensure_shared_server() -> str:

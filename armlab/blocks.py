@@ -19,7 +19,7 @@ COLORS: tuple[str, ...] = ("red", "orange", "yellow", "green", "blue", "violet")
 SIZES: tuple[str, ...] = ("large", "small")
 SHAPES: tuple[str, ...] = ("cube", "arch", "semicircle", "triangle", "cylinder")     # cube = block; others distract
 
-# Mean colours as the L515 sees the blocks under lab lighting (reference/lab.md gives B, G, R; these are R, G, B).
+# Mean colours as the L515 sees the blocks under lab lighting (the lab handout gives B, G, R; these are R, G, B).
 LAB_RGB: dict[str, tuple[int, int, int]] = {
     "red": (127, 10, 10),
     "orange": (150, 75, 30),

@@ -25,7 +25,7 @@ from armlab import slots
 from armlab.arguments import finite_array, finite_float
 from armlab.robot import DH_TOOL_ROTATION, RobotModel, rx200
 from armlab.slots import SlotNotWritten, standin
-from armlab.transforms import exp_se3, homogeneous, rot_x, rot_y, rot_z
+from armlab.transforms import exp_se3, exp_se3_from, homogeneous, rot_x, rot_y, rot_z, screw_matrices
 
 __all__ = [
     "Unreachable",
@@ -36,6 +36,7 @@ __all__ = [
     "dh_frames",
     "link_frames",
     "joint_positions",
+    "frame_points",
     "jacobian",
     "tool_orientation",
     "ik",
@@ -65,7 +66,8 @@ def check_joints(q, robot: RobotModel | None = None, check_limits: bool = True) 
     Raises ValueError naming the problem (shape, NaN, or which joint of which row is out of its limits).
     """
     robot = robot or rx200()
-    q = finite_array(q, "joint angles", [(5,), (None, 5)], _JOINTS_WHAT, plural=True)
+    if not _plain_joints(q):            # what finite_array would pass unchanged needs no second look
+        q = finite_array(q, "joint angles", [(5,), (None, 5)], _JOINTS_WHAT, plural=True)
     if check_limits:
         ok = robot.within_limits(q)
         if not ok.all():
@@ -77,6 +79,13 @@ def check_joints(q, robot: RobotModel | None = None, check_limits: bool = True) 
 
 
 _JOINTS_WHAT = "waist, shoulder, elbow, wrist_angle, wrist_rotate in rad"
+
+
+def _plain_joints(q) -> bool:
+    """True for a float64 ndarray (5,) or (N, 5) of finite numbers: what finite_array returns as it is (the same
+    object), so check_joints can skip its general checks (the simulator's steps pass such arrays every 20 ms)."""
+    return (type(q) is np.ndarray and q.dtype == np.float64 and q.shape[-1:] == (5,) and 1 <= q.ndim <= 2
+            and bool(np.isfinite(q).all()))
 
 
 def _check_position(position, name: str = "position") -> np.ndarray:
@@ -152,10 +161,34 @@ def link_frames(q, robot: RobotModel | None = None, check_limits: bool = True) -
     the physical arm, so they never depend on the DH exercise (dh_frames / fk_dh agree with it to 1e-9 mm).
     """
     robot = robot or rx200()
-    q = check_joints(q, robot, check_limits)
-    E = exp_se3(robot.screws, np.atleast_2d(q))  # (N, 5, 4, 4)
+    return _link_frames(check_joints(q, robot, check_limits), robot)
+
+
+_SCREW_MATRICES: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}      # screws bytes -> (W, W @ W)
+_EYE4 = np.eye(4)
+_EYE4.setflags(write=False)
+
+
+def _exponentials(q: np.ndarray, robot: RobotModel) -> np.ndarray:
+    """exp_se3 of the robot's screws at checked joint angles q (5,) or (N, 5): (N, 5, 4, 4). The screws' matrices
+    (transforms.screw_matrices) are built once per screw table (keyed on its values), not at every call."""
+    key = robot.screws.tobytes()
+    matrices = _SCREW_MATRICES.get(key)
+    if matrices is None:
+        W, WW, _ = screw_matrices(robot.screws)
+        W.setflags(write=False)
+        WW.setflags(write=False)
+        if len(_SCREW_MATRICES) >= _GEOMETRY_ENTRIES:
+            _SCREW_MATRICES.clear()
+        matrices = _SCREW_MATRICES[key] = (W, WW)
+    return exp_se3_from((*matrices, robot.screws[..., 3:]), np.atleast_2d(q))
+
+
+def _link_frames(q: np.ndarray, robot: RobotModel) -> np.ndarray:
+    """link_frames of checked joint angles q (5,) or (N, 5)."""
+    E = _exponentials(q, robot)  # (N, 5, 4, 4)
     frames = np.empty(E.shape[:1] + (7, 4, 4))
-    frames[:, 0] = np.eye(4)
+    frames[:, 0] = _EYE4
     chain = E[:, 0]
     for i in range(5):
         if i:
@@ -174,7 +207,7 @@ def fk_pox(q, robot: RobotModel | None = None, check_limits: bool = True) -> np.
     """Tool pose ee_gripper_link in the world, (4, 4) or (N, 4, 4), by the product of exponentials (mm)."""
     robot = robot or rx200()
     q = check_joints(q, robot, check_limits)
-    E = exp_se3(robot.screws, np.atleast_2d(q))  # (N, 5, 4, 4)
+    E = _exponentials(q, robot)  # (N, 5, 4, 4)
     T = E[:, 0] @ E[:, 1] @ E[:, 2] @ E[:, 3] @ E[:, 4] @ robot.M
     return T if q.ndim == 2 else T[0]
 
@@ -196,13 +229,21 @@ def joint_positions(q, robot: RobotModel | None = None) -> np.ndarray:
     top and the wrist_rotate joint carried with link frames 1 and 4 (RobotModel.points_home, data/rx200_pox.csv).
     """
     robot = robot or rx200()
-    frames = link_frames(q, robot, check_limits=False)
-    base = np.zeros(frames.shape[:-3] + (3,))
+    return frame_points(_link_frames(check_joints(q, robot, check_limits=False), robot), robot)
+
+
+def frame_points(frames: np.ndarray, robot: RobotModel | None = None) -> np.ndarray:
+    """joint_positions' points (..., 7, 3) world mm from the link frames (..., 7, 4, 4) link_frames gave for the same
+    joints: for callers that need both the frames and the points (one product of exponentials, not two)."""
+    robot = robot or rx200()
     on_link1, on_link4 = robot.points_on_links
-    waist_top = frames[..., 1, :3, :3] @ on_link1 + frames[..., 1, :3, 3]
-    wrist_rotate = frames[..., 4, :3, :3] @ on_link4 + frames[..., 4, :3, 3]
-    return np.stack([base, waist_top, frames[..., 1, :3, 3], frames[..., 2, :3, 3], frames[..., 3, :3, 3],
-                     wrist_rotate, frames[..., 6, :3, 3]], axis=-2)
+    out = np.empty(frames.shape[:-3] + (7, 3))
+    out[..., 0, :] = 0.0                                                          # the base
+    out[..., 1, :] = frames[..., 1, :3, :3] @ on_link1 + frames[..., 1, :3, 3]   # the waist top
+    out[..., 2:5, :] = frames[..., 1:4, :3, 3]                                   # shoulder, elbow, wrist
+    out[..., 5, :] = frames[..., 4, :3, :3] @ on_link4 + frames[..., 4, :3, 3]   # the wrist_rotate joint
+    out[..., 6, :] = frames[..., 6, :3, 3]                                       # the tool point
+    return out
 
 
 def jacobian(q, robot: RobotModel | None = None, step: float = 1e-6) -> np.ndarray:

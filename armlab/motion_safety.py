@@ -43,7 +43,7 @@ import numpy as np
 
 from armlab.arguments import finite_float
 from armlab.gripper_geometry import GripperGeometry
-from armlab.kinematics import check_joints, joint_positions, link_frames
+from armlab.kinematics import check_joints, frame_points, joint_positions, link_frames
 from armlab.lab import LabConfig, lab_config
 from armlab.profile import ACCEL_FRACTION, default_moving_time, velocity_violations
 from armlab.robot import RobotModel, rx200
@@ -222,8 +222,9 @@ def held_intrusion(depth, allowance_mm: float = HELD_CONTACT_TOL_MM) -> int | No
 def _parts(Q, robot: RobotModel, gripper: GripperGeometry | None, opening_mm: float | None,
            held: Sequence[HeldBlock]) -> list[tuple[str, np.ndarray, bool]]:
     """(name, world points (n, k, 3) mm, is a contact part) of every checked part at the joint angles Q (n, 5)."""
-    T = link_frames(Q, robot, check_limits=False)[:, 6]              # (n, 4, 4) tool poses
-    points = joint_positions(Q, robot)[:, 2:]                         # (n, 5, 3): shoulder ... tool point
+    frames = link_frames(Q, robot, check_limits=False)               # (n, 7, 4, 4)
+    T = frames[:, 6]                                                  # (n, 4, 4) tool poses
+    points = frame_points(frames, robot)[:, 2:]                       # (n, 5, 3): shoulder ... tool point
     parts = [(name, points[:, i, None], False) for i, name in enumerate(LINK_POINTS)]
     if gripper is not None and opening_mm is not None:
         pads = gripper.pad_corners(T, opening_mm)                     # (n, 2, 8, 3)

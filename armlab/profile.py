@@ -14,7 +14,7 @@ from armlab.robot import RobotModel, rx200
 __all__ = ["trapezoid_fraction", "default_moving_time", "velocity_violations", "MIN_MOVING_TIME_S",
            "LAB_MEAN_SPEED", "ACCEL_FRACTION"]
 
-MIN_MOVING_TIME_S = 0.4            # the lab's shortest move (reference/lab.md)
+MIN_MOVING_TIME_S = 0.4            # the lab's shortest move (the lab handout)
 LAB_MEAN_SPEED = np.pi / 4         # rad/s: the lab's rule of thumb for the largest joint change
 ACCEL_FRACTION = 1 / 3             # the lab's accel_time = moving_time / 3 unless the caller chooses (every default
                                    # ramp of the kit: the arms, the planner's trapezoids, default_moving_time)

@@ -15,11 +15,31 @@ from __future__ import annotations
 
 import math
 import numbers
+import sys
 from collections.abc import Iterable
 
-import jsonschema
-from jsonschema import Draft202012Validator
-from jsonschema.exceptions import best_match
+
+def _import_jsonschema() -> None:
+    """Import jsonschema without letting it import rfc3987_syntax (installed with Jupyter), which builds an Earley
+    parser at import for the "iri" and "iri-reference" formats: about 1 s of CPU in every process that reads one of
+    the kit's files (each notebook kernel, each grading run), for a check the kit never asks for (its schemas use no
+    "format" and it validates no format). Only when jsonschema is not imported yet; rfc3987_syntax stays importable
+    afterwards (a later `import rfc3987_syntax` works; jsonschema's FormatChecker in this process then lacks the two
+    IRI formats, which it also lacks wherever rfc3987_syntax is not installed)."""
+    if "jsonschema" in sys.modules or "rfc3987_syntax" in sys.modules:
+        return
+    sys.modules["rfc3987_syntax"] = None          # an ImportError for jsonschema's optional import
+    try:
+        import jsonschema  # noqa: F401
+    finally:
+        del sys.modules["rfc3987_syntax"]
+
+
+_import_jsonschema()
+
+import jsonschema  # noqa: E402
+from jsonschema import Draft202012Validator  # noqa: E402
+from jsonschema.exceptions import best_match  # noqa: E402
 
 __all__ = ["number", "integer", "vector", "matrix", "camera_matrix", "strict_object", "comment", "file_name",
            "validate", "field_name", "field_error", "MAX_FLOAT_INT"]

@@ -20,6 +20,8 @@ __all__ = [
     "exp_so3",
     "log_so3",
     "exp_se3",
+    "exp_se3_from",
+    "screw_matrices",
     "rotvec_to_matrix",
     "matrix_from_euler_zyz",
     "rpy_from_matrix",
@@ -135,19 +137,44 @@ def log_so3(R) -> np.ndarray:
     return out
 
 
+def screw_matrices(screw) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """What exp_se3 needs of revolute screws (w, v) (..., 6), unit w, that does not depend on the angle: the skew
+    matrix W = [w] (..., 3, 3), its square W @ W (..., 3, 3) and v (..., 3) (in the screws' length unit).
+
+    For screws that stay fixed (a robot's joint axes) compute this once and call exp_se3_from: the same numbers,
+    bit for bit, as exp_se3, without rebuilding the matrices at every call."""
+    screw = np.asarray(screw, dtype=float)
+    W = skew(screw[..., :3])
+    return W, W @ W, screw[..., 3:]
+
+
+_EYE3 = np.eye(3)
+_EYE3.setflags(write=False)
+
+
+def exp_se3_from(matrices: tuple[np.ndarray, np.ndarray, np.ndarray], theta) -> np.ndarray:
+    """exp_se3 of the screws whose screw_matrices are `matrices`, at angles theta (...) rad: (..., 4, 4)."""
+    W, WW, v = matrices
+    theta = np.asarray(theta, dtype=float)
+    th = theta[..., None, None]
+    sin, one_minus_cos = np.sin(th), 1.0 - np.cos(th)
+    R = _EYE3 + sin * W + one_minus_cos * WW
+    G = _EYE3 * th + one_minus_cos * W + (th - sin) * WW
+    t = np.einsum("...ij,...j->...i", G, v)
+    out = np.zeros(R.shape[:-2] + (4, 4))
+    out[..., :3, :3] = R
+    out[..., :3, 3] = t
+    out[..., 3, 3] = 1.0
+    return out
+
+
 def exp_se3(screw, theta) -> np.ndarray:
     """Matrix exponential of a revolute screw: (..., 4, 4) for screw (w, v) (..., 6), unit w, angle theta (...).
 
-    Lengths in v set the unit of the translation (mm throughout the kit).
+    Lengths in v set the unit of the translation (mm throughout the kit). R = I + sin(theta) W + (1 - cos(theta)) W^2
+    and t = (I theta + (1 - cos(theta)) W + (theta - sin(theta)) W^2) v with W = [w] (screw_matrices, exp_se3_from).
     """
-    screw = np.asarray(screw, dtype=float)
-    theta = np.asarray(theta, dtype=float)
-    w, v = screw[..., :3], screw[..., 3:]
-    W = skew(w)
-    th = theta[..., None, None]
-    R = np.eye(3) + np.sin(th) * W + (1.0 - np.cos(th)) * (W @ W)
-    G = np.eye(3) * th + (1.0 - np.cos(th)) * W + (th - np.sin(th)) * (W @ W)
-    return homogeneous(R, np.einsum("...ij,...j->...i", G, v))
+    return exp_se3_from(screw_matrices(screw), theta)
 
 
 def matrix_from_euler_zyz(angles) -> np.ndarray:

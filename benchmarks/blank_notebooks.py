@@ -11,6 +11,8 @@ Measured 2026-12-06 (two shared cores; seconds solved / blank): 00 5.6 / 5.2 (0.
 01_going_further 4.9 / 6.9 (1.42), 02 6.8 / 7.0 (1.03), 03 9.9 / 11.7 (1.18; 5.5 before the kit's IK became Newton's
 method on the PoX planar chain), 04 36.8 / 37.8 (1.03; 1.67 before the colour lookup table), 05 18.8 / 13.7 (0.73),
 06 7.9 / 9.8 (1.24), 07 42.0 / 32.6 (0.78; 1.7 before: the blank strategy makes no move), 08 12.3 / 13.9 (1.13).
+2026-12-07, move_path's stand-in the lab report's plan (report_move_path) instead of the kit's planners: 05 19.5 /
+15.2 (0.78), 06 8.1 / 9.2 (1.13).
 """
 
 from __future__ import annotations

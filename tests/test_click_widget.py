@@ -253,3 +253,50 @@ def test_clicks_through_the_state_machine():
         ClickToGrab(tasks.Session(other, tasks.GuardedArm(other.arm)), machine=machine)
     with pytest.raises(ValueError, match="another session"):
         ClickToGrab(tasks.Session(station, tasks.GuardedArm(station.arm)), machine=machine)   # same station, not it
+
+
+class _FirstBlockThenPoint:
+    """A click sequence of one's own, plainer than the kit's rule: the first click grabs the first block seen
+    wherever it lands; the next one drops on the clicked point (yaw 0)."""
+
+    def __init__(self):
+        self.held, self.told = None, []
+
+    def on_click(self, point, seen):
+        if self.held is None:
+            return ("grab", seen[0])
+        return ("drop", np.asarray(point, float), 0.0)
+
+    def after(self, action, ok):
+        self.told.append((action[0], ok))
+        self.held = (action[1] if ok else None) if action[0] == "grab" else (None if ok else self.held)
+
+
+def test_a_sequence_of_ones_own_decides_what_the_panels_clicks_mean():
+    """ClickToGrab(session, sequence=...) runs each click through tasks.click_with: a click on bare board grabs the
+    first block seen (the kit's rule would refuse it), the next drops it where clicked; a drop the kit cannot act on
+    is a refused click with nothing moved; a sequence with a machine, or without on_click / after, is refused."""
+    station = make_station("sim", seed=0, scene=SCENE3)
+    session = tasks.start_session(station)
+    sequence = _FirstBlockThenPoint()
+    panel = ClickToGrab(session, sequence=sequence)
+    first = tasks.look(session).blocks[0]
+    truth = next(o for o in station.world.blocks if o.color == first.color)
+    bare = station.camera.truth.project(np.array([[0.0, 150.0, 0.0]]))[0]
+    grab = panel.click(bare)
+    assert grab.ok and grab.action == "grab" and truth.id in station.world.held, grab.message
+    spot = np.array([-220.0, 70.0, 0.0])
+    drop = panel.click(station.camera.truth.project(spot[None])[0])
+    assert drop.ok and drop.action == "drop" and not station.world.held, drop.message
+    assert np.abs(truth.position - [0, 0, truth.edge / 2] - spot).max() < 3.0
+    assert sequence.told == [("grab", True), ("drop", True)]
+    sequence.held = first                                   # believes it holds a block: the kit has nothing to drop
+    before = [o.position.copy() for o in station.world.blocks]
+    refused = panel.click(station.camera.truth.project(np.array([[150.0, 250.0, 0.0]]))[0])
+    assert not refused.ok and not refused.moved and "cannot be acted on" in refused.message, refused.message
+    for o, p in zip(station.world.blocks, before, strict=True):
+        np.testing.assert_array_equal(o.position, p)
+    with pytest.raises(ValueError, match="without a machine"):
+        ClickToGrab(session, sequence=sequence, machine=tasks.TaskMachine(session))
+    with pytest.raises(ValueError, match="on_click"):
+        ClickToGrab(session, sequence=object())

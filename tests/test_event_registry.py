@@ -12,9 +12,6 @@ import pytest
 
 from armlab.tasks.events import Strategy, events, make_strategy, register, score_event
 from armlab.tasks.events import registry as reg
-from armlab.tasks.events.line_up import LineUp
-from armlab.tasks.events.sky import Sky
-from armlab.tasks.events.sort_stack import SortStack
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -66,30 +63,39 @@ def test_the_kits_events_are_found_in_their_modules():
     assert (specs["line_up"].time_limit_s, specs["sky"].levels, specs["sky"].time_limit_s) == (600.0, (1,), 600.0)
     assert [specs[n].scene_for(2 if n != "sky" else 1) for n in specs] == ["line_up_2", "empty", "sort_stack_2"]
     assert specs["sky"].detection.max_levels == 13 and specs["sort_stack"].detection is None
-    for name, cls in (("sort_stack", SortStack), ("line_up", LineUp), ("sky", Sky)):
-        strategy = make_strategy(name, 1)
-        assert type(strategy) is cls and isinstance(strategy, Strategy)
-    assert not make_strategy("line_up", 1).cannot_place("too high") and make_strategy("sort_stack", 1).obstacles() == []
-    sky = make_strategy("sky", 1)
-    assert sky.cannot_place("the tower is too high") and "out of reach" in sky.stopped and sky.next_move([]) is None
+    for name in specs:
+        assert isinstance(make_strategy(name, 1), Strategy)
     with pytest.raises(ValueError, match="unknown event 'juggling': expected one of"):
         make_strategy("juggling", 1)
     with pytest.raises(ValueError, match=r"sort_stack has levels \(1, 2, 3\), got 4"):
         make_strategy("sort_stack", 4)
 
 
+class Toy(Strategy):
+    """A strategy that never moves."""
+
+    def __init__(self, level):
+        self.level = level
+
+    def next_move(self, seen):
+        return None
+
+    def placed(self, move):
+        pass
+
+
 def test_register_refuses_a_second_event_of_the_same_name_and_bad_specs(monkeypatch):
     monkeypatch.setattr(reg, "_registered", dict(events()))
-    spec = reg.EventSpec("toy", "toy", (1,), 10.0, SortStack, lambda *a, **k: None)
+    spec = reg.EventSpec("toy", "toy", (1,), 10.0, Toy, lambda *a, **k: None)
     assert register(spec) is spec and register(spec) is spec and "toy" in events()
     with pytest.raises(ValueError, match="already registered"):
-        register(reg.EventSpec("toy", "another toy", (1,), 10.0, SortStack, lambda *a, **k: None))
+        register(reg.EventSpec("toy", "another toy", (1,), 10.0, Toy, lambda *a, **k: None))
     with pytest.raises(ValueError, match="levels"):
-        reg.EventSpec("bad", "bad", (), 10.0, SortStack, lambda *a, **k: None)
+        reg.EventSpec("bad", "bad", (), 10.0, Toy, lambda *a, **k: None)
     with pytest.raises(ValueError, match="time_limit_s"):
-        reg.EventSpec("bad", "bad", (1,), 0.0, SortStack, lambda *a, **k: None)
+        reg.EventSpec("bad", "bad", (1,), 0.0, Toy, lambda *a, **k: None)
     with pytest.raises(ValueError, match="identifier"):
-        reg.EventSpec("bad name", "bad", (1,), 1.0, SortStack, lambda *a, **k: None)
+        reg.EventSpec("bad name", "bad", (1,), 1.0, Toy, lambda *a, **k: None)
     with pytest.raises(TypeError, match="EventSpec"):
         register("sort_stack")
 
@@ -124,3 +130,40 @@ def test_a_new_event_is_one_module_and_runs_through_the_cli_on_the_simulator(tmp
     wrong = subprocess.run([sys.executable, "-m", "armlab", "demo", "--event", "red_spot", "--level", "3"],
                            cwd=tmp_path, env=env, capture_output=True, text=True, timeout=300)
     assert wrong.returncode == 2 and "red_spot has levels (1,), got --level 3" in wrong.stderr
+
+
+def test_without_the_kits_strategies_the_events_run_the_generic_search(monkeypatch):
+    """In the student release the kit's strategies (armlab.tasks.events.strategies) are left out: every event's
+    strategy is then the one-move search over its own scorer, which moves a block only where the rules pay for it
+    and stops, saying so, when no move raises the score."""
+    import builtins
+
+    import numpy as np
+
+    from armlab.tasks.events.search import KIT_STRATEGIES, SearchStrategy
+
+    real_import = builtins.__import__
+
+    def without_kit(name, *args, **kwargs):
+        if name.startswith(KIT_STRATEGIES):
+            raise ModuleNotFoundError(f"No module named {name!r}", name=name)
+        return real_import(name, *args, **kwargs)
+
+    monkeypatch.setattr(builtins, "__import__", without_kit)
+    monkeypatch.setattr("importlib.import_module", lambda name, *a: without_kit(name))
+    for name in events():
+        assert type(make_strategy(name, 1)) is SearchStrategy
+    with pytest.raises(ValueError, match="levels"):
+        make_strategy("line_up", 4)
+
+    class Seen:
+        def __init__(self, color, size, x, y):
+            self.color, self.size, self.yaw, self.shape = color, size, 0.0, "cube"
+            self.position = np.array([x, y, 38.0 if size == "large" else 25.0])
+            self.is_block = True
+
+    search = make_strategy("sort_stack", 1)
+    wrong, right = Seen("red", "large", -150.0, 200.0), Seen("blue", "small", -200.0, -120.0)
+    move = search.next_move([wrong, right])
+    assert move.block is wrong and move.to[1] < 0 and move.to[0] > 0 and move.to[2] == 0.0   # large: y < 0, x > 0
+    assert search.next_move([Seen("red", "large", 200.0, -120.0), right]) is None and "no move" in search.stopped

@@ -135,6 +135,19 @@ def test_teach_and_repeat_refuses_before_the_first_command(holding, mover):
     assert "held red block" in message, message
 
 
+def test_the_sag_fit_refuses_before_the_first_command(holding):
+    """tasks.calibrate_sag moves the arm alone through the executor: a pose taking the held block (the arm says it
+    holds it) into the board is refused before anything moves, and the measuring function is never called."""
+    s = holding.session
+    _, down = hover_then_into_board(s)
+    measured = []
+
+    def fit():
+        tasks.calibrate_sag(holding.station.arm, lambda: measured.append(1) or np.zeros(3), poses=[down])
+    message = assert_refused_before_moving(holding, fit, "fitting the sag model: pose 1 of 1")
+    assert "held red block" in message and not measured, message
+
+
 def test_the_station_panels_sliders_refuse_before_the_first_command(holding):
     """The control station's sliders and buttons move through TaskMachine.execute (StationPanel.move); the same
     refusal, through the panel's own call."""
@@ -163,7 +176,7 @@ def test_a_release_off_the_board_is_refused_by_the_placement_rule(holding):
     """drop_with (a student's move_path) and a taught program's open both go through the placement rule."""
     s = holding.session
     message = assert_refused_before_moving(
-        holding, lambda: move_path.drop_with(s, [0.0, 20.0, 0.0], path=move_path.kit_move_path), "drop_with")
+        holding, lambda: move_path.drop_with(s, [0.0, 20.0, 0.0], path=move_path.default_path()[0]), "drop_with")
     assert "base plate" in message, message
 
 
@@ -185,13 +198,17 @@ def test_the_executor_records_the_release_and_the_arm_forgets_the_block(holding)
 
 def test_the_task_layer_calls_planning_execute_only_in_the_executor():
     """No module of armlab.tasks (or the control station) calls planning.execute, or imports execute from
-    armlab.planning, except the executor: every motion goes through Session.run."""
+    armlab.planning, except the executor, nor commands an arm itself (move_to, open_gripper, close_gripper) except
+    the guarded arm the executor runs plans on: every motion goes through Session.run (the sag fit's included)."""
     sources = [*(ROOT / "armlab" / "tasks").rglob("*.py"), ROOT / "armlab" / "ui" / "station_panel.py"]
     found = []
     for path in sources:
         if path.name == "executor.py" and path.parent.name == "tasks":
             continue
         for node in ast.walk(ast.parse(path.read_text(), str(path))):
+            if path.name != "guard.py" and isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and \
+                    node.func.attr in ("move_to", "open_gripper", "close_gripper"):
+                found.append(f"{path.relative_to(ROOT)}:{node.lineno}: {node.func.attr}")
             if isinstance(node, ast.ImportFrom) and (node.module or "").startswith("armlab.planning") and \
                     any(a.name == "execute" for a in node.names):
                 found.append(f"{path.relative_to(ROOT)}:{node.lineno}: imports execute")

@@ -59,13 +59,15 @@ def pose_from_corners(world_mm, pixels, K, dist, refine: bool = True) -> np.ndar
     image corners pixels (N, 2) px through K (3, 3) and dist.
 
     A planar pose: the board is a plane, so its points and their undistorted, normalised image points are related
-    by a homography (dlt_homography), from which the rotation and translation follow (notebook 01 derives how).
-    With refine (the default), Levenberg-Marquardt on the reprojection error (with the lens distortion) then
-    polishes it; refine=False returns the planar pose itself. Raises ValueError for points off the board.
+    by a homography (yours: dlt_homography), from which the rotation and translation follow (notebook 01 derives
+    how). The kit's own pose takes that homography from OpenCV, never from the student's dlt_homography: the kit's
+    truth runs no student code. With refine (the default), Levenberg-Marquardt on the reprojection error (with the
+    lens distortion) then polishes it; refine=False returns the planar pose itself. Raises ValueError for points
+    off the board.
 
     Exercise calib.tag_extrinsics (notebook 01: the camera's pose from the AprilTag corners).
     """
-    from armlab.calibration.homography import dlt_homography
+    from armlab.calibration.homography import dlt_homography  # noqa: F401 (the tool of the student's region)
 
     world, pixels = np.asarray(world_mm, dtype=np.float64), np.asarray(pixels, dtype=np.float64)
     if world.ndim != 2 or world.shape[1] != 3 or pixels.shape != (len(world), 2) or len(world) < 4:
@@ -76,7 +78,9 @@ def pose_from_corners(world_mm, pixels, K, dist, refine: bool = True) -> np.ndar
                          f"{np.abs(world[:, 2]).max():.3g} mm")
     normalised = cv2.undistortPoints(pixels.reshape(-1, 1, 2), K, dist).reshape(-1, 2)
     # BEGIN SOLUTION calib.tag_extrinsics
-    H = dlt_homography(world[:, :2], normalised)
+    from armlab.calibration.homography import opencv_homography
+
+    H = opencv_homography(world[:, :2], normalised)
     scale = 2.0 / (np.linalg.norm(H[:, 0]) + np.linalg.norm(H[:, 1]))
     if H[2, 2] * scale < 0:                     # t_z = scale * H[2, 2] must be positive: the board is in front
         scale = -scale

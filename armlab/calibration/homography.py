@@ -15,7 +15,7 @@ from armlab.images import check_rgb
 from armlab.lab import TagLayout, lab_config
 from armlab.slots import standin
 
-__all__ = ["BoardView", "tag_homography", "dlt_homography"]
+__all__ = ["BoardView", "tag_homography", "dlt_homography", "opencv_homography"]
 
 
 class BoardView:
@@ -65,8 +65,10 @@ class BoardView:
         return cv2.remap(rgb, self._map_u, self._map_v, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT)
 
 
-def _opencv_homography(src_px, dst_px) -> np.ndarray:
-    """The reference path while calib.tag_homography is blank: OpenCV's least-squares fit (cv2.findHomography)."""
+def opencv_homography(src_px, dst_px) -> np.ndarray:
+    """The kit's own homography (3, 3) taking src_px (N, 2) to dst_px (N, 2): OpenCV's least-squares fit
+    (cv2.findHomography). The stand-in while calib.tag_homography is blank, and the homography the kit's truths use
+    (the camera's pose in calib.tag_extrinsics' reference and checks), never the student's dlt_homography."""
     return cv2.findHomography(np.asarray(src_px, np.float64), np.asarray(dst_px, np.float64), 0)[0]
 
 
@@ -93,7 +95,7 @@ def _normalising_similarity(points: np.ndarray) -> np.ndarray:
     return np.array([[s, 0, -s * centre[0]], [0, s, -s * centre[1]], [0, 0, 1.0]])
 
 
-@standin("calib.tag_homography", _opencv_homography, "homographies come from cv2.findHomography")
+@standin("calib.tag_homography", opencv_homography, "homographies come from cv2.findHomography")
 def dlt_homography(src, dst) -> np.ndarray:
     """The 3x3 homography H (H[2, 2] = 1) taking the points src (N, 2) to dst (N, 2), N >= 4, any units (pixels,
     mm): the normalised direct linear transform (Hartley & Zisserman, alg. 4.2). Exact for four points in general

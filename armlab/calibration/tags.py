@@ -1,8 +1,9 @@
 """AprilTag detection (pupil-apriltags) in OpenCV's pixel convention.
 
-pupil-apriltags reports corners with the pixel centre at +0.5 (reference/toolchain.md): they are shifted by -0.5 px
-here so they mix with OpenCV. Corner order: with the tag upright in the image, bottom-left, bottom-right, top-right,
-top-left (counter-clockwise as seen), matching armlab.lab.TagLayout.corners_world.
+pupil-apriltags reports corners with the pixel centre at +0.5 (measured on rendered tags: 0.7 px off raw, 0.05 px
+after the shift): they are shifted by -0.5 px here so they mix with OpenCV. Corner order: with the tag upright in
+the image, bottom-left, bottom-right, top-right, top-left (counter-clockwise as seen), matching
+armlab.lab.TagLayout.corners_world.
 
 Decodes that needed bit corrections (hamming != 0) are dropped by default: on the simulated board a spurious id 509
 turned up next to the dark arm, and a real board's four tags always decode exactly.

@@ -38,6 +38,7 @@ from .plan import (
     Plan,
     PlanSample,
     execute,
+    joint_moves,
     plot_plan,
     sample_plan,
 )
@@ -61,7 +62,7 @@ __all__ = [
     "plan_pick_place",
     "plan_place", "tilted_release_lift",
     "GRIPPER_TIME_S", "ExecutionResult", "GripperStep", "MoveStep", "Plan", "PlanSample", "execute", "plot_plan",
-    "sample_plan",
+    "sample_plan", "joint_moves",
     "SCALINGS", "moving_time", "time_scaling",
     "CartesianSegment", "JointTrajectory", "PiecewiseTrajectory", "Trajectory", "Waypoint", "cartesian_line",
     "joint_move", "reverse",

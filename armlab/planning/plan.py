@@ -15,13 +15,23 @@ import numpy as np
 
 from armlab.robot import JOINT_NAMES
 
-from .trajectory import Trajectory
+from .trajectory import Trajectory, joint_move
 
 __all__ = ["GRIPPER_TIME_S", "MoveStep", "GripperStep", "Plan", "PlanSample", "ExecutionResult", "execute",
-           "sample_plan", "plot_plan"]
+           "sample_plan", "plot_plan", "joint_moves"]
 
 GRIPPER_TIME_S = 1.0      # the manufacturer's grasp()/release() delay: the arm holds still meanwhile
 _GRIPPER_ACTIONS = ("open", "close")
+
+
+def joint_moves(*poses, label: str = "to pose", robot=None) -> Plan:
+    """One plan of rest-to-rest joint moves (planning.joint_move, the lab's default timing) from poses[0] through
+    each next pose, every pose (5,) rad; the k-th move is labelled f"{label} {k}". ValueError for fewer than two
+    poses or a pose outside the joint limits (naming the joint)."""
+    if len(poses) < 2:
+        raise ValueError(f"joint_moves needs a start and at least one pose to move to, got {len(poses)} pose(s)")
+    return Plan(tuple(MoveStep(joint_move(a, b, robot=robot), f"{label} {k + 1}")
+                      for k, (a, b) in enumerate(zip(poses[:-1], poses[1:]))))
 
 
 @dataclass(frozen=True)

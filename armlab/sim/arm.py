@@ -29,6 +29,7 @@ from armlab.profile import trapezoid_fraction
 from armlab.robot import RobotModel, rx200
 from armlab.sim.gripper import GripperGeometry, close_on, push_with_pads
 from armlab.sim.physics.materials import WOOD
+from armlab.sim.physics.rest import tilt_angle
 from armlab.sim.world import World, describe_object
 from armlab.station.contract import EmergencyStopped, MotionRefused, StationClosed
 from armlab.station.parking import park_and_close
@@ -99,16 +100,18 @@ def gravity_deflection(q, realism: ArmRealism, payload_kg: float = 0.0, robot: R
     heading = q[..., 0] + np.pi / 2                            # the arm points along +y at waist = 0
     h = np.stack([np.cos(heading), np.sin(heading)], axis=-1)
     r = np.einsum("...kj,...j->...k", P[..., :2], h) / 1000.0  # (..., 7) horizontal reach in m
-    upper, fore, grip = (r[..., 2] + r[..., 3]) / 2, (r[..., 3] + r[..., 4]) / 2, (r[..., 4] + r[..., 6]) / 2
+    # one arm pose (the simulator's step): the rest in Python floats, the same IEEE operations as on numpy scalars
+    r = r.tolist() if q.ndim == 1 else [r[..., k] for k in range(r.shape[-1])]
+    upper, fore, grip = (r[2] + r[3]) / 2, (r[3] + r[4]) / 2, (r[4] + r[6]) / 2
     m_up, m_fore, m_grip = realism.upper_arm_kg, realism.forearm_kg, realism.gripper_kg
 
     def moment(pivot, parts):
         return GRAVITY * sum(m * (x - pivot) for m, x in parts)
 
-    beyond_elbow = [(m_fore, fore), (m_grip, grip), (payload_kg, r[..., 6])]
+    beyond_elbow = [(m_fore, fore), (m_grip, grip), (payload_kg, r[6])]
     out = np.zeros(q.shape)
-    out[..., 1] = realism.shoulder_compliance_rad_per_nm * moment(r[..., 2], [(m_up, upper), *beyond_elbow])
-    out[..., 2] = realism.elbow_compliance_rad_per_nm * moment(r[..., 3], beyond_elbow)
+    out[..., 1] = realism.shoulder_compliance_rad_per_nm * moment(r[2], [(m_up, upper), *beyond_elbow])
+    out[..., 2] = realism.elbow_compliance_rad_per_nm * moment(r[3], beyond_elbow)
     return out
 
 
@@ -166,6 +169,8 @@ class SimArm:
         self._held: list[tuple[object, np.ndarray]] = []    # (object, its pose in the tool frame)
         self._told: tuple[motion_safety.HeldBlock, ...] = ()  # what the task layer says it holds (set_held_blocks)
         self.gripper_opening_mm = self.gripper_geometry.max_opening_mm
+        self.last_release: dict[int, float] = {}    # open_gripper: each released object's id -> its tilt (rad) then
+        self._pose_memo: tuple | None = None    # (key, realism, robot, q_true, tool pose): _pose
         self._q_true = self._physical(self._motor)
         world.add_listener(self._on_time)
 
@@ -227,14 +232,26 @@ class SimArm:
     def _refresh(self) -> None:
         """Recompute the physical pose, carry held objects, and let the pads push what they run into."""
         self._link = self._geared(self._motor) if self._torque else self._motor.copy()
-        self._q_true = self._physical(self._motor)
-        T = kinematics.fk_pox(self._q_true, self.robot, check_limits=False)
+        self._q_true, T = self._pose()
         for obj, T_rel in self._held:
             T_obj = T @ T_rel
             obj.position = T_obj[:3, 3].copy()
             roll, pitch, yaw = rpy_from_matrix(T_obj[:3, :3])
             obj.yaw, obj.tilt = float(yaw), np.array([roll, pitch])
         push_with_pads(self.world, T, self.gripper_geometry, self.gripper_opening_mm)
+
+    def _pose(self) -> tuple[np.ndarray, np.ndarray]:
+        """The physical joint angles (5,) rad and the physical tool pose (4, 4) mm for the present motor positions,
+        link state, torque and load. What they depend on is the key of a one-entry memo: the clock's steps while
+        the arm stands (a gripper's second, a look) would compute the very same numbers again. The arrays are the
+        memo's own: read them, never write into them."""
+        key = (self._motor.tobytes(), self._link.tobytes(), self._torque, self._payload_kg())
+        memo = self._pose_memo
+        if memo is None or memo[0] != key or memo[1] is not self.realism or memo[2] is not self.robot:
+            q = self._physical(self._motor)
+            memo = self._pose_memo = (key, self.realism, self.robot, q,
+                                      kinematics.fk_pox(q, self.robot, check_limits=False))
+        return memo[3], memo[4]
 
     # -- readings -------------------------------------------------------------------------------------------
     def joint_positions(self) -> np.ndarray:
@@ -437,12 +454,15 @@ class SimArm:
     # -- gripper --------------------------------------------------------------------------------------------
     def open_gripper(self) -> None:
         """Open the pads fully; a held block falls onto whatever is below it and settles by the world's physics
-        (it topples off when the centre of mass of what it carries is not over what bears it)."""
+        (it topples off when the centre of mass of what it carries is not over what bears it). `last_release` keeps
+        how tilted each released object was when let go (a block carried tilted tips flat on landing, off by up to
+        armlab.sim.physics.rest.tipping_shift_mm)."""
         self._check_ready("opening the gripper")
         self.wait()
         with self.world.lock:
             self._check_ready("opening the gripper")
             held = sorted(self.holding, key=lambda o: o.position[2])
+            self.last_release = {o.id: tilt_angle(o) for o in held}
             self._held, self._told = [], ()
             self.world.held.difference_update(o.id for o in held)
             self.gripper_opening_mm = self.gripper_geometry.max_opening_mm

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from armlab.blocks import LAB_RGB, ObjectState
-from armlab.kinematics import joint_positions, link_frames
+from armlab.kinematics import frame_points, link_frames
 from armlab.lab import lab_config
 from armlab.transforms import rot_x, rot_y
 
@@ -175,8 +175,9 @@ def arm_faces(q, gripper_opening_mm: float, gripper_geometry) -> FaceSet:
     approach, centred on the tool point) and pad_thickness_mm (across the opening).
     """
     q = np.asarray(q, dtype=float)
-    P = joint_positions(q)                      # base, waist top, shoulder, elbow, wrist, wrist_rotate, tool
-    tool = link_frames(q, check_limits=False)[6]
+    frames = link_frames(q, check_limits=False)
+    P = frame_points(frames)                    # base, waist top, shoulder, elbow, wrist, wrist_rotate, tool
+    tool = frames[6]
     side = np.array([np.cos(q[0]), np.sin(q[0]), 0.0])    # normal of the arm's vertical plane
     x, y = tool[:3, 0], tool[:3, 1]
     root = P[6] - FINGER_ROOT_MM * x

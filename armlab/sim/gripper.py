@@ -13,6 +13,7 @@ runs into an object shoves it aside (squaring its face against the pad, as a fla
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -26,6 +27,7 @@ from armlab.transforms import rot_z
 __all__ = ["GripperGeometry", "GraspOutcome", "close_on", "push_with_pads"]
 
 _PUSH_MARGIN_MM = 0.05       # pads touching a face (closed on a cube) do not count as pushing it
+_PREFILTER_MARGIN_MM = 1.0   # push_with_pads' quick test from the tool point leaves this much to spare
 
 
 @dataclass
@@ -95,27 +97,44 @@ def close_on(world: World, T_tool, geometry: GripperGeometry, opening_mm: float)
     return GraspOutcome(o, o.edge, "held")
 
 
+@functools.lru_cache(maxsize=16)
+def _pad_reach(g: GripperGeometry) -> float:
+    """How far (mm) a pad's corners reach from its centre: the norm of its half extents."""
+    return np.linalg.norm(g.half_extents)
+
+
 def push_with_pads(world: World, T_tool, geometry: GripperGeometry, opening_mm: float) -> list[ObjectState]:
     """Shove every free object a finger pad runs into out of the pad's way (along the closing direction, away from
     the pad), squaring its face against the pad; returns the objects moved."""
     g = geometry
     T = np.asarray(T_tool, dtype=float)
     R = T[:3, :3]
-    centres = g.pad_centres(T, opening_mm)
-    reach = np.linalg.norm(g.half_extents)
-    free = [o for o in world.objects if o.id not in world.held]
+    held = world.held
+    free = [o for o in world.objects if o.id not in held]
     if not free:
         return []
-    bound = reach + 0.87 * np.array([o.edge for o in free])
+    positions = np.array([o.position for o in free])    # the free objects' centres (N, 3), again after a shove
+    bound = _pad_reach(g) + 0.87 * np.array([o.edge for o in free])
+    # Most steps touch nothing: a pad's centre is `off` from the tool point, so an object farther than its bound + off
+    # (+ a margin far above any rounding) from the tool point is beyond its bound from both pads.
+    off = (opening_mm / 2 + g.pad_thickness_mm / 2) * np.linalg.norm(T[:3, 1])
+    if np.all(np.linalg.norm(positions - T[:3, 3], axis=-1) > bound + (off + _PREFILTER_MARGIN_MM)):
+        return []
+    centres = g.pad_centres(T, opening_mm)
 
     def near(k: int) -> list[ObjectState]:
         """The free objects within touching distance of pad k (a vectorised test: most steps touch nothing)."""
-        gap = np.linalg.norm(np.array([o.position for o in free]) - centres[k], axis=-1)
-        return [o for o, close in zip(free, gap <= bound, strict=True) if close]
+        nonlocal positions
+        if positions is None:
+            positions = np.array([o.position for o in free])
+        gap = np.linalg.norm(positions - centres[k], axis=-1)
+        return [o for o, close in zip(free, (gap <= bound).tolist(), strict=True) if close]
 
     corners = None
     moved = []
     for k in range(2):
+        if moved:
+            positions = None
         for o in near(k):                      # after pad 0's shoves, pad 1 sees where they left the objects
             if not boxes_overlap(centres[k], R, g.half_extents, *_object_box(o), margin=_PUSH_MARGIN_MM):
                 continue

@@ -9,7 +9,7 @@ Start a session first; every behaviour takes it:
 """
 
 from . import teach
-from .click import ClickRefused, click_drop, click_grab, click_world, current_view
+from .click import ClickRefused, click_drop, click_grab, click_with, click_world, current_view
 from .guard import GuardedArm
 from .handling import RELEASE_GAP_MM, look, pick, place, put_back
 from .machine import STATES, MachineBusy, TaskMachine
@@ -18,7 +18,7 @@ from .sag import LAB_BASELINE, SagModel, calibration_poses, fit_sag
 from .session import Session, calibrate_sag, start_session
 from .teach import TeachFileError, TeachProgram, load_teach, plot_teach, repeat, save_teach
 
-__all__ = ["teach", "ClickRefused", "click_drop", "click_grab", "click_world", "current_view",
+__all__ = ["teach", "ClickRefused", "click_drop", "click_grab", "click_with", "click_world", "current_view",
            "STATES", "MachineBusy", "TaskMachine",
            "GuardedArm", "Observation", "calibrate_camera", "clear_view", "surface_point", "RELEASE_GAP_MM",
            "Session", "start_session", "calibrate_sag", "look", "pick", "place", "put_back", "LAB_BASELINE", "SagModel",

@@ -65,16 +65,10 @@ def reach_experiment(session: Session, arm, measure, locations=LAB_LOCATIONS_MM,
         above = kinematics.ik(target + [0, 0, hover_mm], np.pi / 2, roll, current=here)[0]
         down = kinematics.ik(target, np.pi / 2, roll, current=above)[0]
         what = f"reaching ({target[0]:.0f}, {target[1]:.0f}, {target[2]:.0f}) mm"
-        session.run(_moves(here, above, down), what, arm=arm)
+        session.run(planning.joint_moves(here, above, down), what, arm=arm)
         rows.append(ReachRow(np.array([xy[0], xy[1], z]), clicked, np.asarray(measure(), float)))
-        session.run(_moves(np.asarray(arm.joint_positions(), float), above), f"{what}: back up", arm=arm)
+        session.run(planning.joint_moves(np.asarray(arm.joint_positions(), float), above), f"{what}: back up", arm=arm)
     return rows
-
-
-def _moves(*poses) -> planning.Plan:
-    """Joint moves (default timing) from poses[0] through each next pose (5,) rad, as one plan."""
-    return planning.Plan(tuple(planning.MoveStep(planning.joint_move(a, b), f"to pose {i + 1}")
-                               for i, (a, b) in enumerate(zip(poses[:-1], poses[1:]))))
 
 
 def format_table(headers, rows, floatfmt: str = "{:.1f}") -> str:

@@ -17,7 +17,8 @@ from collections.abc import Callable
 
 import numpy as np
 
-from armlab import planning
+from armlab import kinematics, planning, slots
+from armlab.arguments import finite_array, finite_float
 from armlab.blocks import block_edge
 from armlab.gripper_geometry import GRIPPER
 from armlab.kinematics import Unreachable
@@ -26,7 +27,8 @@ from armlab.robot import RobotModel, rx200
 from . import handling
 from .session import Session, as_session
 
-__all__ = ["move_path", "kit_move_path", "grab_with", "drop_with", "MovePath", "PATH_ACTIONS", "TIP_MARGIN_MM"]
+__all__ = ["move_path", "report_move_path", "default_path", "grab_with", "drop_with", "MovePath", "PATH_ACTIONS",
+           "TIP_MARGIN_MM", "REPORT_LIFT_MM", "REPORT_APPROACH_MM"]
 
 PATH_ACTIONS = ("grasp", "release")
 TIP_MARGIN_MM = 10.0      # the finger tips stay at least this far above what the block stands on (sag: 5-15 mm)
@@ -83,16 +85,66 @@ def move_path(q_start, target, yaw: float, edge: float, action: str,
     # END SOLUTION
 
 
-def kit_move_path(q_start, target, yaw: float, edge: float, action: str,
-                  clearance: float = planning.DEFAULT_CLEARANCE_MM, robot: RobotModel | None = None) -> planning.Plan:
-    """What stands in for move_path while grab.move_path is blank: the kit's own pick and place planners
-    (planning.plan_pick / plan_place, which also rise first and raise the transit over obstacles they are given),
-    with move_path's arguments."""
-    if action == "grasp":
-        return planning.plan_pick(q_start, target, yaw, edge, clearance=clearance, robot=robot)
-    if action == "release":
-        return planning.plan_place(q_start, target, edge, yaw, clearance=clearance, robot=robot)
-    raise ValueError(f"action is {action!r}: kit_move_path knows {' and '.join(PATH_ACTIONS)}")
+# The lab report's own heights (world mm): the gripper lifted to 275 mm, came down to 150 mm over the block, then to
+# half the block's height
+REPORT_LIFT_MM = 275.0
+REPORT_APPROACH_MM = 150.0
+
+
+def report_move_path(q_start, target, yaw: float, edge: float, action: str,
+                     clearance: float = planning.DEFAULT_CLEARANCE_MM,
+                     robot: RobotModel | None = None) -> planning.Plan:
+    """The student release's stand-in for a blank move_path: the lab report's own sequence, another method than the
+    exercise asks for. Joint moves (joint-space interpolation, not a straight line) through fixed heights: up to
+    REPORT_LIFT_MM over the target (as steep as the arm reaches there), top-down from then on: down to
+    REPORT_APPROACH_MM, [open], down to the tool point at half the cube's height (the grip through its middle whatever
+    its size), act, back up to REPORT_APPROACH_MM. The wrist squares the pads to the board's x and y axes, as the
+    report's blocks stood: the block's `yaw` is checked but not used (a turned block is met on its corners).
+    Arguments as move_path's (mm, rad, world frame). Raises kinematics.Unreachable saying why where the report's plan
+    cannot go: a target out of top-down reach, or a top (of the block, or of the placed block) less than `clearance`
+    mm below the fixed approach height (a stack that tall)."""
+    robot = robot or rx200()
+    if action not in PATH_ACTIONS:
+        raise ValueError(f"report_move_path knows the actions {' and '.join(PATH_ACTIONS)}, not {action!r}")
+    p = finite_array(target, "target", (3,), "x, y, z in world mm")
+    edge = finite_float(edge, "edge", positive=True, what="mm")
+    clearance = finite_float(clearance, "clearance", minimum=0.0, what="mm")
+    finite_float(yaw, "yaw", what="rad")                              # checked, not used (the docstring)
+    top = p[2] if action == "grasp" else p[2] + edge                 # what the gripper leaves behind
+    if top + clearance > REPORT_APPROACH_MM:
+        raise Unreachable(f"the lab report's plan comes down to a fixed {REPORT_APPROACH_MM:.0f} mm, less than "
+                          f"{clearance:.0f} mm over the top at {top:.1f} mm: it cannot work on a stack that tall")
+    low_z = p[2] - edge / 2 if action == "grasp" else p[2] + edge / 2     # half the cube's height
+    roll = planning.face_roll(float(np.arctan2(p[1], p[0])), 0.0)      # the pads square to the board's axes
+    q, poses = np.asarray(q_start, float), []
+    for z in (REPORT_LIFT_MM, REPORT_APPROACH_MM, low_z):
+        try:
+            # the lift point as steep as the arm reaches it there (top-down is out of reach that high further out)
+            pitch = kinematics.steepest_pitch([p[0], p[1], z], roll, robot=robot) if z == REPORT_LIFT_MM else np.pi / 2
+            q = kinematics.ik([p[0], p[1], z], pitch, roll, current=q, robot=robot)[0]
+        except Unreachable as e:
+            raise Unreachable(f"the lab report's plan is top-down only, and ({p[0]:.1f}, {p[1]:.1f}, {z:.1f}) mm "
+                              f"is out of top-down reach: {e}") from None
+        poses.append(q)
+    lift, approach, low = poses
+    opening = (planning.GripperStep("open", "open the pads over the block"),) if action == "grasp" else ()
+    steps = (planning.MoveStep(planning.joint_move(q_start, lift, robot=robot), "up to the report's lift height"),
+             planning.MoveStep(planning.joint_move(lift, approach, robot=robot), "down to the report's approach"),
+             *opening,
+             planning.MoveStep(planning.joint_move(approach, low, robot=robot), "down to half the cube's height"),
+             planning.GripperStep("close" if action == "grasp" else "open", action),
+             planning.MoveStep(planning.joint_move(low, approach, robot=robot), "back up to the report's approach"))
+    return planning.Plan(steps)
+
+
+def default_path() -> tuple[MovePath, str]:
+    """What stands in for a blank move_path in the notebooks' demonstrations, and the one line that says so: the
+    kit's own planners (tasks.kit_move_path) where the instructor's tree has them, else the lab report's plan
+    (report_move_path: the student release)."""
+    path = slots.kit_or_standin("armlab.tasks.kit_move_path", "kit_move_path", report_move_path)
+    if path is report_move_path:
+        return path, "the lab report's plan stands in: fixed heights, top-down only, joint moves down"
+    return path, "the kit's planning.plan_pick / plan_place plan the motion"
 
 
 def grab_with(session: Session, block, path: MovePath = move_path) -> bool:

@@ -102,19 +102,28 @@ def same_spot(a, b) -> bool:
 
 def calibrate_sag(arm, measure: Callable[[], np.ndarray], poses=None) -> SagModel:
     """Fit a SagModel: move the raw arm (no compensation) to each pose (default sag.calibration_poses), passing
-    above it first, and call measure() -> tool point (3,) world mm there. Returns the fitted model."""
-    poses = calibration_poses(arm.robot) if poses is None else np.asarray(poses, dtype=float)
+    above it first, and call measure() -> tool point (3,) world mm there. Returns the fitted model.
+
+    Every move goes through the executor (tasks.executor.run over the arm alone: the whole move checked before its
+    first command, nothing known on the board, what the arm says it holds). arm: a backend's Arm, or a GuardedArm
+    whose backend arm is moved without its sag model (the fit measures the uncompensated arm). MotionRefused, with
+    the arm where it was, when a pose's move is refused."""
+    raw = arm.arm if isinstance(arm, GuardedArm) else arm
+    mover = executor.ArmAlone(GuardedArm(raw))
+    poses = calibration_poses(raw.robot) if poses is None else np.asarray(poses, dtype=float)
     q_cmd, measured = [], []
-    for q in poses:
-        above = hover_pose(q, arm.robot)
-        if above is not None:
-            arm.move_to(above)
-        arm.move_to(q)
-        q_cmd.append(np.asarray(arm.joint_positions(), dtype=float))
+    for k, q in enumerate(poses):
+        what = f"fitting the sag model: pose {k + 1} of {len(poses)}"
+        above = hover_pose(q, raw.robot)
+        path = [q] if above is None else [above, q]
+        here = np.asarray(raw.joint_positions(), dtype=float)
+        executor.run(mover, planning.joint_moves(here, *path, label="to the pose, move", robot=raw.robot), what)
+        q_cmd.append(np.asarray(raw.joint_positions(), dtype=float))
         measured.append(np.asarray(measure(), dtype=float))
         if above is not None:
-            arm.move_to(above)
-    return fit_sag(np.array(q_cmd), np.array(measured), arm.robot)
+            executor.run(mover, planning.joint_moves(q_cmd[-1], above, label="back up, move", robot=raw.robot),
+                         f"{what}: back up")
+    return fit_sag(np.array(q_cmd), np.array(measured), raw.robot)
 
 
 def start_session(station: Station, intrinsics="checkerboard", sag: SagModel | None = None,

@@ -14,7 +14,9 @@ the panel's title says what the gripper holds and what the next click will do.
 A view is current while the arm has not moved since it was taken (view_is_current); widget() looks again first when
 it is not (e.g. after a pick made outside the panel, whose frame still shows the block on the board), and a click
 on a stale view is refused (nothing moves) after a new look, so no click ever acts on an old picture. Given a
-tasks.TaskMachine, clicks run through it (its click-grab / click-drop states and its emergency stop).
+tasks.TaskMachine, clicks run through it (its click-grab / click-drop states and its emergency stop). Given a click
+sequence of one's own (exercise grab.sequence, notebook 05: on_click / after), each click runs through
+tasks.click_with with it, and the sequence decides what the click means; the kit's click rule is not used.
 
 Pixels: OpenCV convention (u right, v down, integer = pixel centre) in the camera's full-resolution frame.
 Units: mm, rad, s; world (board) frame. ipywidgets and ipyevents are imported only by ClickToGrab.widget().
@@ -29,7 +31,7 @@ import cv2
 import numpy as np
 
 from armlab.station.contract import EmergencyStopped, MotionRefused
-from armlab.tasks.click import ClickRefused, click_drop, click_grab, click_world, current_view
+from armlab.tasks.click import ClickRefused, click_drop, click_grab, click_with, click_world, current_view
 from armlab.tasks.handling import look
 from armlab.tasks.machine import MachineBusy
 from armlab.tasks.session import Session, as_session
@@ -161,15 +163,22 @@ class ClickToGrab:
             any size, the click mapping does not depend on it.
         machine: a tasks.TaskMachine over the same session: clicks then run as its click-grab / click-drop commands
             (refused while it is busy or emergency-stopped); default: tasks.click_grab / click_drop directly.
+        sequence: a click sequence of one's own (on_click(point, seen), after(action, ok): tasks.click_with), which
+            then decides what each click means (not with a machine); `yaw` is then the sequence's to give.
     """
 
     def __init__(self, session: Session, scale: float = 0.5, yaw: float = 0.0, display_width: int | None = None,
-                 machine=None):
+                 machine=None, sequence=None):
         session = as_session(session, "ClickToGrab")
         if not 0.05 <= scale <= 1.0:
             raise ValueError(f"scale must lie in [0.05, 1], got {scale}")
         if machine is not None and machine.session is not session:
             raise ValueError("the TaskMachine given drives another session")
+        if sequence is not None and (machine is not None or not callable(getattr(sequence, "on_click", None))
+                                     or not callable(getattr(sequence, "after", None))):
+            raise ValueError("a click sequence has on_click(point, seen) and after(action, ok), and runs without a "
+                             "machine (tasks.click_with)")
+        self.sequence = sequence
         self.session, self.station = session, session.station
         self.scale, self.yaw = float(scale), float(yaw)
         self.display_width = display_width
@@ -231,14 +240,17 @@ class ClickToGrab:
                 world = click_world(session, uv, current_view(session).frame)
                 where += f" -> world {_fmt(world)} mm"
                 del log[:]                      # what the click did, not the look that may have come before
+                held = session.held
+                if self.sequence is not None:   # the sequence decides what the click means
+                    action, ok = self._by_sequence(uv)
+                    where = f"{action}{where[where.index(' at pixel'):]}"
                 if action == "grab":
-                    ok = self._grab(uv)
+                    ok = ok if self.sequence is not None else self._grab(uv)
                     block = session.held
                     did = (f"holding the {block.color} {block.size} block (top face {_fmt(block.position)} mm, "
                            f"yaw {_num(np.degrees(block.yaw))} deg)" if ok else "the gripper closed empty (missed)")
                 else:
-                    held = session.held
-                    ok = self._drop(uv)
+                    ok = ok if self.sequence is not None else self._drop(uv)
                     did = f"put the {held.color} block down there"
                 message = f"{where}: {did}; {_summary(log)}"
             except (ClickRefused, MachineBusy) as e:
@@ -256,6 +268,16 @@ class ClickToGrab:
             self._marker = uv
         self._refresh()
         return result
+
+    def _by_sequence(self, uv) -> tuple[str, bool]:
+        """One click through tasks.click_with and the panel's sequence; what it cannot act on (an action the kit
+        refuses, nothing held to drop, out of reach: a ValueError, before anything moves) is a refused click."""
+        try:
+            return click_with(self.session, uv, self.sequence)
+        except ClickRefused:
+            raise
+        except ValueError as e:
+            raise ClickRefused(f"your click sequence's answer cannot be acted on: {e}") from None
 
     def _grab(self, uv) -> bool:
         if self.machine is not None:

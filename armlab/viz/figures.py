@@ -13,7 +13,8 @@ beside the file browser on a 1366-px laptop screen, so nothing is shrunk).
 
 from __future__ import annotations
 
-__all__ = ["MIN_LABEL_PX", "MAX_WIDTH_PX", "DPI", "readable", "readability_problems", "check_readable"]
+__all__ = ["MIN_LABEL_PX", "MAX_WIDTH_PX", "DPI", "MIN_AXES_PX", "UNIT", "readable", "readability_problems",
+           "check_readable", "labelling_problems", "figure_record"]
 
 MIN_LABEL_PX = 12.0     # 9 pt at 100 % zoom (96 px per inch)
 MAX_WIDTH_PX = 900
@@ -66,3 +67,83 @@ def check_readable(fig, **limits) -> None:
     problems = readability_problems(fig, **limits)
     if problems:
         raise ValueError("figure not readable at the size a notebook shows it:\n  " + "\n  ".join(problems))
+
+
+# -- what a figure must say: labels with units, titles clear of the ticks, panels large enough to read ------------
+UNIT = r"[(\[][^()\[\]]+[)\]]"      # "(mm)", "[px]", "(deg)", "(count)": a unit in brackets or parentheses
+MIN_AXES_PX = (200.0, 120.0)          # a panel's least width and height on screen (px at 100 % zoom)
+
+
+def _overlap(a, b, tol: float = 1.0) -> bool:
+    """Whether two display boxes overlap by more than `tol` px each way."""
+    return min(a.x1, b.x1) - max(a.x0, b.x0) > tol and min(a.y1, b.y1) - max(a.y0, b.y0) > tol
+
+
+def _is_colorbar(ax) -> bool:
+    return hasattr(ax, "_colorbar")
+
+
+def _tick_labels(ax):
+    return [t for t in ax.get_xticklabels() + ax.get_yticklabels() if t.get_visible() and t.get_text().strip()]
+
+
+def labelling_problems(fig) -> list[str]:
+    """What a figure leaves unsaid or unreadable, in the lab's rule (empty when none): every visible panel shows its
+    axes and has a title (or the figure a suptitle); each axis with tick labels has a label that names a unit in
+    brackets or parentheses; a colour bar's label names its unit; no title overlaps a tick label or another title;
+    the tick labels of two panels do not overlap; no panel is smaller on screen than MIN_AXES_PX (width, height)
+    px."""
+    import re
+
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    shrink = min(1.0, MAX_WIDTH_PX / (fig.get_figwidth() * fig.dpi))
+    problems = []
+    panels = [ax for ax in fig.axes if ax.get_visible() and ax.axison]
+    problems += [f"a panel without axes ({ax.get_title()[:30]!r}): show its axes with units (px for an image)"
+                 for ax in fig.axes if ax.get_visible() and not ax.axison]
+    suptitle = fig._suptitle is not None and fig._suptitle.get_text().strip()
+    titles = [(ax, t) for ax in fig.axes for t in (ax.title, ax._left_title, ax._right_title)
+              if t.get_visible() and t.get_text().strip()]
+    for i, ax in enumerate(panels):
+        name = f"panel {i + 1}" + (f" ({ax.get_title()[:30]!r})" if ax.get_title() else "")
+        if _is_colorbar(ax):
+            cb = ax._colorbar
+            label = (ax.get_ylabel() if cb.orientation == "vertical" else ax.get_xlabel()) or ax.get_title()
+            if not re.search(UNIT, label or ""):
+                problems.append(f"{name}: a colour bar without a unit in its label ({label!r})")
+            continue
+        if not (ax.get_title() or ax.get_title(loc="left") or suptitle):
+            problems.append(f"{name}: no title")
+        for axis, label, ticks in (("x", ax.get_xlabel(), ax.get_xticklabels()),
+                                   ("y", ax.get_ylabel(), ax.get_yticklabels())):
+            shown = any(t.get_visible() and t.get_text().strip() for t in ticks)    # a shared axis: its neighbour's
+            if shown and not re.search(UNIT, label):
+                problems.append(f"{name}: the {axis} label {label!r} names no unit in brackets or parentheses")
+        box = ax.get_window_extent(renderer)
+        w, h = box.width * shrink, box.height * shrink       # a notebook shows 1 image px as 1 screen px
+        if w < MIN_AXES_PX[0] - 0.5 or h < MIN_AXES_PX[1] - 0.5:
+            problems.append(f"{name}: {w:.0f} x {h:.0f} px on screen (at least {MIN_AXES_PX[0]:.0f} x "
+                            f"{MIN_AXES_PX[1]:.0f} px)")
+    ticks = [(t.get_text(), t.get_window_extent(renderer)) for ax in panels for t in _tick_labels(ax)]
+    boxes = [(ax, t, t.get_window_extent(renderer)) for ax, t in titles]
+    for k, (_, title, box) in enumerate(boxes):
+        hit = next((text for text, tick in ticks if _overlap(box, tick)), None)
+        if hit is not None:
+            problems.append(f"the title {title.get_text()[:30]!r} overlaps the tick label {hit!r}")
+        if any(_overlap(box, other) for _, _, other in boxes[k + 1:]):
+            problems.append(f"the title {title.get_text()[:30]!r} overlaps another title")
+    for a, b in ((a, b) for i, a in enumerate(panels) for b in panels[i + 1:]):
+        hit = next(((s.get_text(), t.get_text()) for s in _tick_labels(a) for t in _tick_labels(b)
+                    if _overlap(s.get_window_extent(renderer), t.get_window_extent(renderer))), None)
+        if hit is not None:
+            problems.append(f"the tick labels {hit[0]!r} and {hit[1]!r} of two panels overlap")
+            break
+    return problems
+
+
+def figure_record(fig) -> dict:
+    """What the notebooks' figure test reads back from a stored figure's output metadata: its size in px (as drawn,
+    before a tight crop), and readability_problems and labelling_problems (both empty for a good figure)."""
+    return {"width_px": round(fig.get_figwidth() * fig.dpi), "height_px": round(fig.get_figheight() * fig.dpi),
+            "problems": readability_problems(fig) + labelling_problems(fig)}

@@ -38,7 +38,7 @@ FINGER_SIZE_MM = (40.0, 8.0, 20.0)          # along tool x, y, z
 FINGER_CENTRE_X_MM = -12.0
 PALM_SIZE_MM = (10.0, 90.0, 24.0)
 PALM_CENTRE_X_MM = -27.575 - 5.0
-MAX_GRIPPER_OPENING_MM = 74.0               # stock fingers: 30-74 mm (reference/rx200.md)
+MAX_GRIPPER_OPENING_MM = 74.0               # stock fingers: 30-74 mm (Interbotix RX200 specification)
 
 
 @dataclass(frozen=True)

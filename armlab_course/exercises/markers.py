@@ -4,6 +4,8 @@ by two lines raising the exercise's not-written error (its message: the id, the 
 write; in an engine file the engine's own SlotNotWritten, in a notebook the course's ExerciseNotWritten), so the
 surrounding code still imports and runs up to the point of use.
 
+Check cells: a notebook's code cell with a `# CHECK <id> [<id> ...]` line (CHECK_LINE) tests those exercises.
+
 Written answers: a markdown cell holding `<!-- BEGIN ANSWER <id> -->` ... `<!-- END ANSWER -->`; the release
 replaces the answer by one prompt line (answer_prompt).
 """
@@ -15,11 +17,12 @@ from dataclasses import dataclass
 
 from .registry import exercise
 
-__all__ = ["Region", "ExerciseMarkerError", "find_regions", "stub_regions", "stub_lines", "is_blank", "find_answers",
-           "blank_answers", "answer_prompt", "is_blank_answer"]
+__all__ = ["CHECK_LINE", "Region", "ExerciseMarkerError", "find_regions", "stub_regions", "stub_lines", "is_blank",
+           "find_answers", "blank_answers", "answer_prompt", "is_blank_answer"]
 
 _BEGIN = re.compile(r"^(?P<indent>[ \t]*)# BEGIN SOLUTION(?:[ \t]+(?P<id>\S+))?[ \t]*$")
 _END = re.compile(r"^(?P<indent>[ \t]*)# END SOLUTION[ \t]*$")
+CHECK_LINE = re.compile(r"^\s*# CHECK[ \t]+(?P<ids>.+?)\s*$", re.MULTILINE)
 
 
 class ExerciseMarkerError(ValueError):

@@ -115,6 +115,8 @@ DEPTH_PLANE = Exercise("calib.depth_plane", "fit the depth camera's planar bias"
                        "armlab/calibration/depth.py", ("fit_depth_correction",))
 Q_REPROJECTION = Exercise("calib.q_reprojection", "why the board-to-image error grows toward the corners", 3,
                           _NB["01"], _src("01"), ("the homography error figure",), kind="written")
+Q_VIEWS = Exercise("calib.q_views", "what adding views does to the closed form's focal length and principal point",
+                   3, _NB["01"], _src("01"), ("the views-against-error figure",), kind="written")
 # -- notebook 02: forward kinematics ----------------------------------------------------------------------------
 DH_LINK = Exercise("fk.dh_link_transform", "one DH link transform, batched (the kit's)", 4, _NB["02"],
                    "armlab/kinematics.py", ("dh_link_transform",))
@@ -124,6 +126,8 @@ EULER = Exercise("fk.euler", "ZYZ Euler angles from a pose (the report's get_eul
                  _src("02"), ("euler_angles_from_T",))
 Q_FRAMES = Exercise("fk.q_frames", "what frame 4 adds and why x2 runs along the hypotenuse", 3, _NB["02"],
                     _src("02"), ("the DH frames figure",), kind="written")
+Q_TABLE_ERROR = Exercise("fk.q_table_error", "predict, then read the map of Table I's tool-point error over the board",
+                         3, _NB["02"], _src("02"), ("the Table I error map",), kind="written")
 # -- notebook 03: inverse kinematics ----------------------------------------------------------------------------
 IK_BRANCHES = Exercise("ik.candidates", "the geometric IK from the triangle figure: the planar two-link problem and "
                        "the wrist pitch, every branch", 14, _NB["03"], "armlab/kinematics.py", ("_branch_joints",))
@@ -132,6 +136,8 @@ Q_BRANCHES = Exercise("ik.q_branches", "which branches the arm can use, from the
 IK_NUMERICAL = Exercise("ik.numerical", "the geometric Jacobian from the link frames, the pose error and a damped "
                         "least squares IK", 8, _NB["03"], _src("03"),
                         ("tool_jacobian", "pose_error", "solve_ik_dls"))
+Q_DAMPING = Exercise("ik.q_damping", "predict, then explain what the damping does beyond and inside the reach", 3,
+                     _NB["03"], _src("03"), ("the damping figure",), kind="written")
 # -- notebook 04: block detection -------------------------------------------------------------------------------
 SEGMENT = Exercise("detect.segment", "the report's segmentation: blur, HSV boxes tuned on training frames, erosion "
                    "and dilation", 8, _NB["04"], _src("04"), ("segment_colours", "tuned_hsv_ranges"), kind="open")
@@ -143,11 +149,16 @@ CONFUSION_QUESTION = Exercise("detect.confusion_question", "why the report's HSV
                               _NB["04"], _src("04"), ("the confusion matrices",), kind="written")
 STACKS = Exercise("detect.stacks", "a stack's top height, levels and top-face centre from the depth image", 6,
                   _NB["04"], _src("04"), ("stack_from_depth",))
+Q_STACKS = Exercise("detect.q_stacks", "predict, then explain how the mean over a stack's mask reads its top", 2,
+                   _NB["04"], _src("04"), ("the stacks figure",), kind="written")
 # -- notebook 05: click to grab ---------------------------------------------------------------------------------
 CLICK_TARGET = Exercise("grab.click_target", "which detected block a click hit: its turned top face under the click, "
                         "the surface the depth saw", 5, _NB["05"], _src("05"), ("click_target",))
 MOVE_PATH = Exercise("grab.move_path", "the report's move_path: the grasp and release motion as a plan", 10,
                      _NB["05"], "armlab/tasks/move_path.py", ("move_path",), kind="open")
+CLICK_SEQUENCE = Exercise("grab.sequence", "click to grab, click to drop: which block a click means, where the held "
+                          "block goes, what to believe after each move", 8, _NB["05"], _src("05"), ("ClickSequence",),
+                          kind="open")
 SAG_QUESTION = Exercise("grab.sag_question", "what the sag figure says about the report's flat offset", 2, _NB["05"],
                         _src("05"), ("the sag figure",), kind="written")
 # -- notebook 06: teach and repeat ------------------------------------------------------------------------------
@@ -156,13 +167,20 @@ TEACH_REPLAY = Exercise("teach.replay", "teach by hand, then a time-scaled repla
 REPLAY_QUESTION = Exercise("teach.replay_question", "taught replay against move_path, from the joint-angle figure", 2,
                            _NB["06"], _src("06"), ("the joint-angle figure",), kind="written")
 # -- notebook 07: autonomous tasks ------------------------------------------------------------------------------
-SORT_STACK = Exercise("events.sort_stack", "a sort 'n stack strategy for levels 2 and 3 from what the robot sees",
+SORT_STACK = Exercise("events.sort_stack", "a sort 'n stack strategy for every level from what the robot sees",
                       12, _NB["07"], _src("07"), ("SortStackStrategy",), kind="open")
+LINE_UP = Exercise("events.line_up", "a line 'em up strategy for every level: the lines' layout, clearing the way, "
+                   "unstacking", 12, _NB["07"], _src("07"), ("LineUpStrategy",), kind="open")
+SKY = Exercise("events.sky", "a to-the-sky strategy: the tower's spot, the carry over its top and when to stop", 8,
+               _NB["07"], _src("07"), ("SkyStrategy",), kind="open")
 TOWER_QUESTION = Exercise("events.tower_question", "the tower's points and what stops it", 2, _NB["07"], _src("07"),
                           ("the tower figure",), kind="written")
 # -- notebook 08: the control station ---------------------------------------------------------------------------
 COMMAND_TRANSITION = Exercise("station.transition", "one transition of the station's state machine: a command from "
                               "idle and back", 6, _NB["08"], _src("08"), ("run_command",))
+STATION_MACHINE = Exercise("station.machine", "the station's whole state machine over the kit's port: the buttons, "
+                           "the E-STOP and reset, teach and repeat", 12, _NB["08"], _src("08"), ("StationMachine",),
+                           kind="open")
 
 EXERCISES: tuple[Exercise, ...] = tuple(v for v in dict(globals()).values() if isinstance(v, Exercise))
 

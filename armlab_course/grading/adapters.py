@@ -28,8 +28,17 @@ def _call_depth_plane(function, depth, K, T):
 
 
 def _call_initial_pose(function, world, pixels, K, dist):
-    """pose_from_corners(refine=False): the region's own R and t, before the Levenberg-Marquardt refinement."""
-    return function(*(np.asarray(a, float) for a in (world, pixels, K, dist)), refine=False)
+    """pose_from_corners(refine=False): the region's own R and t, before the Levenberg-Marquardt refinement, with
+    the kit's own homography (OpenCV's) in place of the student's dlt_homography while it runs: this check grades
+    the pose from a homography, calib.tag_homography grades the homography (a wrong DLT costs that one only)."""
+    from armlab.calibration import homography
+
+    students = homography.dlt_homography
+    homography.dlt_homography = homography.opencv_homography
+    try:
+        return function(*(np.asarray(a, float) for a in (world, pixels, K, dist)), refine=False)
+    finally:
+        homography.dlt_homography = students
 
 
 def _call_intrinsics(function, homographies, image_size):
@@ -195,6 +204,105 @@ def _call_transition(function, script):
     return out + [float(STATES.index(s)) for s in machine.history]
 
 
+# -- the station's whole machine (station.machine) ---------------------------------------------------------------
+class _ScriptedPort:
+    """The port the student's StationMachine drives in a scripted session: every call is logged as numbers (halt 1,
+    restart 2, torque off 3 / on 4, joints 5, a command's work 10 + its index in COMMANDS, a replay 20 then its
+    waypoint count, the sum of its joints and its closed grippers); a command's work and a replay do what the
+    script says for the press under way (see _call_machine)."""
+
+    def __init__(self):
+        self.log: list[float] = []
+        self.machine, self.outcome, self.k, self.reads = None, "ok", 0, 0
+
+    def halt(self):
+        self.log.append(1.0)
+
+    def restart(self):
+        self.log.append(2.0)
+
+    def set_torque(self, on):
+        self.log.append(4.0 if on else 3.0)
+
+    def joints(self):
+        self.reads += 1
+        self.log.append(5.0)
+        return np.array([0.01, -0.02, 0.03, -0.04, 0.05]) * self.reads
+
+    def work(self, command, *args):
+        from armlab.tasks.port import COMMANDS
+
+        self.log.append(10.0 + COMMANDS.index(command))
+        return self._do()
+
+    def replay(self, joints, grippers):
+        joints = np.asarray(joints, float).reshape(-1, 5)
+        self.log += [20.0, float(len(joints)), float(joints.sum()), float(sum(g == "closed" for g in grippers))]
+        return self._do()
+
+    def _do(self):
+        from armlab.station.contract import EmergencyStopped
+        from armlab.tasks.machine import MachineBusy
+
+        if self.outcome == "arm_stop":
+            raise EmergencyStopped("the arm stopped")
+        if self.outcome == "error":
+            raise ValueError("the work failed")
+        if self.outcome == "button_stop":            # the button, pressed while the work runs
+            self.machine.press("estop")
+        elif self.outcome == "nested":               # another button from inside: refused, the work goes on
+            try:
+                self.machine.press("detect")
+            except MachineBusy:
+                return self.k
+            return -2
+        return self.k
+
+
+def _call_machine(function, script):
+    """A scripted session of the student's StationMachine(port): per press [what it gave (0 a result, 1
+    EmergencyStopped, 2 MachineBusy, 3 ValueError, 4 anything else), the result as a number (a command's: 1 when it
+    is the work's; a vector's sum; a count; 0 for None), the state after (index in STATES, -1 another)], then the
+    port's log, the history (indices) and the program's length. A press is [button, outcome or argument].
+
+    The machine's commands run through the kit's stand-in transition (latching_transition) in place of the
+    notebook's run_command, the same for the reference and for the student: what exercise station.transition's
+    answer does (written, blank or wrong) changes nothing here, so a wrong transition costs its own exercise only."""
+    from armlab.station.contract import EmergencyStopped
+    from armlab.tasks.machine import STATES, MachineBusy, latching_transition
+
+    namespace = getattr(getattr(function, "press", None), "__globals__", None)
+    if isinstance(namespace, dict) and "run_command" in namespace:
+        namespace["run_command"] = latching_transition
+    port = _ScriptedPort()
+    machine = port.machine = function(port)
+    out = []
+    for k, (button, arg) in enumerate(script):
+        port.outcome, port.k = str(arg), k
+        args = (arg,) if button == "record" else ()
+        try:
+            got = machine.press(button, *args)
+            code = 0
+            if got is None:
+                value = 0.0
+            elif button not in ("record", "finish"):
+                value = float(got == k) if isinstance(got, int) and not isinstance(got, bool) else -1.0
+            else:
+                value = float(np.sum(np.asarray(got, dtype=float)))
+        except EmergencyStopped:
+            code, value = 1, 0.0
+        except MachineBusy:
+            code, value = 2, 0.0
+        except ValueError:
+            code, value = 3, 0.0
+        except Exception:
+            code, value = 4, 0.0
+        state = machine.state
+        out += [float(code), value, float(STATES.index(state)) if state in STATES else -1.0]
+    history = [float(STATES.index(s)) if s in STATES else -1.0 for s in machine.history]
+    return out + port.log + history + [float(len(machine.program or ()))]
+
+
 # -- open tasks: what the robot would be told ---------------------------------------------------------------------
 def plan_to_plain(plan) -> list[dict]:
     """A planning.Plan as the arm's commands: per move step its start joints and its waypoints [q (5), moving time
@@ -233,14 +341,49 @@ def block_from_plain(plain: dict):
     return Block(**kwargs)
 
 
+_SEQUENCE: dict[str, object] = {}
+
+
+def _call_sequence(function, op, *args):
+    """The student's click sequence, driven by the judge's clicks: "start" makes ClickSequence(); "click" point (3,)
+    seen (plain detections) gives ["grab", index in seen], ["drop", position (3,), yaw] or ["refuse", why] (a
+    ClickRefused); "after" ok tells it the last action's outcome."""
+    from armlab.tasks import ClickRefused
+
+    if op == "start":
+        _SEQUENCE.clear()
+        _SEQUENCE["object"], _SEQUENCE["last"] = function(), None
+        return None
+    sequence = _SEQUENCE["object"]
+    if op == "click":
+        seen = [block_from_plain(b) for b in args[1]]
+        try:
+            action = sequence.on_click(np.asarray(args[0], float), seen)
+        except ClickRefused as e:
+            return ["refuse", str(e)[:200]]
+        _SEQUENCE["last"] = action
+        if action[0] == "grab":
+            index = next((i for i, b in enumerate(seen) if b is action[1]), None)
+            if index is None:
+                raise ValueError("a grab must name a block of `seen`")
+            return ["grab", index]
+        if action[0] == "drop":
+            return ["drop", np.asarray(action[1], float).tolist(), float(action[2])]
+        raise ValueError(f"unknown action {action[0]!r}")
+    if op == "after":
+        sequence.after(_SEQUENCE["last"], bool(args[0]))
+        return None
+    raise ValueError(f"unknown click request {op!r}")
+
+
 _STRATEGY: dict[str, object] = {}
 
 
 def _call_strategy(function, op, *args):
-    """The student's sort 'n stack strategy, driven by the judge's run of the event: "start" level makes
-    SortStackStrategy(level); "next_move" seen (plain detections) gives [index of the block in seen, to (3,),
-    yaw, why, clearance] or None with the stop reason; "placed" index... hears the move placed; "cannot_place" why
-    gives True/False; "obstacles" gives [[x, y, top, radius], ...]."""
+    """The student's event strategy (SortStackStrategy, LineUpStrategy, SkyStrategy), driven by the judge's run of
+    the event: "start" level makes the strategy object of that level; "next_move" seen (plain detections) gives
+    [index of the block in seen, to (3,), yaw, why, clearance] or None with the stop reason; "placed" index... hears
+    the move placed; "cannot_place" why gives True/False; "obstacles" gives [[x, y, top, radius], ...]."""
     if op == "start":
         _STRATEGY.clear()
         _STRATEGY["object"], _STRATEGY["moves"] = function(int(args[0])), []

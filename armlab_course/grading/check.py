@@ -1,12 +1,15 @@
 """The student's self-check (`python -m armlab check [EXERCISE]`): the public CHECK cells of the written exercises,
-run in a sandboxed copy of the student's own checkout by the grader's own runner and sandbox (the same nbval
-plugin, kernel, sanitize file and limits; their notebooks hold no stored outputs, so a check cell passes when its
-asserts do). No hidden checks: those are the instructor's.
+run as the grader runs them (armlab_course.grading.public: one path): each notebook as the release holds it
+(release.PUBLIC_NOTEBOOKS: each CHECK cell judged by its asserts, not by what it prints) with the checkout's regions
+spliced in, cut to the cells its check cells need (armlab_course.grading.slicing), run under strict nbval by the
+grader's own runner and sandbox (the same nbval plugin, kernel, sanitize file and limits), each message redacted
+alike. So the verdict and message of each check cell are the grader's for the same regions; what the student
+changed outside the regions of a notebook counts for neither. No hidden checks: those are the instructor's.
 
-Each notebook runs once, up to the last CHECK cell of the exercises asked for (a later cell cannot change an
-earlier cell's verdict, so the verdict is the grader's, sooner): one exercise of notebook 02 takes seconds. Each
-exercise is reported as soon as its notebook has run (progress(exercise id, result, status)), as "written" (every
-check passes), "failing", "blank" or "by hand".
+Each notebook runs once, for the exercises asked for: a check that builds what it checks (notebook 08's, notebook
+02's) runs little besides itself; one that reads what a demonstration built runs that demonstration. Each exercise
+is reported as soon as its notebook has run (progress(exercise id, result, status)), as "written" (every check
+passes), "failing", "blank" or "by hand".
 
 Each exercise is scored by its own CHECK cells. A check cell of exercise B that fails while an exercise A it uses (B's
 region or check cell names A's function) fails too is reported as "not checked: it needs A, which fails" instead
@@ -17,17 +20,20 @@ from __future__ import annotations
 
 import json
 import re
+import shutil
 import tempfile
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
 from armlab_course.exercises.registry import EXERCISES, Exercise, exercise
+from armlab_course.exercises.release import PUBLIC_NOTEBOOKS, RELEASE_MARKER, public_notebook
 
-from .results import CheckResult, ExerciseResult, score_exercise
-from .run import DEFAULT_LIMITS, Limits, Runner, check_cells
+from .public import public_results, run_public
+from .results import ExerciseResult, score_exercise
+from .run import DEFAULT_LIMITS, Limits, Runner
 from .sandbox import detect
-from .splice import build_worktree
+from .splice import RegionRejected, build_worktree, splice_into
 from .submission import read_submission
 
 __all__ = ["SelfCheck", "self_check", "missing_tools", "is_blank_result", "status_of"]
@@ -63,17 +69,30 @@ def status_of(result: ExerciseResult, blocked: dict[str, tuple[str, str]] | None
     return "failing"
 
 
-def _truncated(notebook: Path, last: int) -> None:
-    """Keep the notebook's cells up to its code cell `last` (nbval's index) and the cells before it."""
-    nb = json.loads(notebook.read_text(encoding="utf-8"))
-    code = 0
-    for k, cell in enumerate(nb["cells"]):
-        if cell.get("cell_type") == "code":
-            if code == last:
-                nb["cells"] = nb["cells"][:k + 1]
-                break
-            code += 1
-    notebook.write_text(json.dumps(nb), encoding="utf-8")
+def _public_copy(checkout: Path, name: str, dest: Path, bodies: dict[str, list[str]]) -> str:
+    """Write into `dest` notebook `name` as the grader runs it for `checkout`: the release's public notebook
+    (release.PUBLIC_NOTEBOOKS; in the instructor's tree, made from its own notebook by release.public_notebook)
+    with the checkout's regions of every written exercise of that notebook spliced in (`bodies`). '' or what
+    went wrong."""
+    shipped = checkout / PUBLIC_NOTEBOOKS / f"{name}.ipynb"
+    instructors = (checkout / "armlab_course/grading/hidden").is_dir() and not (checkout / RELEASE_MARKER).exists()
+    if shipped.is_file():
+        shutil.copy2(shipped, dest)
+    elif instructors:                 # its notebooks hold the stored outputs the release's copies are made from
+        own = checkout / f"notebooks/{name}.ipynb"
+        nb = public_notebook(json.loads(own.read_text(encoding="utf-8")), f"notebooks/{name}.ipynb")
+        dest.write_text(json.dumps(nb, indent=1, ensure_ascii=False) + "\n", encoding="utf-8")
+    else:
+        return (f"this release has no {PUBLIC_NOTEBOOKS}/{name}.ipynb (the notebook the public checks run, as "
+                f"the release holds it): ask for a release made with this version of the kit")
+    tree = dest.parents[1]
+    for ex in EXERCISES:
+        if not ex.in_package and ex.notebook == name and ex.id in bodies:
+            try:
+                splice_into(tree, ex.id, bodies[ex.id])
+            except RegionRejected as e:
+                return str(e)
+    return ""
 
 
 def missing_tools() -> list[str]:
@@ -111,29 +130,30 @@ def self_check(checkout: Path | str = ".", limits: Limits = DEFAULT_LIMITS, unsa
                                     "not written (blank region)", sub.answers.get(ex.id)))
         elif ex.id in sub.problems or ex.id in sub.blank:
             tell(ex, ExerciseResult(ex.id, 0.0, ex.points, [], sub.problems.get(ex.id, "not written (blank region)")))
-    runs, sources = {}, {}
+    sources: dict[str, list[str]] = {}
     if not written:
         return SelfCheck({e.id: results[e.id] for e in asked}, {})
     runner = Runner(detect(unsafe), limits)
     try:
         with tempfile.TemporaryDirectory(prefix="armlab-check-") as tmp:
             tree = build_worktree(checkout, Path(tmp) / "work")
+            whole = Path(tmp) / "whole"           # each notebook before slicing: the labels are the whole one's
+            (whole / "notebooks").mkdir(parents=True)
             for name in sorted({e.notebook for e in written}):
-                path = f"notebooks/{name}.ipynb"
-                tags = check_cells(tree / path)
                 mine = [e for e in written if e.notebook == name]
-                wanted = [i for i, ids in tags.items() if any(e.id in ids for e in mine)]
-                if wanted:
-                    _truncated(tree / path, max(wanted))
-                code = [c for c in json.loads((tree / path).read_text())["cells"] if c["cell_type"] == "code"]
-                sources[name] = ["".join(c["source"]) for c in code]
-                runs[name] = (tags, runner.notebook(tree, path, lax=True))
+                notebook = whole / f"notebooks/{name}.ipynb"
+                problem = _public_copy(checkout, name, notebook, sub.bodies)
+                if problem:
+                    for ex in mine:
+                        tell(ex, score_exercise(ex.id, [], problem))
+                    continue
+                shutil.copy2(notebook, tree / f"notebooks/{name}.ipynb")
+                sources[name] = ["".join(c["source"]) for c in json.loads(notebook.read_text(encoding="utf-8"))[
+                    "cells"] if c["cell_type"] == "code"]
+                run = run_public(runner, tree, name, [e.id for e in mine])
                 for ex in mine:
-                    tags, run = runs[name]
-                    checks = [CheckResult(f"{ex.notebook} cell {i}", i in run.cells and run.cells[i].passed,
-                                          run.cells[i].message if i in run.cells else run.problem or
-                                          "the cell did not run") for i, ids in tags.items() if ex.id in ids]
-                    tell(ex, score_exercise(ex.id, checks, run.problem))
+                    tell(ex, score_exercise(ex.id, public_results(ex.id, run, whole, {tmp: "<grader>"}),
+                                            run.problem))
     finally:
         runner.close()
     results = {e.id: results[e.id] for e in asked}
@@ -141,7 +161,8 @@ def self_check(checkout: Path | str = ".", limits: Limits = DEFAULT_LIMITS, unsa
     failing = [e for e in written if results[e.id].score < results[e.id].max_score]
     for ex in failing:
         text = "\n".join(sub.bodies.get(ex.id, [])) + "\n".join(
-            sources[ex.notebook][int(c.name.rsplit(" ", 1)[-1])] for c in results[ex.id].checks if not c.passed)
+            sources.get(ex.notebook, [])[c.cell] for c in results[ex.id].checks
+            if not c.passed and c.cell is not None and c.cell < len(sources.get(ex.notebook, [])))
         earlier = [a for a in failing if EXERCISES.index(a) < EXERCISES.index(ex)]   # what ex may build on
         needed = next((a for a in earlier if _uses(a, text)), None)
         if needed is not None:

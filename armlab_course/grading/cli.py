@@ -95,7 +95,13 @@ def _check(args: argparse.Namespace) -> int:
 def main(args: argparse.Namespace) -> int:
     if args.command == "check":
         return _check(args)
-    from .grade import GraderChanged, grade_class
+    try:
+        from .grade import GraderChanged, grade_class
+        from .results import total
+    except ImportError:                  # a student release: it ships the self-check, not the grader
+        print("armlab grade: grading is the instructor's: this student release holds no grader (check your work "
+              "with `python -m armlab check`)", file=sys.stderr)
+        return 2
     from .sandbox import SandboxUnavailable
 
     started = time.monotonic()
@@ -103,10 +109,8 @@ def main(args: argparse.Namespace) -> int:
 
     def progress(student: str, results: dict) -> None:
         done[0] += 1
-        score = sum(r.score for r in results.values())
-        total = sum(r.max_score for r in results.values())
-        print(f"[{done[0]}] {student}: {score:g} / {total} ({time.monotonic() - started:.0f} s)", file=sys.stderr,
-              flush=True)
+        print(f"[{done[0]}] {student}: {total(results)} ({time.monotonic() - started:.0f} s)",
+              file=sys.stderr, flush=True)
 
     try:
         graded = grade_class(args.submissions, args.out, args.reference, jobs=args.jobs, limits=_limits(args.timeout),
@@ -116,7 +120,7 @@ def main(args: argparse.Namespace) -> int:
         print(f"armlab grade: {e}", file=sys.stderr)
         return 2
     for student, results in graded.items():
-        print(f"{student}: {sum(r.score for r in results.values()):g} / {sum(r.max_score for r in results.values())}")
+        print(f"{student}: {total(results)}")
     print(f"wrote {Path(args.out) / 'grades.csv'}; similar regions, for your eyes only: "
           f"{Path(args.out) / 'similarity.md'}")
     return 0

@@ -7,18 +7,20 @@ counting
 one; a region calling a forbidden library or kit function -- found in its text (armlab_course.grading.static) or seen
 called while the hidden checks ran (armlab_course.grading.harness) -- gets one more check, failed.
 
-One pass: the student's regions of every written exercise go into one copy of the instructor's tree (the reference
-stays in place for the blank ones), each notebook that checks a written exercise runs once, and the hidden checks
-of every written exercise run in one harness process. An exercise whose checks all pass there is scored from that
-run. An exercise with a failing check is run again alone -- its regions in the reference, the reference in place for
-every other exercise -- and scored from that run, so that one mistake costs one exercise. Results of identical
-regions are shared within one Grader (the work tree, so the outcome, is the same). A submission's runs (each notebook,
-the hidden checks) are independent: with `parallel` > 1 they go side by side.
+One pass: the student's regions of every written exercise go into one copy of the student release (built once per
+Grader by the release builder, armlab_course.exercises.release: every other region a stub the kit stands in for, no
+reference, hidden spec or grader module in it), each notebook that checks a written exercise runs once, and the
+hidden checks of every written exercise run in one harness process. An exercise whose checks all pass there is scored
+from that run. An exercise with a failing check, when another written exercise failed too, is run again alone -- its
+regions and those of the exercises that passed in the release, the failing ones blank -- and scored from that run,
+so that one mistake costs one exercise. Results of identical regions are shared within one Grader (the work tree, so
+the outcome, is the same). A submission's runs (each notebook, the hidden checks) are independent: with `parallel` > 1
+they go side by side.
 
-Everything of the grader is imported, the instructor's tree copied and every expected value computed when the
-Grader is made, before any student code runs; student code runs only in the sandbox (armlab_course.grading.sandbox),
-each
-run in a fresh copy of its tree, and the grader's own sources are checked against the hashes taken at the start
+Everything of the grader is imported, the instructor's tree copied, the release built and every expected value
+computed (the reference run once on the instructor's copy) when the Grader is made, before any student code runs;
+student code runs only in the sandbox (armlab_course.grading.sandbox), each run in a fresh copy of the release with
+its regions, and the grader's own sources are checked against the hashes taken at the start
 before any report is written.
 """
 
@@ -41,10 +43,11 @@ from armlab_course.exercises.registry import EXERCISES, exercise
 
 from . import report as _report  # noqa: F401  (imported now: nothing of the grader is loaded after student code)
 from . import similarity as _similarity
+from .public import public_results, redacted, run_public
 from .results import CheckResult, ExerciseResult, score_exercise
-from .run import DEFAULT_LIMITS, Limits, NotebookRun, Runner, check_cells
-from .sandbox import WORK, Sandbox, detect, owner_only, python_outside, refuse_shared_network
-from .splice import RegionRejected, build_worktree, check_body, splice_into
+from .run import DEFAULT_LIMITS, Limits, NotebookRun, Runner, check_cells, code_cell_labels, with_cell_labels
+from .sandbox import Sandbox, detect, owner_only, python_outside, refuse_shared_network
+from .splice import RegionRejected, build_worktree, check_body, release_worktree, splice_into
 from .static import STATIC_CHECK, static_check
 from .submission import Submission, exercise_file, read_submission, regions_of, source_texts
 
@@ -95,6 +98,30 @@ def student_side(message: str) -> str:
     message = _RAISED.sub(lambda m: f"{m[1]}{m[2]} (its message is not shown: the hidden checks' inputs stay hidden)",
                           message)
     return _TAIL.sub(lambda m: f"{m[1]} (the run's output is not shown)", message)
+
+
+_NAMES = re.compile(r"[A-Za-z_]\w*")
+_BRACKETED = {"<module>", "<lambda>", "<listcomp>", "<genexpr>", "<dictcomp>", "<setcomp>"}
+
+
+def _at(exercise_id: str, where, bodies: Iterable[str], labels: list[str] | None = None) -> str:
+    """Where a hidden check's call raised in the student's own code, for the feedback: " (in your code: <place>,
+    line <n>, in <function>; ...)", innermost last, or ''. Of the frames the student's process sent (judge.where_of
+    kept only plain triples), only those in the exercise's own notebook (its cells) or package file, in a function
+    whose name the student's regions hold (or the exercise's function, <module>, <lambda>...), are shown: nothing
+    else of the run, so no grader path or source, and no text of the run's choosing beyond its own names and line
+    numbers. A notebook cell is named by its label (`labels`, the notebook's code_cell_labels) where given."""
+    ex = exercise(exercise_id)
+    names = set(_NAMES.findall("\n".join(bodies))) | _BRACKETED
+    names |= {spec.function.rsplit(".", 1)[-1] for spec in (_hidden.specs_of(exercise_id) if _hidden else ())}
+    shown = []
+    for place, line, function in where if isinstance(where, list) else []:
+        own = (place == ex.where) if ex.in_package else re.fullmatch(rf"{re.escape(ex.notebook)} cell \d{{1,4}}",
+                                                                     place)
+        if own and function in names:
+            shown.append(f"{place}, line {line}, in {function}")
+    text = f" (in your code: {'; '.join(shown)})" if shown else ""
+    return with_cell_labels(text, Path(ex.notebook), labels) if text and labels and not ex.in_package else text
 
 
 class GraderChanged(RuntimeError):
@@ -158,8 +185,13 @@ class Grader:
         self._sources = source_hashes()
         self._tmp = tempfile.TemporaryDirectory(prefix="armlab-grade-")
         self._root = Path(self._tmp.name)
-        self._pristine = build_worktree(self.reference, self._root / "reference")
-        self._pristine.chmod(0o700)            # never entered by a run's user (the "user" sandbox)
+        # the instructor's files: read by the grader (the reference's bodies) and run once, before any student code,
+        # for the expected values; never a student run's tree
+        self._instructor = build_worktree(self.reference, self._root / "instructor")
+        self._instructor.chmod(0o700)          # never entered by a run's user (the "user" sandbox)
+        # what every student run's tree is made of: the student release (built once), the student's regions spliced
+        self._pristine = release_worktree(self._instructor, self._root / "release")
+        self._pristine.chmod(0o700)
         (self._root / "runs").mkdir(mode=0o711)
         self.runner = Runner(self.sandbox, limits)
         self._cache: dict[tuple, object] = {}
@@ -195,7 +227,8 @@ class Grader:
         return dest
 
     def _spliced(self, bodies: dict[str, list[str]]) -> Path:
-        """A copy of the reference with these exercises' regions replaced (bodies already checked)."""
+        """A copy of the student release with these exercises' regions replaced (bodies already checked); every
+        other exercise stays blank (the kit's stand-in answers for it)."""
         tree = self._fresh(self._pristine)
         for exercise_id, exercise_bodies in bodies.items():
             splice_into(tree, exercise_id, exercise_bodies)
@@ -217,9 +250,11 @@ class Grader:
                                 cpu_s=int(min(self.limits.cpu_s * exercises, left + 10)))
         return runner
 
-    def _notebook(self, tree: Path, name: str, deadline: Deadline | None = None) -> NotebookRun:
-        """The notebook's run on a fresh copy of `tree`; a run that could not start, or whose results could not be
-        read, is a NotebookRun with the reason (never an exception: one submission never stops the class)."""
+    def _notebook(self, tree: Path, name: str, deadline: Deadline | None = None,
+                  exercise_ids: Iterable[str] = ()) -> NotebookRun:
+        """The notebook's run on a fresh copy of `tree` for the public checks of `exercise_ids` (only the cells they
+        need: public.run_public, as the self-check runs them); a run that could not start, or whose results could
+        not be read, is a NotebookRun with the reason (never an exception: one submission never stops the class)."""
         if self._bounded(deadline) is None:
             return NotebookRun({}, deadline.spent())
         run_tree = self._fresh(tree)
@@ -229,7 +264,7 @@ class Grader:
                 return NotebookRun({}, deadline.spent())
             with self._guard:
                 self.runs += 1
-            return runner.notebook(run_tree, f"notebooks/{name}.ipynb")
+            return run_public(runner, run_tree, name, exercise_ids)
         except (OSError, ValueError, TypeError, KeyError, AttributeError, RecursionError, MemoryError) as e:
             return NotebookRun({}, f"the notebook run's results could not be read ({type(e).__name__})")
         finally:
@@ -283,7 +318,7 @@ class Grader:
         ids = self._with_specs(self._computed)
         if not ids:
             return {}
-        got, problem = self._harness(self._pristine, ids, compared_only=True)
+        got, problem = self._harness(self._instructor, ids, compared_only=True)
         if got is None:
             raise RuntimeError(f"the reference's hidden checks gave no results: {problem}")
         expected = {}
@@ -295,9 +330,15 @@ class Grader:
         return expected
 
     # -- checks -----------------------------------------------------------------------------------------------
-    def _hidden_results(self, exercise_id: str, outputs: list[dict] | None, problem: str
-                        ) -> tuple[list[CheckResult], list[str]]:
-        """The exercise's hidden checks from its jobs' outputs, and the forbidden calls seen."""
+    def _hidden_results(self, exercise_id: str, outputs: list[dict] | None, problem: str,
+                        bodies: list[str] = ()) -> tuple[list[CheckResult], list[str]]:
+        """The exercise's hidden checks from its jobs' outputs, and the forbidden calls seen; an error's message
+        says where in the student's own code (`bodies`) it was raised (_at)."""
+        if outputs is not None:
+            outputs = [job if job is None else {**job, "results": [
+                {**r, "at": _at(exercise_id, r.get("where"), bodies, self._labels(exercise_id))}
+                if isinstance(r, dict) and "error" in r else r
+                for r in job["results"]]} for job in outputs]
         checks: list[CheckResult] = []
         seen: list[str] = []
         first = 1
@@ -319,17 +360,13 @@ class Grader:
                 hidden: tuple[dict | None, str]) -> list[CheckResult]:
         """Every check of the exercise: its public CHECK cells in `run`, its hidden checks, and a failed check for a
         forbidden call (in the region's text or seen at run time)."""
-        ex = exercise(exercise_id)
-        tags = [i for i, ids in check_cells(tree / f"notebooks/{ex.notebook}.ipynb").items() if exercise_id in ids]
-        checks = [CheckResult(f"{ex.notebook} cell {i}", i in run.cells and run.cells[i].passed,
-                              self._redact(run.cells[i].message if i in run.cells else
-                                           run.problem or "the cell did not run")) for i in tags]
+        checks = self._public(exercise_id, run, tree)
         seen: list[str] = []
         if exercise_id in self._expected:
             outputs, problem = hidden
             try:
                 hidden_checks, seen = self._hidden_results(exercise_id, None if outputs is None else
-                                                           outputs[exercise_id], problem)
+                                                           outputs[exercise_id], problem, bodies)
             except _MALFORMED as e:             # the run's results were not of the shape a harness writes
                 hidden_checks, seen = self._hidden_results(
                     exercise_id, None, f"the hidden checks' results could not be read ({type(e).__name__})")
@@ -342,11 +379,26 @@ class Grader:
                                                            f"ran: the exercise is to write it, not to call it"))
         return checks
 
+    def _public(self, exercise_id: str, run: NotebookRun, tree: Path) -> list[CheckResult]:
+        """The exercise's public CHECK cells in the notebook run `run` of `tree`."""
+        return public_results(exercise_id, run, tree, self._paths())
+
+    def _paths(self) -> dict[str, str]:
+        """The grader's own paths, as a message shows them."""
+        return {str(self._root): "<grader>", str(self.reference): "<reference>"}
+
+    def _labels(self, exercise_id: str) -> list[str] | None:
+        """The code-cell labels of the exercise's notebook in the student release (a region's body spliced in
+        changes no cell's place), or None for a package exercise."""
+        ex = exercise(exercise_id)
+        if ex.in_package:
+            return None
+        return self._once(("labels", ex.notebook),
+                          lambda: code_cell_labels(self._pristine / f"notebooks/{ex.notebook}.ipynb"))
+
     def _redact(self, message: str) -> str:
         """A message without the grader's own paths."""
-        for path, name in ((str(self._root), "<grader>"), (str(self.reference), "<reference>"), (WORK, "<work>")):
-            message = message.replace(path, name)
-        return message
+        return redacted(message, self._paths())
 
     # -- grading ----------------------------------------------------------------------------------------------
     def _once(self, key: tuple, compute: Callable[[], object]) -> object:
@@ -362,18 +414,34 @@ class Grader:
         text = "\0\0".join(f"{e}\0" + "\0".join(b) for e, b in sorted(bodies.items()))
         return hashlib.sha256(text.encode()).hexdigest()
 
-    def grade_exercise(self, exercise_id: str, bodies: list[str], deadline: Deadline | None = None
-                       ) -> ExerciseResult:
-        """The exercise alone: `bodies` spliced into the reference, its notebook and its hidden checks run (within
+    def grade_exercise(self, exercise_id: str, bodies: list[str], deadline: Deadline | None = None,
+                       beside: dict[str, list[str]] | None = None) -> ExerciseResult:
+        """The exercise alone: `bodies` spliced into the student release (with the `beside` exercises' bodies, already
+        checked, in place too; every other exercise blank), its notebook and its hidden checks run (within
         `deadline`, if given)."""
-        return self._once(("alone", exercise_id, self._digest({exercise_id: bodies})),
-                          lambda: self._alone(exercise_id, bodies, deadline))
+        beside = {e: b for e, b in (beside or {}).items() if e != exercise_id}
+        return self._once(("alone", exercise_id, self._digest({exercise_id: bodies}), self._digest(beside)),
+                          lambda: self._alone(exercise_id, bodies, deadline, beside))
 
-    def _alone(self, exercise_id: str, bodies: list[str], deadline: Deadline | None = None) -> ExerciseResult:
+    def public_checks(self, exercise_id: str, bodies: list[str]) -> list[CheckResult]:
+        """Only the exercise's public CHECK cells as grading runs them (its notebook on the student release with
+        `bodies` spliced in, every other exercise blank; no hidden checks, so no expected values are needed): what
+        the self-check must agree with. RegionRejected for a body holding markers."""
+        for body in bodies:
+            check_body(body, exercise_id)
+        tree = self._spliced({exercise_id: bodies})
+        try:
+            ex = exercise(exercise_id)
+            return self._public(exercise_id, self._notebook(tree, ex.notebook, None, [exercise_id]), tree)
+        finally:
+            self._discard(tree)
+
+    def _alone(self, exercise_id: str, bodies: list[str], deadline: Deadline | None = None,
+               beside: dict[str, list[str]] | None = None) -> ExerciseResult:
         try:
             for body in bodies:
                 check_body(body, exercise_id)
-            tree = self._spliced({exercise_id: bodies})
+            tree = self._spliced({**(beside or {}), exercise_id: bodies})
         except RegionRejected as e:
             return score_exercise(exercise_id, [], str(e))
         try:
@@ -409,15 +477,17 @@ class Grader:
         checks, the longest, first), none past `deadline`."""
         with ThreadPoolExecutor(max_workers=self.parallel) as pool:
             hidden = pool.submit(self._harness, tree, self._with_specs(exercise_ids), False, deadline)
-            runs = dict(zip(notebooks, pool.map(lambda name: self._notebook(tree, name, deadline), notebooks),
-                            strict=True))
+            runs = dict(zip(notebooks, pool.map(lambda name: self._notebook(
+                tree, name, deadline, [e for e in exercise_ids if exercise(e).notebook == name]), notebooks),
+                strict=True))
             return runs, hidden.result()
 
     def _reference_bodies(self, exercise_id: str) -> list[str]:
-        """The reference's region bodies of the exercise (from the grader's private copy)."""
+        """The reference's region bodies of the exercise (from the grader's private copy of the instructor's
+        files)."""
         name = exercise_file(exercise(exercise_id))
         return self._once(("reference", exercise_id),
-                          lambda: regions_of(source_texts(self._pristine / name), exercise_id, name))
+                          lambda: regions_of(source_texts(self._instructor / name), exercise_id, name))
 
     def grade(self, submission: Submission) -> dict[str, ExerciseResult]:
         """Every graded exercise's result for `submission`; its runs end within TIME_BUDGET x the timeout."""
@@ -446,25 +516,24 @@ class Grader:
         if written:
             together = self._once(("together", self._digest(written)), lambda: self._together(written, deadline))
             failing = {e for e, (checks, _) in together.items() if not checks or not all(c.passed for c in checks)}
+            passing = {e: b for e, b in written.items() if e not in failing}
             for exercise_id, (checks, problem) in together.items():
-                others_fail = failing - {exercise_id}
-                if exercise_id not in failing or not any(written[e] != self._reference_bodies(e)
-                                                         for e in others_fail):
-                    # every check passed, or each other exercise that failed is the reference itself: the pass
-                    # was already this exercise alone as far as a failure can tell
+                if exercise_id not in failing or not failing - {exercise_id}:
+                    # every check passed, or no other exercise failed: the tree of a run alone (the exercises that
+                    # passed in place, the failing ones blank) would be the pass's own
                     results[exercise_id] = score_exercise(exercise_id, checks, problem)
                 elif deadline.left() < 1:
                     results[exercise_id] = score_exercise(exercise_id, checks, problem or (
                         "scored from the pass with every exercise in place: the submission's time was spent before "
                         "it could run alone"))
                 else:
-                    results[exercise_id] = self.grade_exercise(exercise_id, written[exercise_id], deadline)
+                    results[exercise_id] = self.grade_exercise(exercise_id, written[exercise_id], deadline, passing)
         return {e: results[e] for e in self.exercise_ids}
 
     # -- for instructors trying hidden specs ----------------------------------------------------------------
     def hidden_checks(self, exercise_id: str, bodies: list[str]) -> list[CheckResult]:
-        """Only the hidden checks of `bodies` spliced into the reference (no notebook run): for instructors trying a
-        new HiddenSpec against wrong answers. RegionRejected for a body holding markers."""
+        """Only the hidden checks of `bodies` spliced into the student release (no notebook run): for instructors
+        trying a new HiddenSpec against wrong answers. RegionRejected for a body holding markers."""
         return self.hidden_checks_together({exercise_id: bodies})[exercise_id]
 
     def hidden_checks_together(self, bodies: dict[str, list[str]]) -> dict[str, list[CheckResult]]:
@@ -482,7 +551,7 @@ class Grader:
             self._discard(tree)
         out: dict[str, list[CheckResult]] = {e: [] for e in bodies}
         for e in ids:
-            checks, seen = self._hidden_results(e, None if outputs is None else outputs[e], problem)
+            checks, seen = self._hidden_results(e, None if outputs is None else outputs[e], problem, bodies[e])
             out[e] = checks + ([CheckResult(STATIC_CHECK, False, f"called {seen[0]} at run time")] if seen else [])
         return out
 
@@ -506,7 +575,9 @@ def grade_class(submissions: Path | str, out: Path | str, reference: Path | str,
     process), calling progress(student, results) as each is done, and write OUT/grades.csv,
     OUT/<student folder>/results.json and feedback.md (report.student_folder), and the regions' similarity for the
     instructor: OUT/similarity.csv and OUT/similarity.md (armlab_course.grading.similarity). shared_network: see
-    Grader."""
+    Grader. With written questions among the exercises: OUT/answers.csv, and OUT/rubric.csv and OUT/hand_grading.md
+    (armlab_course.grading.hand) to mark them by."""
+    from .hand import write_hand_grading
     from .report import write_reports
 
     submissions = Path(submissions)
@@ -543,6 +614,7 @@ def grade_class(submissions: Path | str, out: Path | str, reference: Path | str,
             graded = dict(zip(names, pool.map(one, students, names), strict=True))
         grader.verify_sources()
     write_reports(graded, out)
+    write_hand_grading(graded, out, reference)     # rubric.csv and hand_grading.md for the written questions
     _similarity.write_similarity(read.values(), reference, out, next(iter(graded.values())))
     return graded
 

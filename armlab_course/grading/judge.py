@@ -17,19 +17,42 @@ value. The child decides nothing: whatever it sends is the student's answer, che
 
 from __future__ import annotations
 
+import re
 import secrets
 import subprocess
 from collections.abc import Callable
 
 from .wire import LineReader, WireError, decode, dumps, encode, loads
 
-__all__ = ["ChildError", "ChildGone", "Child", "run_jobs"]
+__all__ = ["ChildError", "ChildGone", "Child", "run_jobs", "where_of", "MAX_FRAMES"]
 
 _ERROR_CHARS = 300
+MAX_FRAMES = 8                                    # the student's frames shown with an error (innermost last)
+_FUNCTION = re.compile(r"<[a-z]{1,12}>|[A-Za-z_]\w{0,59}")      # a function's name, or <module>, <lambda>...
 
 
 class ChildError(Exception):
-    """The student's code raised (or returned what cannot be sent): the message is the child's one line."""
+    """The student's code raised (or returned what cannot be sent): the message is the child's one line; `where`
+    the frames the child says were the student's own (where_of: plain [place, line, function] triples only)."""
+
+    def __init__(self, message: str, where: list | None = None) -> None:
+        super().__init__(message)
+        self.where = where or []
+
+
+def where_of(sent) -> list[list]:
+    """The frames a child sent with an error, kept only when each is [place, line, function] with a short place,
+    a line number and a function name (at most MAX_FRAMES, innermost last); anything else is dropped. The grader
+    then shows only those of the exercise's own file (grade.py: they are what the student's process says)."""
+    if not isinstance(sent, list):
+        return []
+    out = []
+    for frame in sent[-MAX_FRAMES:]:
+        if isinstance(frame, list) and len(frame) == 3 and isinstance(frame[0], str) and len(frame[0]) <= 200 \
+                and type(frame[1]) is int and 0 < frame[1] < 1_000_000 and isinstance(frame[2], str) \
+                and _FUNCTION.fullmatch(frame[2]):
+            out.append([frame[0], frame[1], frame[2]])
+    return out
 
 
 class ChildGone(Exception):
@@ -83,7 +106,7 @@ class Child:
         if isinstance(forbidden, list):
             self.forbidden[job] |= {str(f) for f in forbidden[:50]}
         if "error" in answer:
-            raise ChildError(str(answer["error"])[:_ERROR_CHARS])
+            raise ChildError(str(answer["error"])[:_ERROR_CHARS], where_of(answer.get("where")))
         if "value" not in answer:
             raise ChildGone("an answer with neither a value nor an error")
         try:
@@ -104,10 +127,10 @@ def _direct(call: Callable, *args):
 
 def run_jobs(proc: subprocess.Popen, jobs: list[dict], deadline: float) -> tuple[list | None, str]:
     """Every case of every job asked of the child `proc` before `deadline` (time.monotonic()): per job {"results":
-    per case {"value": ...} or {"error": ...}, "forbidden": sorted names}, and '' -- or, when the child stops
-    answering part way, the results so far with an error for every case left, and why. (None, why) when it never
-    started. A job: {"notebook", "function", "adapter", "prelude", "forbidden", "cases": [args...], "judge":
-    hook(call, *args) or None}."""
+    per case {"value": ...} or {"error": ..., "where": the student's frames, if any}, "forbidden": sorted names},
+    and '' -- or, when the child stops answering part way, the results so far with an error for every case left,
+    and why. (None, why) when it never started. A job: {"notebook", "function", "adapter", "prelude", "forbidden",
+    "cases": [args...], "judge": hook(call, *args) or None}."""
     try:
         child = Child(proc, jobs, deadline)
     except ChildGone as e:
@@ -124,7 +147,7 @@ def run_jobs(proc: subprocess.Popen, jobs: list[dict], deadline: float) -> tuple
             try:
                 results.append({"value": hook(lambda *a, j=j: child.call(j, *a), *args)})
             except ChildError as e:
-                results.append({"error": str(e)})
+                results.append({"error": str(e), "where": e.where})
             except ChildGone as e:
                 problem = str(e)
                 results.append({"error": problem})

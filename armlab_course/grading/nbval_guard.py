@@ -7,8 +7,12 @@ sandbox in pytest's own process, never in the kernel that runs student code:
 - After each cell that passed it sends the kernel a probe (a silent cell printing a fresh nonce): the kernel's guard
   (kernel_startup.py) fails the probe when the cell, or one before it, changed the checks' machinery, and a probe
   whose nonce does not come back means its code never ran as written. Either way the cell fails.
+- A cell that raises fails, whatever its tags or nbval comments say (the release tags its exercise and check cells
+  "raises-exception" so that JupyterLab's Run All goes on past them; nbval would count them passed when they raise).
 - A kernel that dies (os._exit, a signal, the CPU limit) fails the running cell at once instead of leaving nbval
   waiting for the cell timeout, and each stream output message is cut to OUTPUT_LIMIT characters.
+- A failed cell's message is its exception's line and the traceback's frames in the student's own code: the
+  notebook's cells and the exercise regions of package files (own_frames), never the kit's or the grader's.
 
 It reaches nbval through pytest's plugin manager (the `nbval` plugin and its RunningKernel), so nothing here imports
 nbval: without nbval loaded it does nothing but record.
@@ -20,6 +24,7 @@ import re
 import secrets
 import sys
 import time
+from pathlib import Path
 from queue import Empty
 
 import pytest
@@ -114,6 +119,11 @@ def _probe(kernel) -> str:
 
 @pytest.hookimpl(wrapper=True)
 def pytest_runtest_call(item):
+    options = getattr(item, "options", None)
+    if _state and isinstance(options, dict):
+        # A cell that raises fails the grader's run whatever its tags say: the student release tags its exercise and
+        # check cells "raises-exception" (Run All goes on past them in JupyterLab), which nbval would count as passed.
+        options["check_exception"] = False
     result = yield
     kernel = getattr(getattr(item, "parent", None), "kernel", None)
     if _state and kernel is not None and _CELL.search(item.nodeid):
@@ -121,6 +131,84 @@ def pytest_runtest_call(item):
         if why:
             raise AssertionError(f"GraderIntegrityError: {why}")
     return result
+
+
+_CELL_FRAME = re.compile(r"^Cell In\[\d+\], line (\d+)(?:, in ([\w.<>]+))?")
+_FILE_FRAME = re.compile(r"^File (\S+?):(\d+), in ([\w.<>]+)")
+_ARROW = re.compile(r"^-+> (\d+) ?(.*)$")
+_REGION = re.compile(r"^\s*#+\s*(BEGIN|END) SOLUTION\b")
+MAX_FRAMES = 8
+
+
+def _arrow(lines: list[str], start: int, number: int) -> str | None:
+    """The code on the traceback's arrow line of line `number`, in the frame that starts at lines[start]."""
+    for line in lines[start + 1:start + 40]:
+        if _CELL_FRAME.match(line) or _FILE_FRAME.match(line):
+            return None
+        found = _ARROW.match(line)
+        if found and int(found[1]) == number:
+            return found[2].rstrip()
+    return None
+
+
+def _here(path: str) -> Path:
+    """A traceback's file path (IPython writes the home as ~), resolved."""
+    return Path(path).expanduser().resolve()
+
+
+def _in_region(path: str, number: int) -> bool:
+    """Whether line `number` of the work tree's file `path` lies inside an exercise region."""
+    try:
+        if not _here(path).is_relative_to(Path.cwd().resolve()):
+            return False
+        inside = False
+        for i, line in enumerate(_here(path).read_text(encoding="utf-8").splitlines(), start=1):
+            marker = _REGION.match(line)
+            if marker:
+                inside = marker[1] == "BEGIN"
+            elif i == number:
+                return inside
+    except (OSError, UnicodeDecodeError, ValueError):
+        pass
+    return False
+
+
+def own_frames(text: str, sources: list[str], upto: int, notebook: str) -> list[str]:
+    """The frames of a failed cell's traceback (IPython's text) in the student's own code, innermost last (at most
+    MAX_FRAMES): a notebook cell ("02_forward_kinematics cell 8, line 3, in helper": the latest code cell up to
+    `upto` whose line holds the traceback's code) or an exercise region of a package file ("armlab/kinematics.py,
+    line 120, in dh_link_transform"). The kit's, the libraries' and the grader's frames are left out."""
+    lines = [re.sub(r"(\x1b|#x1B)\[[0-9;]*m", "", line).strip() for line in text.splitlines()]
+    frames = []
+    for k, line in enumerate(lines):
+        cell = _CELL_FRAME.match(line)
+        if cell:
+            number, code = int(cell[1]), _arrow(lines, k, int(cell[1]))
+            for i in range(min(upto, len(sources) - 1), -1, -1):
+                held = sources[i].splitlines()
+                if code is not None and number <= len(held) and held[number - 1].rstrip() == code:
+                    function = (cell[2] or "<module>").rsplit(".", 1)[-1]
+                    frames.append(f"{notebook} cell {i}, line {number}, in {function}")
+                    break
+            continue
+        file = _FILE_FRAME.match(line)
+        if file and _in_region(file[1], int(file[2])):
+            frames.append(f"{_here(file[1]).relative_to(Path.cwd().resolve())}, line {file[2]}, "
+                          f"in {file[3].rsplit('.', 1)[-1]}")
+    return frames[-MAX_FRAMES:]
+
+
+@pytest.hookimpl(wrapper=True)
+def pytest_runtest_makereport(item, call):
+    """A failed cell's report gets `armlab_where`: its traceback's frames in the student's own code (own_frames)."""
+    report = yield
+    if _state and report.failed and _CELL.search(report.nodeid):
+        try:
+            sources = [c.source for c in item.parent.nb.cells if c.cell_type == "code"]
+            report.armlab_where = own_frames(report.longreprtext, sources, item.cell_num, Path(str(item.fspath)).stem)
+        except Exception:                   # noqa: BLE001 -- no frames is a message without them, never a crash
+            report.armlab_where = []
+    return report
 
 
 def pytest_runtest_logreport(report) -> None:
@@ -134,7 +222,9 @@ def pytest_runtest_logreport(report) -> None:
         elif report.skipped:
             _state["cells"][cell] = (False, "skipped")
         else:
-            _state["cells"][cell] = (False, first_line(report.longreprtext))
+            where = getattr(report, "armlab_where", [])
+            message = first_line(report.longreprtext, 300 if where else 600)
+            _state["cells"][cell] = (False, f"{message} (in your code: {'; '.join(where)})" if where else message)
 
 
 def pytest_sessionfinish(session, exitstatus) -> None:

@@ -14,7 +14,7 @@ from pathlib import Path
 from armlab_course.exercises.registry import exercise
 
 from .csv_cells import csv_text
-from .results import ExerciseResult
+from .results import ExerciseResult, total
 
 __all__ = ["atomic_write", "results_json", "feedback_md", "grades_csv", "answers_csv", "table",
            "self_check_report", "write_reports", "student_folder"]
@@ -44,18 +44,13 @@ def _summary(r: ExerciseResult) -> str:
     return text + (f"; first failing check: {first.name}: {first.message}" if first else "")
 
 
-def _auto(results: dict[str, ExerciseResult]) -> list[ExerciseResult]:
-    """The automatically graded results (not the written answers the instructor grades by hand)."""
-    return [r for r in results.values() if not r.by_hand]
-
-
 def results_json(results: dict[str, ExerciseResult]) -> str:
     """Gradescope's results.json: one test per exercise; a written answer is a test of 0 points showing the answer
     (its points are given by hand, in Gradescope's own manual grading)."""
     tests = [{"name": f"{r.exercise_id}: {exercise(r.exercise_id).title}", "score": 0 if r.by_hand else r.score,
               "max_score": 0 if r.by_hand else r.max_score, "output": _summary(r), "visibility": "visible"}
              for r in results.values()]
-    return json.dumps({"score": round(sum(r.score for r in _auto(results)), 2), "tests": tests}, indent=1) + "\n"
+    return json.dumps({"score": total(results).score, "tests": tests}, indent=1) + "\n"
 
 
 def table(results: dict[str, ExerciseResult]) -> str:
@@ -70,10 +65,7 @@ def table(results: dict[str, ExerciseResult]) -> str:
             continue
         checks = f"{sum(c.passed for c in r.checks)}/{len(r.checks)}" if r.checks else "-"
         lines.append(f"{r.exercise_id.ljust(width)}  {r.score:>5g}/{r.max_score:<2d} {checks}")
-    auto = _auto(results)
-    lines.append(f"{'total'.ljust(width)}  {sum(r.score for r in auto):>5g}/{sum(r.max_score for r in auto)}"
-                 + (f" (+{sum(r.max_score for r in results.values() if r.by_hand)} by hand)"
-                    if len(auto) < len(results) else ""))
+    lines.append(f"{'total'.ljust(width)}  {total(results)}")
     return "\n".join(lines)
 
 
@@ -106,7 +98,7 @@ def self_check_report(results: dict[str, ExerciseResult], blocked: dict[str, tup
 
 
 def feedback_md(student: str, results: dict[str, ExerciseResult]) -> str:
-    out = [f"# Feedback for {student}", "", "```", table(results), "```", ""]
+    out = [f"# Feedback for {student}", "", f"Total: {total(results)}", "", "```", table(results), "```", ""]
     for r in results.values():
         if r.by_hand:
             out += [f"## {r.exercise_id} ({exercise(r.exercise_id).title}): graded by hand, {r.max_score} points", ""]
@@ -122,15 +114,15 @@ def feedback_md(student: str, results: dict[str, ExerciseResult]) -> str:
 
 
 def grades_csv(graded: dict[str, dict[str, ExerciseResult]]) -> str:
-    """One row per student: each automatic exercise's score, total and max of those, then one empty column per
-    written answer for the instructor to fill in by hand (as nbgrader's manual grading), headed with its points."""
+    """One row per student: each automatic exercise's score, total and max of those (results.total), then one empty
+    column per written answer for the instructor to fill in by hand (as nbgrader's manual grading), headed with its
+    points."""
     first = next(iter(graded.values()))
     auto = [i for i, r in first.items() if not r.by_hand]
     by_hand = [i for i, r in first.items() if r.by_hand]
     header = ["student", *auto, "total", "max", *(f"{i} (by hand, /{first[i].max_score})" for i in by_hand)]
-    return csv_text(header, ([student, *(float(results[i].score) for i in auto),
-                              float(sum(results[i].score for i in auto)), sum(results[i].max_score for i in auto),
-                              *("" for _ in by_hand)] for student, results in graded.items()))
+    return csv_text(header, ([student, *(float(results[i].score) for i in auto), float(total(results).score),
+                              total(results).out_of, *("" for _ in by_hand)] for student, results in graded.items()))
 
 
 def answers_csv(graded: dict[str, dict[str, ExerciseResult]]) -> str:
@@ -141,15 +133,15 @@ def answers_csv(graded: dict[str, dict[str, ExerciseResult]]) -> str:
                     ([student, *(results[i].answer or "" for i in by_hand)] for student, results in graded.items()))
 
 
-_RESERVED = ("grades.csv", "answers.csv")
+_RESERVED = ("grades.csv", "answers.csv", "rubric.csv", "hand_grading.md", "similarity.csv", "similarity.md")
 _PLAIN = re.compile(r"[\w][\w .@+,-]{0,99}")
 
 
 def student_folder(student: str) -> str:
     """The folder of OUT that holds a student's results.json and feedback.md: the student's name when it is a
     plain one (letters, digits, space, . @ + , - _; not starting with a dot or a dash; not one of the grader's own
-    files grades.csv and answers.csv), else its plain characters followed by a short hash of the whole name (so two
-    odd names never share a folder)."""
+    files in OUT: grades.csv, answers.csv, rubric.csv, hand_grading.md, similarity.*), else its plain characters
+    followed by a short hash of the whole name (so two odd names never share a folder)."""
     if _PLAIN.fullmatch(student) and student.lower() not in _RESERVED and student.rstrip(" .") == student:
         return student
     plain = re.sub(r"[^\w.@+,-]+", "_", student).strip("._-")[:60] or "student"

@@ -30,12 +30,14 @@ from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from pathlib import Path
 
+from armlab_course.exercises.markers import CHECK_LINE
+
 from .sandbox import Limits, PidsGroup, Sandbox
 
-__all__ = ["DEFAULT_LIMITS", "Limits", "CellResult", "NotebookRun", "Runner", "check_cells", "verify_signed",
-           "CHILD_FILES"]
+__all__ = ["DEFAULT_LIMITS", "Limits", "CellResult", "NotebookRun", "Runner", "check_cells", "code_cell_labels",
+           "with_cell_labels",
+           "verify_signed", "CHILD_FILES"]
 
-_CHECK = re.compile(r"^\s*# CHECK[ \t]+(?P<ids>.+?)\s*$", re.MULTILINE)
 OUTPUT_TAIL = 20_000               # bytes of a run's console output kept (its end)
 _MAX_RESULTS_BYTES = 64 * 2**20     # a result file larger than this is refused unread
 _CONFIG = "[pytest]\naddopts =\nfilterwarnings =\n    ignore::DeprecationWarning\n"
@@ -68,13 +70,43 @@ class NotebookRun:
     problem: str = ""
 
 
+def code_cell_labels(notebook: Path) -> list[str]:
+    """Per code cell (nbval's 'Cell N', 0-based among the code cells), how a student finds it in JupyterLab: the
+    notebook, the cell's position among all its cells (1-based, markdown included), the execution count JupyterLab
+    shows once Restart Kernel and Run All Cells has run every cell, and the cell's first line, e.g.
+    '02_forward_kinematics cell 22 ([10] after Run All: # CHECK fk.euler)'."""
+    cells = json.loads(Path(notebook).read_text(encoding="utf-8"))["cells"]
+    labels = []
+    for position, cell in enumerate(cells, start=1):
+        if cell["cell_type"] != "code":
+            continue
+        first = next((line.strip() for line in "".join(cell["source"]).splitlines() if line.strip()), "(empty)")
+        first = first if len(first) <= 60 else first[:57] + "..."
+        labels.append(f"{Path(notebook).stem} cell {position} ([{len(labels) + 1}] after Run All: {first})")
+    return labels
+
+
+def with_cell_labels(message: str, notebook: Path, labels: list[str] | None = None) -> str:
+    """`message` with every frame's "<notebook> cell <i>, line" (i the code-cell index, as a run's frames name a
+    cell) written with the cell's label instead (code_cell_labels: how JupyterLab shows it, as the check names say);
+    an index past the notebook's code cells stays as it is."""
+    stem = Path(notebook).stem
+    labels = code_cell_labels(notebook) if labels is None else labels
+
+    def label(match: re.Match) -> str:
+        index = int(match[1])
+        return labels[index] if index < len(labels) else match[0]
+
+    return re.sub(rf"\b{re.escape(stem)} cell (\d{{1,4}})(?=, line )", label, message)
+
+
 def check_cells(notebook: Path) -> dict[int, tuple[str, ...]]:
     """The notebook's CHECK-tagged code cells: code-cell index -> the exercise ids its '# CHECK' line names."""
     nb = json.loads(notebook.read_text(encoding="utf-8"))
     code = [c for c in nb["cells"] if c["cell_type"] == "code"]
     tags = {}
     for i, cell in enumerate(code):
-        found = _CHECK.search("".join(cell["source"]))
+        found = CHECK_LINE.search("".join(cell["source"]))
         if found:
             tags[i] = tuple(found["ids"].split())
     return tags
@@ -215,17 +247,17 @@ class Runner:
             out = tail_of(log)
         return done, out, proc.returncode
 
-    def notebook(self, worktree: Path, notebook: str, lax: bool = False) -> NotebookRun:
-        """Run `notebook` (relative to `worktree`) under nbval with the instructor's sanitize file; per-cell results.
-        lax: --nbval-lax (a cell fails only by raising; for a student's own notebooks, which hold no stored
-        outputs)."""
+    def notebook(self, worktree: Path, notebook: str) -> NotebookRun:
+        """Run `notebook` (relative to `worktree`) under strict nbval with the instructor's sanitize file (a cell
+        passes when it raises nothing and its output matches the stored one; a CHECK cell of a public notebook is
+        tagged to be judged by its asserts alone, release.public_notebook); per-cell results."""
         work = self.sandbox.inside(worktree)
         private = worktree / ".grader"
         private.mkdir(exist_ok=True)
         (private / "pytest.ini").write_text(_CONFIG)
         results = private / "results.json"
         cmd = [sys.executable, "-m", "pytest", "-q", "-c", f"{work}/.grader/pytest.ini", "--rootdir", work,
-               "-p", "no:cacheprovider", notebook, "--nbval-lax" if lax else "--nbval",
+               "-p", "no:cacheprovider", notebook, "--nbval",
                "-p", "armlab_grader.nbval_guard", "--nbval-sanitize-with", "tests/nbval_sanitize.cfg",
                f"--nbval-cell-timeout={int(self.limits.timeout_s)}", f"--nbval-kernel-name={KERNEL_NAME}",
                "--nbval-kernel-startup-timeout=300", f"--armlab-results={work}/.grader/results.json"]

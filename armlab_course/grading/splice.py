@@ -16,7 +16,7 @@ from armlab_course.exercises.registry import exercise
 from .submission import exercise_file
 
 __all__ = ["RegionRejected", "tracked_files", "check_body", "splice_text", "write_regions", "build_worktree",
-           "splice_into", "GRADER_ONLY"]
+           "splice_into", "GRADER_ONLY", "release_worktree"]
 
 # nbval's comment markers, the kit's check tags and exercise markers: a student body may hold none of them. A line
 # is a marker the way nbval reads one (nbval.plugin.find_comment_markers: the stripped line starts with '#', and
@@ -102,6 +102,23 @@ def build_worktree(reference: Path, dest: Path, exercise_id: str | None = None,
         shutil.copy2(src, target)
     if exercise_id is not None:
         splice_into(dest, exercise_id, bodies or [])
+    return dest
+
+
+def release_worktree(instructor: Path, dest: Path) -> Path:
+    """The student release of `instructor` (a private copy of the instructor's tracked files, as build_worktree makes
+    it; a git index is made in it when it has none) written into the new folder `dest` by the release builder
+    (armlab_course.exercises.release: every region a stub, no instructor-only file), its notebooks those the public
+    checks run (release.public_notebook: the CHECK cells as the instructor ran them, each judged by its asserts,
+    not by what it prints), which the release also ships for the self-check (PUBLIC_NOTEBOOKS)."""
+    from armlab_course.exercises.release import PUBLIC_NOTEBOOKS, make_student_release
+
+    if not (instructor / ".git").exists():
+        for cmd in (["init", "-q"], ["add", "-A"]):
+            subprocess.run(["git", "-C", str(instructor), *cmd], capture_output=True, check=True)
+    make_student_release(instructor, dest)
+    for public in sorted((dest / PUBLIC_NOTEBOOKS).glob("*.ipynb")):
+        shutil.copy2(public, dest / "notebooks" / public.name)
     return dest
 
 

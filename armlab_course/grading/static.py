@@ -7,6 +7,10 @@ refers to it: a call or attribute (`cv2.findHomography(...)`, `camera.project`),
 `from ... import`), an import of it, or a string naming it (`getattr(cv2, "findHomography")`); the last dotted part
 of each listed name is what is compared. Names the region binds itself (its variables, its own functions) and the
 exercise's own function names do not count.
+
+Code a region builds or loads at run time is refused too (RUN_TIME_CODE): exec, eval, compile or __import__ by name,
+an import of importlib, runpy or builtins, a loader's exec_module, run_path or reload. What they would run cannot be
+read here; the harness's audit hook watches them at run time (armlab_course.grading.harness).
 """
 
 from __future__ import annotations
@@ -16,11 +20,17 @@ import textwrap
 
 from armlab_course.exercises.registry import exercise
 
-from .results import CheckResult
+from .results import STATIC_CHECK, CheckResult
 
-__all__ = ["STATIC_CHECK", "forbidden_of", "forbidden_uses", "static_check"]
+__all__ = ["STATIC_CHECK", "RUN_TIME_CODE", "forbidden_of", "forbidden_uses", "run_time_code", "static_check"]
 
-STATIC_CHECK = "static check: no forbidden call"
+# names that build, load or run code at run time: builtins by their bare name (`compile` only so: re.compile is
+# fine), modules by import, a loader's methods by attribute
+RUN_TIME_CODE = {"names": ("exec", "eval", "compile", "__import__", "__builtins__", "globals", "vars"),
+                 "modules": ("importlib", "runpy", "builtins", "imp", "code", "codeop"),
+                 "attributes": ("exec", "eval", "__import__", "import_module", "reload", "exec_module",
+                                "spec_from_file_location", "run_path", "run_module", "load_module", "__builtins__",
+                                "__globals__", "__closure__", "__wrapped__")}
 
 
 def forbidden_of(exercise_id: str) -> tuple[str, ...]:
@@ -98,6 +108,26 @@ def forbidden_uses(body: str, names: tuple[str, ...], own: tuple[str, ...] = ())
     return sorted(found.items(), key=lambda item: names.index(item[0]))
 
 
+def run_time_code(body: str) -> list[tuple[str, int]]:
+    """What in the region `body` builds, loads or runs code at run time (RUN_TIME_CODE), each with its line (1 = the
+    region's first), in the order found."""
+    tree, offset = _parse(body)
+    if tree is None:
+        return []
+    bound = _bound(tree)
+    found = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Name) and isinstance(node.ctx, ast.Load) and node.id in RUN_TIME_CODE["names"] \
+                and node.id not in bound:
+            found.append((node.id, node.lineno - offset))
+        elif isinstance(node, ast.Attribute) and node.attr in RUN_TIME_CODE["attributes"]:
+            found.append((node.attr, node.lineno - offset))
+        elif isinstance(node, (ast.Import, ast.ImportFrom)):
+            modules = [a.name for a in node.names] if isinstance(node, ast.Import) else [node.module or ""]
+            found += [(m, node.lineno - offset) for m in modules if m.split(".")[0] in RUN_TIME_CODE["modules"]]
+    return sorted(found, key=lambda item: item[1])
+
+
 def static_check(exercise_id: str, bodies: list[str]) -> CheckResult | None:
     """One check for the exercise's regions: passed when none refers to a forbidden name, else failed with a message
     naming the first; None when the exercise has no list (a student release)."""
@@ -110,9 +140,11 @@ def static_check(exercise_id: str, bodies: list[str]) -> CheckResult | None:
             uses = forbidden_uses(body, names, own)
         except Unreadable as e:
             return CheckResult(STATIC_CHECK, False, f"{e}: write it as plain statements")
-        if uses:
-            name, line = uses[0]
-            where = f"region {k}, line {line}" if len(bodies) > 1 else f"line {line} of the region"
-            return CheckResult(STATIC_CHECK, False, f"the region uses {name} ({where}): the exercise is to write "
-                                                    f"it, not to call the library's or the kit's version")
+        for found, why in ((uses, "the exercise is to write it, not to call the library's or the kit's version"),
+                           (run_time_code(body), "a region runs the code written in it, not code it builds or "
+                                                 "loads at run time")):
+            if found:
+                name, line = found[0]
+                where = f"region {k}, line {line}" if len(bodies) > 1 else f"line {line} of the region"
+                return CheckResult(STATIC_CHECK, False, f"the region uses {name} ({where}): {why}")
     return CheckResult(STATIC_CHECK, True)

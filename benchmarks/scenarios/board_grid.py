@@ -121,6 +121,7 @@ class Outcome:
     outcome: str
     error: np.ndarray | None = None
     message: str = ""
+    tilt_rad: float = 0.0          # a place: how tilted the block was when the gripper let it go (SimArm.last_release)
 
 
 def _cube(color: str, x: float, y: float, yaw: float) -> ObjectState:

@@ -60,22 +60,31 @@ def _recover(session: tasks.Session) -> None:
     tasks.look(session)
 
 
-def run_station(seed: int, places: int) -> list[Outcome]:
+def run_station(seed: int, places: int, detect_with: str | None = None) -> list[Outcome]:
     """`places` pick-then-place trials on the seeded station (module notes), in rounds: look once, then pick and
     place each detected block far enough out in turn (a student's loop over one detection), and look again after a
     failed pick or a refusal; fewer when _IDLE_ROUNDS looks in a row try no place (no block left far enough out, or
     none that can be picked). Returns the place Outcomes in order (picks that do not end with the block held are
-    skipped)."""
+    skipped).
+
+    detect_with: None, the blocks the session's look detects; or the intrinsics of another calibration of the same
+    station ("factory", "checkerboard": tasks.perception.calibrate_camera, its own tags and depth plane), with which
+    the blocks picked are detected in a frame of their own after each look, as a student does who detects with the
+    calibration notebook 04 uses and picks through a task session calibrated on its own."""
     # the simulator: imported when the trials run
     from armlab import make_station
+    from armlab.tasks import perception
 
     session = tasks.start_session(make_station("sim", seed=seed))
+    other = None if detect_with is None else perception.calibrate_camera(session.station, detect_with, arm=session)
     rng = np.random.default_rng([seed, 24])
     out: list[Outcome] = []
     idle = 0                                      # rounds in a row that tried no place
     while len(out) < places and idle < _IDLE_ROUNDS:
-        blocks = [b for b in tasks.look(session).blocks
-                  if b.is_block and np.hypot(*b.position[:2]) >= PICK_MIN_REACH_MM]
+        seen = tasks.look(session)
+        if other is not None:                     # the arm is out of view: detect again with the other calibration
+            seen = perception.observe(session.station, other, session, clear=False)
+        blocks = [b for b in seen.blocks if b.is_block and np.hypot(*b.position[:2]) >= PICK_MIN_REACH_MM]
         before = len(out)
         for k in rng.permutation(len(blocks)):
             if len(out) >= places or not _trial(session, blocks[k], rng, out):
@@ -114,5 +123,6 @@ def _trial(session: tasks.Session, block, rng: np.random.Generator, out: list[Ou
         return False
     bottom = truth.position - [0.0, 0.0, truth.edge / 2]
     note = f"picked from a detection {seen_off:.1f} mm off its block" if seen_off > DETECTION_OFF_MM else ""
-    out.append(Outcome(GridSpot(REGION, float(spot[0]), float(spot[1])), "place", "done", bottom - spot, note))
+    tilt = float(getattr(station.arm, "last_release", {}).get(truth.id, 0.0))
+    out.append(Outcome(GridSpot(REGION, float(spot[0]), float(spot[1])), "place", "done", bottom - spot, note, tilt))
     return True

@@ -201,14 +201,14 @@ print("the camera reports its factory intrinsics: fx =", station.camera.K[0, 0],
 # (darker-blue) patches; the arm at its sleep pose is in the picture too.
 
 # %%
-fig, (ax_rgb, ax_depth) = plt.subplots(1, 2, figsize=(9, 2.9))
+fig, (ax_rgb, ax_depth) = plt.subplots(1, 2, figsize=(9, 3.2))
 ax_rgb.imshow(frame.rgb)
-ax_rgb.set_title("RGB")
+ax_rgb.set_title("RGB: the board, blocks and arm")
 im = ax_depth.imshow(frame.depth, cmap="viridis", vmin=850, vmax=1100)
-ax_depth.set_title("depth (mm)")
-fig.colorbar(im, ax=ax_depth, fraction=0.03)
+ax_depth.set_title("depth: nearer is darker")
+fig.colorbar(im, ax=ax_depth, fraction=0.03, label="camera Z (mm)")
 for ax in (ax_rgb, ax_depth):
-    ax.axis("off")
+    ax.set(xlabel="u (px)", ylabel="v (px)", xticks=(0, 600, 1200))
 fig.tight_layout()
 
 # %% [markdown]
@@ -296,7 +296,8 @@ print(f"OK: {len(tops)} block tops seen where they are: error {err.min():.0f}-{e
 #   exercises, points, kind, and whether each is still blank.
 # - Your instructor runs every notebook top to bottom with `pytest --nbval`, which re-executes each cell and compares
 #   its printed output with the stored one: keep outputs deterministic (seeded random numbers, no timings).
-# - `make test` runs the kit's own tests and all notebooks; `make lab` opens JupyterLab on `notebooks/`.
+# - `make check` runs the check cells of the exercises you have written (`python -m armlab check`), `make test` the
+#   kit's own tests; `make lab` opens JupyterLab on `notebooks/`.
 #
 # Next: **01 · camera calibration**.
 

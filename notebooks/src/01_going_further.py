@@ -114,14 +114,15 @@ for name, cam, depth, correct in cases:
     refine_rows[name] = errors
     print(f"{name:<40} {errors[0].mean_mm:6.2f} / {errors[0].max_mm:4.1f} {errors[1].mean_mm:6.2f} / "
           f"{errors[1].max_mm:4.1f}   tilt {ref.tilt_deg:.2f} deg, height {ref.height_change_mm:+.1f} mm")
-fig, ax = plt.subplots(figsize=(8, 2.6))
+fig, ax = plt.subplots(figsize=(8, 3.2))
 y = np.arange(len(cases))
 for offset, k, label in ((-0.2, 0, "tags"), (0.2, 1, "tags + depth")):
     values = [r[k].mean_mm for r in refine_rows.values()]
     ax.barh(y + offset, values, 0.4)
     for yi, v in zip(y, values):
-        ax.text(v + 0.1, yi + offset, f"{label}: {v:.1f} mm", va="center", fontsize=8)
-ax.set(yticks=y, yticklabels=list(refine_rows), xlabel="mean grid world error (mm)")
+        ax.text(v + 0.1, yi + offset, f"{label}: {v:.1f} mm", va="center", fontsize=9.5)
+ax.set(yticks=y, yticklabels=list(refine_rows), xlabel="mean grid world error (mm)", ylabel="intrinsics (case)",
+       title="grid error from the tags alone and after the depth refinement")
 ax.invert_yaxis()
 fig.tight_layout()
 

@@ -19,6 +19,7 @@
 # | `fk.dh_table` | `dh_table(h0, L1, beta, L2, Lt)`: frames and table | 8 | code | PoX at hidden poses, geometries |
 # | `fk.euler` | `euler_angles_from_T(T)`: ZYZ Euler angles | 5 | code | hidden poses, singular ones too |
 # | `fk.q_frames` | a written answer about your frames figure | 3 | written | by hand |
+# | `fk.q_table_error` | a written answer about the Table I error map (section 6) | 3 | written | by hand |
 #
 # A **Check** cell (`# CHECK <id>`) tests your work; cells marked *demonstration* show the kit and are not graded.
 # Restart the kernel after editing a package file.
@@ -104,7 +105,16 @@ by_motions = (homogeneous(rot_z(params[:, 0])) @ homogeneous(None, np.stack([zer
 assert A.shape == (500, 4, 4), f"dh_link_transform of 500 links gave shape {A.shape}, expected (500, 4, 4)"
 assert np.allclose(A[:, 3], [0, 0, 0, 1], atol=0), "the last row of a link transform must be (0, 0, 0, 1)"
 err = np.abs(A - by_motions).max()
-assert err < 1e-9, f"your link transforms differ from Rz Tz Tx Rx by up to {err:.2g}: check the order and the signs"
+if err >= 1e-9:                        # name the cause where the check can tell it
+    for k, name in enumerate(("theta", "d", "a", "alpha")):
+        flipped = params * np.where(np.arange(4) == k, -1.0, 1.0)
+        assert np.abs(kinematics.dh_link_transform(*flipped.T) - by_motions).max() > 1e-9, \
+            f"your link transform is right with {name} negated: check {name}'s sign"
+    row = int(np.argmax(np.abs(A - by_motions).max(axis=(0, 2))))
+    off_mm, off_rot = np.abs(A - by_motions)[:, :3, 3].max(), np.abs(A - by_motions)[:, :3, :3].max()
+assert err < 1e-9, (f"your link transforms differ from Rz Tz Tx Rx by up to {off_mm:.2g} mm in position and "
+                    f"{off_rot:.2g} in a rotation matrix entry (unitless), first in row {row}: multiply the four "
+                    f"matrices again and compare that row, entry by entry")
 print("OK: dh_link_transform equals Rz(theta) Tz(d) Tx(a) Rx(alpha) for 500 random links within 1e-9")
 
 # %% [markdown]
@@ -156,7 +166,7 @@ ax.text(pts[3, 1] + 80, pts[3, 2] + 8, "L2 = 200", fontsize=9)
 ax.text(pts[4, 1] + 40, pts[4, 2] + 8, "Lt", fontsize=9)
 ax.text(-60, h0 / 2, "h0", fontsize=9)
 ax.set(title="the RX200 at home, side view: joints and axes (no frames: you place them)", xlabel="world y (mm)",
-       ylabel="world z (mm)", aspect="equal", xlim=(-80, 520), ylim=(-20, 380))
+       ylabel="world z (mm)", aspect="equal", xlim=(-80, 520), ylim=(-20, 380), yticks=range(0, 301, 100))
 fig.tight_layout()
 
 # %% [markdown]
@@ -250,7 +260,8 @@ for ax, (title, q) in zip(axes, poses.items()):
     ax.axhline(0, color="peru", lw=4, zorder=0)
     ax.set(title=f"{title}: q = {np.round(q, 2)} rad", ylabel="world z (mm)", aspect="equal", xlim=(-280, 540),
            ylim=(-30, 400))
-axes[-1].set_xlabel("world y (mm)")
+for ax in axes:
+    ax.set_xlabel("world y (mm)")
 fig.tight_layout()
 
 # %% [markdown]
@@ -314,8 +325,21 @@ T_dh, T_pox = fk_from_table(Q, yours), fk_pox(Q)
 home = fk_from_table(robot.home, yours)[:3, 3]
 err_p = np.abs(T_dh[:, :3, 3] - T_pox[:, :3, 3]).max()
 err_R = np.abs(T_dh[:, :3, :3] - T_pox[:, :3, :3]).max()
+if not np.allclose(fk_from_table(Q[:50], yours), fk_pox(Q[:50]), atol=1e-6):   # name the cause where it can tell
+    for i, j in np.ndindex(5, 4):
+        other = np.array(yours, dtype=float)
+        other[i, j] = -other[i, j]
+        column = ("theta offset", "d", "a", "alpha")[j]
+        assert other[i, j] == 0 or not np.allclose(fk_from_table(Q[:50], other), fk_pox(Q[:50]), atol=1e-6), \
+            f"your table is right with row {i + 1}'s {column} negated: check its sign (which way z{i + 1} points)"
+    for i, step in np.ndindex(5, 2):
+        other = np.array(yours, dtype=float)
+        other[i, 0] += (2 * beta, -2 * beta)[step]
+        assert not np.allclose(fk_from_table(Q[:50], other), fk_pox(Q[:50]), atol=1e-6), \
+            f"row {i + 1}'s theta offset is off by 2 beta: the L's tilt beta is taken off there where you add it " \
+            "(or added where you take it off)"
 assert np.allclose(home, [0, 408.575, 304.57], atol=1e-6), \
-    f"your table puts the tool at {home.round(1)} mm at home, expected (0, 408.6, 304.6): check d and a"
+    f"your table puts the tool at {home.round(1)} mm at home, expected (0, 408.6, 304.6)"
 assert err_p < 1e-6, f"your table's tool point is up to {err_p:.2g} mm off the PoX model at random poses: " \
     "check the theta offsets and the twists"
 assert err_R < 1e-9, f"your table's tool orientation is up to {err_R:.2g} off the PoX model: check frame 5"
@@ -363,13 +387,24 @@ Q = random_q(300)
 angles = np.array([euler_angles_from_T(T) for T in kinematics.fk(Q)])
 assert angles.shape == (300, 3), f"euler_angles_from_T should return 3 angles, got shape {angles.shape[1:]}"
 rebuilt = matrix_from_euler_zyz(angles)
-err = np.abs(rebuilt - kinematics.fk(Q)[:, :3, :3]).max()
-assert err < 1e-9, f"Rz(phi) Ry(theta) Rz(psi) of your angles misses the tool's rotation by up to {err:.2g}"
+R_tool = kinematics.fk(Q)[:, :3, :3]
+err = np.abs(rebuilt - R_tool).max()
+if err >= 1e-9:                        # name the cause where the check can tell it
+    for k, name in enumerate(("phi", "theta", "psi")):
+        for how, other in (("negated", -angles[:, k]), ("mirrored (pi minus it)", np.pi - angles[:, k])):
+            fixed = angles.copy()
+            fixed[:, k] = other
+            assert np.abs(matrix_from_euler_zyz(fixed) - R_tool).max() > 1e-9, \
+                f"your angles are right with {name} {how}: check the signs of the two entries of R it is read from"
+turn = np.degrees(np.arccos(np.clip((np.einsum("nji,nji->n", rebuilt, R_tool) - 1) / 2, -1, 1))).max()
+assert err < 1e-9, (f"Rz(phi) Ry(theta) Rz(psi) of your angles misses the tool's rotation by up to {turn:.2g} deg "
+                    f"({err:.2g} in a rotation matrix entry, unitless)")
 assert np.all((angles[:, 1] >= 0) & (angles[:, 1] <= np.pi)), "theta must lie in [0, pi]"
 for a, flip in ((0.7, 0.0), (-2.0, np.pi)):                 # sin(theta) = 0: psi = 0, phi carries the rotation
     got = euler_angles_from_T(homogeneous(rot_z(a) @ rot_y(flip)))
     assert abs(got[2]) < 1e-12 and np.isclose(got[1], flip, atol=1e-12) and np.isclose(got[0], a, atol=1e-9), \
-        f"at theta = {flip:.2f} expected (phi, theta, psi) = ({a}, {flip:.2f}, 0), got {np.round(got, 3)}"
+        f"at theta = {flip:.2f} expected (phi, theta, psi) = ({a}, {flip:.2f}, 0), got {np.round(got, 3)}: where " \
+        "sin(theta) = 0 set psi = 0 and let phi carry the rotation (a singular case of its own)"
 print("OK: your Euler angles rebuild the tool's rotation at 300 random poses within 1e-9 and the singular poses "
       "keep psi = 0")
 
@@ -411,24 +446,41 @@ for name, fk_report in report_models.items():
     print(f"{name}: top-down grasps on the board off by {np.nanmin(e):.1f} to {np.nanmax(e):.1f} mm "
           f"(mean {np.nanmean(e):.1f}); 1000 random poses: {e_any.min():.1f} to {e_any.max():.1f} mm")
 
+# %% [markdown]
+# *Predict before you run the next cell* (write it at the top of your answer to `fk.q_table_error` below): the
+# report's wrist-to-tool length is 6 mm shorter than the manufacturer's (the other reports' 15.6 mm longer). Over the
+# board, where will the tool point of a top-down grasp be off most, and by how much?
+
 # %%
-fig, axes = plt.subplots(1, 2, figsize=(9, 3.2))
+fig, axes = plt.subplots(1, 2, figsize=(9, 3.4), sharey=True)
 for ax, (name, e) in zip(axes, errors.items()):
-    im = ax.pcolormesh(X, Y, e, shading="nearest", cmap="viridis")
+    im = ax.pcolormesh(X, Y, e, shading="nearest", cmap="viridis", vmin=0, vmax=20)    # one scale for both
     ax.plot(0, 0, "r^", ms=8)
-    ax.set(title=f"{name}: |error| (mm)", xlabel="world x (mm)", ylabel="world y (mm)", aspect="equal")
-    fig.colorbar(im, ax=ax, shrink=0.8)
-fig.tight_layout()
+    ax.set(title=f"{name}: {np.nanmin(e):.1f}-{np.nanmax(e):.1f} mm", xlabel="world x (mm)", aspect="equal",
+           xticks=range(-400, 401, 200))
+axes[0].set_ylabel("world y (mm)")
+fig.colorbar(im, ax=axes, shrink=0.85, label="tool point error (mm)")
 
 # %% [markdown]
-# For top-down grasps the tool axis is vertical, so a wrong wrist-to-tool length shows up almost one-for-one as a
-# height error (6 mm short, or 15.6 mm long), combined with the 0.66 mm lower shoulder and the 0.4 mm shorter
-# hypotenuse (which move the tool the other way for the short variant: about 5 and 16.5 mm in all). A few millimetres
-# is half the clearance of a 25 mm block in the gripper: the model must use the manufacturer's numbers, and measured
-# corrections (gravity sag) belong on top of it, not in it.
+# **Exercise `fk.q_table_error` (3 points, written).** Compare the maps with your prediction. How does the error vary
+# over the board, and how large is it for each wrist-to-tool length? Explain, from the pose of a top-down grasp, why
+# it has this shape and why its size is not exactly the 6 (or 15.6) mm the length is off by. What does it mean for
+# grasping a 25 mm block? (Your prediction, then three or four sentences.)
 
 # %% [markdown]
-# *Demonstration* (the kit's numbers, not graded): the errors stay within the range the text states.
+# <!-- BEGIN ANSWER fk.q_table_error -->
+# Prediction: largest far from the base, where the arm is stretched.
+# Observed: the error is the same all over the board to within about 0.5 mm: 4.9 to 5.4 mm with 152.575 mm and
+# 16.2 to 16.7 mm with 174.15 mm (one colour scale, 0-20 mm). A top-down grasp holds the tool axis vertical wherever the
+# target is, so a wrong wrist-to-tool length moves the tool point straight up or down by the same amount everywhere;
+# the report's 0.66 mm lower shoulder and 0.4 mm shorter hypotenuse add a smaller error of nearly the same size
+# everywhere, which takes about 1 mm off the 6 mm and adds about 1 mm to the 15.6 mm. A few millimetres is half the
+# clearance of a 25 mm block in the fingers: the model must use the manufacturer's lengths, and measured corrections
+# (the gravity sag) go on top of it, not into it.
+# <!-- END ANSWER -->
+
+# %% [markdown]
+# *Demonstration* (the kit's numbers, not graded): the errors stay within the range the maps show.
 
 # %%
 e1, e2 = (errors[name] for name in report_models)

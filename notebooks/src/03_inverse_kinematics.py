@@ -23,6 +23,7 @@
 # | `ik.candidates` | `_branch_joints` (`armlab/kinematics.py`): every branch | 14 | code | `ik` at hidden targets |
 # | `ik.q_branches` | a written answer about the branches figure (section 2) | 3 | written | by hand |
 # | `ik.numerical` | `tool_jacobian`, `pose_error`, `solve_ik_dls` (section 5) | 8 | code | hidden poses and targets |
+# | `ik.q_damping` | a written answer about the damping figure (section 5) | 3 | written | by hand |
 #
 # A **Check** cell (`# CHECK <id>`) tests your work; cells marked *demonstration* show the kit and are not graded.
 #
@@ -32,6 +33,7 @@
 import numpy as np
 import matplotlib.pyplot as plt
 from IPython import get_ipython
+from matplotlib.patches import Arc
 
 from armlab import kinematics
 from armlab_course.exercises import references, require_written, rubric, with_reference
@@ -79,24 +81,53 @@ target_demo, psi_demo = np.array([0.0, 300.0, 60.0]), 0.9
 q_demo = kinematics.ik(target_demo, psi_demo)[0]
 pts = kinematics.joint_positions(q_demo)
 shoulder, elbow, wrist, tool = (np.array([p[1], p[2]]) for p in pts[[2, 3, 4, 6]])
-fig, ax = plt.subplots(figsize=(8, 4.4))
+
+
+def direction(v):
+    """The angle (deg) of a plane vector from the horizontal."""
+    return np.degrees(np.arctan2(v[1], v[0]))
+
+
+def angle_arc(ax, centre, a_from, a_to, r, label, colour, at=1.3):
+    """An arc of radius r (mm) at centre from direction a_from to a_to (deg, the short way), labelled beside it."""
+    lo, hi = (a_from, a_to) if (a_to - a_from) % 360 <= 180 else (a_to, a_from)
+    hi = lo + (hi - lo) % 360
+    ax.add_patch(Arc(centre, 2 * r, 2 * r, theta1=lo, theta2=hi, color=colour, lw=1.5))
+    mid = np.radians((lo + hi) / 2)
+    ax.text(*(centre + at * r * np.array([np.cos(mid), np.sin(mid)])), label, color=colour, fontsize=11,
+            ha="center", va="center")
+
+
+a_hyp = direction(elbow - shoulder)                           # the upper arm's hypotenuse
+corner = shoulder + 200.0 * np.array([np.cos(np.radians(a_hyp) + beta), np.sin(np.radians(a_hyp) + beta)])
+fig, ax = plt.subplots(figsize=(8, 5.4))
+ax.plot(*np.array([shoulder, corner, elbow]).T, "-", color="0.75", lw=7, solid_capstyle="round", zorder=0)
+ax.annotate("200 mm", (shoulder + corner) / 2, xytext=(-58, 0), textcoords="offset points", fontsize=10,
+            color="0.4")
+ax.annotate("50 mm", (corner + elbow) / 2, xytext=(-18, -20), textcoords="offset points", fontsize=10, color="0.4")
 ax.plot(*np.array([shoulder, elbow, wrist]).T, "-o", color="0.35", lw=4, ms=7)
 ax.plot(*np.array([wrist, tool]).T, "-", color="0.35", lw=4)
 ax.plot(*np.array([shoulder, wrist]).T, "--", color="tab:purple", lw=1.5)
 ax.plot([shoulder[0], shoulder[0] + 330], [shoulder[1]] * 2, ":", color="k", lw=1)
-ax.plot([tool[0] - 120, tool[0] + 40], [tool[1]] * 2, ":", color="k", lw=1)
+ax.plot([wrist[0], wrist[0] + 110], [wrist[1]] * 2, ":", color="k", lw=1)
 ax.plot(*tool, "kx", ms=12, mew=2.5)
-for point, text, off in ((shoulder, "shoulder", (8, -18)), (elbow, "elbow", (-14, 10)),
+d_dir = direction(wrist - shoulder)
+angle_arc(ax, shoulder, 0.0, d_dir, 45, "$\\varphi$", "tab:purple")            # the elevation of d
+angle_arc(ax, shoulder, d_dir, a_hyp, 70, "$\\gamma_s$", "tab:blue", at=1.2)     # the triangle at the shoulder
+angle_arc(ax, shoulder, a_hyp, a_hyp + np.degrees(beta), 120, "$\\beta$", "0.4", at=1.12)
+angle_arc(ax, elbow, direction(shoulder - elbow), direction(wrist - elbow), 35, "$\\gamma_e$", "tab:blue", at=1.5)
+angle_arc(ax, wrist, 0.0, direction(tool - wrist), 50, "$\\psi$", "tab:red", at=1.3)   # the pitch, below horizontal
+for point, text, off in ((shoulder, "shoulder", (8, -18)), (elbow, "elbow", (10, 4)),
                          (wrist, "wrist centre", (8, 8)), (tool, "target (tool point)", (8, -16))):
     ax.annotate(text, point, xytext=off, textcoords="offset points", fontsize=10)
-for p0, p1, text, off in ((shoulder, elbow, "$L_1$", (-22, 0)), (elbow, wrist, "$L_2$", (0, 8)),
+for p0, p1, text, off in ((shoulder, elbow, "$L_1$", (6, -8)), (elbow, wrist, "$L_2$", (0, 8)),
                           (wrist, tool, "$L_t$", (6, 6)), (shoulder, wrist, "$d$", (4, -16))):
     ax.annotate(text, (p0 + p1) / 2, xytext=off, textcoords="offset points", fontsize=12)
-ax.annotate("$\\psi$ (pitch)", tool, xytext=(-95, 8), textcoords="offset points", fontsize=11)
 ax.axhline(0, color="peru", lw=4)
 ax.annotate("$h_0$", (shoulder[0], shoulder[1] / 2), xytext=(-30, 0), textcoords="offset points", fontsize=12)
-ax.set(title="the arm's plane: the triangle shoulder-elbow-wrist centre", xlabel="distance from the base axis (mm)",
-       ylabel="height z (mm)", aspect="equal", xlim=(-90, 420), ylim=(-20, 360))
+ax.set(title="the arm's plane: the triangle, its angles and the L of the upper arm",
+       xlabel="distance from the base axis (mm)", ylabel="height z (mm)", aspect="equal", xlim=(-90, 420),
+       ylim=(-20, 360))
 fig.tight_layout()
 
 # %% [markdown]
@@ -127,6 +158,9 @@ T = kinematics.fk(Q)
 P, approach = T[:, :3, 3], T[:, :3, 0]
 radial = P[:, :2] / np.linalg.norm(P[:, :2], axis=1, keepdims=True)
 pitches = np.arctan2(-approach[:, 2], np.sum(approach[:, :2] * radial, axis=1))
+first, second = (kinematics.ik_branches(P[i], pitches[i], Q[i, 4])[:, :4] for i in (0, 1))
+assert not np.array_equal(first, second, equal_nan=True), \
+    "ik_branches gives the same first four joints whatever the target: compute them from the target and the pitch"
 worst, found = 0.0, 0
 for p, pitch, q in zip(P, pitches, Q):
     cand = kinematics.ik_branches(p, pitch, q[4])
@@ -158,7 +192,7 @@ print(f"OK: every branch lands on its target (within 1e-9 mm) and the original j
 target, pitch = np.array([60.0, 380.0, 60.0]), np.pi / 2
 cand = kinematics.ik_branches(target, pitch)
 u = np.append(target[:2] / np.linalg.norm(target[:2]), 0.0)
-fig, axes = plt.subplots(2, 2, figsize=(9, 6.8), sharey=True)
+fig, axes = plt.subplots(2, 2, figsize=(9, 7.6), sharey=True)
 axes = axes.ravel()
 for ax, name, q in zip(axes, kinematics.BRANCHES, cand):
     pts = kinematics.joint_positions(q)
@@ -177,10 +211,10 @@ for ax, name, q in zip(axes, kinematics.BRANCHES, cand):
     verdict = "within the limits" if not bad else "breaks " + ", ".join(b.split(" = ")[0] for b in bad)
     degrees = np.round(np.degrees(q[:4])).astype(int)
     ax.set_title(f"{name}\nq1-4 = {degrees} deg\n{verdict}", fontsize=10)
-    ax.set(aspect="equal", xlim=(-120, 430), ylim=(-40, 330))
+    ax.set(aspect="equal", xlim=(-120, 430), ylim=(-40, 330), xticks=range(0, 401, 100))
 for ax in axes[::2]:
     ax.set_ylabel("z (mm)")
-for ax in axes[2:]:
+for ax in axes:
     ax.set_xlabel("towards the target (mm)")
 fig.tight_layout()
 
@@ -198,14 +232,16 @@ print(f"OK: kinematics.ik returns {len(solutions)} solutions, in the order {orde
 
 # %% [markdown]
 # **Exercise `ik.q_branches` (3 points, written).** In the branches figure, (a) which branch breaks a joint limit,
-# and which joint stops it? (b) The kit ranks elbow up first. Looking at the figure, give one physical reason to
+# which joint stops it and by how many degrees (compare its angle in the figure with `robot.lower` and
+# `robot.upper`)? (b) The kit ranks elbow up first. Looking at the figure, give one physical reason to
 # prefer the facing elbow-up branch over the flipped one for a top-down grasp on the board, and one situation where
 # only the flipped waist can reach (section 4 counts how often). Two or three sentences each.
 
 # %% [markdown]
 # <!-- BEGIN ANSWER ik.q_branches -->
-# (a) The flipped elbow-down branch breaks a limit: its shoulder would have to lean back past −96° (the shoulder's
-# lower limit), so only three branches remain.
+# (a) The flipped elbow-down branch breaks a limit: the figure's title gives its q4 = −116°, 16° past the wrist_angle's
+# lower limit of −100°, so it is the wrist_angle that stops it (its shoulder, at −96°, is within its limit), and
+# three branches remain.
 # (b) The facing elbow-up branch keeps the upper arm and the elbow above the shoulder-wrist line, high above the
 # board and the blocks, and needs the least waist and shoulder motion from home; the flipped one swings the whole arm
 # over the base and rolls the wrist over. Only the flipped waist reaches targets behind the base that the shoulder
@@ -248,9 +284,9 @@ ax.plot(r_max * np.cos(a), r_max * np.sin(a), "r--", lw=1)
 ax.annotate(f"r_max = {r_max:.0f} mm", (r_max * np.cos(2.2), r_max * np.sin(2.2)), xytext=(-80, 6),
             textcoords="offset points", color="r", fontsize=10)
 ax.plot(0, 0, "r^", ms=9)
-ax.set(title="steepest approach pitch per board cell (deg); white: top-down boundary", xlabel="world x (mm)",
+ax.set(title="steepest approach pitch per board cell; white: where top-down stops", xlabel="world x (mm)",
        ylabel="world y (mm)", aspect="equal")
-fig.colorbar(im, ax=ax, shrink=0.8)
+fig.colorbar(im, ax=ax, shrink=0.8, label="steepest pitch (deg)")
 fig.tight_layout()
 
 # %% [markdown]
@@ -570,7 +606,7 @@ target, pitch = np.array([60.0, 380.0, 60.0]), np.pi / 2
 cand = kinematics.ik_branches(target, pitch)
 starts = {"home": robot.home, "sleep": robot.sleep, "elbow raised": np.array([0.0, 0.8, -1.5, 0.5, 0.0]),
           "waist turned back": np.array([2.8, -1.0, -1.2, -1.2, 0.0])}
-offsets = {"home": (6, -6), "sleep": (6, -4), "elbow raised": (-82, -16), "waist turned back": (4, 6)}
+offsets = {"home": (8, -6), "sleep": (8, -4), "elbow raised": (-90, 8), "waist turned back": (4, 6)}
 fig, ax = plt.subplots(figsize=(8, 4.2))
 for name, q0 in starts.items():
     try:
@@ -584,13 +620,14 @@ for name, q0 in starts.items():
         history, verdict = e.history, f"no convergence: stops about {10 * round(e.history[-1, 0] / 10)} mm away, " \
             f"{' and '.join(stuck) or 'no joint'} at the limit"
     error = np.maximum(history[:, 0], 100.0 * history[:, 1])
-    ax.semilogy(np.arange(len(error)), np.maximum(error, 1e-6), "-o", ms=3)
+    line, = ax.semilogy(np.arange(len(error)), np.maximum(error, 1e-6), "-o", ms=3)
     last = min(len(error) - 1, 60)
-    ax.annotate(name, (last, max(error[last], 1e-6)), xytext=offsets[name], textcoords="offset points", fontsize=10)
+    ax.annotate(name, (last, max(error[last], 1e-6)), xytext=offsets[name], textcoords="offset points", fontsize=10,
+                color=line.get_color(), arrowprops=dict(arrowstyle="-", color=line.get_color(), lw=0.8))
     print(f"from {name:18s} -> {verdict}")
 ax.axhline(1e-3, color="k", ls=":", lw=1)
-ax.set(xlim=(0, 75), ylim=(1e-6, 2e3), xlabel="iteration", ylabel="pose error (mm; rad x 100 mm)",
-       title="damped least squares from four starts (dotted: the tolerance)")
+ax.set(xlim=(0, 75), ylim=(1e-6, 2e3), xlabel="iteration (count)", ylabel="pose error (mm; rad x 100 mm)",
+       title="damped least squares from four starts: three converge, one stalls (dotted: the tolerance)")
 fig.tight_layout()
 
 # %% [markdown]
@@ -605,7 +642,11 @@ fig.tight_layout()
 #
 # Stretched out straight, the arm cannot move its tool any further outward: $J$ loses a direction. Below, a
 # horizontal approach at shoulder height straight ahead, 10 mm beyond the stretched arm's reach (left) and 2 mm
-# inside it (right), from home, with three dampings $\lambda$.
+# inside it (right), from home, with three dampings $\lambda$ (0.1, 2 and 30 mm/rad), with your `solve_ik_dls`.
+#
+# *Predict before you run the cell* (write it at the top of your answer to `ik.q_damping` below): for the target out
+# of reach, what will the position error do over 60 iterations with a small and with a large damping? And inside the
+# reach, which damping converges first?
 
 # %%
 reach = L1 + L2 + Lt
@@ -628,16 +669,32 @@ for ax, extra in zip(axes, (10.0, -2.0)):
                         textcoords="offset points", fontsize=10, color=line.get_color())
         where = f"{extra:.0f} mm beyond" if extra > 0 else f"{-extra:.0f} mm inside"
         print(f"target {where} the reach, lambda = {damping:4.1f} mm/rad: {verdict}")
-    ax.set(title=f"target {where} the reach", xlabel="iteration", ylabel="position error (mm)", xlim=(0, 62))
+    ax.set(title=f"target {where} the reach", xlabel="iteration (count)", ylabel="position error (mm)",
+           xlim=(0, 62))
 axes[0].set_ylim(9, 12.5)
 axes[1].set_ylim(1e-4, 1e3)
 fig.tight_layout()
 
 # %% [markdown]
-# Out of reach (left), a weakly damped step keeps asking for an impossible outward motion: the step hits the
-# `max_step` clamp and the arm chatters between two poses for ever, never settling. Strong damping trades a little
-# speed for a bounded step and settles at the nearest point the arm can reach, 10 mm short. Inside the reach (right),
-# every damping converges, the strong one a little slower.
+# **Exercise `ik.q_damping` (3 points, written).** Compare the figure with your prediction. Describe what each
+# damping does beyond the reach and inside it (read the errors and iteration counts off the figure and the printed
+# lines). Explain, from the damped step $\Delta q = J^T (J J^T + \lambda^2 I)^{-1} e$ and the stretched arm's $J$, why
+# a small damping behaves as it does out of reach, and what a large one costs inside the reach. How would you choose
+# $\lambda$ for the lab? (Your prediction, then three to five sentences.)
+
+# %% [markdown]
+# <!-- BEGIN ANSWER ik.q_damping -->
+# Prediction: the small damping oscillates out of reach; the large one is slower inside it.
+# Observed: out of reach, λ = 0.1 and 2 mm/rad never settle: the error chatters between about 10.2 and 11 mm for all
+# 60 iterations; λ = 30 mm/rad settles after about 10 iterations at 10.0 mm, the nearest the arm gets. Inside the
+# reach, λ = 0.1 and 2 reach it in 10 steps (the error falls by orders of magnitude per step), λ = 30 only linearly
+# (a straight line on the log scale), reaching it in 36 steps. Stretched out, J loses its
+# outward direction: its smallest singular value σ goes to 0 and the undamped step divides the outward error by σ, so
+# the step is huge, hits the max_step clamp and throws the arm back and forth; the damped step has gain σ/(σ² + λ²),
+# at most 1/(2λ), so a large λ keeps it small and bounded, at the price of shrinking every step near the solution
+# (slow, linear convergence). For the lab: a small λ (a few mm/rad) where targets are checked to be in reach first, or
+# a λ that grows when the error stops falling (Levenberg-Marquardt), and always a step clamp.
+# <!-- END ANSWER -->
 
 # %% [markdown]
 # ## Your rubric

@@ -34,7 +34,7 @@ from IPython import get_ipython
 from armlab import kinematics, make_station, planning, tasks
 from armlab_course.exercises import require_written, with_reference
 from armlab.tasks.experiments import LAB_TABLE_III_ERROR_MM, format_table, reach_experiment
-from armlab.tasks.move_path import drop_with, grab_with, kit_move_path, move_path
+from armlab.tasks.move_path import default_path, drop_with, grab_with, move_path
 from armlab.tasks.sag import LAB_BASELINE, calibration_poses, hover_pose
 
 get_ipython().run_line_magic("matplotlib", "inline")
@@ -83,8 +83,8 @@ print("clicked the red block at pixel", np.round(red.pixel, 1), "-> world", p, "
 # * **the depth.** Seen from above, faces can overlap: a small block stacked off-centre on a large one sits inside the
 #   large one's square. The click's height $p_z$ tells which surface was under the pointer.
 #
-# The kit's rule (`tasks.click_grab`: the nearest face centre within one block edge) ignores both: near the corner of
-# a turned block, or on the bare board just beside one, it can pick the wrong block or one that was not clicked.
+# The nearest-centre rule (the nearest face centre within one block edge) ignores both: near the corner of a turned
+# block, or on the bare board just beside one, it can pick the wrong block or one that was not clicked.
 #
 # **Exercise `grab.click_target` (5 points, code):** write `click_target(click, tops, yaws, edges, margin_mm=3.0)`:
 # `click` the world point (3,) mm, `tops` (n, 3) the top-face centres (world mm), `yaws` (n,) rad, `edges` (n,) mm;
@@ -209,9 +209,9 @@ print(f"OK: every face centre, the four corners of the turned green face and the
 # Section 5 below shows what goes wrong when the roll ignores the yaw.
 
 # %%
-# your move_path; while it is blank the kit's own planners stand in (it says so once)
-path = with_reference(move_path, "grab.move_path", kit_move_path,
-                      "the kit's planning.plan_pick / plan_place plan the motion")
+# your move_path; while it is blank a stand-in plans and says so once (in the student release the lab report's own
+# plan: fixed heights, joint moves, the pads square to the board's axes rather than to the block)
+path = with_reference(move_path, "grab.move_path", *default_path())
 plan = path(session.arm.joint_positions(), red.position, float(red.yaw), 38.0, "grasp")
 print(plan.describe())
 sampled = planning.sample_plan(plan, 0.05)
@@ -373,12 +373,132 @@ assert not held_unturned or abs(green_truth.yaw - yaw_before) > np.radians(5), "
 print("OK: misaligned wrist: roll 0 fails or shoves the block; the roll from the block's yaw grasps it")
 
 # %% [markdown]
+# ## Your click-to-grab sequence
+#
+# `move_path` plans one grasp or one release. What turns clicks into those is the **sequence**: the first click on
+# a block grabs it, the next click puts it down on the surface under the click (the board, or the top of another
+# block: a click on a block while holding one stacks on it), and a click that cannot be acted on is refused with
+# nothing moved. The kit runs one click with `tasks.click_with(session, uv, sequence)`: it finds the world point
+# under the pixel (`click_world`, on the corrected depth) and the current view's detections, asks your
+# `sequence.on_click(point, seen)` what to do, does it (the kit's pick or place, checked whole), looks again and
+# tells you `sequence.after(action, ok)`: whether the block is now held, or the place ran through. Think about:
+# - which detected block a click means (a click lands anywhere on a top face, up to its corners; the face is turned by
+#   its yaw) and what to say when it means none (`ClickRefused(why)`);
+# - what your sequence must remember between clicks, and what it must *not* believe until `after` says so (a pick
+#   that closes on nothing);
+# - where the held block's *bottom* face goes for a click on the board and on another block's top, and a click where
+#   the held block itself stood (the frame still shows it).
+#
+# **Exercise `grab.sequence`:** write `ClickSequence.on_click` and `ClickSequence.after`.
+
+# %%
+from armlab.blocks import block_edge
+from armlab.tasks import ClickRefused
+
+
+class ClickSequence:
+    """Click to grab, click to drop (see above): on_click(point, seen) -> ("grab", block) or ("drop", position, yaw)."""
+
+    def __init__(self):
+        self.held = None             # the detection of the block the gripper holds (None: it holds nothing)
+        self.notes = {}              # whatever else your sequence remembers
+
+    def on_click(self, point, seen):
+        # BEGIN SOLUTION grab.sequence
+        point = np.asarray(point, dtype=float)
+
+        def under_click(b):
+            """The click's offset in the top face's own axes is within half its edge (and 3 mm) both ways."""
+            c, s = np.cos(b.yaw), np.sin(b.yaw)
+            dx, dy = point[:2] - np.asarray(b.position[:2])
+            return max(abs(c * dx + s * dy), abs(-s * dx + c * dy)) <= b.edge_mm / 2 + 3.0
+
+        if self.held is None:
+            hit = [b for b in seen if b.is_block and under_click(b)]
+            if not hit:
+                raise ClickRefused(f"no block under the click at ({point[0]:.0f}, {point[1]:.0f}) mm")
+            return ("grab", max(hit, key=lambda b: b.position[2]))       # the top one of a stack
+        held = self.held
+        if under_click(held) and point[2] > held.position[2] - held.edge_mm / 2:
+            point[2] = held.position[2] - block_edge(held.size)           # where it stood: on what it stood on
+        return ("drop", point, 0.0)
+        # END SOLUTION
+
+    def after(self, action, ok):
+        # BEGIN SOLUTION grab.sequence
+        if action[0] == "grab":
+            self.held = action[1] if ok else None
+        elif ok:
+            self.held = None
+        # END SOLUTION
+
+
+def refuse_every_click(point, seen):
+    """The stand-in while your sequence is blank: every click is refused and nothing moves."""
+    raise ClickRefused("your click sequence is not written yet: nothing moves")
+
+
+clicks = ClickSequence()
+clicks.on_click = with_reference(clicks.on_click, "grab.sequence", refuse_every_click,
+                                 "every click is refused: nothing moves")
+demo_station = make_station("sim", seed=2, scene=SCENE)
+demo_session = tasks.start_session(demo_station)
+for where in ([-150.0, 200.0, 38.0], [-220.0, 60.0, 0.0]):              # the red block, then a free spot
+    uv = demo_station.camera.truth.project(np.array([where]))[0]
+    try:
+        print(f"click at ({uv[0]:.0f}, {uv[1]:.0f}) px:", tasks.click_with(demo_session, uv, clicks))
+    except ClickRefused as refused:
+        print(f"click at ({uv[0]:.0f}, {uv[1]:.0f}) px refused: {refused}")
+
+# %% [markdown]
+# ## Check: your sequence, click by click, on the simulator
+#
+# A fresh station with the same three blocks: a click on bare board (refused, nothing moves), the red block (held),
+# a free spot (it lands within 3 mm), the blue block near a corner of its face (held) and the green block's top (the
+# blue one lands on it, centred). The simulator's ground truth decides.
+
+# %%
+# CHECK grab.sequence
+seq_station = make_station("sim", seed=3, scene=SCENE)
+seq_session = tasks.start_session(seq_station)
+mine = ClickSequence()
+truth = {o.color: o for o in seq_station.world.blocks}
+
+
+def click_at(point):
+    return tasks.click_with(seq_session, seq_station.camera.truth.project(np.array([point], float))[0], mine)
+
+
+try:
+    click_at([0.0, 120.0, 0.0])
+    refused = False
+except ClickRefused:
+    refused = True
+assert refused and not seq_station.world.held, "a click on bare board was not refused"
+assert click_at([-150.0, 200.0, 38.0]) == ("grab", True) and truth["red"].id in seq_station.world.held, \
+    "the click on the red block did not grab it"
+assert click_at([-220.0, 60.0, 0.0]) == ("drop", True), "the drop on the board did not run"
+red_off = np.abs(truth["red"].position - [-220.0, 60.0, 19.0]).max()
+assert red_off < 3.0 and not seq_station.world.held, f"the red block landed {red_off:.1f} mm from the click"
+corner = np.array([200.0, 150.0]) + 9.0 * np.array([np.cos(0.3) + np.sin(0.3), np.sin(0.3) - np.cos(0.3)])
+assert click_at([*corner, 25.0]) == ("grab", True) and truth["blue"].id in seq_station.world.held, \
+    "a click near a corner of the blue block's face did not grab it"
+assert click_at([60.0, 300.0, 38.0]) == ("drop", True), "the drop on the green block did not run"
+blue_off = np.abs(truth["blue"].position - [60.0, 300.0, 38.0 + 12.5]).max()
+assert blue_off < 3.0, f"the blue block landed {blue_off:.1f} mm from the green block's top centre"
+print(f"OK: your click sequence refused bare board, grabbed and dropped the red block ({red_off:.1f} mm off) and "
+      f"stacked the blue one on the green ({blue_off:.1f} mm off)")
+
+# %% [markdown]
 # ## 6 · Click to grab, click to drop
 #
 # **Demonstration** of the kit's click-to-grab panel (it plans with the kit's planners, not your `move_path`).
 # `tasks.click_grab(session, (u, v))` and `tasks.click_drop(session, (u, v))` do all of the above from a pixel of the
-# current frame (`session.last.frame`). Clicks off the board, on the robot, on bare board or out of
-# reach raise `tasks.ClickRefused` and nothing moves.
+# current frame (`session.last.frame`), by the kit's click rule. Clicks off the board, on the robot, on bare board or
+# out of reach raise `tasks.ClickRefused` and nothing moves. In the student release that rule is a lesser stand-in
+# for your sequence: a click grabs only within a few pixels of a block's detected centre, and a drop where the held
+# block was seen is refused; your `ClickSequence` runs through `tasks.click_with` (above), and
+# `ClickToGrab(session, sequence=ClickSequence())` puts it behind the live panel instead of the kit's rule.
 #
 # In a live notebook you click the image itself: `ClickToGrab(session).widget()` shows the current frame
 # (downscaled to $w \times h = 640 \times 360$ px to keep it light) and listens to its clicks with `ipyevents`. The

@@ -32,7 +32,7 @@ from armlab._paths import data_path
 from armlab_course.exercises import references, require_written, with_reference
 from armlab.tasks import teach
 from armlab.detection import Block
-from armlab.tasks.move_path import drop_with, grab_with, kit_move_path, move_path
+from armlab.tasks.move_path import default_path, drop_with, grab_with, move_path
 from armlab.transforms import wrap_quarter
 
 get_ipython().run_line_magic("matplotlib", "inline")
@@ -161,13 +161,13 @@ print(f"OK: swap: red is {np.abs(red.position - b).max():.1f} mm from B's spot, 
 # ## 5 · The same swap with `move_path`
 #
 # The report did the swap by teaching; its click-to-grab used `move_path`, which plans each pick and place from a
-# point. Here the three moves of the swap run through **your** `move_path` of notebook 05 (while it is blank, the
-# kit's planners stand in and say so), on a fresh station: A → intermediate, B → A, intermediate → B, each block
-# picked at its top-face centre as the simulator knows it (no camera here, as in the taught swap).
+# point. Here the three moves of the swap run through **your** `move_path` of notebook 05 (while it is blank, a
+# stand-in plans and says so: in the student release the lab report's own fixed-height plan), on a fresh station:
+# A → intermediate, B → A, intermediate → B, each block picked at its top-face centre as the simulator knows it (no
+# camera here, as in the taught swap).
 
 # %%
-path = with_reference(move_path, "grab.move_path", kit_move_path,
-                      "the kit's planning.plan_pick / plan_place plan the motion")
+path = with_reference(move_path, "grab.move_path", *default_path())
 path_station = make_station("sim", seed=0, scene="swap")
 path_session = tasks.start_session(path_station)
 path_red, path_blue = (next(o for o in path_station.world.blocks if o.color == c) for c in ("red", "blue"))

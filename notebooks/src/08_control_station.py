@@ -11,9 +11,11 @@
 # | exercise | points | kind | how it is graded |
 # |---|---|---|---|
 # | `station.transition` | 6 | code | hidden sequences of commands, errors, stops and nested commands |
+# | `station.machine` | 12 | open task | hidden scripted sessions: buttons, a stop in every state, teach, repeat |
 #
-# The cell called **Check** tests your transition on the simulator; cells marked **Demonstration** show the kit's
-# panel and test nothing of yours. Units: millimetres and radians; world (board) frame.
+# The cells called **Check** test your transition on the simulator and your machine on scripted sessions; cells
+# marked **Demonstration** show the kit's panel and test nothing of yours. Units: millimetres and radians; world
+# (board) frame.
 #
 # ## 0 · Before the real arm moves: the checklist
 #
@@ -186,7 +188,193 @@ print(f"OK: your transition ran {machine.history.count('idle') - 1} commands on 
       "idle, a stop during the work ended in estop")
 
 # %% [markdown]
+# ## 1b · The whole machine: buttons, the stop, teach and repeat
+#
+# Now the machine itself. The station's buttons are `calibrate`, `detect`, `execute`, `click-grab`, `click-drop`
+# (the commands: `COMMANDS`), `teach`, `record`, `finish`, `repeat`, `estop` and `reset`. Your machine gets the kit's
+# **port** — all it may do to the station — and the kit presses its buttons with `machine.press(button, *args)`:
+# - `port.work(command, *args)` runs a command's work (its arguments are the button's); `port.halt()` stops the arm
+#   at once, after which every arm command raises `EmergencyStopped` until `port.restart()`; `port.set_torque(on)`;
+#   `port.joints()` reads the arm's joints (5,) rad; `port.replay(joints, grippers)` plays waypoints back;
+# - a command and `repeat` run through your `run_command` above (the same rules; `repeat` with nothing taught is a
+#   `ValueError`, and nothing is entered);
+# - `teach` (from `idle`): the torque goes off (the arm is posed by hand) and the machine is in `teach`; `record`
+#   (`"open"` or `"closed"`, the gripper there) stores `port.joints()` and returns it; `finish` puts the torque back
+#   on, keeps the waypoints as the program `repeat` plays (none recorded: the last program stays) and returns their
+#   number; a `record` or `finish` outside `teach`, and every other button during `teach`, is refused
+#   (`MachineBusy`);
+# - `estop`, in **every** state: halt the arm and be in `estop` (entered once); everything but `estop` and `reset` is
+#   then refused with `EmergencyStopped`; `reset` only in `estop` (elsewhere `MachineBusy`): restart the arm, forget a
+#   teaching cut short, back to `idle`. A stop during teaching leaves the arm limp until the reset restarts it.
+#
+# The machine keeps `state`, `history` (every state entered), `stop_requested` (from `estop` until `reset`) and
+# `enter(state)`, so that `run_command(self, ...)` works on it.
+#
+# **Exercise `station.machine`:** write `StationMachine.press`. `machine_on(session)` then drives the simulated
+# station.
+
+# %%
+from armlab.tasks.port import COMMANDS, SessionPort
+
+
+class StationMachine:
+    """The station's state machine over the kit's port (see above)."""
+
+    def __init__(self, port):
+        self.port = port
+        self.state, self.history = "idle", ["idle"]
+        self.stop_requested = False
+        self.program = None          # the last taught waypoints: [(joints, gripper), ...]
+        self.notes = {}              # whatever else your machine remembers
+
+    def enter(self, state):
+        self.state = state
+        self.history.append(state)
+
+    def press(self, button, *args):
+        # BEGIN SOLUTION station.machine
+        if button == "estop":
+            self.stop_requested = True
+            self.port.halt()
+            if self.state != "estop":
+                self.enter("estop")
+            return None
+        if button == "reset":
+            if self.state != "estop":
+                raise MachineBusy(f"reset refused: the machine is in {self.state!r}, not 'estop'")
+            self.port.restart()
+            self.stop_requested = False
+            self.notes.pop("teaching", None)
+            self.enter("idle")
+            return None
+        if self.state == "estop":
+            raise EmergencyStopped(f"{button} refused: the station is emergency-stopped; reset first")
+        if button in ("record", "finish"):
+            if self.state != "teach":
+                raise MachineBusy(f"{button} refused: the machine is in {self.state!r}, not 'teach'")
+            if button == "record":
+                gripper = args[0] if args else "open"
+                if gripper not in ("open", "closed"):
+                    raise ValueError(f"the gripper is 'open' or 'closed', got {gripper!r}")
+                q = self.port.joints()
+                self.notes["teaching"].append((q, gripper))
+                return q
+            self.port.set_torque(True)
+            self.program = self.notes.pop("teaching") or self.program
+            self.enter("idle")
+            return len(self.program or ())
+        if self.state != "idle":
+            raise MachineBusy(f"{button} refused: the machine is in {self.state!r}")
+        if button == "teach":
+            self.port.set_torque(False)
+            self.notes["teaching"] = []
+            self.enter("teach")
+            return None
+        if button == "repeat":
+            if not self.program:
+                raise ValueError("nothing to repeat: teach a program first")
+            joints, grippers = zip(*self.program)
+            return run_command(self, "repeat", lambda: self.port.replay(np.array(joints), grippers))
+        if button in COMMANDS:
+            return run_command(self, button, lambda: self.port.work(button, *args))
+        raise ValueError(f"unknown button {button!r}")
+        # END SOLUTION
+
+
+def machine_on(session):
+    """Your machine over the kit's port of a task session."""
+    return StationMachine(SessionPort(session))
+
+
+# %% [markdown]
+# ## Check: your machine in scripted sessions
+#
+# First on the simulator: detect, teach two waypoints (the arm posed by hand), repeat them, and a stop pressed while
+# teaching. Then on a scripted port that records what your machine asks of the station: a stop in every state, and a
+# button pressed in every state, must be handled as above.
+
+# %%
+# CHECK station.machine
+mine = make_station("sim", seed=0, scene={"objects": [
+    {"color": "red", "size": "large", "position_mm": [-150.0, 200.0], "yaw_rad": 0.0}]})
+m = machine_on(tasks.start_session(mine))
+assert any(b.color == "red" for b in m.press("detect")), "detect found no red block"
+m.press("teach")
+assert not mine.arm.torque_enabled, "teaching: the torque must be off"
+for q, g in (([0.3, -0.2, 0.1, 0.9, 0.0], "open"), ([-0.3, -0.1, 0.2, 0.8, 0.0], "closed")):
+    mine.arm.move_by_hand(np.array(q))
+    m.press("record", g)
+taught = m.press("finish")
+assert mine.arm.torque_enabled, "finish: the torque is still off: teaching ends with the arm holding its pose again"
+assert taught == 2 and m.state == "idle", f"finish: {taught} waypoints taught (2 recorded), state {m.state!r}"
+m.press("repeat")
+assert np.abs(mine.arm.joint_positions() - [-0.3, -0.1, 0.2, 0.8, 0.0]).max() < 0.02, "the repeat did not end there"
+m.press("teach")
+m.press("estop")
+assert m.state == "estop", f"a stop while teaching: state {m.state!r}"
+m.press("reset")
+assert mine.arm.torque_enabled and m.history[-3:] == ["teach", "estop", "idle"], f"history {m.history[-4:]}"
+
+
+def raises(error, call, *args) -> bool:
+    """Whether call(*args) raises `error` (the check's own helper)."""
+    try:
+        call(*args)
+    except error:
+        return True
+    return False
+
+
+class ScriptedPort:
+    """A port that records what the machine asks (its work returns the command's name)."""
+
+    def __init__(self):
+        self.log = []
+
+    def __getattr__(self, name):
+        def call(*args):
+            self.log.append(name)
+            return np.zeros(5) if name == "joints" else (args[0] if name == "work" else None)
+        return call
+
+
+every = ("idle", "teach", "calibrate", "repeat", "estop")
+for where in every:                  # a stop in every state (a command's state: pressed during its work)
+    port = ScriptedPort()
+    m = StationMachine(port)
+    m.program = [(np.zeros(5), "open")]
+    if where == "teach":
+        m.press("teach")
+    elif where == "estop":
+        m.press("estop")
+    if where in ("calibrate", "repeat"):
+        port.work = port.replay = lambda *a, m=m: m.press("estop")
+        heard = raises(EmergencyStopped, m.press, where)
+        assert heard, f"a stop during {where}: the caller did not hear EmergencyStopped"
+    else:
+        m.press("estop")
+    assert m.state == "estop" and m.history.count("estop") == 1, f"a stop in {where}: history {m.history}"
+    assert "halt" in port.log, f"a stop in {where}: the arm was not halted"
+    for button in ("detect", "teach", "repeat", "record"):
+        assert raises(EmergencyStopped, m.press, button), f"after a stop in {where}: {button} was not refused"
+    m.press("reset")
+    assert m.state == "idle" and port.log[-1] == "restart", f"reset after a stop in {where}: {port.log}"
+m = StationMachine(ScriptedPort())
+m.press("teach")
+for button in ("detect", "teach", "repeat", "reset"):
+    assert raises(MachineBusy, m.press, button) and m.state == "teach", \
+        f"{button} during teaching was not refused (state {m.state!r})"
+print("OK: your machine detected, taught and repeated on the simulator, and a stop in every state halted the arm, "
+      "refused every button but reset, and reset restarted it")
+
+# %% [markdown]
 # ## 2 · The panel (demonstration)
+#
+# The panel drives the kit's `TaskMachine`. In the student release its teaching buttons are a lesser stand-in for
+# your `StationMachine`: a *teach*, *record* or *finish* pressed out of turn stops the station (press *reset* to go
+# on) instead of being refused. `station_panel(session, machine=OwnMachine(session, StationMachine))` (from
+# `armlab.tasks.port`) puts your machine behind the panel instead. The emergency stop is the kit's own either way:
+# it halts the arm through the guarded arm first, whatever a machine does.
 #
 # The view shows the camera image, its depth or the last detections; hovering shows the world point under the
 # pointer; a click grabs the block under it or drops the held one there. The buttons run the machine's commands

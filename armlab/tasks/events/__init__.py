@@ -1,4 +1,4 @@
-"""The competition events (reference/lab.md): sort 'n stack, line 'em up and to the sky, run autonomously on a
+"""The competition events (docs/course/competition.md): sort 'n stack, line 'em up and to the sky, run autonomously on a
 simulated station and scored from the world's ground truth.
 
     from armlab.tasks.events import run_event

@@ -14,7 +14,8 @@ from armlab.blocks import block_edge
 from armlab.lab import lab_config
 from armlab.planning import DEFAULT_CLEARANCE_MM
 
-__all__ = ["Move", "footprint_radius", "occupied_by", "free_spot", "is_stacked", "covered", "REACH_MM", "GAP_MM"]
+__all__ = ["Move", "footprint_radius", "occupied_by", "free_spot", "free_spots", "is_stacked", "covered", "REACH_MM",
+           "GAP_MM"]
 
 REACH_MM = (170.0, 320.0)     # radii where staging spots go: top-down picks and places work well there
 GAP_MM = 25.0                 # free space kept around a staged block for the finger pads
@@ -65,10 +66,10 @@ def occupied_by(xy, radius: float, seen, ignore=()) -> list:
             and np.linalg.norm(np.asarray(b.position[:2]) - xy) < radius + footprint_radius(b) + GAP_MM]
 
 
-def free_spot(seen, size: str, near, reserved=(), y_min: float = 40.0, step: float = 20.0) -> np.ndarray:
-    """A free board spot (3,) world mm (z = 0) for a block of `size`: on a grid of `step` mm within REACH_MM of the
-    waist axis, y >= y_min, clear of every detection and of `reserved` points ((x, y) of planned slots), away from the
-    AprilTags, nearest to `near` (2+,). Raises ValueError when there is none."""
+def free_spots(seen, size: str, reserved=(), y_min: float = 40.0, step: float = 20.0) -> np.ndarray:
+    """Every free board spot (K, 2) world mm for a block of `size` on a grid of `step` mm: within REACH_MM of the
+    waist axis, y >= y_min, clear of every detection and of `reserved` points ((x, y) of planned slots), away from
+    the AprilTags (K may be 0)."""
     lab = lab_config()
     r_block = block_edge(size) / np.sqrt(2)
     xs = np.arange(lab.board_x[0] + 40, lab.board_x[1] - 40 + 1e-9, step)
@@ -83,8 +84,14 @@ def free_spot(seen, size: str, near, reserved=(), y_min: float = 40.0, step: flo
         ok &= np.linalg.norm(P - np.asarray(b.position[:2]), axis=1) >= r_block + footprint_radius(b) + GAP_MM
     for q in reserved:
         ok &= np.linalg.norm(P - np.asarray(q, float)[:2], axis=1) >= 2 * r_block + GAP_MM
-    if not ok.any():
+    return P[ok]
+
+
+def free_spot(seen, size: str, near, reserved=(), y_min: float = 40.0, step: float = 20.0) -> np.ndarray:
+    """A free board spot (3,) world mm (z = 0) for a block of `size` (free_spots), nearest to `near` (2+,). Raises
+    ValueError when there is none."""
+    cand = free_spots(seen, size, reserved, y_min, step)
+    if not len(cand):
         raise ValueError(f"no free spot on the board for a {size} block (every reachable spot is taken)")
-    cand = P[ok]
     best = cand[np.argmin(np.linalg.norm(cand - np.asarray(near, float)[:2], axis=1))]
     return np.array([best[0], best[1], 0.0])

@@ -1,4 +1,4 @@
-"""Scoring of the competition events from a world state (the ground truth), by the rules of reference/lab.md.
+"""Scoring of the competition events from a world state (the ground truth), by the rules of docs/course/competition.md.
 
 Every scorer takes the objects on the board (armlab.blocks.ObjectState: centre position in world mm, yaw rad) and
 returns a Score with one line per block. Only objects at rest count: an object rests when its bottom face lies on

@@ -1,11 +1,13 @@
 """To the sky: large blocks handed over one at a time at a fixed spot, stacked into one tower as high as possible.
+The robot's side (the strategy) is the kit's own where it is installed (the instructor's tree,
+armlab.tasks.events.strategies.sky) and the generic search (armlab.tasks.events.search) in the student release, where
+writing it is exercise events.sky; this module holds the hand-over and the reach the strategy builds on.
 
 HandOver is the scene's side (the person handing the blocks over, acting on the simulated world): it puts one large
 block at HANDOVER_XY (with a little jitter in position and turn, as a hand would) at the start and after every block
-that ends on the tower. Sky is the robot's side: it picks the block at the hand-over spot and puts it on the tower at
-TOWER_XY, the next level up, always aimed at the same (x, y) so placement errors do not add up (the detected top
-face of a tall tower drifts by a few mm per 100 mm of height, more than the arm errs); the tower's height is believed
-from what was placed and checked against the detected top while it is below the detector's height limit.
+that ends on the tower. The kit's strategy is the robot's side: it picks the block at the hand-over spot and puts
+it on the tower at TOWER_XY, the next level up, always aimed at the same (x, y) so placement errors do not add up
+(the detected top face of a tall tower drifts by a few mm per 100 mm of height, more than the arm errs).
 The tower stops when the next level is out of the arm's reach. What limits it is the height the tool point can reach
 above the tower spot (highest_tool_z): top-down only about 260 mm (wrist_angle runs out), so every level above ~6
 blocks is placed with a tilted approach; at any pitch about 510 mm, best at 150-180 mm from the waist axis (the
@@ -23,13 +25,13 @@ from armlab import kinematics
 from armlab.blocks import COLORS, ObjectState, block_edge
 from armlab.detection import DetectionSettings
 from armlab.kinematics import Unreachable
-from armlab.planning import Obstacle, inner_limits
+from armlab.planning import inner_limits
 
-from .layout import Move
-from .registry import EventSpec, Strategy
+from .registry import EventSpec
 from .scoring import SKY_LEVELS, score_sky
+from .search import kit_or_search
 
-__all__ = ["Sky", "HandOver", "HANDOVER_XY", "TOWER_XY", "SKY_CLEARANCE_MM", "SKY_SETTINGS", "TOWER_RADIUS_MM",
+__all__ = ["HandOver", "HANDOVER_XY", "TOWER_XY", "SKY_CLEARANCE_MM", "SKY_SETTINGS", "TOWER_RADIUS_MM",
            "highest_tool_z", "EVENT"]
 
 HANDOVER_XY = (-200.0, 150.0)
@@ -99,43 +101,6 @@ class HandOver:
         return {"n_handed": self.supply, "handover_xy": HANDOVER_XY}
 
 
-class Sky(Strategy):
-    """The to-the-sky strategy: the block seen at the hand-over spot goes on top of the tower."""
-
-    event = "sky"
-    level = 1
-
-    def __init__(self, level: int = 1):
-        if level not in SKY_LEVELS:
-            raise ValueError(f"to the sky has no levels (use 1), got {level!r}")
-        self.height = 0                     # blocks on the tower (belief)
-        self.top_xy = np.asarray(TOWER_XY, float)
-        self.stopped = ""                   # why the tower stopped growing, once it has
-
-    def next_move(self, seen) -> Move | None:
-        if self.stopped:
-            return None
-        e = block_edge("large")
-        tops = [b for b in seen if b.is_block and np.linalg.norm(np.asarray(b.position[:2]) - TOWER_XY) < NEAR_MM]
-        if tops:                             # the tower's top face is in view: trust it for the count
-            self.height = int(round(max(b.position[2] for b in tops) / e))
-        handed = [b for b in seen if b.is_block and np.linalg.norm(np.asarray(b.position[:2]) - HANDOVER_XY) < NEAR_MM]
-        if not handed:
-            return None
-        return Move(handed[0], np.array([*self.top_xy, self.height * e]), 0.0, "tower", SKY_CLEARANCE_MM)
-
-    def placed(self, move: Move) -> None:
-        self.height += 1
-
-    def cannot_place(self, why: str) -> bool:
-        """The next level is out of reach: the tower is done (next_move returns None from now on, saying why)."""
-        self.stopped = f"the next level is out of reach: {why}"
-        return True
-
-    def obstacles(self) -> list:
-        """The tower as the strategy believes it (its top is out of the detector's range once it is tall)."""
-        return [Obstacle(*TOWER_XY, self.height * block_edge("large"), TOWER_RADIUS_MM)]
-
-
-EVENT = EventSpec("sky", "to the sky", SKY_LEVELS, 600.0, Sky, score_sky, scene=lambda level: "empty",
+EVENT = EventSpec("sky", "to the sky", SKY_LEVELS, 600.0, kit_or_search("sky", "Sky"), score_sky,
+                  scene=lambda level: "empty",
                   detection=SKY_SETTINGS, supply=HandOver)

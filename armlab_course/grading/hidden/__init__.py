@@ -29,7 +29,7 @@ import numpy as np
 from armlab_course.exercises.registry import EXERCISES, exercise
 
 __all__ = ["HiddenSpec", "SPECS", "FORBIDDEN", "FORBIDDEN_EVERYWHERE", "specs_of", "cases_of", "compare",
-           "module_of"]
+           "how_it_differs", "module_of"]
 
 SEED = 20261101
 
@@ -49,7 +49,13 @@ class HiddenSpec:
     judge(call, *args) -> the value compared, where call(*request_args) asks the child for one call of the function
     (through the adapter) and returns its plain answer (raising judge.ChildError with the student's error): it
     renders inputs, scores answers and, for an open task, replays what the answers tell the robot on the judge's own
-    simulator (None: the case's arguments are sent as they are and the answer is the value)."""
+    simulator (None: the case's arguments are sent as they are and the answer is the value).
+
+    What a failed check tells the student (compare), in the words of the notebook, never the inputs: `what` the
+    numbers compared are and their `unit` (the size of the largest difference is shown in it); or `parts`, the
+    (name, unit) of each number of a result in turn (repeating), when they differ (the part that misses most is
+    named); or `criteria`, what each number of a pass/fail result (1.0 / 0.0) says, repeating per `per` (e.g.
+    "block"): the first one not met is named."""
 
     function: str
     cases: Callable[[np.random.Generator], list[list[list]]]
@@ -59,6 +65,11 @@ class HiddenSpec:
     agree: float = 1.0
     outcome: bool = False
     judge: Callable | None = None
+    what: str = "the result"
+    unit: str = ""
+    parts: tuple[tuple[str, str], ...] = ()
+    criteria: tuple[str, ...] = ()
+    per: str = ""
 
 
 # Calls that would do an exercise for the student: a name matches any reference to it in the region (a call, an
@@ -115,17 +126,55 @@ def cases_of(exercise_id: str) -> list[list[list[list]]] | None:
     return [json.loads(json.dumps(spec.cases(rng), default=float)) for spec in specs]
 
 
+def _size(value: float, unit: str) -> str:
+    return f"{value:.2g}" + (f" {unit}" if unit else "")
+
+
+def how_it_differs(spec: HiddenSpec, got: np.ndarray | None, expected: np.ndarray | None) -> str:
+    """Which property of a result missed and by how much, in the spec's words and units (see HiddenSpec), without
+    the inputs or the expected numbers: a pass/fail result names its first criterion not met; a result of another
+    shape says so; else the numbers' (or the part's) largest difference, or for exact results (atol 0) how many of
+    them differ."""
+    if got is None or expected is None:
+        return f"{spec.what}: not a number or an array of numbers"
+    if got.shape != expected.shape:
+        return f"{spec.what}: shape {got.shape}, expected {expected.shape}"
+    if got.size == 0:
+        return f"{spec.what}: empty"
+    close = np.isclose(got, expected, rtol=0, atol=spec.atol, equal_nan=True).ravel()
+    wrong = np.flatnonzero(~close)
+    if not wrong.size:
+        return f"{spec.what}: too little of it agrees"
+    if spec.criteria:
+        n = len(spec.criteria)
+        first = int(wrong[0])
+        where = f"{spec.per} {first // n + 1}: " if spec.per and got.size > n else ""
+        return f"{where}not met: {spec.criteria[first % n]} ({len(wrong)} of {got.size} criteria not met)"
+    diff = np.abs(got - expected).ravel()
+    if np.isnan(diff[wrong]).any():
+        return f"{spec.what}: NaN or infinity where a number is expected"
+    worst = int(wrong[np.argmax(diff[wrong])])
+    what, unit = spec.what, spec.unit
+    if spec.parts:
+        name, unit = spec.parts[worst % len(spec.parts)]
+        what = f"{spec.what} ({name})"
+    if spec.atol == 0:
+        return f"{spec.what}: {len(wrong)} of its {got.size} numbers differ from the expected"
+    return f"{what}: off by up to {_size(float(diff[worst]), unit)} (tolerance {_size(spec.atol, unit)})"
+
+
 def compare(spec: HiddenSpec, student: list[dict], expected: list[dict] | None, sizes: list[int], first: int = 1
             ) -> list[tuple[bool, str]]:
     """Per hidden check of `spec` (`sizes` calls each, numbered from `first`): passed, and a message naming the
-    first call that differs. `expected`: the reference's results, None for an outcome spec (every number 1.0)."""
+    first call that differs (for an error, with its "at": where in the student's code it was raised, as the grader
+    wrote it). `expected`: the reference's results, None for an outcome spec (every number 1.0)."""
     out, k = [], 0
     for i, n in enumerate(sizes, start=first):
         message = ""
         for j in range(k, k + n):
             got = student[j] if j < len(student) else {"error": "no result"}
             if "error" in got:
-                message = f"hidden check {i}, call {j - k + 1}: raised {got['error']}"
+                message = f"hidden check {i}, call {j - k + 1}{got.get('at', '')}: raised {got['error']}"
                 break
             try:
                 a = np.asarray(got["value"], dtype=float)
@@ -134,9 +183,9 @@ def compare(spec: HiddenSpec, student: list[dict], expected: list[dict] | None, 
                 close = np.isclose(a, b, rtol=0, atol=spec.atol, equal_nan=True) if comparable else None
                 same = close is not None and (close.all() if spec.agree >= 1 else close.mean() >= spec.agree)
             except (ValueError, TypeError):
-                same = False
+                same, a, b = False, None, None
             if not same:
-                message = f"hidden check {i}, call {j - k + 1}: the result differs from the expected value"
+                message = f"hidden check {i}, call {j - k + 1}: {how_it_differs(spec, a, b)}"
                 if spec.agree < 1:
                     message += f" (fewer than {spec.agree:.0%} of it agrees)"
                 break

@@ -39,7 +39,9 @@ def _judge_depth_plane(call, K, T, bias, seed):
 
 
 SPECS: tuple[HiddenSpec, ...] = (HiddenSpec("armlab.calibration.depth.fit_depth_correction", _depth_scenes, atol=1e-6,
-                                    adapter="_call_depth_plane", judge=_judge_depth_plane),)
+                                    adapter="_call_depth_plane", judge=_judge_depth_plane, what="the depth-plane fit",
+                                    parts=(("a", "mm per px"), ("b", "mm per px"), ("c", "mm"), ("residual_mm", "mm"),
+                                           ("inliers", "pixels"))),)
 FORBIDDEN: tuple[str, ...] = (
     "scipy.optimize.least_squares", "depth._robust_plane", "cv2.fitLine"
 )

@@ -28,8 +28,10 @@ def _back_projections(rng):
     return cases
 
 
-SPECS: tuple[HiddenSpec, ...] = (HiddenSpec("project_pinhole", _projections, atol=1e-6),
-                                 HiddenSpec("pixel_to_world_pinhole", _back_projections, atol=1e-6))
+SPECS: tuple[HiddenSpec, ...] = (HiddenSpec("project_pinhole", _projections, atol=1e-6,
+                                            what="the projected pixels (u, v)", unit="px"),
+                                 HiddenSpec("pixel_to_world_pinhole", _back_projections, atol=1e-6,
+                                            what="the back-projected world points (x, y, z)", unit="mm"))
 FORBIDDEN: tuple[str, ...] = (
     "cv2.projectPoints", "Camera.project", "Camera.project_camera", "Camera.pixel_to_world", "Camera.pixel_to_camera",
     "Camera.camera_to_world",

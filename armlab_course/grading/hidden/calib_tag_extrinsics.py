@@ -23,7 +23,8 @@ def _tag_views(rng):
 
 
 SPECS: tuple[HiddenSpec, ...] = (HiddenSpec("armlab.calibration.extrinsics.pose_from_corners", _tag_views, atol=1e-6,
-                                       adapter="_call_initial_pose"),)
+                                       adapter="_call_initial_pose",
+                                       what="the camera pose (its rotation's entries, unitless, and translation, mm)"),)
 FORBIDDEN: tuple[str, ...] = (
     "cv2.solvePnP", "cv2.solvePnPRansac", "cv2.solvePnPGeneric", "cv2.solvePnPRefineLM",
     "cv2.decomposeHomographyMat", "extrinsics._opencv_pose", "cv2.findHomography"

@@ -21,7 +21,8 @@ def _homographies(rng):
     return cases
 
 
-SPECS: tuple[HiddenSpec, ...] = (HiddenSpec("armlab.calibration.homography.dlt_homography", _homographies, atol=1e-7),)
+SPECS: tuple[HiddenSpec, ...] = (HiddenSpec("armlab.calibration.homography.dlt_homography", _homographies, atol=1e-7,
+                                            what="the homography's entries (unitless)"),)
 FORBIDDEN: tuple[str, ...] = (
-    "cv2.findHomography", "cv2.getPerspectiveTransform"
+    "cv2.findHomography", "cv2.getPerspectiveTransform", "homography.opencv_homography"
 )

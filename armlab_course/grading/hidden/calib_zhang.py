@@ -44,7 +44,8 @@ def _views(rng):
 
 
 SPECS: tuple[HiddenSpec, ...] = (HiddenSpec("intrinsics_from_homographies", _views, atol=1e-6,
-                                            adapter="_call_intrinsics", prelude="definitions"),)
+                                            adapter="_call_intrinsics", prelude="definitions",
+                                            what="the intrinsics K (its pixel rows in units of 1000 px)"),)
 FORBIDDEN: tuple[str, ...] = (
     "cv2.calibrateCamera", "cv2.calibrateCameraExtended", "cv2.calibrateCameraRO", "cv2.initCameraMatrix2D",
     "calibration.calibrate_intrinsics", "cv2.fisheye.calibrate",

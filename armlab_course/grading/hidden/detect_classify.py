@@ -19,7 +19,8 @@ def _colour_models(rng):
 
 
 SPECS: tuple[HiddenSpec, ...] = (HiddenSpec("armlab.detection.color.ColorModel", _colour_models, atol=1e-9,
-                                  adapter="_call_classify"),)
+                                  adapter="_call_classify",
+                                  what="the classes and their margins"),)
 FORBIDDEN: tuple[str, ...] = (
     "ColorModel._nearest_mean",
 )

@@ -40,5 +40,7 @@ def _judge_face(call, centre, edge, yaw, mm_per_px):
 
 
 SPECS = (HiddenSpec("face_geometry", _square_faces, atol=0, adapter="_call_face", prelude="definitions",
-                    judge=_judge_face),)
+                    judge=_judge_face,
+                    criteria=("the centre within 1 px", "the yaw within 5 deg (modulo quarter turns, in [-pi/4, pi/4))",
+                              "the size class right")),)
 FORBIDDEN = ("scipy.ndimage.center_of_mass", "transforms.wrap_quarter", "detect_objects", "detect_blocks")

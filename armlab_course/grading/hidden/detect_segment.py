@@ -30,5 +30,6 @@ def _judge_segment(call, scene, seed, arm_over_board):
 
 
 SPECS = (HiddenSpec("segment_colours", _segment_scenes, atol=0, adapter="_call_segment", judge=_judge_segment,
-                    prelude="definitions"),)
+                    prelude="definitions", criteria=("at least 95 % of the visible faces labelled right",
+                                                     "under 0.5 % of the bare board labelled")),)
 FORBIDDEN = ("ColorModel", "segment_by_colour_model", "default_color_model", "hsv_table_classify")

@@ -93,6 +93,7 @@ def _judge_stack(call, K, T, blocks, noise_mm, lost, seed):
 
 
 SPECS = (HiddenSpec("stack_from_depth", _stacks, atol=2.0, adapter="_call_stack", prelude="definitions",
-                    judge=_judge_stack),)
+                    judge=_judge_stack, what="the stack",
+                    parts=(("top height", "mm"), ("centre x", "mm"), ("centre y", "mm"), ("levels (x 10)", ""))),)
 FORBIDDEN = ("stack_levels", "stack_heights", "detect_objects", "detect_blocks", "segment_faces",
              "height_from_depth", "world_from_depth", "pixels_to_plane")

@@ -13,7 +13,8 @@ def _link_batches(rng):
               rng.uniform(-300, 300, 6).tolist(), rng.uniform(-np.pi, np.pi, 6).tolist()]] for _ in range(3)]
 
 
-SPECS: tuple[HiddenSpec, ...] = (HiddenSpec("armlab.kinematics.dh_link_transform", _link_batches),)
+SPECS: tuple[HiddenSpec, ...] = (HiddenSpec("armlab.kinematics.dh_link_transform", _link_batches,
+                                            what="the link transforms (rotation entries, unitless; translation, mm)"),)
 FORBIDDEN: tuple[str, ...] = (
     "kinematics._dh_by_elementary_motions", "kinematics.fk_pox"
 )

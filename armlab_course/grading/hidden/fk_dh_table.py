@@ -41,7 +41,8 @@ def _judge_dh_table(call, geometry, q):
 
 
 SPECS: tuple[HiddenSpec, ...] = (HiddenSpec("dh_table", _geometries, atol=1e-6, judge=_judge_dh_table,
-                                            prelude="definitions"),)
+                                            prelude="definitions", what="the tool poses your table chains to "
+                                            "(rotation entries, unitless; position, mm)"),)
 FORBIDDEN: tuple[str, ...] = (
     "kinematics.fk_pox", "kinematics.fk", "kinematics.fk_dh", "kinematics.link_frames", "kinematics.dh_frames",
     "RobotModel.dh", "pox_of_lengths",

@@ -41,7 +41,9 @@ def _judge_euler(call, T):
 
 
 SPECS: tuple[HiddenSpec, ...] = (HiddenSpec("euler_angles_from_T", _rotations, atol=1e-7, judge=_judge_euler,
-                                            prelude="definitions"),)
+                                            prelude="definitions", what="the Euler angles",
+                                            parts=(("cos phi", ""), ("sin phi", ""), ("theta", "rad"), ("cos psi", ""),
+                                                   ("sin psi", ""))),)
 FORBIDDEN: tuple[str, ...] = (
     "transforms.rpy_from_matrix", "scipy.spatial.transform.Rotation",
 )

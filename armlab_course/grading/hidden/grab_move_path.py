@@ -65,6 +65,7 @@ def _judge_move_path(call, seed, blocks, spots):
 
 
 SPECS = (HiddenSpec("armlab.tasks.move_path.move_path", _grab_scenes, atol=0, adapter="_call_move_path", outcome=True,
-                    judge=_judge_move_path),)
+                    judge=_judge_move_path, criteria=("grasped", "landed within 3 mm of its spot"), per="block"),)
 FORBIDDEN = ("planning.plan_pick", "planning.plan_place", "planning.plan_pick_place", "choose_grasp", "kit_move_path",
-             "grasp_height", "place_tool_height", "default_grasp_depth", "tasks.pick", "tasks.place", "handling")
+             "grasp_height", "place_tool_height", "default_grasp_depth", "tasks.pick", "tasks.place", "handling",
+             "report_move_path", "default_path")

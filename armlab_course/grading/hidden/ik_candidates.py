@@ -28,7 +28,8 @@ def _ik_all_solutions(rng):
     return [single[i:i + 2] + several[i:i + 2] for i in range(0, 8, 2)]
 
 
-SPECS: tuple[HiddenSpec, ...] = (HiddenSpec("armlab.kinematics.ik", _ik_all_solutions, atol=1e-6),)
+SPECS: tuple[HiddenSpec, ...] = (HiddenSpec("armlab.kinematics.ik", _ik_all_solutions, atol=1e-6,
+                                            what="the IK solutions' joint angles", unit="rad"),)
 FORBIDDEN: tuple[str, ...] = (
     "kinematics._numerical_candidates", "IKinSpace", "IKinBody",
     "scipy.optimize.least_squares", "scipy.optimize.fsolve", "scipy.optimize.minimize"

@@ -81,10 +81,14 @@ def _judge_dls(call, T_target, q0):
 
 SPECS: tuple[HiddenSpec, ...] = (
     # exact: the DH and the PoX frames agree to 1e-12; finite differences of fk reach 1e-8 at best
-    HiddenSpec("tool_jacobian", _jacobian_poses, atol=1e-10, prelude="definitions"),
-    HiddenSpec("pose_error", _pose_pairs, atol=1e-7, prelude="definitions"),
+    HiddenSpec("tool_jacobian", _jacobian_poses, atol=1e-10, prelude="definitions",
+               what="the Jacobian's entries (linear rows, mm per rad; angular rows, rad per rad)"),
+    HiddenSpec("pose_error", _pose_pairs, atol=1e-7, prelude="definitions",
+               what="the pose error (position part, mm; rotation part, rad)"),
     HiddenSpec("solve_ik_dls", _dls_runs, atol=0.0, adapter="_call_dls", prelude="definitions",
-               judge=_judge_dls),
+               judge=_judge_dls, criteria=("the tool within 0.01 mm of the target",
+                                           "the tool's orientation within 1e-4 (rotation matrix entries)",
+                                           "the joints within their limits")),
 )
 FORBIDDEN: tuple[str, ...] = (
     "kinematics.jacobian", "kinematics.ik", "kinematics.ik_branches",

@@ -27,5 +27,6 @@ def _scripts(rng):
     return checks
 
 
-SPECS = (HiddenSpec("run_command", _scripts, atol=0, adapter="_call_transition", prelude="definitions"),)
+SPECS = (HiddenSpec("run_command", _scripts, atol=0, adapter="_call_transition", prelude="definitions",
+                    what="what each command gave and the state after it"),)
 FORBIDDEN = ("command_transition", "TaskMachine._run")

@@ -54,8 +54,11 @@ def _plans(rng):
 
 
 SPECS: tuple[HiddenSpec, ...] = (
-    HiddenSpec("teach_program", _teach_sessions, atol=1e-9, adapter="_call_teach", prelude="definitions"),
-    HiddenSpec("scaled_durations", _replays, atol=1e-9, adapter="_call_scaled_durations", prelude="definitions"),
-    HiddenSpec("scaled_plan", _plans, atol=1e-9, adapter="_call_scaled_plan", prelude="definitions"),
+    HiddenSpec("teach_program", _teach_sessions, atol=1e-9, adapter="_call_teach", prelude="definitions",
+               what="the taught program (joints, rad; gripper states; torque)"),
+    HiddenSpec("scaled_durations", _replays, atol=1e-9, adapter="_call_scaled_durations", prelude="definitions",
+               what="the segment times", unit="s"),
+    HiddenSpec("scaled_plan", _plans, atol=1e-9, adapter="_call_scaled_plan", prelude="definitions",
+               what="the plan's steps (kind; duration, s; end joints, rad)"),
 )
 FORBIDDEN: tuple[str, ...] = ("teach.load_teach", "kit_recording", "data_path", "TeachProgram.to_plan")
