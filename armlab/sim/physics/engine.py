@@ -27,6 +27,8 @@ REST_SPIN_RAD_S = 0.02
 REST_HOLD_S = 0.05
 MAX_SETTLE_S = 15.0          # run_to_rest gives up after this much physics time: a tower of eight rocked on its base
                              # for 5.2 s after a block landed hard on it (to the sky, seed 2), then rested
+MAX_SETTLE_S = 15.0          # run_to_rest gives up after this much physics time: a tower of eight rocked on its base
+                             # for 5.2 s after a block landed hard on it (to the sky, seed 2), then rested
 PUSH_SPEED_MM_S = 100.0      # how fast the pusher plate advances (a pad's pace)
 _PUSH_GAP_MM = 0.2           # the pusher starts this far behind the object's face
 

@@ -28,7 +28,15 @@ and drift 0.33 mm at 2 ms; condim 3 drifts 0.11 mm where condim 4 drifts 0.07. H
         stack does not creep (soft contacts otherwise let it slide slowly under a sideways load); the elliptic cone
         lost marginal towers that statics has standing.
     noslip off: it bought 0.01-0.03 mm for four times the step time.
-    condim 4: sliding and torsional friction (a pushed block turns about its contact patch; a tower does not spin).
+    condim 3: sliding friction only. Box-on-box contacts come as several points over the face, whose sliding
+        friction already resists a twist; condim 4's torsional friction (0.002 m) fed a sway that never died out: a
+        tower of ten, its upper levels let go tilted in to the sky (seed 1), swung +-7 mm at its top at up to 125 mm/s
+        and still moved after 15 s of physics. Measured 2026-12-07 on the same towers (3 s, largest drift):
+                    (10,0)  (10,3)  (14,0)  (7,5)  (5,9)     (10,5)     that tower of ten     per step (10 blocks)
+        condim 4    0.00    0.06    0.00    0.04   183 fell  476 fell   moving after 15 s     66 us
+        condim 3    0.00    0.10    0.00    0.06   181 fell  420 fell   at rest after 1.17 s  50 us
+        (a lightly loaded machine); torsional coefficient 0.0005 / 0.001 / 0.005 m rested after 1.7 / 6.0 / > 15 s.
+        The cost: a small block riding on a pushed stack turns 2.5 deg over a 60 mm push (condim 4: under 2).
     solimp (0.95, 0.99, 0.001): the impedance close to 1 at a penetration of 1 mm or less.
 """
 
@@ -66,7 +74,7 @@ class ContactSettings:
     solimp: tuple[float, float, float] = (0.95, 0.99, 0.001)
     cone: str = "pyramidal"
     impratio: float = 10.0
-    condim: int = 4
+    condim: int = 3
     noslip_iterations: int = 0
     iterations: int = 50
 

@@ -97,7 +97,7 @@ RUBRICS: dict[str, tuple[Criterion, ...]] = {
             "a detected point per block and still picks B at its centre")),
     "events.tower_question": _c(
         (1, "the points from the figure's block count with the rule, the sum shown (12 blocks: 8 x 30 + 4 x 50 = "
-            "440), and 50 fewer with the default clearance (11 blocks: 390)"),
+            "440), and 200 fewer with the default clearance (8 blocks: 240; its tilted blocks fall)"),
         (1, "what must fit between the top and the highest tool point, in mm (the held block below the tool point, "
             "the clearance, a straight-down approach), one change to gain a block with its risk, and what to measure "
             "on the real arm first")),
@@ -117,7 +117,7 @@ GIVEAWAYS: dict[str, tuple[str, ...]] = {
     "detect.q_stacks": ("seen edge-on", "more oblique"),
     "grab.sag_question": ("15 mm too high",),
     "teach.replay_question": ("needs no camera",),
-    "events.tower_question": ("440", "390"),
+    "events.tower_question": ("440", "8 x 30 = 240"),
 }
 
 # per question, numbers its model answer reads off the figure's cells: each must stand both in the model answer and
