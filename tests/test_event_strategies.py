@@ -178,14 +178,15 @@ def test_sky_tower_grows_as_high_as_the_arm_reaches_over_the_best_spot():
     tower = len(result.score.lines)
     e = block_edge("large")
     # On the physics world a block let go tilted (levels above ~6) tips flat on landing, off to one side; the kit's
-    # strategy aims it by landing_offset so that it lands over the tower (without that aim: 9 levels on seed 0)
+    # strategy aims it by landing_offset so that it lands over the tower (unaimed, the 9th landed 16 mm off); the
+    # 10th, let go beyond 45 deg, falls off (the geometric world, which laid every block flat, gave 12 levels)
     assert tower >= SKY_TOWER_BLOCKS and result.score.points == sky_points(tower)
     column = max(columns(station.world.objects), key=len)
     off = [float(np.hypot(*(o.position[:2] - TOWER_XY))) for o in column]
-    assert max(off) < 15.0, off                                      # a straight tower (mm from its axis)
+    assert max(off) < 6.0, off                                       # a straight tower (mm from its axis)
     assert station.world.would_move() == []                          # what is scored stands by the physics
     assert "out of reach" in result.stopped
-    # the next level's hover (top + release gap + up to e/2 for a tilted block's lowest edge + edge + clearance) is
-    # above what the arm reaches there, the last one's was not: the tower is as tall as straight-down placing allows
+    # the last standing level's hover (top + release gap + up to e/2 for a tilted block's lowest edge + edge +
+    # clearance) is within what the arm reaches there: reach is not what stops the tower
     hover = lambda level: level * e + RELEASE_GAP_MM + e / 2 + e + SKY_CLEARANCE_MM    # noqa: E731
-    assert hover(tower - 1) <= highest_tool_z(TOWER_XY) < hover(tower)
+    assert hover(tower) <= highest_tool_z(TOWER_XY)

@@ -74,3 +74,20 @@ def test_a_block_dropped_over_the_edge_topples_and_a_settled_world_stays():
     top = world.add(ObjectState("green", "large", E, np.array([22.0, 250.0, 200.0]), 0.0, "cube", 1))
     assert top.top_z < 2 * E - 5.0                          # centre 3 mm beyond the edge: it does not stay up there
     assert world.would_move() == []
+
+
+def test_pads_squeeze_and_lift_a_block_by_friction_and_an_off_centre_grip_turns_it_more():
+    from armlab.gripper_geometry import GRIPPER
+    from armlab.sim.physics.grasp import LIFT_MM, contact_grip
+
+    R = np.column_stack([[0, 0, -1], [1, 0, 0], [0, -1, 0]]).astype(float)     # top-down, closing along +x
+    turns = []
+    for off in (0.0, 10.0):
+        block = ObjectState("red", "large", E, np.array([0.0, 250.0, E / 2]), 0.0, "cube", 0)
+        T = np.eye(4)
+        T[:3, :3], T[:3, 3] = R, [0.0, 250.0, E / 2] + off * R[:, 2]
+        grip = contact_grip([block], 0, T, GRIPPER, GRIPPER.max_opening_mm, E)
+        assert grip.held and grip.rise_mm == pytest.approx(LIFT_MM, abs=0.5)
+        np.testing.assert_allclose(grip.T_tool_block[:3, 3], [0.0, 0.0, -off], atol=0.3)   # where the pads hold it
+        turns.append(grip.turn_rad)
+    assert turns[0] < np.radians(0.05) < turns[1]          # gravity turns a block gripped off its centre

@@ -489,17 +489,17 @@ print(f"OK: to the sky: a stable tower of {tower} blocks, scored by the sky rule
 
 # %% [markdown]
 # <!-- BEGIN ANSWER events.tower_question -->
-# 12 blocks: 8 x 30 + 4 x 50 = 440 points; with the default 50 mm clearance the arm comes down from higher, more
-# tilted, and the tower stops at 8 blocks (a run with clearance 50 shows it): 8 x 30 = 240, 200 points fewer. The
-# 13th block's bottom would go on the top at 456 mm; gripped at its
-# centre it hangs 19 mm below the tool point, so the tool must come down to about 477 mm, and it comes straight down
-# from a hover the held block's height plus the 15 mm clearance higher, about 511 mm: the very highest point the tool
-# reaches there, where the arm can no longer move it straight down at any pitch. For one more block: grip it higher
-# up (less of it below the tool: the same tower top needs a lower tool), carry it in with less clearance, or build at
-# the spot where the arm reaches highest while still coming down near-vertically. The risk: a grip off the centre
-# tilts the block in the pads, and less clearance lets a few mm of sag or detection error knock the tower over. On the
-# real arm, measure first the highest tool point reached straight down at the spot and the sag there with a block
-# held, and how far the block slips in the pads when gripped off centre.
+# 9 blocks: 8 x 30 + 1 x 50 = 290 points; with the default 50 mm clearance the arm comes down from higher, more
+# tilted, and the tower stops at 8 blocks (a run with clearance 50 shows it): 8 x 30 = 240, 50 points fewer. The
+# 10th block's bottom would go on the top at 342 mm; gripped at its centre it hangs 19 mm below the tool point, so
+# the tool comes down to about 364 mm, from a hover the held block's height plus the 15 mm clearance higher, about
+# 420 mm: below the 511 mm the tool reaches there, so reach is not what stops it. Above about 6 levels the arm can no
+# longer come straight down; the block, picked straight down, hangs in the pads turned by the approach's tilt (about
+# 50 deg for the 10th), lands on an edge, tips onto another face and falls off. For one more block: let it go less
+# tilted (pick it with the pitch it will be placed with, or put the tower where the arm comes down steeper), or grip
+# it higher up. The risk: a block gripped tilted or off centre turns in the pads, and a tower whose top blocks land
+# off knocks over. On the real arm, measure first how tilted the arm comes down at each level at the spot, where a
+# block let go that tilted lands, and how far a block turns in the pads when gripped off centre.
 # <!-- END ANSWER -->
 
 # %% [markdown]

@@ -5,6 +5,7 @@ Modules, one job each:
     mjcf: the MJCF model text of a set of objects (board, free bodies, a kinematic pusher), in metres and kg.
     engine: a compiled model with its state: load the objects' poses, step to rest, read the poses back.
     rest: the pose of a body at rest as the kit's ObjectState (world mm, yaw; flat faces snapped flat).
+    grasp: the finger pads as bodies squeezing and lifting a block (friction holds it or not); not yet SimArm's grasp.
 
 The world (armlab.sim.world.World) keeps the objects as ObjectState and calls the engine whenever something moves
 them (a release, a push, a scene's dropped blocks); the objects' poses feed the kit's own renderer as before.

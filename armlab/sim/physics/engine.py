@@ -8,6 +8,7 @@ result; the compiled model is cached by the objects' shapes and sizes (mjcf.scen
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from functools import lru_cache
 
@@ -20,13 +21,13 @@ from armlab.sim.physics.mjcf import PARK_Z_M, PUSHER_HALF_M, scene_mjcf
 from armlab.sim.physics.rest import object_rotation
 from armlab.transforms import matrix_from_rpy
 
-__all__ = ["Physics", "PhysicsError", "REST_SPEED_MM_S", "REST_SPIN_RAD_S", "MAX_SETTLE_S"]
+__all__ = ["Physics", "PhysicsError", "REST_SPEED_MM_S", "REST_SPIN_RAD_S", "MAX_SETTLE_S", "SWAY_S", "SWAY_DAMPING"]
 
 REST_SPEED_MM_S = 2.0        # every body slower than this (and REST_SPIN_RAD_S) for REST_HOLD_S counts as at rest
 REST_SPIN_RAD_S = 0.02
 REST_HOLD_S = 0.05
-MAX_SETTLE_S = 15.0          # run_to_rest gives up after this much physics time: a tower of eight rocked on its base
-                             # for 5.2 s after a block landed hard on it (to the sky, seed 2), then rested
+SWAY_S = 2.0                 # run_to_rest: still moving after this much physics time, the objects' motion is damped
+SWAY_DAMPING = (0.02, 0.02, 0.02, 2e-5, 2e-5, 2e-5)    # per free joint: N s/m (x, y, z), N m s/rad (3 turns)
 MAX_SETTLE_S = 15.0          # run_to_rest gives up after this much physics time: a tower of eight rocked on its base
                              # for 5.2 s after a block landed hard on it (to the sky, seed 2), then rested
 PUSH_SPEED_MM_S = 100.0      # how fast the pusher plate advances (a pad's pace)
@@ -38,8 +39,28 @@ class PhysicsError(RuntimeError):
 
 
 @lru_cache(maxsize=64)
-def _model(shapes: tuple[tuple[str, float], ...], settings: ContactSettings, wood: Wood) -> mujoco.MjModel:
-    return mujoco.MjModel.from_xml_string(scene_mjcf(shapes, settings, wood))
+def _model(shapes: tuple[tuple[str, float], ...], settings: ContactSettings, wood: Wood,
+           pad_half_mm: tuple[float, float, float] | None = None) -> mujoco.MjModel:
+    return mujoco.MjModel.from_xml_string(scene_mjcf(shapes, settings, wood, pad_half_mm))
+
+
+_DIGITS = 6                  # what enters MuJoCo is rounded to 1e-6 (m: 1 um; quaternion units): see _metres
+
+
+def _metres(p_mm) -> np.ndarray:
+    """World mm (3,) as MuJoCo's metres, rounded to 1 um. The poses come from numpy's kinematics and the kit's
+    iterative solvers (IK, the sag fit), whose results differ between CPUs' SIMD kernels (tools/nbval-numerics) by up
+    to about 1e-8 mm at a release, and a tilted block's landing or a tall tower's fall is chaotic: unrounded (and
+    rounded to 1 nm), to the sky (seed 0) built 12 levels natively and 10 without AVX-512. MuJoCo's own arithmetic
+    does not depend on those settings, so inputs rounded far coarser than those differences give the same physics
+    (unless a value lies within about 1e-8 mm of a rounding boundary: about 1 in 10^5 values)."""
+    return np.round(np.asarray(p_mm, dtype=float) / 1000.0, _DIGITS)
+
+
+def _unit(q: np.ndarray) -> np.ndarray:
+    """q (4,) over its norm, computed with correctly rounded scalar math (the same on every CPU)."""
+    norm = math.sqrt(math.fsum(float(v) * float(v) for v in q))
+    return np.array([float(v) / norm for v in q])
 
 
 def _quat(R: np.ndarray) -> np.ndarray:
@@ -56,22 +77,41 @@ class Physics:
         time_s: physics time simulated so far (s).
     """
 
-    def __init__(self, objects: Sequence[ObjectState], settings: ContactSettings = CONTACT, wood: Wood = WOOD):
+    def __init__(self, objects: Sequence[ObjectState], settings: ContactSettings = CONTACT, wood: Wood = WOOD,
+                 pad_half_mm: tuple[float, float, float] | None = None):
         self.objects = list(objects)
         shapes = tuple((o.shape, float(o.edge)) for o in self.objects)
-        self.model = _model(shapes, settings, wood)
+        self.model = _model(shapes, settings, wood, None if pad_half_mm is None else tuple(map(float, pad_half_mm)))
+        self.has_pads = pad_half_mm is not None
         self.data = mujoco.MjData(self.model)
         self._body0 = self.model.body("object0").id if self.objects else 0
         for k, o in enumerate(self.objects):
-            self.data.qpos[7 * k:7 * k + 3] = np.asarray(o.position, float) / 1000.0
-            self.data.qpos[7 * k + 3:7 * k + 7] = _quat(object_rotation(o))
+            self.data.qpos[7 * k:7 * k + 3] = _metres(o.position)
+            self.data.qpos[7 * k + 3:7 * k + 7] = _unit(np.round(_quat(object_rotation(o)), _DIGITS))
         self._park()
         mujoco.mj_forward(self.model, self.data)
         self.time_s = 0.0
 
     def _park(self) -> None:
-        self.data.mocap_pos[0] = (0.0, 0.0, PARK_Z_M)
-        self.data.mocap_quat[0] = (1.0, 0.0, 0.0, 0.0)
+        for m in range(self.model.nmocap):
+            self.data.mocap_pos[m] = (0.0, 0.0, PARK_Z_M)
+            self.data.mocap_quat[m] = (1.0, 0.0, 0.0, 0.0)
+
+    def set_pads(self, centres_mm, R, teleport: bool = False) -> None:
+        """Move the two finger pads' targets (a model built with pad_half_mm) to centres_mm (2, 3) world mm, turned
+        by the tool's rotation R (3, 3); the pads follow them by their welds (mjcf), and with teleport are put there
+        at once, at rest."""
+        q = _quat(R)
+        n = 7 * len(self.objects)
+        for k in range(2):
+            self.data.mocap_pos[1 + k] = np.asarray(centres_mm[k], float) / 1000.0
+            self.data.mocap_quat[1 + k] = q
+            if teleport:
+                self.data.qpos[n + 7 * k:n + 7 * k + 3] = self.data.mocap_pos[1 + k]
+                self.data.qpos[n + 7 * k + 3:n + 7 * k + 7] = q
+                self.data.qvel[6 * len(self.objects) + 6 * k:6 * len(self.objects) + 6 * k + 6] = 0.0
+        if teleport:
+            mujoco.mj_forward(self.model, self.data)
 
     # -- stepping -------------------------------------------------------------------------------------------
     def step(self, n: int = 1) -> None:
@@ -89,17 +129,32 @@ class Physics:
 
     def run_to_rest(self, max_s: float = MAX_SETTLE_S) -> float:
         """Step until every body has rested for REST_HOLD_S; returns the physics time taken (s). PhysicsError when
-        something still moves after max_s of physics time (or the state blew up)."""
+        something still moves after max_s of physics time (or the state blew up).
+
+        A tall stack can keep swaying on its soft contacts long after a block landed hard on it: to the sky's tower
+        of eleven (seed 0) swayed for 16 s of physics before it rested, one of ten with condim 4 for more than 15 s.
+        A real wooden tower loses that energy at its contacts within a swing or two; so after SWAY_S of physics with
+        something still moving, every object's motion is damped (SWAY_DAMPING: 0.02 N s/m, 2e-5 N m s/rad, a time
+        constant of about 1.6 s for a large block's motion and 0.4 s for its turning). That tower then rested 3.0 s
+        later (damping 2.5x as strong: 4.4 s), standing as before. The model's damping is restored afterwards (models
+        are shared by the cache). Deterministic: the switch happens at the same step."""
         dt = self.model.opt.timestep
         hold = max(1, int(round(REST_HOLD_S / dt)))
         start, still = self.time_s, 0
-        while self.time_s - start < max_s:
-            self.step()
-            if not np.all(np.isfinite(self.data.qpos)):
-                raise PhysicsError("the physics state became non-finite (objects placed inside one another?)")
-            still = still + 1 if self.at_rest() else 0
-            if still >= hold:
-                return self.time_s - start
+        damping = self.model.dof_damping.copy()
+        n = 6 * len(self.objects)
+        try:
+            while self.time_s - start < max_s:
+                if still == 0 and self.time_s - start >= SWAY_S and not damping[:n].any():
+                    self.model.dof_damping[:n] = np.tile(SWAY_DAMPING, len(self.objects))
+                self.step()
+                if not np.all(np.isfinite(self.data.qpos)):
+                    raise PhysicsError("the physics state became non-finite (objects placed inside one another?)")
+                still = still + 1 if self.at_rest() else 0
+                if still >= hold:
+                    return self.time_s - start
+        finally:
+            self.model.dof_damping[:] = damping
         moving = [o.id for o, v in zip(self.objects, self.data.qvel.reshape(-1, 6), strict=True)
                   if np.linalg.norm(v[:3]) * 1000.0 >= REST_SPEED_MM_S or np.linalg.norm(v[3:]) >= REST_SPIN_RAD_S]
         raise PhysicsError(f"objects {moving} still move after {max_s:.1f} s of physics")
@@ -119,16 +174,17 @@ class Physics:
         half = np.array(PUSHER_HALF_M) * 1000.0
         start = pos[:2] - d * (reach + half[0] + _PUSH_GAP_MM)
         z = bottom + 1.0 + half[2]
-        self.data.mocap_quat[0] = _quat(matrix_from_rpy(np.array([0.0, 0.0, np.arctan2(d[1], d[0])])))
+        self.data.mocap_quat[0] = _unit(np.round(_quat(matrix_from_rpy(np.array([0.0, 0.0, np.arctan2(d[1], d[0])]))),
+                                                 _DIGITS))
         dt = self.model.opt.timestep
         n = max(1, int(np.ceil((distance_mm + _PUSH_GAP_MM) / (speed_mm_s * dt))))
         for i in range(1, n + 1):
             u = i / n                                                # a smooth start and stop, as a servo moves
             xy = start + d * (distance_mm + _PUSH_GAP_MM) * (3 * u ** 2 - 2 * u ** 3)
-            self.data.mocap_pos[0] = np.array([xy[0], xy[1], z]) / 1000.0
+            self.data.mocap_pos[0] = _metres([xy[0], xy[1], z])
             self.step()
         back = start + d * (distance_mm - 5.0)                      # step back off the face before parking
-        self.data.mocap_pos[0] = np.array([back[0], back[1], z]) / 1000.0
+        self.data.mocap_pos[0] = _metres([back[0], back[1], z])
         self.step()
         self._park()
 
