@@ -127,7 +127,7 @@ def test_every_imported_package_has_a_declared_version_range():
     imported_as = {"numpy": "numpy", "cv2": "opencv-python-headless", "pupil_apriltags": "pupil-apriltags",
                    "meshcat": "meshcat", "zmq": "pyzmq", "matplotlib": "matplotlib", "ipywidgets": "ipywidgets",
                    "ipyevents": "ipyevents", "IPython": "ipython", "scipy": "scipy", "jsonschema": "jsonschema",
-                   "platformdirs": "platformdirs",
+                   "platformdirs": "platformdirs", "mujoco": "mujoco",
                    "anywidget": "anywidget", "traitlets": "traitlets", "umsgpack": "u-msgpack-python",
                    "pytest": "pytest"}
     third_party: dict[str, set] = {}            # module -> the extras of the files importing it (None: the core)

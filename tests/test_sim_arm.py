@@ -293,8 +293,8 @@ def test_finger_landing_on_a_block_shoves_it_aside():
     move_tool(arm, [0.0, 250.0, 100.0], roll)
     move_tool(arm, [0.0, 250.0, 19.0], roll)        # the +x pad (x 31..37 mm) lands on the block
     moved = block.position[:2] - [45.0, 250.0]
-    assert moved[0] > 10.0 and abs(moved[1]) < 1e-9     # pushed outwards along the closing direction, clear of it
-    assert abs(wrap_quarter(block.yaw)) < 1e-9                              # squared against the flat pad
+    assert moved[0] > 10.0 and abs(moved[1]) < 0.5      # pushed outwards along the closing direction, clear of it
+    assert abs(wrap_quarter(block.yaw)) < np.radians(1.0)                   # squared against the flat pad
     assert world.problems() == []
     assert not arm.close_gripper()
 

@@ -50,8 +50,9 @@ def test_shove_carries_the_stack_and_pushes_what_it_runs_into():
     a, b, c = cube("red", id=0), cube("blue", "small", z=38.0 + 12.5, id=1), cube("green", xy=(50.0, 250.0), id=2)
     world = World([a, b, c])
     world.shove(a, [1.0, 0.0], 20.0)
-    assert a.position[0] == pytest.approx(20.0) and b.position[0] == pytest.approx(20.0)   # b rode along
-    assert c.position[0] >= 20.0 + 38.0                                                   # c was pushed clear
+    assert a.position[0] == pytest.approx(20.0, abs=1.0)              # a pushed block slides on a little (physics)
+    assert b.position[0] == pytest.approx(a.position[0], abs=1.0)     # b rode along on a, by friction
+    assert c.position[0] >= a.position[0] + 38.0 - 0.1                # c was pushed clear
     assert world.problems() == []
 
 

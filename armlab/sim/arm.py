@@ -28,6 +28,8 @@ from armlab.gripper_geometry import GRIPPER
 from armlab.profile import trapezoid_fraction
 from armlab.robot import RobotModel, rx200
 from armlab.sim.gripper import GripperGeometry, close_on, push_with_pads
+from armlab.sim.physics.materials import WOOD
+from armlab.sim.physics.rest import tilt_angle
 from armlab.sim.world import World, describe_object
 from armlab.station.contract import EmergencyStopped, MotionRefused, StationClosed
 from armlab.station.parking import park_and_close
@@ -64,7 +66,7 @@ class ArmRealism:
     upper_arm_kg: float = 0.30
     forearm_kg: float = 0.20
     gripper_kg: float = 0.25
-    block_density_kg_m3: float = 600.0
+    block_density_kg_m3: float = WOOD.density_kg_m3     # the physics world's wood (armlab.sim.physics)
     backlash_rad: float = 0.003
     joint_offset_std_rad: float = 0.002
     encoder_noise_rad: float = 0.0005
@@ -167,6 +169,7 @@ class SimArm:
         self._held: list[tuple[object, np.ndarray]] = []    # (object, its pose in the tool frame)
         self._told: tuple[motion_safety.HeldBlock, ...] = ()  # what the task layer says it holds (set_held_blocks)
         self.gripper_opening_mm = self.gripper_geometry.max_opening_mm
+        self.last_release: dict[int, float] = {}    # open_gripper: each released object's id -> its tilt (rad) then
         self._pose_memo: tuple | None = None    # (key, realism, robot, q_true, tool pose): _pose
         self._q_true = self._physical(self._motor)
         world.add_listener(self._on_time)
@@ -450,12 +453,16 @@ class SimArm:
 
     # -- gripper --------------------------------------------------------------------------------------------
     def open_gripper(self) -> None:
-        """Open the pads fully; a held block drops onto whatever is below it (or tips off it)."""
+        """Open the pads fully; a held block falls onto whatever is below it and settles by the world's physics
+        (it topples off when the centre of mass of what it carries is not over what bears it). `last_release` keeps
+        how tilted each released object was when let go (a block carried tilted tips flat on landing, off by up to
+        armlab.sim.physics.rest.tipping_shift_mm)."""
         self._check_ready("opening the gripper")
         self.wait()
         with self.world.lock:
             self._check_ready("opening the gripper")
             held = sorted(self.holding, key=lambda o: o.position[2])
+            self.last_release = {o.id: tilt_angle(o) for o in held}
             self._held, self._told = [], ()
             self.world.held.difference_update(o.id for o in held)
             self.gripper_opening_mm = self.gripper_geometry.max_opening_mm

@@ -1,18 +1,21 @@
-"""The simulated block world: the objects on the board (ground truth), a simulated clock, and simple statics.
+"""The simulated block world: the objects on the board (ground truth), a simulated clock, and their physics.
 
 Objects are armlab.blocks.ObjectState (cubes and distractors) in the world (board) frame, mm and rad: `position` is
-the object's centre, `yaw` its turn about +z. The statics are quasi-static and geometric, not a physics engine:
-a released object drops straight down onto the highest object under its footprint (or the board) and rests flat on
-it when its centre of mass lies over its supports; otherwise it tips off and lands beside them. A pushed object
-slides along the push, carrying whatever is stacked on it and pushing what it runs into.
+the object's centre, `yaw` its turn about +z, `tilt` (roll, pitch) non-zero only for an object the physics left
+leaning. Whatever moves the objects runs MuJoCo's contact dynamics (armlab.sim.physics) until everything rests: a
+released object falls from where it is and topples when the centre of mass of everything it carries is not over
+what bears it; a pushed object is driven by a kinematic plate, carrying by friction what is stacked on it and pushing
+what it runs into. There are no geometric statics: the world's validation (problems) asks the physics too.
 
 Time: `time_s` is simulated seconds. `advance(dt)` moves it forward in small steps and tells the listeners (the
 simulated arm) so that non-blocking motions progress; with real_time=True `sync()` keeps it in step with the wall
-clock.
+clock. The physics of a release or a push runs to rest within the step that caused it (its own time is not added to
+the clock: blocks settle in well under the gripper's opening time).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import threading
 import time
 from collections.abc import Callable, Iterable
@@ -21,12 +24,16 @@ import numpy as np
 
 from armlab.blocks import ObjectState
 from armlab.lab import lab_config
-from armlab.sim.geometry import convex_hull, point_in_convex, polygons_overlap, separation_along
+from armlab.sim.geometry import boxes_overlap, polygons_overlap
+from armlab.sim.physics import Physics
+from armlab.sim.physics.rest import apply_rest_pose, object_rotation
 
 __all__ = ["World", "SETTLE_TOL_MM", "describe_object"]
 
 SETTLE_TOL_MM = 0.5          # an object counts as resting on a support when its bottom is this close to the top
-_MAX_CHAIN = 20              # longest chain of tip-offs or pushes followed before giving up
+PLACE_DROP_MM = 60.0         # an object added higher than this above its support is set down on it, not dropped
+LEAN_TOL_MM = 0.1           # collide(): what a leaning object may sink into another (soft contacts)
+STAY_MM = 1.0                # problems(): an object the physics moves further than this would not stay
 
 
 def describe_object(o: ObjectState) -> str:
@@ -125,7 +132,12 @@ class World:
 
     @classmethod
     def collide(cls, a: ObjectState, b: ObjectState, tol: float = 0.01) -> bool:
-        """True when two objects interpenetrate by more than tol mm."""
+        """True when two objects interpenetrate by more than tol mm (a leaning one as its tilted bounding box, by more
+        than LEAN_TOL_MM at least: its pose is the physics', whose soft contacts sink a few hundredths of a mm; a
+        fallen tower left a block leaning 1.3 deg 0.01-0.05 mm into another)."""
+        if np.any(a.tilt) or np.any(b.tilt):
+            return boxes_overlap(a.position, object_rotation(a), np.full(3, a.edge / 2),
+                                 b.position, object_rotation(b), np.full(3, b.edge / 2), max(tol, LEAN_TOL_MM))
         z_overlap = min(a.top_z, b.top_z) - max(a.bottom_z, b.bottom_z)
         return z_overlap > tol and cls.footprints_overlap(a, b, tol)
 
@@ -154,56 +166,76 @@ class World:
                     frontier.append(o)
         return sorted(out, key=lambda o: o.position[2])
 
-    @staticmethod
-    def _supported(obj: ObjectState, supports: list[ObjectState]) -> bool:
-        if not supports:
-            return True
-        hull = convex_hull(np.vstack([p for s in supports for p in s.footprint_world()]))
-        return len(hull) >= 3 and point_in_convex(obj.position[:2], hull)
+    def _support_top(self, obj: ObjectState) -> float:
+        return self.supports_of(obj)[0]
 
-    # -- statics --------------------------------------------------------------------------------------------
-    def settle(self, obj: ObjectState) -> None:
-        """Drop obj straight down onto its support and lay it flat; it tips off (landing beside the support) when
-        its centre of mass is not over the support."""
-        for _ in range(_MAX_CHAIN):
-            obj.tilt = np.zeros(2)
-            height, supports = self.supports_of(obj)
-            obj.position[2] = height + obj.edge / 2
-            if self._supported(obj, supports):
-                return
-            # Tip off: the object rolls over the support's edge and lands beside it, away from the support.
-            centre = np.mean(np.vstack([p for s in supports for p in s.footprint_world()]), axis=0)
-            d = obj.position[:2] - centre
-            d = d / np.linalg.norm(d) if np.linalg.norm(d) > 1e-9 else np.array([1.0, 0.0])
-            shift = max(separation_along(p, q, d) for p in obj.footprint_world()
-                        for s in supports for q in s.footprint_world())
-            obj.position[:2] += d * (shift + 1.0)
-            obj.position[2] = height   # it falls from the support's top, then settles again below
-        raise RuntimeError(f"{describe_object(obj)} did not come to rest after {_MAX_CHAIN} tip-offs")
+    def _lowest_z(self, obj: ObjectState) -> float:
+        """The world z (mm) of obj's lowest corner (tilt included)."""
+        h = obj.edge / 2
+        corners = np.array([[sx, sy, sz] for sx in (-h, h) for sy in (-h, h) for sz in (-h, h)])
+        return float(obj.position[2] + np.min(corners @ object_rotation(obj)[2]))
 
-    def shove(self, obj: ObjectState, direction, distance: float, _moved: tuple = ()) -> None:
-        """Slide obj (and everything stacked on it) horizontally by distance mm along direction (2,), pushing any
-        object it runs into, then let the moved objects settle."""
+    def _simulate(self, act: Callable[[Physics, list[ObjectState]], None] | None = None) -> list[ObjectState]:
+        """Run the physics of every free object (held ones excluded) from the present poses: act(physics, objects)
+        first (e.g. a push), then until everything rests; write the poses back (armlab.sim.physics.rest), lowest
+        first, and return the objects that moved."""
+        free = self._free()
+        before = [(o.position.copy(), float(o.yaw), o.tilt.copy()) for o in free]
+        physics = Physics(free)
+        if act is not None:
+            act(physics, free)
+        physics.run_to_rest()
+        poses = [physics.pose(k) for k in range(len(free))]
+        moved = []
+        for k in sorted(range(len(free)), key=lambda k: poses[k][0][2]):
+            if apply_rest_pose(free[k], *poses[k], before[k], self._support_top):
+                moved.append(free[k])
+        return moved
+
+    # -- physics --------------------------------------------------------------------------------------------
+    def settle(self, obj: ObjectState) -> list[ObjectState]:
+        """Let obj fall from where it is onto whatever is below it and everything come to rest (MuJoCo); an object
+        added far above its support (more than PLACE_DROP_MM, e.g. a scene's dropped block) is first set down on
+        it, as a hand places it. Returns the objects that moved."""
+        height = self.supports_of(obj)[0]
+        low = self._lowest_z(obj)
+        if low > height + PLACE_DROP_MM or low < height:
+            obj.position[2] += height - low
+        return self._simulate()
+
+    def shove(self, obj: ObjectState, direction, distance: float) -> list[ObjectState]:
+        """Push obj horizontally by distance mm along direction (2,) with a kinematic plate low on its trailing side
+        (armlab.sim.physics.engine.Physics.push): what is stacked on it rides along by friction, what it runs into
+        is pushed, and everything then comes to rest. Returns the objects that moved."""
         d = np.asarray(direction, dtype=float)[:2]
-        d = d / np.linalg.norm(d)
-        group = [obj, *(o for o in self.stack_above(obj) if all(o is not m for m in _moved))]
-        for o in group:
-            o.position[:2] += d * distance
-        if len(_moved) < _MAX_CHAIN:
-            for other in self._free([*_moved, *group]):
-                hits = [m for m in group if self.collide(m, other)]
-                if hits:
-                    need = max(separation_along(p, q, d) for m in hits for p in other.footprint_world()
-                               for q in m.footprint_world())
-                    self.shove(other, d, need + 0.5, (*_moved, *group))
-        for o in group:
-            if o.id not in self.held:
-                self.settle(o)
+        if not np.isfinite(distance) or distance < 0 or not np.all(np.isfinite(d)) or np.linalg.norm(d) < 1e-12:
+            raise ValueError(f"World.shove: need a horizontal direction and a distance >= 0 mm, got {d}, {distance}")
+        if obj.id in self.held:
+            raise ValueError(f"World.shove: {describe_object(obj)} is held by the gripper")
+
+        def push(physics: Physics, objects: list[ObjectState]) -> None:
+            physics.push(next(k for k, o in enumerate(objects) if o is obj), d, float(distance))
+
+        return self._simulate(push)
+
+    def would_move(self) -> list[tuple[ObjectState, float]]:
+        """The free objects the physics moves further than STAY_MM (or turns) when left alone from the present
+        poses, with how far (mm); the world itself is not changed."""
+        copies = [dataclasses.replace(o, position=o.position.copy(), tilt=o.tilt.copy()) for o in self._free()]
+        twin = World(copies)
+        twin._simulate()
+        out = []
+        for o, c in zip(self._free(), copies, strict=True):
+            shift = float(np.linalg.norm(c.position - o.position))
+            if shift > STAY_MM or abs(c.yaw - o.yaw) > np.radians(2.0) or np.any(np.abs(c.tilt - o.tilt) > 0.035):
+                out.append((o, shift))
+        return out
 
     # -- validation -----------------------------------------------------------------------------------------
     def problems(self) -> list[str]:
         """Everything physically wrong with the world, in words (empty when valid): objects off the board,
-        interpenetrating, floating, or resting where they would tip off. Held objects are exempt from resting."""
+        interpenetrating, floating, or where the physics would not leave them (tipping off, sliding). Held objects
+        are exempt from resting."""
         lab = lab_config()
         out = []
         objs = self._objects
@@ -212,14 +244,12 @@ class World:
             if not np.all(lab.on_board(pts)):
                 out.append(f"{describe_object(o)} is not entirely on the board (x in {lab.board_x}, "
                            f"y in {lab.board_y})")
-            if o.id in self.held:
-                continue
-            height, supports = self.supports_of(o)
+            if o.id in self.held or np.any(o.tilt):
+                continue                           # a leaning object rests on its neighbours: the physics checks it
+            height = self.supports_of(o)[0]
             if abs(o.bottom_z - height) > SETTLE_TOL_MM:
                 out.append(f"{describe_object(o)} does not rest on its support: bottom at {o.bottom_z:.1f} mm, "
                            f"support top at {height:.1f} mm")
-            elif not self._supported(o, supports):
-                out.append(f"{describe_object(o)} would tip off: its centre is not over the object(s) below it")
         for i, a in enumerate(objs):
             for b in objs[i + 1:]:
                 if self.collide(a, b):
@@ -227,4 +257,7 @@ class World:
         ids = [o.id for o in objs]
         if len(set(ids)) != len(ids):
             out.append(f"object ids are not unique: {ids}")
+        if not out:                                # the physics only runs on a world without the faults above
+            out += [f"{describe_object(o)} would not stay where it is: the physics moves it {shift:.1f} mm (it tips "
+                    f"off or slides)" for o, shift in self.would_move()]
         return out

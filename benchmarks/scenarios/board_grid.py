@@ -15,7 +15,9 @@ tasks.place at the place spot with a seeded yaw. Each outcome is one of OUTCOMES
 when the guarded arm sent nothing for it, else "refused mid-plan" (a pre-check bug). The placement error is the
 placed block's true bottom-face centre minus the target (world mm; ground truth, so simulation only). The pick's
 error is the grasped block's true centre in the tool frame minus where the plan put it (tool frame mm: how well the
-pads were centred on it). Units: mm, rad; world (board) frame.
+pads were centred on it), and its turn the angle between the block's true rotation in the tool frame and the one the
+plan believes (held_in_tool): what the task layer believes it holds against the physics world's truth. Units: mm,
+rad; world (board) frame.
 """
 
 from __future__ import annotations
@@ -28,7 +30,9 @@ from armlab import tasks
 from armlab.blocks import ObjectState, block_edge
 from armlab.kinematics import Unreachable
 from armlab.lab import lab_config
+from armlab.sim.physics.rest import object_rotation
 from armlab.station.contract import MotionRefused
+from armlab.transforms import homogeneous
 
 __all__ = ["GridSpot", "GRID", "REGIONS", "OUTCOMES", "Outcome", "random_spots", "grid_pairs", "run_trial"]
 
@@ -121,6 +125,8 @@ class Outcome:
     outcome: str
     error: np.ndarray | None = None
     message: str = ""
+    tilt_rad: float = 0.0          # a place: how tilted the block was when the gripper let it go (SimArm.last_release)
+    turn_rad: float = 0.0          # a pick: the angle between the held block's true and believed rotation in the tool
 
 
 def _cube(color: str, x: float, y: float, yaw: float) -> ObjectState:
@@ -170,9 +176,10 @@ def run_trial(pick: GridSpot, place: GridSpot, seed: int) -> tuple[Outcome, Outc
         return Outcome(pick, "pick", _refusal(sent, session.arm), message=str(e)), None
     if not held or truth not in st.arm.holding:
         return Outcome(pick, "pick", "not grasped", message=str(getattr(st.arm, "last_grasp", ""))), None
-    T_tool_block = np.linalg.inv(st.arm.tool_pose_true()) @ np.r_[truth.position, 1.0]
-    grasp_error = T_tool_block[:3] - session.held_in_tool[:3, 3]
-    picked = Outcome(pick, "pick", "done", grasp_error)
+    T_tool_block = np.linalg.inv(st.arm.tool_pose_true()) @ homogeneous(object_rotation(truth), truth.position)
+    grasp_error = T_tool_block[:3, 3] - session.held_in_tool[:3, 3]
+    turn = np.clip((np.trace(session.held_in_tool[:3, :3].T @ T_tool_block[:3, :3]) - 1.0) / 2.0, -1.0, 1.0)
+    picked = Outcome(pick, "pick", "done", grasp_error, turn_rad=float(np.arccos(turn)))
     target = np.array([place.x, place.y, block_edge("large") if place.stack else 0.0])
     sent = len(session.arm.sent)
     try:

@@ -123,5 +123,6 @@ def _trial(session: tasks.Session, block, rng: np.random.Generator, out: list[Ou
         return False
     bottom = truth.position - [0.0, 0.0, truth.edge / 2]
     note = f"picked from a detection {seen_off:.1f} mm off its block" if seen_off > DETECTION_OFF_MM else ""
-    out.append(Outcome(GridSpot(REGION, float(spot[0]), float(spot[1])), "place", "done", bottom - spot, note))
+    tilt = float(getattr(station.arm, "last_release", {}).get(truth.id, 0.0))
+    out.append(Outcome(GridSpot(REGION, float(spot[0]), float(spot[1])), "place", "done", bottom - spot, note, tilt))
     return True

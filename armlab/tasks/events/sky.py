@@ -25,14 +25,16 @@ from armlab import kinematics
 from armlab.blocks import COLORS, ObjectState, block_edge
 from armlab.detection import DetectionSettings
 from armlab.kinematics import Unreachable
-from armlab.planning import inner_limits
+from armlab.planning import inner_limits, steepest_pitch_inside
+from armlab.sim.physics.rest import tipping_shift_mm
 
+from ..handling import RELEASE_GAP_MM
 from .registry import EventSpec
 from .scoring import SKY_LEVELS, score_sky
 from .search import kit_or_search
 
 __all__ = ["HandOver", "HANDOVER_XY", "TOWER_XY", "SKY_CLEARANCE_MM", "SKY_SETTINGS", "TOWER_RADIUS_MM",
-           "highest_tool_z", "EVENT"]
+           "highest_tool_z", "landing_offset", "SKY_TOWER_BLOCKS", "SKY_TOWER_DEFAULT_CLEARANCE_BLOCKS", "EVENT"]
 
 HANDOVER_XY = (-200.0, 150.0)
 TOWER_XY = (120.0, 120.0)           # 170 mm from the waist axis: where the tool reaches highest (module notes)
@@ -41,6 +43,13 @@ SKY_CLEARANCE_MM = 15.0             # held block over the tower top; the empty f
                                     # end 7 mm above the new top after the release
 SKY_SETTINGS = DetectionSettings(max_height=500.0, max_levels=13)   # the tower rises above the default 260 mm, 6 levels
 TOWER_RADIUS_MM = 27.0              # the tower as an obstacle for the plans: a column this wide at TOWER_XY
+# How tall a tower the kit's strategy builds on the physics world (2026-12-07; the public check of notebook 07 and the
+# hidden checks of events.sky ask for these): carried SKY_CLEARANCE_MM over the top and aimed by landing_offset, 9
+# blocks, straight (every centre within 5 mm of the tower's axis), on seeds 0-5 and on seed 0 under the other numerics
+# of tools/nbval-numerics; the tenth, let go beyond 45 deg, falls off. With the kit's default 50 mm clearance, 8 on
+# seeds 0-3. (The geometric world, which laid every released block flat, gave 12 and 11.)
+SKY_TOWER_BLOCKS = 9
+SKY_TOWER_DEFAULT_CLEARANCE_BLOCKS = 8
 
 
 def highest_tool_z(xy, top_down: bool = False, tol_mm: float = 0.5) -> float:
@@ -65,6 +74,34 @@ def highest_tool_z(xy, top_down: bool = False, tol_mm: float = 0.5) -> float:
         mid = 0.5 * (good + bad)
         good, bad = (mid, bad) if ok(mid) else (good, mid)
     return good
+
+
+def landing_offset(level: int, xy=TOWER_XY) -> np.ndarray:
+    """Where (x, y) mm a large block put on a tower of `level` blocks at xy lands from where its centre is let go,
+    when it was picked top-down and is placed at the steepest pitch the arm has a block's height above the release
+    (planning.steepest_pitch_inside; the arm comes straight down from above at one pitch). It is carried turned by
+    the pitch's tilt t from vertical about the pads' closing axis, falls onto its lowest edge and tips flat
+    (armlab.sim.physics.rest.tipping_shift_mm), outward from the waist axis. Zero while the release is top-down (up
+    to ~6 levels at TOWER_XY); aiming the block's centre at xy minus this offset lands it over xy.
+
+    Beyond t = 45 deg (the tenth level at TOWER_XY) it lands on its other face, tips inward by 16-18 mm and slides:
+    whether it then stays is decided by fractions of a mm, so no aim is given (zero). Aimed by half the predicted
+    offset, the tenth level stood or fell with the last bits of the kit's numerics (to the sky seed 0: 12 levels
+    natively, 10 without AVX-512 or 9 without AVX2, so no stored output could hold it); unaimed it falls off.
+
+    Measured 2026-12-07 at TOWER_XY (to the sky, seed 0): levels 7-10 were let go at 9.8, 23.9, 36.8 and 50.8 deg
+    (this gives 11.5, 24.8, 38.2, 53.0) and, unaimed, landed 1.2, 7.7, 16.4 and 17.8 mm off; aimed, levels 7-9 land
+    within 5 mm of the tower's axis."""
+    e = block_edge("large")
+    p = np.array([xy[0], xy[1], level * e + RELEASE_GAP_MM + e / 2 + e], float)
+    try:
+        pitch, _ = steepest_pitch_inside(p)
+    except Unreachable:
+        return np.zeros(2)
+    t = np.pi / 2 - float(pitch)
+    if t > np.pi / 4:
+        return np.zeros(2)
+    return np.array(xy, float) / np.linalg.norm(xy) * tipping_shift_mm(e, t)
 
 
 class HandOver:

@@ -15,7 +15,7 @@ from armlab.planning import Obstacle
 from ..layout import Move
 from ..registry import Strategy
 from ..scoring import SKY_LEVELS
-from ..sky import HANDOVER_XY, NEAR_MM, SKY_CLEARANCE_MM, TOWER_RADIUS_MM, TOWER_XY
+from ..sky import HANDOVER_XY, NEAR_MM, SKY_CLEARANCE_MM, TOWER_RADIUS_MM, TOWER_XY, landing_offset
 
 __all__ = ["Sky"]
 
@@ -43,7 +43,8 @@ class Sky(Strategy):
         handed = [b for b in seen if b.is_block and np.linalg.norm(np.asarray(b.position[:2]) - HANDOVER_XY) < NEAR_MM]
         if not handed:
             return None
-        return Move(handed[0], np.array([*self.top_xy, self.height * e]), 0.0, "tower", SKY_CLEARANCE_MM)
+        aim = self.top_xy - landing_offset(self.height)      # a block let go tilted tips flat: aim so it lands over
+        return Move(handed[0], np.array([*aim, self.height * e]), 0.0, "tower", SKY_CLEARANCE_MM)
 
     def placed(self, move: Move) -> None:
         self.height += 1

@@ -1,0 +1,21 @@
+"""The simulated world's physics: MuJoCo rigid-body contact dynamics for the objects on the board.
+
+Modules, one job each:
+    materials: the wood's density and friction and the contact settings (solver, cone, solref), with their sources.
+    mjcf: the MJCF model text of a set of objects (board, free bodies, a kinematic pusher), in metres and kg.
+    engine: a compiled model with its state: load the objects' poses, step to rest, read the poses back.
+    rest: the pose of a body at rest as the kit's ObjectState (world mm, yaw; flat faces snapped flat).
+    grasp: the finger pads as bodies squeezing and lifting a block (friction holds it or not); not yet SimArm's grasp.
+
+The world (armlab.sim.world.World) keeps the objects as ObjectState and calls the engine whenever something moves
+them (a release, a push, a scene's dropped blocks); the objects' poses feed the kit's own renderer as before.
+
+Not modelled yet: the arm's links and the gripper's pads as bodies. A grasp still follows the geometric grasp rule
+of armlab.sim.gripper and a held block is carried kinematically; where a pad runs into an object, the push it gives
+runs here (World.shove). Contact grasps (pads squeezing, friction holding) are the next step.
+"""
+
+from armlab.sim.physics.engine import Physics, PhysicsError
+from armlab.sim.physics.materials import CONTACT, WOOD, ContactSettings, Wood
+
+__all__ = ["Physics", "PhysicsError", "CONTACT", "WOOD", "ContactSettings", "Wood"]
