@@ -11,11 +11,11 @@ rose with them (within SLIP_MM); its pose in the tool frame is then the physics 
 not stop gravity turning it (a block gripped off its centre swings about the closing axis). Units: mm, rad, s at the
 interface; world frame.
 
-Measured 2026-12-07 (a large block squeezed top-down at its centre): the grip is 0.21, 0.53, 1.06, 3.47 and 21.4 N a
-pad at 0.02, 0.05, 0.1, 0.3 and 1 mm of squeeze; at 0.03-1 mm the block rises with the pads, and gripped 5 or 10 mm
-off its centre (along the pads' width) it turns 0.2 or 0.5 deg; at 0.02 mm (0.21 N) the centred block slips 1.1 mm
-in the 10 mm lift and the one gripped 10 mm off its centre slips 3.4 mm and turns 8.3 deg. Whether an off-centre
-grip slips on the bench thus turns on the gripper's force, which the kit has not measured. Not yet the simulated arm's grasp: SimArm still
+Measured 2026-12-07 (a large block squeezed top-down at its centre): the grip is 0.21, 0.53, 1.06, 3.47 and 21.4 N a pad
+at 0.02, 0.05, 0.1, 0.3 and 1 mm of squeeze; at 0.03-1 mm the block rises with the pads, and gripped 5 or 10 mm off its
+centre (along the pads' width) it turns 0.2 or 0.5 deg; at 0.02 mm (0.21 N) the centred block slips 1.1 mm in the 10 mm
+lift and the one gripped 10 mm off its centre slips 3.4 mm and turns 8.3 deg. Whether an off-centre grip slips on the
+bench thus turns on the gripper's force, which the kit has not measured. Not yet the simulated arm's grasp: SimArm still
 holds by the grasp rule of armlab.sim.gripper (issue 36's next step is to decide holding and the held pose here).
 """
 
