@@ -49,7 +49,7 @@ class World:
     Attributes:
         objects: every object (ground truth, world mm / rad); blocks: the cubes only.
         time_s: simulated time (s).
-        held: ids of objects held by the gripper (they are exempt from the statics).
+        held: ids of objects held by the gripper (they are exempt from the physics).
         lock: the one re-entrant lock of the simulation: the clock's steps and everything the simulated arm changes
             (a check and the motion it starts, a stop) run under it, so a stop from another thread (a GUI's, a
             timer's) comes either before a move starts or after, never in between. One lock, not one per part: the
