@@ -38,7 +38,7 @@ from IPython import get_ipython
 from armlab.blocks import COLORS, LAB_RGB
 from armlab.detection import default_color_model, detect_objects, draw_detections, height_from_depth
 from armlab.detection import hsv_table_classify
-from armlab.detection.color import LAB_HSV_TABLE
+from armlab.detection.color import LAB_HSV_TABLE, ColorModel
 from armlab_course.exercises import references, require_written, with_reference
 from armlab.sim.detection_eval import (DetectionScore, balanced_frame, corrected_depth, score_frame,
                                        score_segmentation, sim_case)
@@ -150,6 +150,31 @@ require_written("detect.classify")
 hsv_acc = np.mean(np.array(hsv_labels) == np.array(truth))
 model_acc = np.mean(np.array(model_labels) == np.array(truth))
 assert model_acc == 1.0, f"the colour model names {model_acc:.0%} of the faces right (expected all)"
+# two properties of the rule itself, on colours mixed between every two colours' faces: a class whose spreads are
+# widened can only gain colours, and must gain some; a class taken away that was not a colour's nearest can only
+# widen that colour's margin (the runner-up is then the same or farther)
+kit = default_color_model()
+truth_arr = np.array(truth)
+faces = {c: balanced[truth_arr == c].mean(axis=0) for c in kit.names if np.any(truth_arr == c)}
+mix = np.linspace(0.0, 1.0, 41)[:, None]
+gained = 0
+for a in faces:
+    wider = ColorModel(kit.names, kit.means, kit.stds * np.where(np.array(kit.names) == a, 4.0, 1.0)[:, None])
+    for b in faces:
+        if b != a:
+            path = (1 - mix) * faces[b] + mix * faces[a]
+            before, after = kit.classify(path)[0].count(a), wider.classify(path)[0].count(a)
+            assert after >= before, f"widening {a}'s spreads took colours away from {a}"
+            gained += after - before
+assert gained > 0, "widening a colour's spreads moved no colour into it: weigh each class's distance by its own spreads"
+everything = np.vstack([(1 - mix) * faces[b] + mix * faces[a] for a in faces for b in faces if a != b])
+names_all, margins_all = kit.classify(everything)
+for gone in kit.names:
+    keep = np.array(kit.names) != gone
+    fewer = ColorModel(tuple(np.array(kit.names)[keep]), kit.means[keep], kit.stds[keep])
+    others = np.array(names_all) != gone
+    assert np.all(fewer.classify(everything[others])[1] >= margins_all[others] - 1e-9), \
+        f"taking the {gone} class away made a margin smaller: the margin is to the second-nearest class"
 print(f"OK: on {len(truth)} rendered faces your nearest-class rule with the kit's model is right on {model_acc:.0%} "
       f"(the report's table on the same renderings: {hsv_acc:.0%})")
 

@@ -18,6 +18,8 @@ from armlab_course.grading.run import Limits
 LIMITS = Limits(timeout_s=400, cpu_s=400)
 
 HINTS = {
+    ("detect.classify", "per-class spreads ignored"): "weigh each class's distance by its own spreads",
+    ("detect.classify", "margin to the farthest class"): "the margin is to the second-nearest class",
     ("calib.pinhole", "no translation"): "leaves out T_cam_world's translation",
     ("calib.pinhole", "rotation not transposed"): "right with T_cam_world's rotation transposed",
     ("calib.zhang", "rows of H for its columns"): "changes when the board's origin moves",
@@ -72,8 +74,6 @@ CAUSE_UNTOLD = {
 }
 HIDDEN_ONLY = {
     ("ik.numerical", "finite differences, not the exact Jacobian"): "close to 1e-8: the public check's tolerance",
-    ("detect.classify", "per-class spreads ignored"): "right on the public frames; the hidden ones tell",
-    ("detect.classify", "margin to the farthest class"): "right on the public frames; the hidden ones tell",
     ("station.transition", "errors always back to idle"): "the public sessions raise no error after a stop",
     ("events.sort_stack", "no unstacking"): "the three public levels need no unstacking",
 }
