@@ -522,7 +522,7 @@ def leaning_tower(step_mm, y_mm, levels=8):
             for k in range(levels)]
 
 
-fig, axes = plt.subplots(1, 2, figsize=(8.0, 4.6), sharey=True)
+fig, axes = plt.subplots(1, 2, figsize=(8.0, 4.6))
 for ax, step in zip(axes, (4.0, 6.0)):
     put = leaning_tower(step, 250.0)
     rested = with_objects_at([], put)
@@ -534,9 +534,9 @@ for ax, step in zip(axes, (4.0, 6.0)):
         xz = corners @ np.array([[c, -s_], [s_, c]]) + o.position[[0, 2]]
         ax.add_patch(plt.Polygon(xz, fc=np.array(LAB_RGB[COLORS[o.id % 6]]) / 255, ec="k", lw=0.5, alpha=0.85))
     top = max(o.top_z for o in rested)
-    ax.set(xlim=(-360, 20), ylim=(0, 340), aspect="equal", xlabel="x (mm)",
+    ax.set(xlim=(-360, 20), ylim=(0, 340), xticks=range(-300, 1, 100), xlabel="x (mm)", ylabel="z (mm)",
            title=f"each block {step:.0f} mm further out:\ntop now at {top:.0f} mm")
-axes[0].set_ylabel("z (mm)")
+    ax.set_aspect("equal", adjustable="box")
 fig.tight_layout()
 
 # %% [markdown]

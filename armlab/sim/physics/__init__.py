@@ -15,7 +15,14 @@ of armlab.sim.gripper and a held block is carried kinematically; where a pad run
 runs here (World.shove). Contact grasps (pads squeezing, friction holding) are the next step.
 """
 
-from armlab.sim.physics.engine import Physics, PhysicsError
-from armlab.sim.physics.materials import CONTACT, WOOD, ContactSettings, Wood
+import os
+
+# MuJoCo renders nothing here (the camera keeps the kit's own renderer): without a GL backend, importing mujoco loads
+# no windowing library (its default, glfw, probes its version in a subprocess whose output it evals, which fails in
+# some hosts, e.g. the API reference's build). A user's own MUJOCO_GL wins.
+os.environ.setdefault("MUJOCO_GL", "disable")
+
+from armlab.sim.physics.engine import Physics, PhysicsError  # noqa: E402
+from armlab.sim.physics.materials import CONTACT, WOOD, ContactSettings, Wood  # noqa: E402
 
 __all__ = ["Physics", "PhysicsError", "CONTACT", "WOOD", "ContactSettings", "Wood"]

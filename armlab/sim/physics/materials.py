@@ -1,6 +1,6 @@
 """The blocks' material and the contact model's settings.
 
-Wood: the kit's blocks are wooden cubes (reference/lab.md: large 38 mm, small 25 mm). The density (also the
+Wood: the kit's blocks are wooden cubes (the lab's notes: large 38 mm, small 25 mm). The density (also the
 simulated arm's, for a held block's weight: ArmRealism.block_density_kg_m3) is 600 kg/m^3, within the 500-750 kg/m^3
 of pine to beech, so a large block weighs 32.9 g and a small one 9.4 g; an assumed value, not weighed on the bench.
 Friction: dry wood on wood slides at 0.25-0.5 in engineering tables; 0.4 is used for every pair (MuJoCo takes the
