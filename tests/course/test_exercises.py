@@ -582,6 +582,7 @@ TWINS = {
                        ("attr", "armlab.planning.straight_descent", "descend"),
                        ("attr", "armlab.planning.straight_descent", "approach_reachable")],
 }
+
 _LOOKUP = """
 import importlib, json, sys
 found = []
