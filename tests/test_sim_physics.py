@@ -87,7 +87,23 @@ def test_pads_squeeze_and_lift_a_block_by_friction_and_an_off_centre_grip_turns_
         T = np.eye(4)
         T[:3, :3], T[:3, 3] = R, [0.0, 250.0, E / 2] + off * R[:, 2]
         grip = contact_grip([block], 0, T, GRIPPER, GRIPPER.max_opening_mm, E)
-        assert grip.held and grip.rise_mm == pytest.approx(LIFT_MM, abs=0.5)
-        np.testing.assert_allclose(grip.T_tool_block[:3, 3], [0.0, 0.0, -off], atol=0.3)   # where the pads hold it
+        assert grip.held and grip.rise_mm == pytest.approx(LIFT_MM, abs=0.1)
+        assert grip.force_n == pytest.approx(13.0, abs=0.1)                 # the servo at the default pressure
+        np.testing.assert_allclose(grip.T_tool_block[:3, 3], [0.0, 0.0, -off], atol=0.1)   # where the pads hold it
+        assert grip.gap_mm == pytest.approx(E, abs=0.2)                     # the pads sink in a little
         turns.append(grip.turn_rad)
-    assert turns[0] < np.radians(0.05) < turns[1]          # gravity turns a block gripped off its centre
+    assert turns[0] < np.radians(0.01) < turns[1]          # gravity turns a block gripped off its centre
+
+
+def test_the_servo_force_follows_the_pressure():
+    from armlab.gripper_geometry import GRIPPER
+    from armlab.sim.physics import gripper_servo
+
+    forces = [gripper_servo.pad_force_n(p, E / 2 + GRIPPER.pad_thickness_mm) for p in (0.0, 0.5, 1.0)]
+    assert forces == pytest.approx([7.8, 13.0, 18.2], abs=0.1)              # (150 + 200 p) / 885 of the stall torque
+    small = gripper_servo.pad_force_n(0.5, 12.5 + GRIPPER.pad_thickness_mm)
+    assert small == pytest.approx(16.0, abs=0.1)                            # the crank's lever is shorter there
+    with pytest.raises(ValueError, match="pressure"):
+        gripper_servo.duty(1.5)
+    with pytest.raises(ValueError, match="crank's travel"):
+        gripper_servo.pad_force_n(0.5, 40.0)

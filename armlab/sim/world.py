@@ -23,10 +23,13 @@ from collections.abc import Callable, Iterable
 import numpy as np
 
 from armlab.blocks import ObjectState
+from armlab.gripper_geometry import GripperGeometry
 from armlab.lab import lab_config
 from armlab.sim.geometry import boxes_overlap, polygons_overlap
 from armlab.sim.physics import Physics
+from armlab.sim.physics.grasp import LIFT_MM, SLIP_MM, Grip, contact_grip
 from armlab.sim.physics.rest import apply_rest_pose, object_rotation
+from armlab.transforms import invert_transform, rpy_from_matrix
 
 __all__ = ["World", "SETTLE_TOL_MM", "describe_object"]
 
@@ -217,6 +220,35 @@ class World:
             physics.push(next(k for k, o in enumerate(objects) if o is obj), d, float(distance))
 
         return self._simulate(push)
+
+    def grip(self, obj: ObjectState, T_tool, geometry: GripperGeometry, from_mm: float, width_mm: float,
+             pressure: float) -> tuple[Grip, list[ObjectState]]:
+        """Close the finger pads on obj at tool pose T_tool (4, 4) world mm and test the grip with a short lift
+        (armlab.sim.physics.grasp.contact_grip: the pads from from_mm apart, the servo at `pressure`, its force taken
+        at width_mm across). Returns the grip and the objects that rose with the pads (obj first, then what rode on
+        it; none when the grip failed), which are left at their poses in the pads with the lift undone (their
+        pose in the tool frame is the physics'); everything else is left where the pads and the lift left it, at
+        rest."""
+        free = self._free()
+        k = next(j for j, o in enumerate(free) if o is obj)
+        before = [(o.position.copy(), float(o.yaw), o.tilt.copy()) for o in free]
+        grip = contact_grip(free, k, T_tool, geometry, from_mm, width_mm, pressure)
+        rose = [j for j, (p, _) in enumerate(grip.poses)
+                if grip.held and p[2] - before[j][0][2] >= LIFT_MM - SLIP_MM]
+        group = sorted(rose, key=lambda j: (j != k, grip.poses[j][0][2]))
+        down = np.asarray(T_tool, dtype=float) @ invert_transform(grip.T_tool)      # the lift undone
+        for j in group:
+            o = free[j]
+            o.position = down[:3, :3] @ grip.poses[j][0] + down[:3, 3]
+            roll, pitch, yaw = rpy_from_matrix(down[:3, :3] @ grip.poses[j][1])
+            o.yaw, o.tilt = float(yaw), np.array([roll, pitch])
+        self.held.update(free[j].id for j in group)
+        rest = [j for j in range(len(free)) if j not in rose]
+        for j in sorted(rest, key=lambda j: grip.poses[j][0][2]):
+            apply_rest_pose(free[j], *grip.poses[j], before[j], self._support_top)
+        if not grip.held:
+            self._simulate()
+        return grip, [free[j] for j in group]
 
     def would_move(self) -> list[tuple[ObjectState, float]]:
         """The free objects the physics moves further than STAY_MM (or turns) when left alone from the present
