@@ -22,10 +22,13 @@ from armlab.blocks import ObjectState
 from armlab.gripper_geometry import GripperGeometry
 from armlab.sim.geometry import boxes_overlap, convex_hull, separation_along, wrap_quarter
 from armlab.sim.physics.grasp import DEFAULT_PRESSURE, LIFT_MM
+from armlab.sim.physics.rest import object_rotation
 from armlab.sim.world import World
 from armlab.transforms import rot_z
 
-__all__ = ["GripperGeometry", "GraspOutcome", "close_on", "push_with_pads"]
+__all__ = ["GripperGeometry", "GraspOutcome", "close_on", "push_with_pads", "off_square_rad", "SQUARE_TOLERANCE_RAD"]
+
+SQUARE_TOLERANCE_RAD = float(np.radians(5.0))   # a cube held within this of square to the pads is held square
 
 _PUSH_MARGIN_MM = 0.05       # pads touching a face (closed on a cube) do not count as pushing it
 _PREFILTER_MARGIN_MM = 1.0   # push_with_pads' quick test from the tool point leaves this much to spare
@@ -43,6 +46,15 @@ class GraspOutcome:
 
 def _object_box(o: ObjectState) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return o.position, rot_z(o.yaw), np.full(3, o.edge / 2)
+
+
+def off_square_rad(T_tool, obj: ObjectState) -> float:
+    """How far (rad, 0..pi/4) a cube's nearest face normal is turned from the pads' closing direction (the tool's y
+    axis, T_tool (4, 4)): 0 when the pads lie flat on two opposite faces; a cube pinched on two edges is turned by
+    up to 45 deg. Works at any pitch."""
+    closing = np.asarray(T_tool, dtype=float)[:3, 1]
+    axes = object_rotation(obj)
+    return float(np.arccos(min(1.0, float(np.max(np.abs(axes.T @ closing))) / np.linalg.norm(closing))))
 
 
 def _between(world: World, T: np.ndarray, g: GripperGeometry, opening_mm: float) -> ObjectState | None:
@@ -78,7 +90,10 @@ def close_on(world: World, T_tool, geometry: GripperGeometry, opening_mm: float,
         return GraspOutcome([], g.min_opening_mm, "nothing between the finger pads")
     grip, group = world.grip(o, T, g, opening_mm, _width_across(o, T[:3, 1]), pressure)
     if grip.held:
-        return GraspOutcome(group, round(grip.gap_mm, 2), f"held ({grip.force_n:.1f} N a pad)")
+        turned = off_square_rad(T, o)
+        how = "held" if turned <= SQUARE_TOLERANCE_RAD else \
+            f"held {np.degrees(turned):.0f} deg off square (pinched on two edges)"
+        return GraspOutcome(group, round(grip.gap_mm, 2), f"{how} ({grip.force_n:.1f} N a pad)")
     resting = float(np.clip(_width_across(o, T[:3, 1]), g.min_opening_mm, opening_mm))
     return GraspOutcome([], resting, f"slipped: the {o.size} {o.color} block rose {max(grip.rise_mm, 0.0):.1f} mm "
                                      f"of a {LIFT_MM:.0f} mm test lift between pads squeezing with "

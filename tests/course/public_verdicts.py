@@ -46,6 +46,7 @@ HINTS = {
     ("grab.click_target", "the face's yaw ignored"): "test the point in the face's own axes",
     ("grab.click_target", "the depth ignored (the first face containing the click)"): "let the click's height decide",
     ("grab.move_path", "release at the grasp height"): "below the board",
+    ("grab.move_path", "roll ignores the yaw"): "off square: the pads pinched it on two edges",
     ("grab.sequence", "every block taken as hit (no test of the face)"): "a click on bare board was not refused",
     ("teach.replay", "recorded before posing"): "not at A",
     ("teach.replay", "no velocity floor"): "over its velocity limit",
@@ -63,8 +64,6 @@ CAUSE_UNTOLD = {
     ("ik.numerical", "orientation left out of the step"): "the student's own loop stops unconverged (its "
                                                           "NotConverged), before any check can look",
     ("detect.segment", "ranges tuned too tight"): "four colours are missed: too tight and shifted ranges look alike",
-    ("grab.move_path", "roll ignores the yaw"): "the gripper closes on nothing: a wrong roll, height or spot look "
-                                                "alike from the outcome",
     ("grab.sequence", "the held block never forgotten after a drop"): "the kit refuses the second drop; the "
                                                                       "sequence's belief is not observable",
     ("events.line_up", "blocks keep their detected yaw (not square to the line)"): "the line is too long: turned "
