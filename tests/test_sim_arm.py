@@ -338,7 +338,8 @@ def test_release_onto_a_block_stacks_it():
 def test_release_too_far_off_the_block_below_tips_it_off():
     world, lower, upper = _place_on(25.0)                 # centre beyond the 19 mm half edge: not supported
     assert upper.position[2] == pytest.approx(19.0)       # fell to the board
-    assert upper.position[0] > 100.0 + 38.0 - 1e-6        # beside the block, on the side it hung over
+    assert upper.position[0] > lower.position[0] + 38.0 - 1e-6   # beside the block, on the side it hung over (it
+    # struck the open finger on that side as it toppled, and pushed the block below 6.8 mm the other way)
     assert not World.footprints_overlap(upper, lower)
     assert world.problems() == []
 

@@ -107,3 +107,31 @@ def test_the_servo_force_follows_the_pressure():
         gripper_servo.duty(1.5)
     with pytest.raises(ValueError, match="crank's travel"):
         gripper_servo.pad_force_n(0.5, 40.0)
+
+
+def test_the_arm_is_a_body_a_block_dropped_on_its_gripper_rests_there_and_a_part_inside_a_block_is_left_out():
+    from armlab.gripper_geometry import GRIPPER
+    from armlab.robot import rx200
+    from armlab.sim.physics import Physics
+    from armlab.sim.physics.arm_bodies import BAR_HALF_MM, arm_parts
+
+    robot = rx200()
+    home = arm_parts(np.zeros(5), robot, GRIPPER, GRIPPER.max_opening_mm)       # the arm straight out at 304.57 mm
+    assert [p.name for p in home] == ["upper arm", "forearm", "wrist", "gripper bar", "left finger", "right finger"]
+    bar = home[3]
+    block = ObjectState("red", "large", E, bar.pose[:3, 3] + [0.0, 0.0, 60.0], 0.0, "cube", 0)
+    physics = Physics([block], arm=home)
+    physics.run_to_rest()
+    position, _ = physics.pose(0)
+    assert position[2] == pytest.approx(304.57 + BAR_HALF_MM[1] + E / 2, abs=0.5)   # on the bar's top, not the board
+    # the arm reaching down into a block (a link swept through it): that part is left out, the block stays put
+    from armlab import kinematics
+
+    low = kinematics.ik([0.0, 250.0, 19.0], np.pi / 2, 0.0)[0]                  # top-down at a block's centre height
+    fingers = arm_parts(low, robot, GRIPPER, GRIPPER.max_opening_mm)
+    tip = fingers[4].pose[:3, 3]
+    inside = ObjectState("blue", "large", E, np.array([tip[0], tip[1], E / 2]), 0.0, "cube", 0)
+    physics = Physics([inside], arm=fingers)
+    assert "left finger" in physics.arm_left_out
+    physics.run_to_rest()
+    np.testing.assert_allclose(physics.pose(0)[0], inside.position, atol=0.1)

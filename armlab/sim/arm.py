@@ -28,6 +28,7 @@ from armlab.gripper_geometry import GRIPPER
 from armlab.profile import trapezoid_fraction
 from armlab.robot import RobotModel, rx200
 from armlab.sim.gripper import GripperGeometry, close_on, push_with_pads
+from armlab.sim.physics.arm_bodies import arm_parts
 from armlab.sim.physics.grasp import DEFAULT_PRESSURE
 from armlab.sim.physics.gripper_servo import duty
 from armlab.sim.physics.materials import WOOD
@@ -179,6 +180,7 @@ class SimArm:
         self._pose_memo: tuple | None = None    # (key, realism, robot, q_true, tool pose): _pose
         self._q_true = self._physical(self._motor)
         world.add_listener(self._on_time)
+        world.arm = self._bodies
 
     # -- physical model -------------------------------------------------------------------------------------
     def _payload_kg(self) -> float:
@@ -214,6 +216,10 @@ class SimArm:
         tasks.calibrate_sag): moving it touches nothing of this arm's world and takes none of its time."""
         return SimArm(World(), self.realism, self.gripper_geometry, self.seed, robot=self.robot,
                       gripper_time_s=self.gripper_time_s, gripper_pressure=self.gripper_pressure)
+
+    def _bodies(self, hand: bool) -> list:
+        """The arm's bodies where it stands now, for the world's physics (armlab.sim.physics.arm_bodies)."""
+        return arm_parts(self._q_true, self.robot, self.gripper_geometry, self.gripper_opening_mm, hand)
 
     def tool_pose_true(self) -> np.ndarray:
         """The physical tool pose (4, 4) in the world (ground truth, mm)."""

@@ -27,6 +27,7 @@ from armlab.gripper_geometry import GripperGeometry
 from armlab.lab import lab_config
 from armlab.sim.geometry import boxes_overlap, polygons_overlap
 from armlab.sim.physics import Physics
+from armlab.sim.physics.arm_bodies import ArmPart
 from armlab.sim.physics.grasp import LIFT_MM, SLIP_MM, Grip, contact_grip
 from armlab.sim.physics.rest import apply_rest_pose, object_rotation
 from armlab.transforms import invert_transform, rpy_from_matrix
@@ -53,6 +54,8 @@ class World:
         objects: every object (ground truth, world mm / rad); blocks: the cubes only.
         time_s: simulated time (s).
         held: ids of objects held by the gripper (they are exempt from the physics).
+        arm: what tells the physics where the arm's bodies are (armlab.sim.physics.arm_bodies: arm_parts(hand)
+            -> list of ArmPart), set by the simulated arm standing in this world; None: no arm.
         lock: the one re-entrant lock of the simulation: the clock's steps and everything the simulated arm changes
             (a check and the motion it starts, a stop) run under it, so a stop from another thread (a GUI's, a
             timer's) comes either before a move starts or after, never in between. One lock, not one per part: the
@@ -67,6 +70,7 @@ class World:
         self.time_s = 0.0
         self.real_time = bool(real_time)
         self.held: set[int] = set()
+        self.arm: Callable[[bool], list[ArmPart]] | None = None
         self._listeners: list[Callable[[float], None]] = []
         self._wall = time.monotonic()
         self.lock = threading.RLock()
@@ -184,7 +188,7 @@ class World:
         first, and return the objects that moved."""
         free = self._free()
         before = [(o.position.copy(), float(o.yaw), o.tilt.copy()) for o in free]
-        physics = Physics(free)
+        physics = Physics(free, arm=self._arm_parts(hand=True))
         if act is not None:
             act(physics, free)
         physics.run_to_rest()
@@ -194,6 +198,9 @@ class World:
             if apply_rest_pose(free[k], *poses[k], before[k], self._support_top):
                 moved.append(free[k])
         return moved
+
+    def _arm_parts(self, hand: bool) -> list[ArmPart]:
+        return [] if self.arm is None else self.arm(hand)
 
     # -- physics --------------------------------------------------------------------------------------------
     def settle(self, obj: ObjectState) -> list[ObjectState]:
@@ -232,7 +239,7 @@ class World:
         free = self._free()
         k = next(j for j, o in enumerate(free) if o is obj)
         before = [(o.position.copy(), float(o.yaw), o.tilt.copy()) for o in free]
-        grip = contact_grip(free, k, T_tool, geometry, from_mm, width_mm, pressure)
+        grip = contact_grip(free, k, T_tool, geometry, from_mm, width_mm, pressure, arm=self._arm_parts(hand=False))
         rose = [j for j, (p, _) in enumerate(grip.poses)
                 if grip.held and p[2] - before[j][0][2] >= LIFT_MM - SLIP_MM]
         group = sorted(rose, key=lambda j: (j != k, grip.poses[j][0][2]))

@@ -16,6 +16,7 @@ import mujoco
 import numpy as np
 
 from armlab.blocks import ObjectState
+from armlab.sim.physics.arm_bodies import ArmPart
 from armlab.sim.physics.materials import CONTACT, WOOD, ContactSettings, Wood
 from armlab.sim.physics.mjcf import PARK_Z_M, PUSHER_HALF_M, Hand, scene_mjcf
 from armlab.sim.physics.rest import object_rotation
@@ -40,8 +41,8 @@ class PhysicsError(RuntimeError):
 
 @lru_cache(maxsize=64)
 def _model(shapes: tuple[tuple[str, float], ...], settings: ContactSettings, wood: Wood,
-           hand: Hand | None = None) -> mujoco.MjModel:
-    return mujoco.MjModel.from_xml_string(scene_mjcf(shapes, settings, wood, hand))
+           hand: Hand | None = None, arm: tuple[tuple[str, tuple[float, ...]], ...] = ()) -> mujoco.MjModel:
+    return mujoco.MjModel.from_xml_string(scene_mjcf(shapes, settings, wood, hand, arm))
 
 
 _DIGITS = 6                  # what enters MuJoCo is rounded to 1e-6 (m: 1 um; quaternion units): see _metres
@@ -78,10 +79,12 @@ class Physics:
     """
 
     def __init__(self, objects: Sequence[ObjectState], settings: ContactSettings = CONTACT, wood: Wood = WOOD,
-                 hand: Hand | None = None):
+                 hand: Hand | None = None, arm: Sequence[ArmPart] = ()):
         self.objects = list(objects)
         shapes = tuple((o.shape, float(o.edge)) for o in self.objects)
-        self.model = _model(shapes, settings, wood, hand)
+        arm = list(arm)
+        self.model = _model(shapes, settings, wood, hand, tuple((p.kind, tuple(round(v, 3) for v in p.size_mm))
+                                                                 for p in arm))
         self.hand = hand
         self.data = mujoco.MjData(self.model)
         self._body0 = self.model.body("object0").id if self.objects else 0
@@ -89,13 +92,38 @@ class Physics:
             self.data.qpos[7 * k:7 * k + 3] = _metres(o.position)
             self.data.qpos[7 * k + 3:7 * k + 7] = _unit(np.round(_quat(object_rotation(o)), _DIGITS))
         self._park()
-        mujoco.mj_forward(self.model, self.data)
+        self.arm_left_out = self._place_arm(arm)
         self.time_s = 0.0
 
     def _park(self) -> None:
         for m in range(self.model.nmocap):
             self.data.mocap_pos[m] = (0.0, 0.0, PARK_Z_M)
             self.data.mocap_quat[m] = (1.0, 0.0, 0.0, 0.0)
+
+    def _place_arm(self, arm: list[ArmPart]) -> list[str]:
+        """Pose the arm's bodies (rounded as every input is); a part that overlaps an object stays parked. Returns
+        the names of the parts left out."""
+        ids = []
+        for k, part in enumerate(arm):
+            m = int(self.model.body(f"arm{k}").mocapid[0])
+            self.data.mocap_pos[m] = _metres(part.pose[:3, 3])
+            self.data.mocap_quat[m] = _unit(np.round(_quat(part.pose[:3, :3]), _DIGITS))
+            ids.append((m, self.model.body(f"arm{k}").id))
+        mujoco.mj_forward(self.model, self.data)
+        objects = set(range(self._body0, self._body0 + len(self.objects)))
+        touching = set()
+        for c in self.data.contact[:self.data.ncon]:
+            bodies = {int(self.model.geom_bodyid[c.geom1]), int(self.model.geom_bodyid[c.geom2])}
+            if c.dist < 0 and bodies & objects:
+                touching |= bodies
+        left_out = []
+        for (m, body), part in zip(ids, arm, strict=True):
+            if body in touching:
+                self.data.mocap_pos[m] = (0.0, 0.0, PARK_Z_M)
+                left_out.append(part.name)
+        if left_out:
+            mujoco.mj_forward(self.model, self.data)
+        return left_out
 
     # -- the gripper (a model built with a Hand) --------------------------------------------------------------
     def set_hand(self, T_tool_mm, teleport: bool = False) -> None:
@@ -205,7 +233,7 @@ class Physics:
         back = start + d * (distance_mm - 5.0)                      # step back off the face before parking
         self.data.mocap_pos[0] = _metres([back[0], back[1], z])
         self.step()
-        self._park()
+        self.data.mocap_pos[0] = (0.0, 0.0, PARK_Z_M)
 
     # -- reading --------------------------------------------------------------------------------------------
     def pose(self, k: int) -> tuple[np.ndarray, np.ndarray]:

@@ -26,6 +26,7 @@ import numpy as np
 
 from armlab.blocks import ObjectState
 from armlab.gripper_geometry import GripperGeometry
+from armlab.sim.physics.arm_bodies import ArmPart
 from armlab.sim.physics.engine import Physics
 from armlab.sim.physics.gripper_servo import pad_armature_kg, pad_damping_n_s_m, pad_force_n
 from armlab.sim.physics.mjcf import Hand
@@ -79,15 +80,17 @@ def _steps(physics: Physics, seconds: float) -> int:
 
 
 def contact_grip(objects: Sequence[ObjectState], k: int, T_tool, geometry: GripperGeometry, from_mm: float,
-                 width_mm: float, pressure: float = DEFAULT_PRESSURE, lift_s: float = LIFT_S) -> Grip:
+                 width_mm: float, pressure: float = DEFAULT_PRESSURE, lift_s: float = LIFT_S,
+                 arm: Sequence[ArmPart] = ()) -> Grip:
     """Squeeze objects[k] (free objects at rest, world mm) between the pads at tool pose T_tool (4, 4) mm, the pads
     closing from from_mm apart with the servo's force at `pressure` (its force taken where they meet a block
-    width_mm across: the block's width across the pads), then lift LIFT_MM in lift_s (module notes)."""
+    width_mm across: the block's width across the pads), then lift LIFT_MM in lift_s (module notes). arm: the arm's
+    links, standing still (arm_bodies without the hand: the gripper here is the hand that lifts)."""
     g = geometry
     T = np.asarray(T_tool, dtype=float)
     force = round(pad_force_n(pressure, float(np.clip(width_mm, g.min_opening_mm, g.max_opening_mm)) / 2
                               + g.pad_thickness_mm), 3)
-    physics = Physics(objects, hand=hand_for(g, width_mm))
+    physics = Physics(objects, hand=hand_for(g, width_mm), arm=arm)
     physics.set_hand(T, teleport=True)
     physics.set_gap(from_mm)
     physics.squeeze(force)

@@ -18,6 +18,8 @@ Bodies:
         against a damper (the servo's back-EMF). A mocap body itself has no velocity in MuJoCo's contact solver,
         so it pushes by penetration but drags nothing by friction (measured: a block squeezed with 627 N did not
         rise 1 um when mocap pads rose 10 mm); a welded body moves with a velocity and does.
+    "arm<k>" (with arm shapes): the simulated arm's bodies (arm_bodies: link capsules, the gripper bar, the fingers),
+        kinematic (mocap) bodies the engine poses where the arm stands, parked below the board otherwise.
 
 The model depends only on the objects' shapes and sizes, not their poses (engine caches compiled models by them).
 """
@@ -97,10 +99,21 @@ def _hand(hand: Hand, wood: Wood) -> tuple[str, str, str]:
     return target, body, constraints
 
 
+def _arm(arm: Sequence[tuple[str, tuple[float, ...]]]) -> str:
+    """The arm's kinematic bodies (XML): one per (kind, size mm) of arm_bodies.ArmPart."""
+    out = []
+    for k, (kind, size) in enumerate(arm):
+        size_m = _fmt(v / 1000.0 for v in size)
+        out.append(f'<body name="arm{k}" mocap="true" pos="0 0 {PARK_Z_M}"><geom type="{kind}" size="{size_m}"/>'
+                   '</body>')
+    return "".join(out)
+
+
 def scene_mjcf(shapes: Sequence[tuple[str, float]], settings: ContactSettings = CONTACT, wood: Wood = WOOD,
-               hand: Hand | None = None) -> str:
+               hand: Hand | None = None, arm: Sequence[tuple[str, tuple[float, ...]]] = ()) -> str:
     """The MJCF text of a board with one free body per (shape, edge mm) in `shapes`, and the pusher; with a Hand also
-    the gripper (module notes), parked below the board like the pusher. The hand comes after the objects, so the
+    the gripper, with `arm` ((kind, size mm) each) the arm's bodies (module notes), parked below the board like the
+    pusher. The hand comes after the objects, so the
     objects' joints stay first in qpos (then the hand's free joint and the two slides)."""
     s = settings
     bodies, assets = [], []
@@ -125,6 +138,7 @@ def scene_mjcf(shapes: Sequence[tuple[str, float]], settings: ContactSettings = 
       <geom type="box" size="{_fmt((px, py, pz))}"/>
     </body>
     {target}
+    {_arm(arm)}
     {"".join(bodies)}
     {gripper}
   </worldbody>
