@@ -5,7 +5,10 @@ pick a detected block 150 mm or more from the waist axis and place it at a rando
 Up to 200 places here (4 stations, up to 50 each: 143 are tried, the others end when no block is left 150 mm
 out); `benchmarks/manipulation.py fuzz` runs more, by sector. And, as issue 33 found them refused mid-plan, places
 of blocks detected with another calibration of the same station than the session's (the factory intrinsics with the
-station's own tags and depth plane, as notebook 04's detection is calibrated apart from the task session)."""
+station's own tags and depth plane, as notebook 04's detection is calibrated apart from the task session).
+Measured 2026-12-07: the 143 places all done, the worst 2.35 mm off; 11 let go more than 2 deg tilted (blocks held
+level, placed 386-420 mm out where no top-down descent reaches; 19 before a block picked tilted was let go level by
+planning.plan_place, the worst then 2.63 mm off)."""
 
 from __future__ import annotations
 
@@ -31,7 +34,9 @@ def test_student_places_are_done_within_3_mm_or_refused_before_moving():
     outcomes = [(seed, o) for seed in SEEDS for o in run_station(seed, PLACES_PER_STATION)]
     counts = Counter(o.outcome for _, o in outcomes)
     worst = max((float(np.abs(o.error).max()) for _, o in outcomes if o.outcome == "done"), default=0.0)
-    print(f"student fuzz: {len(outcomes)} places: {dict(counts)}; the worst done place {worst:.2f} mm off")
+    tilted = sum(o.tilt_rad > np.radians(2.0) for _, o in outcomes if o.outcome == "done")
+    print(f"student fuzz: {len(outcomes)} places: {dict(counts)}; the worst done place {worst:.2f} mm off; "
+          f"{tilted} let go more than 2 deg tilted")
     assert len(outcomes) >= 0.6 * len(SEEDS) * PLACES_PER_STATION, f"only {len(outcomes)} places were tried"
     mid_plan = [f"seed {seed}, {o.spot}: {o.message}" for seed, o in outcomes if o.outcome == "refused mid-plan"]
     assert not mid_plan, "refused after the arm had moved:\n" + "\n".join(mid_plan)
