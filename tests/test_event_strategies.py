@@ -189,7 +189,7 @@ def test_sky_tower_grows_as_high_as_the_arm_reaches_over_the_best_spot():
     # lands against the open finger on its low side)
     assert station.world.would_move() == []                          # what is scored stands by the physics
     assert "out of reach" in result.stopped
-    # the last standing level's hover (top + release gap + up to e/2 for a tilted block's lowest edge + edge +
-    # clearance) is within what the arm reaches there: reach is not what stops the tower
+    # the hover over a tower of n levels (top + release gap + up to e/2 for a tilted block's lowest edge + edge +
+    # clearance) is what placing level n + 1 needs: the tower is as tall as the arm's reach over its spot allows
     hover = lambda level: level * e + RELEASE_GAP_MM + e / 2 + e + SKY_CLEARANCE_MM    # noqa: E731
-    assert hover(tower) <= highest_tool_z(TOWER_XY)
+    assert hover(tower - 1) <= highest_tool_z(TOWER_XY) < hover(tower)
