@@ -52,8 +52,9 @@ HINTS = {
     ("teach.replay", "no velocity floor"): "over its velocity limit",
     ("events.sort_stack", "stack height not tracked"): "into the known block",
     ("events.line_up", "lines too long (50 mm pitch for both sizes, 60 for the large)"): "mm long (>= 300)",
-    # on the physics world the levels it keeps putting on the tower fall off, until the 24 blocks are used up
-    ("events.sky", "keeps trying after a level out of reach (never stops)"): "stopped before the arm ran out of reach",
+    # on the physics world it keeps trying the 13th level, out of reach, until the time is up
+    ("events.sky", "keeps trying after a level out of reach (never stops)"):
+        "did the strategy stop once the next level was out of reach",
     ("station.transition", "no stop at the end of the work"): "a stop during the work: heard False",
     ("station.machine", "reset in any state"): "reset during teaching was not refused",
     ("station.machine", "the torque left off after teaching"): "the torque is still off",
