@@ -18,7 +18,7 @@ __all__ = ["GripperGeometry", "GRIPPER"]
 
 @dataclass(frozen=True)
 class GripperGeometry:
-    """Finger pad geometry (mm) and grasp tolerances.
+    """Finger pad geometry (mm). What the pads hold is the simulator's physics' to decide (armlab.sim.gripper).
 
     Attributes:
         pad_width_mm: pad extent along tool z (across the fingers' faces).
@@ -28,9 +28,6 @@ class GripperGeometry:
         finger_min_mm, finger_max_mm: travel of each finger's outer face from the centre line (the manufacturer's
             15-37 mm); the gap between the pads is 2 (finger - pad_thickness), 18-62 mm by default, so that both
             the 25 mm and the 38 mm cubes can be held (the lab's modified fingers).
-        align_tol_rad: largest misalignment (mod 90 deg) between the closing direction and a cube's face normal
-            that still gives a grasp.
-        min_contact_mm: least overlap of the pads with the cube's sides, vertically and across, for a grasp.
     """
 
     pad_width_mm: float = 20.0
@@ -38,19 +35,15 @@ class GripperGeometry:
     pad_thickness_mm: float = 6.0
     finger_min_mm: float = 15.0
     finger_max_mm: float = 37.0
-    align_tol_rad: float = float(np.radians(10.0))
-    min_contact_mm: float = 5.0
 
     def __post_init__(self):
-        for name in ("pad_width_mm", "pad_height_mm", "pad_thickness_mm", "min_contact_mm"):
+        for name in ("pad_width_mm", "pad_height_mm", "pad_thickness_mm"):
             value = getattr(self, name)
             if not np.isfinite(value) or value <= 0:
                 raise ValueError(f"GripperGeometry.{name} must be a positive number of mm, got {value}")
         if not 0 <= self.finger_min_mm - self.pad_thickness_mm < self.finger_max_mm - self.pad_thickness_mm:
             raise ValueError(f"GripperGeometry: finger travel {self.finger_min_mm}-{self.finger_max_mm} mm with "
                              f"{self.pad_thickness_mm} mm pads leaves no valid gap between the pads")
-        if not 0 < self.align_tol_rad < np.pi / 4:
-            raise ValueError(f"GripperGeometry.align_tol_rad must be in (0, pi/4), got {self.align_tol_rad}")
 
     @property
     def min_opening_mm(self) -> float:

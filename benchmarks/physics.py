@@ -9,13 +9,15 @@ not inflate) and, beside it, the wall time. Scenes of 30 large and small blocks 
 blocks and a tower of ten, each level 10 mm further out, toppling: the busiest contact pattern the world meets).
 Each runs S seconds of physics; the figure is the minimum over the repeats of the time per step (the machines are
 shared: the minimum is the least disturbed run), and "x real time" is the physics time step over the CPU time per
-step. MuJoCo steps on one thread; OpenMP is held to one too. The last row: one World.settle (a block released onto
-a block, run to rest) in the 30-block world, in ms.
+step. MuJoCo steps on one thread; OpenMP is held to one too. The last rows: one World.settle (a block released onto
+a block, run to rest) and one World.grip (the pads closing on a block and the test lift) in the 30-block world, in ms.
 
 Measured 2026-12-06 (MuJoCo 3.17.0, 2 ms steps; two cores at a load average of 19): CPU per step resting 126 us
 (15.9x real time), stacked 169 us (11.9x), falling 148 us (13.5x); wall 846, 1040, 946 us under that load; one
 settle 15.8 ms CPU. Again 2026-12-07 with condim 3 (materials.py; load average 2.9): resting 97 us (20.6x real
-time), stacked 131 us (15.3x), falling 113 us (17.8x), wall the same; one settle 12.6 ms CPU.
+time), stacked 131 us (15.3x), falling 113 us (17.8x), wall the same; one settle 12.6 ms CPU. With grasps by contact
+(load average 3.5): resting 97 us (20.6x), stacked 126 us (15.9x), falling 110 us (18.1x); one settle 13.3 ms, one
+grasp 45.2 ms CPU.
 """
 
 from __future__ import annotations
@@ -78,6 +80,22 @@ def settle_seconds() -> float:
     return time.process_time() - start
 
 
+def grasp_seconds() -> float:
+    """CPU seconds of one World.grip: the pads closing from wide open on a large block of the 30-block resting scene,
+    top-down, and the test lift (what SimArm.close_gripper runs)."""
+    from armlab.gripper_geometry import GRIPPER
+
+    objects = resting()
+    world = World(objects)
+    block = next(o for o in objects if o.size == "large")
+    T = np.eye(4)
+    T[:3, :3] = np.column_stack([[0, 0, -1], [1, 0, 0], [0, -1, 0]])      # top-down, closing along +x
+    T[:3, 3] = block.position
+    start = time.process_time()
+    world.grip(block, T, GRIPPER, GRIPPER.max_opening_mm, block.edge, 0.5)
+    return time.process_time() - start
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=3)
@@ -91,6 +109,8 @@ def main() -> None:
         print(f"{name:20} {cpu * 1e6:12.0f} {dt / cpu:12.1f} {wall * 1e6:13.0f}", flush=True)
     best = min(settle_seconds() for _ in range(args.repeats))
     print(f"{'one settle':20} {best * 1e3:9.1f} ms CPU")
+    best = min(grasp_seconds() for _ in range(args.repeats))
+    print(f"{'one grasp':20} {best * 1e3:9.1f} ms CPU")
 
 
 if __name__ == "__main__":

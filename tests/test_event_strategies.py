@@ -178,15 +178,18 @@ def test_sky_tower_grows_as_high_as_the_arm_reaches_over_the_best_spot():
     tower = len(result.score.lines)
     e = block_edge("large")
     # On the physics world a block let go tilted (levels above ~6) tips flat on landing, off to one side; the kit's
-    # strategy aims it by landing_offset so that it lands over the tower (unaimed, the 9th landed 16 mm off); the
-    # 10th, let go beyond 45 deg, falls off (the geometric world, which laid every block flat, gave 12 levels)
+    # strategy aims it by landing_offset so that it lands over the tower (unaimed, the 9th landed 16 mm off). Seed 0
+    # builds 12 levels (440 points): the open finger on a tilted block's low side catches it as it tips (without the
+    # arm's bodies in the physics, the 10th fell off: 9 levels)
     assert tower >= SKY_TOWER_BLOCKS and result.score.points == sky_points(tower)
     column = max(columns(station.world.objects), key=len)
     off = [float(np.hypot(*(o.position[:2] - TOWER_XY))) for o in column]
-    assert max(off) < 6.0, off                                       # a straight tower (mm from its axis)
+    assert max(off) < 12.0, off                                      # a straight tower (mm from its axis): measured
+    # 2026-12-07 with grasps by contact and the arm's bodies, twelve levels within 9.0 mm natively, 10.2 mm under the
+    # other numerics (a level let go tilted lands against the open finger on its low side)
     assert station.world.would_move() == []                          # what is scored stands by the physics
     assert "out of reach" in result.stopped
-    # the last standing level's hover (top + release gap + up to e/2 for a tilted block's lowest edge + edge +
-    # clearance) is within what the arm reaches there: reach is not what stops the tower
+    # the hover over a tower of n levels (top + release gap + up to e/2 for a tilted block's lowest edge + edge +
+    # clearance) is what placing level n + 1 needs: the tower is as tall as the arm's reach over its spot allows
     hover = lambda level: level * e + RELEASE_GAP_MM + e / 2 + e + SKY_CLEARANCE_MM    # noqa: E731
-    assert hover(tower) <= highest_tool_z(TOWER_XY)
+    assert hover(tower - 1) <= highest_tool_z(TOWER_XY) < hover(tower)

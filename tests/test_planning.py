@@ -544,30 +544,88 @@ def test_place_prefers_a_shorter_top_down_descent_that_keeps_the_yaw():
     assert next(s.trajectory for s in far.steps if s.label == "descend").pitch < np.radians(85)
 
 
+def _held_turned(degrees: float) -> np.ndarray:
+    """T_tool_block (4, 4) mm of a cube centred on the tool point, held as a top-down grasp leaves it, then turned by
+    `degrees` about the tool's closing axis y (as a pitched grasp holds it, seen from a top-down tool)."""
+    from armlab.transforms import homogeneous
+
+    a = np.radians(degrees)
+    c, s = np.cos(a), np.sin(a)
+    return homogeneous(np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]]) @ kinematics.fk(
+        kinematics.ik(np.array([0.0, 250.0, 57.0]), np.pi / 2, 0.0)[0])[:3, :3].T, np.zeros(3))
+
+
+def _released(plan, T_tool_block: np.ndarray, edge: float) -> tuple[float, float, np.ndarray]:
+    """(tilt deg: its nearest face normal from vertical, lowest corner's z mm, centre x, y (2,) mm) of the held cube
+    at the end of the plan's descent, where it is let go."""
+    cube = kinematics.fk(next(st.trajectory for st in plan.steps if st.label == "descend").end) @ T_tool_block
+    corners = np.array([[x, y, z] for x in (-.5, .5) for y in (-.5, .5) for z in (-.5, .5)]) * edge
+    tilt = np.degrees(np.arccos(min(1.0, np.abs(cube[2, :3]).max())))
+    return float(tilt), float((corners @ cube[:3, :3].T + cube[:3, 3])[:, 2].min()), cube[:2, 3]
+
+
 def test_a_place_is_aimed_with_the_held_blocks_pose_in_the_tool_frame():
     # a block picked tilted at full reach sits 8 deg turned (about the closing axis) in the tool frame: placed
     # top-down without its pose its lowest corner would end 2.5 mm below the target (into what it is put on)
-    from armlab.transforms import homogeneous
-
     e, spot = 38.0, np.array([0.0, 250.0, 38.0])
-    a = np.radians(8.0)
-    c, s = np.cos(a), np.sin(a)
-    T_tool_block = homogeneous(np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]]) @ kinematics.fk(
-        kinematics.ik(np.array([0.0, 250.0, 57.0]), np.pi / 2, 0.0)[0])[:3, :3].T, np.zeros(3))
-
-    def lowest_and_centre(plan):
-        down = next(st.trajectory for st in plan.steps if st.label == "descend")
-        cube = kinematics.fk(down.end) @ T_tool_block
-        corners = np.array([[x, y, z] for x in (-.5, .5) for y in (-.5, .5) for z in (-.5, .5)]) * e
-        return (corners @ cube[:3, :3].T + cube[:3, 3])[:, 2].min(), cube[:2, 3]
-
-    low, centre = lowest_and_centre(planning.plan_place(planning.CAMERA_CLEAR_POSE, spot, e, 0.0))
+    T_tool_block = _held_turned(8.0)
+    _, low, centre = _released(planning.plan_place(planning.CAMERA_CLEAR_POSE, spot, e, 0.0), T_tool_block, e)
     assert low < spot[2] - 2.0
-    low, centre = lowest_and_centre(planning.plan_place(planning.CAMERA_CLEAR_POSE, spot, e, 0.0,
-                                                        held_in_tool=T_tool_block))
+    _, low, centre = _released(planning.plan_place(planning.CAMERA_CLEAR_POSE, spot, e, 0.0,
+                                                   held_in_tool=T_tool_block), T_tool_block, e)
     assert low == pytest.approx(spot[2], abs=0.1) and np.abs(centre - spot[:2]).max() <= 0.1
     with pytest.raises(ValueError, match="held_in_tool"):
         planning.plan_place(planning.CAMERA_CLEAR_POSE, spot, e, held_in_tool=np.eye(3))
+
+
+@pytest.mark.parametrize("descent", ["straight", "joint chord"])
+def test_a_block_held_tilted_is_let_go_level_on_its_bottom_face(descent, monkeypatch):
+    # a block gripped at pitch 60 deg sits 30 deg turned about the closing axis in the tool frame: a top-down place
+    # would let it go 30 deg tilted, to land on an edge and tip; the place comes down at the pitch that levels it,
+    # whichever descent the kit has (the student release's joint chord: test_descent.py)
+    import sys
+
+    if descent == "joint chord":
+        monkeypatch.setitem(sys.modules, "armlab.planning.straight_descent", None)
+    assert planning.descent.straight() == (descent == "straight")
+    e, T_tool_block = 38.0, _held_turned(30.0)
+    assert planning.level_pitch_roll(T_tool_block[:3, :3]) == pytest.approx((np.radians(60.0), 0.0), abs=1e-9)
+    for spot in ([0.0, 250.0, 38.0], [150.0, 100.0, 0.0], [-300.0, 0.0, 0.0], [0.0, 400.0, 0.0]):
+        spot = np.array(spot)
+        plan = planning.plan_place(planning.CAMERA_CLEAR_POSE, spot, e, 0.3, held_in_tool=T_tool_block)
+        tilt, low, centre = _released(plan, T_tool_block, e)
+        assert tilt < 0.5, f"let go {tilt:.2f} deg tilted at {spot}"
+        assert low == pytest.approx(spot[2], abs=0.1) and np.abs(centre - spot[:2]).max() <= 0.1
+        assert _released(planning.plan_place(planning.CAMERA_CLEAR_POSE, spot, e, 0.3), T_tool_block, e)[0] > 10.0
+
+
+def test_where_no_level_release_is_reachable_the_lowest_corner_is_aimed():
+    # held 5 deg turned, the block is level only with the tool at 85 deg: 420 mm out the arm reaches no steeper than
+    # 83.7 deg even at the board, so the place is tilted and its lowest corner, not its bottom face, is aimed
+    e, spot, T_tool_block = 38.0, np.array([0.0, 420.0, 0.0]), _held_turned(5.0)
+    level_pitch, _ = planning.level_pitch_roll(T_tool_block[:3, :3])
+    assert kinematics.steepest_pitch(spot) < level_pitch - np.radians(1.0)
+    tilt, low, centre = _released(planning.plan_place(planning.CAMERA_CLEAR_POSE, spot, e, 0.0,
+                                                      held_in_tool=T_tool_block), T_tool_block, e)
+    assert tilt > 1.0
+    assert low == pytest.approx(spot[2], abs=0.1) and np.abs(centre - spot[:2]).max() <= 0.1
+    # a cube held level under a top-down tool is placed as before (with the requested yaw): no levelling needed
+    assert planning.level_pitch_roll(_held_turned(0.0)[:3, :3])[0] == pytest.approx(np.pi / 2)
+
+
+def test_level_pitch_roll_is_the_grasps_own_pitch_and_roll():
+    # a cube gripped level at pitch p and roll r is let go level at the same pitch and roll, whatever the heading;
+    # no pitch below horizontal levels a cube whose top face points ahead of the tool
+    rng = np.random.default_rng(7)
+    for h, p, r in zip(rng.uniform(-np.pi, np.pi, 20), rng.uniform(0.2, np.pi / 2 - 0.05, 20),
+                       rng.uniform(-0.6, 0.6, 20), strict=True):
+        R_tool = kinematics.tool_orientation(h, p, r)
+        yaw = rng.uniform(-np.pi, np.pi)
+        R_block = np.array([[np.cos(yaw), -np.sin(yaw), 0.0], [np.sin(yaw), np.cos(yaw), 0.0], [0.0, 0.0, 1.0]])
+        assert planning.level_pitch_roll(R_tool.T @ R_block) == pytest.approx((p, r), abs=1e-9)
+    assert planning.level_pitch_roll(kinematics.tool_orientation(0.0, -0.1, 0.0).T) is None
+    with pytest.raises(ValueError, match="R_tool_block"):
+        planning.level_pitch_roll(np.eye(4))
 
 
 def test_face_misalignment_is_exact_at_zero_and_the_angle_elsewhere():

@@ -259,30 +259,36 @@ def test_aligned_grasp_holds_and_carries_the_block(size):
     block = cube(size=size, yaw=0.3)
     world, arm = make([block])
     assert pick(arm, block)
-    assert arm.gripper_opening_mm == pytest.approx(block_edge(size))
+    assert arm.gripper_opening_mm == pytest.approx(block_edge(size), abs=0.3)      # the pads sink in a little
     move_tool(arm, [150.0, 200.0, 120.0], aligned_roll([150.0, 200.0, 120.0], 0.0))
     tool = arm.tool_pose_true()
-    np.testing.assert_allclose(block.position, tool[:3, 3], atol=1e-6)     # carried rigidly, centred on the pads
-    assert abs(wrap_quarter(block.yaw)) < 1e-9                              # turned with the wrist to yaw 0 (mod 90)
+    np.testing.assert_allclose(block.position, tool[:3, 3], atol=0.05)     # carried rigidly, centred on the pads
+    assert abs(wrap_quarter(block.yaw)) < np.radians(0.1)                   # turned with the wrist to yaw 0 (mod 90)
 
 
-def test_misaligned_by_45_degrees_fails_and_turns_the_block():
-    block = cube(yaw=0.0)
+@pytest.mark.parametrize("size", ["large", "small"])
+def test_a_block_turned_30_degrees_off_the_pads_is_turned_or_held_turned(size):
+    """The pads meet a cube turned 30 deg on two of its vertical edges: they turn it square, or (rubber on wood
+    sticking: the couple of the squeeze, arm (e/2)(cos 30 - sin 30) x 2, is less than the pads' friction can resist,
+    0.8 x (e/2)(cos 30 + sin 30) x 2) pinch it on its edges and lift it still turned. Either way it is not held as
+    the task layer believes (square and centred): the block turns in the world, or in the pads."""
+    block = cube(size=size, yaw=np.radians(30.0))
     world, arm = make([block])
-    assert not pick(arm, block, yaw=np.pi / 4)
-    assert "slipped" in arm.last_grasp
-    assert abs(wrap_quarter(block.yaw - np.pi / 4)) < 1e-9                  # squared against the pads
-    assert block.position[2] == pytest.approx(19.0)
-    move_tool(arm, block.position + [0, 0, 100], aligned_roll(block.position, np.pi / 4))
-    assert block.position[2] == pytest.approx(19.0)                         # left behind on the board
-    assert world.problems() == []
+    held = pick(arm, block, yaw=0.0)
+    T_tool_block = arm._held[0][1] if held else None
+    turned_in_world = abs(wrap_quarter(block.yaw - np.radians(30.0)))
+    # the block's yaw in the pads: its x axis turned about the approach (tool x) within the tool's y-z plane
+    turned_in_pads = abs(wrap_quarter(np.arctan2(T_tool_block[2, 0], T_tool_block[1, 0]))) if held else 0.0
+    assert max(turned_in_world, turned_in_pads) > np.radians(20.0), (held, turned_in_world, turned_in_pads)
+    print(f"{size}: held {held}, turned {np.degrees(turned_in_world):.1f} deg in the world, "
+          f"{np.degrees(turned_in_pads):.1f} deg off square in the pads ({arm.last_grasp})")
 
 
-def test_too_high_fails():
+def test_pads_closing_above_a_block_grasp_nothing_and_leave_it():
     block = cube(size="small")
     world, arm = make([block])
-    assert not pick(arm, block, dz=block.edge / 2 + 4.0)
-    assert "too high" in arm.last_grasp
+    assert not pick(arm, block, dz=block.edge / 2 + GripperGeometry().pad_height_mm / 2 + 1.0)
+    assert "nothing between" in arm.last_grasp
     np.testing.assert_allclose(block.position, [0.0, 250.0, 12.5])
 
 
@@ -332,7 +338,8 @@ def test_release_onto_a_block_stacks_it():
 def test_release_too_far_off_the_block_below_tips_it_off():
     world, lower, upper = _place_on(25.0)                 # centre beyond the 19 mm half edge: not supported
     assert upper.position[2] == pytest.approx(19.0)       # fell to the board
-    assert upper.position[0] > 100.0 + 38.0 - 1e-6        # beside the block, on the side it hung over
+    assert upper.position[0] > lower.position[0] + 38.0 - 1e-6   # beside the block, on the side it hung over (it
+    # struck the open finger on that side as it toppled, and pushed the block below 6.8 mm the other way)
     assert not World.footprints_overlap(upper, lower)
     assert world.problems() == []
 
@@ -463,7 +470,7 @@ def test_held_block_is_checked_against_a_distractor_by_its_own_footprint():
                 move_tool(arm, low, aligned_roll(low, 0.0))
         else:
             move_tool(arm, low, aligned_roll(low, 0.0))
-            assert held.bottom_z == pytest.approx(1.0)
+            assert held.bottom_z == pytest.approx(1.0, abs=0.05)     # it slid 0.02 mm in the pads as they lifted
 
 
 def test_placing_on_a_block_in_resting_contact_and_lifting_off_again_are_accepted():
@@ -473,12 +480,12 @@ def test_placing_on_a_block_in_resting_contact_and_lifting_off_again_are_accepte
     on_top = lower.position + [0.0, 0.0, 38.0]              # the held block's bottom exactly on the red block's top
     move_tool(arm, on_top + [0, 0, 40], aligned_roll(on_top, 0.0))
     move_tool(arm, on_top, aligned_roll(on_top, 0.0))
-    assert upper.bottom_z == pytest.approx(lower.top_z)
+    assert upper.bottom_z == pytest.approx(lower.top_z, abs=0.05)     # it slid 0.02 mm in the pads as they lifted
     arm.open_gripper()
     np.testing.assert_allclose(upper.position, on_top, atol=1e-6)
     assert arm.close_gripper()
     move_tool(arm, on_top + [0, 0, 60], aligned_roll(on_top, 0.0))
-    assert upper.bottom_z == pytest.approx(lower.top_z + 60.0)
+    assert upper.bottom_z == pytest.approx(lower.top_z + 60.0, abs=0.05)
     np.testing.assert_allclose(lower.position, [100.0, 250.0, 19.0])
     assert world.problems() == []
 

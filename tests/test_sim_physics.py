@@ -87,7 +87,51 @@ def test_pads_squeeze_and_lift_a_block_by_friction_and_an_off_centre_grip_turns_
         T = np.eye(4)
         T[:3, :3], T[:3, 3] = R, [0.0, 250.0, E / 2] + off * R[:, 2]
         grip = contact_grip([block], 0, T, GRIPPER, GRIPPER.max_opening_mm, E)
-        assert grip.held and grip.rise_mm == pytest.approx(LIFT_MM, abs=0.5)
-        np.testing.assert_allclose(grip.T_tool_block[:3, 3], [0.0, 0.0, -off], atol=0.3)   # where the pads hold it
+        assert grip.held and grip.rise_mm == pytest.approx(LIFT_MM, abs=0.1)
+        assert grip.force_n == pytest.approx(13.0, abs=0.1)                 # the servo at the default pressure
+        np.testing.assert_allclose(grip.T_tool_block[:3, 3], [0.0, 0.0, -off], atol=0.1)   # where the pads hold it
+        assert grip.gap_mm == pytest.approx(E, abs=0.2)                     # the pads sink in a little
         turns.append(grip.turn_rad)
-    assert turns[0] < np.radians(0.05) < turns[1]          # gravity turns a block gripped off its centre
+    assert turns[0] < np.radians(0.01) < turns[1]          # gravity turns a block gripped off its centre
+
+
+def test_the_servo_force_follows_the_pressure():
+    from armlab.gripper_geometry import GRIPPER
+    from armlab.sim.physics import gripper_servo
+
+    forces = [gripper_servo.pad_force_n(p, E / 2 + GRIPPER.pad_thickness_mm) for p in (0.0, 0.5, 1.0)]
+    assert forces == pytest.approx([7.8, 13.0, 18.2], abs=0.1)              # (150 + 200 p) / 885 of the stall torque
+    small = gripper_servo.pad_force_n(0.5, 12.5 + GRIPPER.pad_thickness_mm)
+    assert small == pytest.approx(16.0, abs=0.1)                            # the crank's lever is shorter there
+    with pytest.raises(ValueError, match="pressure"):
+        gripper_servo.duty(1.5)
+    with pytest.raises(ValueError, match="crank's travel"):
+        gripper_servo.pad_force_n(0.5, 40.0)
+
+
+def test_the_arm_is_a_body_a_block_dropped_on_its_gripper_rests_there_and_a_part_inside_a_block_is_left_out():
+    from armlab.gripper_geometry import GRIPPER
+    from armlab.robot import rx200
+    from armlab.sim.physics import Physics
+    from armlab.sim.physics.arm_bodies import BAR_HALF_MM, arm_parts
+
+    robot = rx200()
+    home = arm_parts(np.zeros(5), robot, GRIPPER, GRIPPER.max_opening_mm)       # the arm straight out at 304.57 mm
+    assert [p.name for p in home] == ["upper arm", "forearm", "wrist", "gripper bar", "left finger", "right finger"]
+    bar = home[3]
+    block = ObjectState("red", "large", E, bar.pose[:3, 3] + [0.0, 0.0, 60.0], 0.0, "cube", 0)
+    physics = Physics([block], arm=home)
+    physics.run_to_rest()
+    position, _ = physics.pose(0)
+    assert position[2] == pytest.approx(304.57 + BAR_HALF_MM[1] + E / 2, abs=0.5)   # on the bar's top, not the board
+    # the arm reaching down into a block (a link swept through it): that part is left out, the block stays put
+    from armlab import kinematics
+
+    low = kinematics.ik([0.0, 250.0, 19.0], np.pi / 2, 0.0)[0]                  # top-down at a block's centre height
+    fingers = arm_parts(low, robot, GRIPPER, GRIPPER.max_opening_mm)
+    tip = fingers[4].pose[:3, 3]
+    inside = ObjectState("blue", "large", E, np.array([tip[0], tip[1], E / 2]), 0.0, "cube", 0)
+    physics = Physics([inside], arm=fingers)
+    assert "left finger" in physics.arm_left_out
+    physics.run_to_rest()
+    np.testing.assert_allclose(physics.pose(0)[0], inside.position, atol=0.1)

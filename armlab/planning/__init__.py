@@ -17,6 +17,7 @@ from .grasp import (
     face_misalignment,
     face_roll,
     inner_limits,
+    level_pitch_roll,
     pad_clearance,
     steepest_pitch_inside,
     tilted_roll,
@@ -64,6 +65,7 @@ from .transit import DEFAULT_CLEARANCE_MM, Clearance, Obstacle, as_obstacles, tr
 __all__ = [
     "LIMIT_MARGIN_RAD", "MAX_CLOSING_TILT_RAD", "GraspPose", "choose_grasp", "face_misalignment", "face_roll",
     "tilted_roll", "PAD_CLEARANCE_MM", "pad_clearance", "inner_limits", "steepest_pitch_inside",
+    "level_pitch_roll",
     "CAMERA_CLEAR_POSE", "default_grasp_depth", "grasp_height", "place_tool_height", "plan_camera_clear", "plan_pick",
     "plan_pick_place",
     "plan_place", "tilted_release_lift",

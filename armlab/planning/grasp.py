@@ -30,6 +30,14 @@ centre line), so with a neighbour close on that side they brush it and turn it. 
 unless its pads come within PAD_CLEARANCE_MM of a neighbour (an obstacle cylinder whose top is above the pads'
 lowest point) and the other pair leaves more room.
 
+Levelling a held block (level_pitch_roll, for a release): a tool at heading h, pitch p and roll r turns a direction
+u of the tool frame into Rz(h) Ry(p) Rx(r) u, which is world up, whatever h, when Ry(p) Rx(r) u = e_z, i.e. u is the
+last row of Ry(p) Rx(r): u = (-sin p, cos p sin r, cos p cos r). So a held cube with the face normal u (tool frame)
+is let go with that face up, and its faces level, at p = atan2(-u_x, hypot(u_y, u_z)) and r = atan2(u_y, u_z): for a
+cube gripped level at pitch p0 and roll r0 (u = Rx(-r0) Ry(-p0) e_z), the pick's own pitch and roll. Top-down
+(u = -x of the tool) any roll levels it; otherwise the roll is fixed, and so is the cube's yaw relative to the arm
+plane: a level release keeps the yaw the cube had to the arm plane at its grasp, not a requested one.
+
 Joint-limit margin: the steepest pitch sits where a joint (usually wrist_angle) reaches its position limit, and the
 task layer's sag compensation (armlab.tasks.sag, a few mrad) would push such a command past the limit. So pitches
 and IK solutions are chosen first with every limit pulled in by LIMIT_MARGIN_RAD (inner_limits), and only when
@@ -53,7 +61,7 @@ from . import descent
 
 __all__ = ["GraspPose", "face_roll", "tilted_roll", "face_misalignment", "choose_grasp", "TOP_DOWN",
            "LIMIT_MARGIN_RAD", "MAX_CLOSING_TILT_RAD", "PAD_CLEARANCE_MM", "pad_clearance", "inner_limits",
-           "steepest_pitch_inside"]
+           "steepest_pitch_inside", "level_pitch_roll"]
 
 TOP_DOWN = np.pi / 2
 LIMIT_MARGIN_RAD = 0.01         # planned poses keep this far inside the position limits where they can (module notes)
@@ -129,6 +137,22 @@ def face_misalignment(heading: float, pitch: float, roll: float, yaw: float) -> 
     # atan2(|n x y|, |n . y|), not arccos(|n . y|): arccos turns a last-bit error of an aligned pair's dot product
     # into 1.5e-8 rad, which then depends on the CPU's rounding
     return float(np.arctan2(np.linalg.norm(np.cross(normals[k], y_tool)), abs(dots[k])))
+
+
+def level_pitch_roll(R_tool_block) -> tuple[float, float] | None:
+    """The tool (pitch, roll) rad that lets a held cube go with its faces level (module notes), from its rotation in
+    the tool frame R_tool_block (3, 3) (T_tool_block's): the face that was up when it was gripped (its own z axis, as
+    tasks.precheck.held_pose_at_grasp believes a cube gripped level) is put up again, so the pads and finger tips stand
+    to its bottom face as they did at the grasp. None when that would need the tool at or above horizontal
+    (pitch <= 0)."""
+    R = np.asarray(R_tool_block, dtype=float)
+    if R.shape != (3, 3) or not np.all(np.isfinite(R)):
+        raise ValueError(f"R_tool_block must be a finite (3, 3) rotation, got shape {R.shape}")
+    u = R[:, 2]
+    pitch = float(np.arctan2(-u[0], np.hypot(u[1], u[2])))
+    if pitch <= 0.0:
+        return None
+    return pitch, float(np.arctan2(u[1], u[2]))
 
 
 def inner_limits(robot: RobotModel | None = None, margin: float = LIMIT_MARGIN_RAD) -> RobotModel:

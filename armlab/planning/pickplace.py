@@ -16,7 +16,8 @@ Heights (world mm):
   refused with Unreachable naming the obstacle.
 The descent and lift are the kit's descent (planning.descent: a straight line in the instructor's kit, a joint chord
 in the student release) at the grasp's pitch and roll (grasp.choose_grasp: top-down with the roll across the block's
-faces, or the steepest pitch the descent can be made at).
+faces, or the steepest pitch the descent can be made at); a place of a block held tilted in the tool frame (gripped at
+another pitch) comes down where it can at the pitch and roll that let it go level (grasp.level_pitch_roll).
 
 Camera clear: the arm stands upright over its base (CAMERA_CLEAR_POSE: elbow -90 deg, gripper pointing up). Seen from
 the overhead camera (about 1 m up at y = 337 mm), everything in that pose projects onto the board behind the
@@ -34,8 +35,8 @@ from armlab.gripper_geometry import GRIPPER
 from armlab.kinematics import Unreachable
 from armlab.robot import RobotModel, rx200
 
-from .descent import descend
-from .grasp import choose_grasp, steepest_pitch_inside
+from .descent import approach_reachable, descend
+from .grasp import TOP_DOWN, choose_grasp, inner_limits, level_pitch_roll, steepest_pitch_inside
 from .plan import GripperStep, MoveStep, Plan
 from .trajectory import cartesian_line, check_point, joint_move, reverse
 from .transit import DEFAULT_CLEARANCE_MM, GRIPPER_RADIUS_MM, Obstacle, as_obstacles, transit_clearance
@@ -136,18 +137,61 @@ def tilted_release_lift(edge: float, pitch: float) -> float:
     return float(edge / 2 * abs(np.cos(pitch)))
 
 
-def _line_or_none(p0: np.ndarray, p1: np.ndarray, grasp, robot: RobotModel):
-    """The descent p0 -> p1 (mm) at the grasp's pitch and roll (planning.descent), or None where it cannot be made (it
+def _line_or_none(p0: np.ndarray, p1: np.ndarray, pitch: float, roll: float, robot: RobotModel):
+    """The descent p0 -> p1 (mm) at pitch and roll (rad; planning.descent), or None where it cannot be made (it
     would switch IK branch on the way, e.g. where choose_grasp's branch is one the limits with a margin allow)."""
     try:
-        return descend(p0, p1, grasp.pitch, grasp.roll, robot=robot)
+        return descend(p0, p1, pitch, roll, robot=robot)
     except Unreachable:
         return None
 
 
+def _chosen_descent(target: np.ndarray, yaw: float, z_t: float, low_hover: float | None, action: str,
+                    others: list[Obstacle], robot: RobotModel):
+    """(hover (3,) mm, lowered, descent) at choose_grasp's pitch and roll for the yaw from the transit height z_t, or
+    from a lower hover (down to low_hover) where that comes down steeper (_approach's notes)."""
+    neighbours = others if action == "close" else ()      # a pick's open pads keep clear of them
+    grasp = choose_grasp(target, yaw, approach_z=z_t, robot=robot, obstacles=neighbours)
+    best = None
+    if not grasp.top_down and low_hover is not None:       # a shorter descent keeps the yaw
+        for z in np.arange(z_t - _LOW_HOVER_STEP_MM, low_hover - 1e-9, -_LOW_HOVER_STEP_MM):
+            low = choose_grasp(target, yaw, approach_z=z, robot=robot, obstacles=neighbours)
+            if low.pitch > grasp.pitch + 1e-9:             # steeper: less tilt, more of the yaw kept
+                hover = np.array([target[0], target[1], z])
+                line = _line_or_none(hover, target, low.pitch, low.roll, robot)
+                if line is not None:
+                    grasp, best = low, (hover, True, line)
+                    if low.top_down:
+                        break
+    if best is not None:
+        return best
+    hover = np.array([target[0], target[1], z_t])
+    return hover, False, descend(hover, target, grasp.pitch, grasp.roll, robot=robot)
+
+
+def _posed_descent(target: np.ndarray, z_t: float, low_hover: float | None, pitch: float, roll: float,
+                   robot: RobotModel):
+    """(hover (3,) mm, lowered, descent) down to target at a given pitch and roll (rad): from the transit height z_t,
+    else from the highest lower hover (in _LOW_HOVER_STEP_MM steps down to low_hover) it can be made from, with the
+    margin from the joint limits first (grasp module notes). Raises Unreachable when there is none."""
+    hovers = [z_t] + ([] if low_hover is None else list(np.arange(z_t - _LOW_HOVER_STEP_MM, low_hover - 1e-9,
+                                                                   -_LOW_HOVER_STEP_MM)))
+    for model in (inner_limits(robot), robot):
+        for z in hovers:
+            hover = np.array([target[0], target[1], z])
+            if approach_reachable(target, z, pitch, roll, model):
+                line = _line_or_none(hover, target, pitch, roll, robot)
+                if line is not None:
+                    return hover, bool(z < z_t), line
+    raise Unreachable(f"no descent at pitch {np.degrees(pitch):.1f} deg, roll {np.degrees(roll):.1f} deg comes down "
+                      f"to ({target[0]:.1f}, {target[1]:.1f}, {target[2]:.1f}) mm from a hover between "
+                      f"{hovers[-1]:.1f} and {z_t:.1f} mm")
+
+
 def _approach(q_start, target: np.ndarray, yaw: float, floor_z: float, held_below: float, action: str,
               obstacles, clearance: float, scaling: str, robot: RobotModel, what: str,
-              low_hover: float | None = None, own_column: bool = False) -> Plan:
+              low_hover: float | None = None, own_column: bool = False,
+              pose: tuple[float, float] | None = None) -> Plan:
     """transit to the hover point over target, [open], descend, open/close, lift back (see the module notes).
 
     floor_z: the top (mm) the empty tool must clear at the hover point when the plan ends (the picked block's top, or
@@ -157,6 +201,7 @@ def _approach(q_start, target: np.ndarray, yaw: float, floor_z: float, held_belo
     own_column: the obstacles standing at the target (the block being picked, the stack under it) only keep the
     transit's tool from going lower over them than the hover point it ends at (the others: `clearance`), so a low
     hover over the picked block is not refused because of that block itself.
+    pose: the descent's (pitch, roll) rad, fixed (_posed_descent: a level release) instead of chosen for the yaw.
     """
     if not np.isfinite(clearance) or clearance < 0:
         raise ValueError(f"clearance must be a non-negative length in mm, got {clearance}")
@@ -173,24 +218,12 @@ def _approach(q_start, target: np.ndarray, yaw: float, floor_z: float, held_belo
     near = _near_segment(others, kinematics.fk(q0, robot)[:3, 3], target)
     if near:
         z_t = max(z_t, max(o.top for o in near) + clearance + held_below)
-    lowered = False
     for _ in range(_MAX_RAISES + 1):
-        hover = np.array([target[0], target[1], z_t])
         try:
-            neighbours = others if action == "close" else ()      # a pick's open pads keep clear of them
-            grasp = choose_grasp(target, yaw, approach_z=z_t, robot=robot, obstacles=neighbours)
-            down = None
-            if not grasp.top_down and low_hover is not None:       # a shorter descent keeps the yaw
-                for z in np.arange(z_t - _LOW_HOVER_STEP_MM, low_hover - 1e-9, -_LOW_HOVER_STEP_MM):
-                    low = choose_grasp(target, yaw, approach_z=z, robot=robot, obstacles=neighbours)
-                    if low.pitch > grasp.pitch + 1e-9:             # steeper: less tilt, more of the yaw kept
-                        line = _line_or_none(np.array([target[0], target[1], z]), target, low, robot)
-                        if line is not None:
-                            grasp, hover, lowered, down = low, np.array([target[0], target[1], z]), True, line
-                            if low.top_down:
-                                break
-            if down is None:
-                down = descend(hover, target, grasp.pitch, grasp.roll, robot=robot)
+            if pose is None:
+                hover, lowered, down = _chosen_descent(target, yaw, z_t, low_hover, action, others, robot)
+            else:
+                hover, lowered, down = _posed_descent(target, z_t, low_hover, *pose, robot)
             rise = _rise(q0, z_t, scaling, robot)
         except Unreachable as e:
             raise Unreachable(f"{what}: cannot move straight up or down to the transit height {z_t:.1f} mm: "
@@ -203,7 +236,7 @@ def _approach(q_start, target: np.ndarray, yaw: float, floor_z: float, held_belo
             break
         o = c.obstacle
         if lowered:                  # the lower hover passes too close to a neighbour: tilt from z_t instead
-            low_hover, lowered = None, False
+            low_hover = None
             continue
         z_t += c.deficit + 1.0
     else:
@@ -256,14 +289,28 @@ def plan_place(q_start, position, edge: float, yaw: float = 0.0, obstacles=(),
     (e.g. tilted with the tool of a tilted pick); when given, the release is aimed with it instead: the plan is
     redone with the tool target shifted until, at the end of the planned descent, the cube's centre is over
     position's x, y and its lowest corner at position's height (within _AIM_TOL_MM, at most _RELEASE_TRIES plans).
+    A cube held tilted (more than _LEVEL_TOL_RAD from level under a top-down tool: gripped at another pitch) is let go
+    level: the descent is made at grasp.level_pitch_roll's pitch and roll (the pick's own, for a cube gripped level),
+    which puts its faces level and its bottom face at position's height; the yaw is then the one the cube had to the
+    arm plane at its grasp, not `yaw`. Only where no such descent exists (out of reach at that pitch and roll, from
+    any hover down to LOW_HOVER_MM above the placed block, or its transit cannot clear the obstacles) is the cube
+    placed as without levelling, and let go tilted, its lowest corner aimed at position's height: it lands on that
+    edge and tips flat, up to armlab.sim.physics.rest.tipping_shift_mm off.
     """
     robot = robot or rx200()
     position = check_point(position, "place position")
     depth = _check_edge_depth(edge, grasp_depth)
     motion_safety.check_placement(position, edge, yaw, robot=robot)
     if held_in_tool is not None:
-        return _aimed_place(q_start, position, edge, depth, yaw, obstacles, clearance, scaling, robot,
-                            _check_pose(held_in_tool, "held_in_tool"))
+        T_tool_block = _check_pose(held_in_tool, "held_in_tool")
+        level = level_pitch_roll(T_tool_block[:3, :3])
+        if level is not None and level[0] < TOP_DOWN - _LEVEL_TOL_RAD:
+            try:
+                return _aimed_place(q_start, position, edge, depth, yaw, obstacles, clearance, scaling, robot,
+                                    T_tool_block, level)
+            except Unreachable:
+                pass                 # no level release: the cube is let go tilted, its lowest corner aimed
+        return _aimed_place(q_start, position, edge, depth, yaw, obstacles, clearance, scaling, robot, T_tool_block)
     lift = 0.0
     for attempt in range(_RELEASE_TRIES):
         # a tilted descent's pitch depends on the hover height the plan settles on: plan, then again with the place
@@ -282,6 +329,7 @@ def plan_place(q_start, position, edge: float, yaw: float = 0.0, obstacles=(),
 
 
 _AIM_TOL_MM = 0.1                # an aimed release is redone until it is off by at most this much per axis
+_LEVEL_TOL_RAD = np.radians(0.5)  # a held cube this close to level under a top-down tool is placed as one held level
 _CUBE_CORNERS = np.array([[x, y, z] for x in (-0.5, 0.5) for y in (-0.5, 0.5) for z in (-0.5, 0.5)])
 
 
@@ -293,15 +341,17 @@ def _check_pose(T, name: str) -> np.ndarray:
 
 
 def _aimed_place(q_start, position: np.ndarray, edge: float, depth: float, yaw: float, obstacles, clearance: float,
-                 scaling: str, robot: RobotModel, T_tool_block: np.ndarray) -> Plan:
-    """plan_place aimed with the held cube's pose in the tool frame (plan_place's held_in_tool)."""
+                 scaling: str, robot: RobotModel, T_tool_block: np.ndarray,
+                 pose: tuple[float, float] | None = None) -> Plan:
+    """plan_place aimed with the held cube's pose in the tool frame (plan_place's held_in_tool); pose: the descent's
+    (pitch, roll) rad, fixed (a level release), else chosen for the yaw. Raises Unreachable when it cannot be made."""
     offset = np.zeros(3)
     for _ in range(_RELEASE_TRIES):
         p = position + offset
         target = np.array([p[0], p[1], place_tool_height(p[2], edge, depth)])
         plan = _approach(q_start, target, yaw, p[2] + edge, edge - depth, "open", obstacles, clearance, scaling,
                          robot, f"placing at ({position[0]:.1f}, {position[1]:.1f}, {position[2]:.1f}) mm",
-                         low_hover=p[2] + edge + LOW_HOVER_MM)
+                         low_hover=p[2] + edge + LOW_HOVER_MM, pose=pose)
         cube = kinematics.fk(next(s.trajectory for s in plan.steps if s.label == "descend").end, robot) @ T_tool_block
         lowest = (_CUBE_CORNERS * edge @ cube[:3, :3].T + cube[:3, 3])[:, 2].min()
         miss = np.array([position[0] - cube[0, 3], position[1] - cube[1, 3], position[2] - lowest])

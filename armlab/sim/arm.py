@@ -28,8 +28,11 @@ from armlab.gripper_geometry import GRIPPER
 from armlab.profile import trapezoid_fraction
 from armlab.robot import RobotModel, rx200
 from armlab.sim.gripper import GripperGeometry, close_on, push_with_pads
+from armlab.sim.physics.arm_bodies import arm_parts
+from armlab.sim.physics.grasp import DEFAULT_PRESSURE
+from armlab.sim.physics.gripper_servo import duty
 from armlab.sim.physics.materials import WOOD
-from armlab.sim.physics.rest import tilt_angle
+from armlab.sim.physics.rest import object_rotation, tilt_angle
 from armlab.sim.world import World, describe_object
 from armlab.station.contract import EmergencyStopped, MotionRefused, StationClosed
 from armlab.station.parking import park_and_close
@@ -144,12 +147,16 @@ class SimArm:
         seed: seeds the homing offsets and the encoder noise.
         real_time: blocking moves take wall-clock time too (else they return at once, in simulated time).
         gripper_time_s: simulated time an open or close takes (the manufacturer's default delay is 1 s).
+        gripper_pressure: the grasp's effort, 0..1 (the manufacturer's set_pressure, default 0.5): how hard the pads
+            squeeze (armlab.sim.physics.gripper_servo).
     """
 
     def __init__(self, world: World, realism: str | ArmRealism = "realistic", gripper: GripperGeometry | None = None,
                  seed: int = 0, real_time: bool = False, robot: RobotModel | None = None,
-                 gripper_time_s: float = 1.0):
+                 gripper_time_s: float = 1.0, gripper_pressure: float = DEFAULT_PRESSURE):
         self.robot = robot or rx200()
+        duty(gripper_pressure)                              # refuses a pressure outside 0..1, naming it
+        self.gripper_pressure = float(gripper_pressure)
         self.world = world
         self.realism = ArmRealism.preset(realism) if isinstance(realism, str) else realism
         if not isinstance(self.realism, ArmRealism):
@@ -173,6 +180,7 @@ class SimArm:
         self._pose_memo: tuple | None = None    # (key, realism, robot, q_true, tool pose): _pose
         self._q_true = self._physical(self._motor)
         world.add_listener(self._on_time)
+        world.arm = self._bodies
 
     # -- physical model -------------------------------------------------------------------------------------
     def _payload_kg(self) -> float:
@@ -207,7 +215,11 @@ class SimArm:
         board of its own, for measurements a lab makes before the blocks are set out (e.g. the sag fit of
         tasks.calibrate_sag): moving it touches nothing of this arm's world and takes none of its time."""
         return SimArm(World(), self.realism, self.gripper_geometry, self.seed, robot=self.robot,
-                      gripper_time_s=self.gripper_time_s)
+                      gripper_time_s=self.gripper_time_s, gripper_pressure=self.gripper_pressure)
+
+    def _bodies(self, hand: bool) -> list:
+        """The arm's bodies where it stands now, for the world's physics (armlab.sim.physics.arm_bodies)."""
+        return arm_parts(self._q_true, self.robot, self.gripper_geometry, self.gripper_opening_mm, hand)
 
     def tool_pose_true(self) -> np.ndarray:
         """The physical tool pose (4, 4) in the world (ground truth, mm)."""
@@ -472,7 +484,8 @@ class SimArm:
         self._pass_gripper_time()
 
     def close_gripper(self) -> bool:
-        """Close the pads; True when a block is held (by the grasp rule of armlab.sim.gripper)."""
+        """Close the pads; True when a block is held (by contact physics: armlab.sim.gripper.close_on; why in
+        last_grasp)."""
         self._check_ready("closing the gripper")
         self.wait()
         with self.world.lock:
@@ -480,17 +493,15 @@ class SimArm:
             if self._held:
                 return True
             T = kinematics.fk_pox(self._q_true, self.robot, check_limits=False)
-            outcome = close_on(self.world, T, self.gripper_geometry, self.gripper_opening_mm)
+            outcome = close_on(self.world, T, self.gripper_geometry, self.gripper_opening_mm, self.gripper_pressure)
             self.gripper_opening_mm = outcome.opening_mm
             self.last_grasp = outcome.reason
-            if outcome.held is not None:
-                group = [outcome.held, *self.world.stack_above(outcome.held)]
-                T_tool_world = invert_transform(T)
-                self._held = [(o, T_tool_world @ homogeneous(rot_z(o.yaw), o.position)) for o in group]
-                self.world.held.update(o.id for o in group)
+            T_tool_world = invert_transform(T)
+            self._held = [(o, T_tool_world @ homogeneous(object_rotation(o), o.position)) for o in outcome.held]
+            self.world.held.update(o.id for o in outcome.held)
             self._refresh()
         self._pass_gripper_time()
-        return outcome.held is not None
+        return bool(outcome.held)
 
     # -- teaching and safety --------------------------------------------------------------------------------
     def set_torque(self, enabled: bool) -> None:

@@ -1,14 +1,14 @@
-"""The simulated gripper: grasping, holding and pushing by geometry (not magic), with the finger pads of
+"""The simulated gripper: grasping by contact physics and pushing with the pads, with the finger pads of
 armlab.gripper_geometry.GripperGeometry (the description the planner shares; re-exported here).
 
 Frames: the tool frame is the manufacturer's ee_gripper_link (x = approach direction out of the gripper, y = the
 closing direction across the fingers, z completes a right-handed frame). Units: mm, rad.
 
-Grasp rule: closing holds a cube only when it lies between the pads, the closing direction is horizontal and across
-two opposite faces (cube yaw vs. closing direction, modulo 90 deg, within `align_tol_rad`), and the pads overlap the
-cube's sides by at least `min_contact_mm` vertically and across. The pads then centre the cube between them and
-square it up. A cube turned further than the tolerance is turned and pushed by the pads but slips out; a pad that
-runs into an object shoves it aside (squaring its face against the pad, as a flat pusher does).
+Grasp (close_on): the cube nearest the tool point between the open pads is squeezed by them in the world's physics
+(World.grip: the servo's force, friction, a test lift; armlab.sim.physics.grasp) and is held when it rose with them.
+The pads push and turn what they close on: a cube a little off the pads is turned square, one turned further may be
+pinched on its edges or slip out; one gripped too high or too little across slips. A pad that runs into an object
+while the arm moves shoves it aside (push_with_pads: squaring its face against the pad, as a flat pusher does).
 """
 
 from __future__ import annotations
@@ -21,10 +21,14 @@ import numpy as np
 from armlab.blocks import ObjectState
 from armlab.gripper_geometry import GripperGeometry
 from armlab.sim.geometry import boxes_overlap, convex_hull, separation_along, wrap_quarter
+from armlab.sim.physics.grasp import DEFAULT_PRESSURE, LIFT_MM
+from armlab.sim.physics.rest import object_rotation
 from armlab.sim.world import World
 from armlab.transforms import rot_z
 
-__all__ = ["GripperGeometry", "GraspOutcome", "close_on", "push_with_pads"]
+__all__ = ["GripperGeometry", "GraspOutcome", "close_on", "push_with_pads", "off_square_rad", "SQUARE_TOLERANCE_RAD"]
+
+SQUARE_TOLERANCE_RAD = float(np.radians(5.0))   # a cube held within this of square to the pads is held square
 
 _PUSH_MARGIN_MM = 0.05       # pads touching a face (closed on a cube) do not count as pushing it
 _PREFILTER_MARGIN_MM = 1.0   # push_with_pads' quick test from the tool point leaves this much to spare
@@ -32,9 +36,10 @@ _PREFILTER_MARGIN_MM = 1.0   # push_with_pads' quick test from the tool point le
 
 @dataclass
 class GraspOutcome:
-    """What closing the gripper did: the object now held (None if nothing), the final gap (mm), and why."""
+    """What closing the gripper did: the objects now held (the grasped cube first, then what rides on it; empty if
+    nothing), the final gap between the pads (mm), and why."""
 
-    held: ObjectState | None
+    held: list[ObjectState]
     opening_mm: float
     reason: str
 
@@ -43,58 +48,56 @@ def _object_box(o: ObjectState) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return o.position, rot_z(o.yaw), np.full(3, o.edge / 2)
 
 
-def close_on(world: World, T_tool, geometry: GripperGeometry, opening_mm: float) -> GraspOutcome:
-    """Close the pads from `opening_mm` at tool pose T_tool (4, 4) (the physical pose) and apply the grasp rule.
+def off_square_rad(T_tool, obj: ObjectState) -> float:
+    """How far (rad, 0..pi/4) a cube's nearest face normal is turned from the pads' closing direction (the tool's y
+    axis, T_tool (4, 4)): 0 when the pads lie flat on two opposite faces; a cube pinched on two edges is turned by
+    up to 45 deg. Works at any pitch."""
+    closing = np.asarray(T_tool, dtype=float)[:3, 1]
+    axes = object_rotation(obj)
+    return float(np.arccos(min(1.0, float(np.max(np.abs(axes.T @ closing))) / np.linalg.norm(closing))))
 
-    May move the cube between the pads (centred and squared up). Only cubes can be held.
-    """
-    g = geometry
-    T = np.asarray(T_tool, dtype=float)
+
+def _between(world: World, T: np.ndarray, g: GripperGeometry, opening_mm: float) -> ObjectState | None:
+    """The free cube whose centre lies between the open pads nearest the tool point, or None."""
     R, t = T[:3, :3], T[:3, 3]
-    best, best_p = None, None
+    best, best_d = None, np.inf
     for o in world.objects:
         if o.id in world.held or not o.is_block:
             continue
         p = R.T @ (o.position - t)
         between = (abs(p[1]) < opening_mm / 2 and abs(p[0]) < (g.pad_height_mm + o.edge) / 2
                    and abs(p[2]) < (g.pad_width_mm + o.edge) / 2)
-        if between and (best_p is None or np.linalg.norm(p) < np.linalg.norm(best_p)):
-            best, best_p = o, p
-    if best is None:
-        return GraspOutcome(None, g.min_opening_mm, "nothing between the finger pads")
-    o, p = best, best_p
-    y = R[:, 1]
-    mis = float(wrap_quarter(np.arctan2(y[1], y[0]) - o.yaw))
-    width = o.edge * (abs(np.cos(mis)) + abs(np.sin(mis)))
-    resting = float(np.clip(width, g.min_opening_mm, opening_mm))
+        if between and np.linalg.norm(p) < best_d:
+            best, best_d = o, float(np.linalg.norm(p))
+    return best
 
-    tilt = np.arcsin(min(1.0, abs(y[2])))
-    if tilt > g.align_tol_rad:
-        return GraspOutcome(None, resting, f"the closing direction is tilted {np.degrees(tilt):.1f} deg from "
-                                           f"horizontal, so the pads cannot squeeze two opposite faces")
-    zs = g.pad_corners(T, opening_mm)[..., 2]
-    vertical = min(zs.max(), o.top_z) - max(zs.min(), o.bottom_z)
-    if vertical < g.min_contact_mm:
-        return GraspOutcome(None, resting if vertical > 0 else g.min_opening_mm,
-                            f"the pads overlap the block's sides by only {max(vertical, 0):.1f} mm vertically "
-                            f"(need {g.min_contact_mm:.1f} mm): the gripper is too high")
-    across = (g.pad_width_mm + o.edge) / 2 - abs(p[2])
-    if across < g.min_contact_mm:
-        return GraspOutcome(None, resting, f"the pads overlap the block by only {across:.1f} mm across "
-                                           f"(need {g.min_contact_mm:.1f} mm)")
-    if o.edge < g.min_opening_mm:
-        return GraspOutcome(None, g.min_opening_mm, f"the {o.edge:.0f} mm block is narrower than the closed "
-                                                    f"gap of {g.min_opening_mm:.0f} mm")
-    # The closing pads turn the cube until a face lies flat on a pad, and push it to the middle of the gap.
-    o.yaw = float(o.yaw + mis)
-    y_h = np.array([y[0], y[1]])
-    if abs(p[1]) > 1e-9:
-        world.shove(o, -np.sign(p[1]) * y_h, abs(p[1]) * np.linalg.norm(y_h))
-    if abs(mis) > g.align_tol_rad:
-        return GraspOutcome(None, o.edge, f"the block was {np.degrees(abs(mis)):.1f} deg off the pads (tolerance "
-                                          f"{np.degrees(g.align_tol_rad):.1f} deg): the pads turned it and it "
-                                          f"slipped out")
-    return GraspOutcome(o, o.edge, "held")
+
+def _width_across(o: ObjectState, closing: np.ndarray) -> float:
+    """A cube's width (mm) along the horizontal part of the closing direction (3,): edge (|cos m| + |sin m|), m its
+    yaw off the closing direction (mod 90 deg)."""
+    mis = float(wrap_quarter(np.arctan2(closing[1], closing[0]) - o.yaw))
+    return o.edge * (abs(np.cos(mis)) + abs(np.sin(mis)))
+
+
+def close_on(world: World, T_tool, geometry: GripperGeometry, opening_mm: float,
+             pressure: float = DEFAULT_PRESSURE) -> GraspOutcome:
+    """Close the pads from `opening_mm` at tool pose T_tool (4, 4) (the physical pose), the servo at `pressure`
+    (0..1, the manufacturer's): the world's physics decides what is held (module notes). Only cubes are grasped."""
+    g = geometry
+    T = np.asarray(T_tool, dtype=float)
+    o = _between(world, T, g, opening_mm)
+    if o is None:
+        return GraspOutcome([], g.min_opening_mm, "nothing between the finger pads")
+    grip, group = world.grip(o, T, g, opening_mm, _width_across(o, T[:3, 1]), pressure)
+    if grip.held:
+        turned = off_square_rad(T, o)
+        how = "held" if turned <= SQUARE_TOLERANCE_RAD else \
+            f"held {np.degrees(turned):.0f} deg off square (pinched on two edges)"
+        return GraspOutcome(group, round(grip.gap_mm, 2), f"{how} ({grip.force_n:.1f} N a pad)")
+    resting = float(np.clip(_width_across(o, T[:3, 1]), g.min_opening_mm, opening_mm))
+    return GraspOutcome([], resting, f"slipped: the {o.size} {o.color} block rose {max(grip.rise_mm, 0.0):.1f} mm "
+                                     f"of a {LIFT_MM:.0f} mm test lift between pads squeezing with "
+                                     f"{grip.force_n:.1f} N each")
 
 
 @functools.lru_cache(maxsize=16)

@@ -23,10 +23,14 @@ from collections.abc import Callable, Iterable
 import numpy as np
 
 from armlab.blocks import ObjectState
+from armlab.gripper_geometry import GripperGeometry
 from armlab.lab import lab_config
 from armlab.sim.geometry import boxes_overlap, polygons_overlap
 from armlab.sim.physics import Physics
+from armlab.sim.physics.arm_bodies import ArmPart
+from armlab.sim.physics.grasp import LIFT_MM, SLIP_MM, Grip, contact_grip
 from armlab.sim.physics.rest import apply_rest_pose, object_rotation
+from armlab.transforms import invert_transform, rpy_from_matrix
 
 __all__ = ["World", "SETTLE_TOL_MM", "describe_object"]
 
@@ -50,6 +54,8 @@ class World:
         objects: every object (ground truth, world mm / rad); blocks: the cubes only.
         time_s: simulated time (s).
         held: ids of objects held by the gripper (they are exempt from the physics).
+        arm: what tells the physics where the arm's bodies are (armlab.sim.physics.arm_bodies: arm_parts(hand)
+            -> list of ArmPart), set by the simulated arm standing in this world; None: no arm.
         lock: the one re-entrant lock of the simulation: the clock's steps and everything the simulated arm changes
             (a check and the motion it starts, a stop) run under it, so a stop from another thread (a GUI's, a
             timer's) comes either before a move starts or after, never in between. One lock, not one per part: the
@@ -64,6 +70,7 @@ class World:
         self.time_s = 0.0
         self.real_time = bool(real_time)
         self.held: set[int] = set()
+        self.arm: Callable[[bool], list[ArmPart]] | None = None
         self._listeners: list[Callable[[float], None]] = []
         self._wall = time.monotonic()
         self.lock = threading.RLock()
@@ -181,7 +188,7 @@ class World:
         first, and return the objects that moved."""
         free = self._free()
         before = [(o.position.copy(), float(o.yaw), o.tilt.copy()) for o in free]
-        physics = Physics(free)
+        physics = Physics(free, arm=self._arm_parts(hand=True))
         if act is not None:
             act(physics, free)
         physics.run_to_rest()
@@ -191,6 +198,9 @@ class World:
             if apply_rest_pose(free[k], *poses[k], before[k], self._support_top):
                 moved.append(free[k])
         return moved
+
+    def _arm_parts(self, hand: bool) -> list[ArmPart]:
+        return [] if self.arm is None else self.arm(hand)
 
     # -- physics --------------------------------------------------------------------------------------------
     def settle(self, obj: ObjectState) -> list[ObjectState]:
@@ -217,6 +227,35 @@ class World:
             physics.push(next(k for k, o in enumerate(objects) if o is obj), d, float(distance))
 
         return self._simulate(push)
+
+    def grip(self, obj: ObjectState, T_tool, geometry: GripperGeometry, from_mm: float, width_mm: float,
+             pressure: float) -> tuple[Grip, list[ObjectState]]:
+        """Close the finger pads on obj at tool pose T_tool (4, 4) world mm and test the grip with a short lift
+        (armlab.sim.physics.grasp.contact_grip: the pads from from_mm apart, the servo at `pressure`, its force taken
+        at width_mm across). Returns the grip and the objects that rose with the pads (obj first, then what rode on
+        it; none when the grip failed), which are left at their poses in the pads with the lift undone (their
+        pose in the tool frame is the physics'); everything else is left where the pads and the lift left it, at
+        rest."""
+        free = self._free()
+        k = next(j for j, o in enumerate(free) if o is obj)
+        before = [(o.position.copy(), float(o.yaw), o.tilt.copy()) for o in free]
+        grip = contact_grip(free, k, T_tool, geometry, from_mm, width_mm, pressure, arm=self._arm_parts(hand=False))
+        rose = [j for j, (p, _) in enumerate(grip.poses)
+                if grip.held and p[2] - before[j][0][2] >= LIFT_MM - SLIP_MM]
+        group = sorted(rose, key=lambda j: (j != k, grip.poses[j][0][2]))
+        down = np.asarray(T_tool, dtype=float) @ invert_transform(grip.T_tool)      # the lift undone
+        for j in group:
+            o = free[j]
+            o.position = down[:3, :3] @ grip.poses[j][0] + down[:3, 3]
+            roll, pitch, yaw = rpy_from_matrix(down[:3, :3] @ grip.poses[j][1])
+            o.yaw, o.tilt = float(yaw), np.array([roll, pitch])
+        self.held.update(free[j].id for j in group)
+        rest = [j for j in range(len(free)) if j not in rose]
+        for j in sorted(rest, key=lambda j: grip.poses[j][0][2]):
+            apply_rest_pose(free[j], *grip.poses[j], before[j], self._support_top)
+        if not grip.held:
+            self._simulate()
+        return grip, [free[j] for j in group]
 
     def would_move(self) -> list[tuple[ObjectState, float]]:
         """The free objects the physics moves further than STAY_MM (or turns) when left alone from the present

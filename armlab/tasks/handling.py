@@ -9,9 +9,11 @@ place() releases the block RELEASE_GAP_MM above the requested bottom height, so 
 it into what it is put on (the block drops that little and settles); the release is aimed with the held block's pose
 in the tool frame as planned at its grasp (planning.plan_place's held_in_tool): its centre over the spot and its
 lowest corner at the release height, so a block picked tilted at long reach, or placed tilted, is not lowered into
-the board or what it is put on. Every pick and place plan is checked whole before its first command by the executor
-(tasks.precheck: the commands the guarded arm would send, the pads and the held block along them, the sag model and
-the known blocks; the placement rule at every release): an impossible one raises MotionRefused with nothing sent.
+the board or what it is put on; a block picked tilted is let go level (its bottom face at the release height) where
+the arm can come down at the pitch that levels it, so it does not land on an edge and tip. Every pick and place plan
+is checked whole before its first command by the executor (tasks.precheck: the commands the guarded arm would send,
+the pads and the held block along them, the sag model and the known blocks; the placement rule at every release): an
+impossible one raises MotionRefused with nothing sent.
 Units: mm, rad; world (board) frame.
 """
 

@@ -476,7 +476,8 @@ assert tower >= SKY_TOWER_BLOCKS, f"the tower has {tower} blocks (expected at le
 assert sky.score.points == scoring.sky_points(tower), "the score does not follow the sky rules"
 assert sky.moves and "cannot place" in sky.moves[-1].move, f"the tower stopped before the arm ran out of reach: " \
     f"{sky.stopped}"
-assert sky.within_limit, f"it took {sky.time_s:.0f} s (limit {sky.time_limit_s:.0f} s)"
+assert sky.within_limit, f"it took {sky.time_s:.0f} s (limit {sky.time_limit_s:.0f} s; the kit's tower of " \
+    f"{SKY_TOWER_BLOCKS} takes about 190 s): did the strategy stop once the next level was out of reach?"
 print(f"OK: to the sky: a stable tower of {tower} blocks, scored by the sky rules")
 
 # %% [markdown]
@@ -489,17 +490,20 @@ print(f"OK: to the sky: a stable tower of {tower} blocks, scored by the sky rule
 
 # %% [markdown]
 # <!-- BEGIN ANSWER events.tower_question -->
-# 9 blocks: 8 x 30 + 1 x 50 = 290 points; with the default 50 mm clearance the arm comes down from higher, more
-# tilted, and the tower stops at 8 blocks (a run with clearance 50 shows it): 8 x 30 = 240, 50 points fewer. The
-# 10th block's bottom would go on the top at 342 mm; gripped at its centre it hangs 19 mm below the tool point, so
-# the tool comes down to about 364 mm, from a hover the held block's height plus the 15 mm clearance higher, about
-# 420 mm: below the 511 mm the tool reaches there, so reach is not what stops it. Above about 6 levels the arm can no
-# longer come straight down; the block, picked straight down, hangs in the pads turned by the approach's tilt (about
-# 50 deg for the 10th), lands on an edge, tips onto another face and falls off. For one more block: let it go less
-# tilted (pick it with the pitch it will be placed with, or put the tower where the arm comes down steeper), or grip
-# it higher up. The risk: a block gripped tilted or off centre turns in the pads, and a tower whose top blocks land
-# off knocks over. On the real arm, measure first how tilted the arm comes down at each level at the spot, where a
-# block let go that tilted lands, and how far a block turns in the pads when gripped off centre.
+# 12 blocks: 8 x 30 + 4 x 50 = 440 points; with the default 50 mm clearance the arm comes down from higher, more
+# tilted, and the tower stops at 8 blocks (a run with clearance 50 shows it; the 9th falls off): 8 x 30 = 240, 200
+# points fewer. The 13th block's bottom would go on the top at 456 mm (3 mm over it: the release gap); gripped at
+# its centre it hangs 19 mm below the tool point, so the tool comes down to about 478 mm, up to 19 mm higher for a
+# block let go tilted (its lowest edge, not its face, meets the top), from a hover the held block's 38 mm plus the
+# 15 mm clearance higher: about 531 mm, above the 511 mm the tool reaches there, so reach is what stops it. Above
+# about 6 levels the arm can no longer come straight down; the block, picked straight down, hangs in the pads turned
+# by the approach's tilt, lands on an edge and tips flat (the kit aims it where it lands; the open finger on its low
+# side catches it). For one more block: a smaller clearance (the finger tips end 7 mm above the new top now), grip
+# the block higher up so it hangs less far below the tool point, or put the tower where the arm reaches higher. The
+# risk: the held block or the fingers brush the tower's top, and a block gripped high is held by less of its faces
+# and turns in the pads. On the real arm, measure first how far the tool sags below its command at that height and
+# reach (it eats the clearance), how tilted the arm comes down at each level, and where a block let go that tilted
+# lands.
 # <!-- END ANSWER -->
 
 # %% [markdown]

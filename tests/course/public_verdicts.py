@@ -46,13 +46,15 @@ HINTS = {
     ("grab.click_target", "the face's yaw ignored"): "test the point in the face's own axes",
     ("grab.click_target", "the depth ignored (the first face containing the click)"): "let the click's height decide",
     ("grab.move_path", "release at the grasp height"): "below the board",
+    ("grab.move_path", "roll ignores the yaw"): "off square: the pads pinched it on two edges",
     ("grab.sequence", "every block taken as hit (no test of the face)"): "a click on bare board was not refused",
     ("teach.replay", "recorded before posing"): "not at A",
     ("teach.replay", "no velocity floor"): "over its velocity limit",
     ("events.sort_stack", "stack height not tracked"): "into the known block",
     ("events.line_up", "lines too long (50 mm pitch for both sizes, 60 for the large)"): "mm long (>= 300)",
-    # on the physics world the levels it keeps putting on the tower fall off, until the 24 blocks are used up
-    ("events.sky", "keeps trying after a level out of reach (never stops)"): "stopped before the arm ran out of reach",
+    # on the physics world it keeps trying the 13th level, out of reach, until the time is up
+    ("events.sky", "keeps trying after a level out of reach (never stops)"):
+        "did the strategy stop once the next level was out of reach",
     ("station.transition", "no stop at the end of the work"): "a stop during the work: heard False",
     ("station.machine", "reset in any state"): "reset during teaching was not refused",
     ("station.machine", "the torque left off after teaching"): "the torque is still off",
@@ -63,8 +65,6 @@ CAUSE_UNTOLD = {
     ("ik.numerical", "orientation left out of the step"): "the student's own loop stops unconverged (its "
                                                           "NotConverged), before any check can look",
     ("detect.segment", "ranges tuned too tight"): "four colours are missed: too tight and shifted ranges look alike",
-    ("grab.move_path", "roll ignores the yaw"): "the gripper closes on nothing: a wrong roll, height or spot look "
-                                                "alike from the outcome",
     ("grab.sequence", "the held block never forgotten after a drop"): "the kit refuses the second drop; the "
                                                                       "sequence's belief is not observable",
     ("events.line_up", "blocks keep their detected yaw (not square to the line)"): "the line is too long: turned "

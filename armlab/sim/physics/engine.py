@@ -16,8 +16,9 @@ import mujoco
 import numpy as np
 
 from armlab.blocks import ObjectState
+from armlab.sim.physics.arm_bodies import ArmPart
 from armlab.sim.physics.materials import CONTACT, WOOD, ContactSettings, Wood
-from armlab.sim.physics.mjcf import PARK_Z_M, PUSHER_HALF_M, scene_mjcf
+from armlab.sim.physics.mjcf import PARK_Z_M, PUSHER_HALF_M, Hand, scene_mjcf
 from armlab.sim.physics.rest import object_rotation
 from armlab.transforms import matrix_from_rpy
 
@@ -40,8 +41,8 @@ class PhysicsError(RuntimeError):
 
 @lru_cache(maxsize=64)
 def _model(shapes: tuple[tuple[str, float], ...], settings: ContactSettings, wood: Wood,
-           pad_half_mm: tuple[float, float, float] | None = None) -> mujoco.MjModel:
-    return mujoco.MjModel.from_xml_string(scene_mjcf(shapes, settings, wood, pad_half_mm))
+           hand: Hand | None = None, arm: tuple[tuple[str, tuple[float, ...]], ...] = ()) -> mujoco.MjModel:
+    return mujoco.MjModel.from_xml_string(scene_mjcf(shapes, settings, wood, hand, arm))
 
 
 _DIGITS = 6                  # what enters MuJoCo is rounded to 1e-6 (m: 1 um; quaternion units): see _metres
@@ -78,18 +79,20 @@ class Physics:
     """
 
     def __init__(self, objects: Sequence[ObjectState], settings: ContactSettings = CONTACT, wood: Wood = WOOD,
-                 pad_half_mm: tuple[float, float, float] | None = None):
+                 hand: Hand | None = None, arm: Sequence[ArmPart] = ()):
         self.objects = list(objects)
         shapes = tuple((o.shape, float(o.edge)) for o in self.objects)
-        self.model = _model(shapes, settings, wood, None if pad_half_mm is None else tuple(map(float, pad_half_mm)))
-        self.has_pads = pad_half_mm is not None
+        arm = list(arm)
+        self.model = _model(shapes, settings, wood, hand, tuple((p.kind, tuple(round(v, 3) for v in p.size_mm))
+                                                                 for p in arm))
+        self.hand = hand
         self.data = mujoco.MjData(self.model)
         self._body0 = self.model.body("object0").id if self.objects else 0
         for k, o in enumerate(self.objects):
             self.data.qpos[7 * k:7 * k + 3] = _metres(o.position)
             self.data.qpos[7 * k + 3:7 * k + 7] = _unit(np.round(_quat(object_rotation(o)), _DIGITS))
         self._park()
-        mujoco.mj_forward(self.model, self.data)
+        self.arm_left_out = self._place_arm(arm)
         self.time_s = 0.0
 
     def _park(self) -> None:
@@ -97,21 +100,65 @@ class Physics:
             self.data.mocap_pos[m] = (0.0, 0.0, PARK_Z_M)
             self.data.mocap_quat[m] = (1.0, 0.0, 0.0, 0.0)
 
-    def set_pads(self, centres_mm, R, teleport: bool = False) -> None:
-        """Move the two finger pads' targets (a model built with pad_half_mm) to centres_mm (2, 3) world mm, turned
-        by the tool's rotation R (3, 3); the pads follow them by their welds (mjcf), and with teleport are put there
-        at once, at rest."""
-        q = _quat(R)
-        n = 7 * len(self.objects)
-        for k in range(2):
-            self.data.mocap_pos[1 + k] = np.asarray(centres_mm[k], float) / 1000.0
-            self.data.mocap_quat[1 + k] = q
-            if teleport:
-                self.data.qpos[n + 7 * k:n + 7 * k + 3] = self.data.mocap_pos[1 + k]
-                self.data.qpos[n + 7 * k + 3:n + 7 * k + 7] = q
-                self.data.qvel[6 * len(self.objects) + 6 * k:6 * len(self.objects) + 6 * k + 6] = 0.0
-        if teleport:
+    def _place_arm(self, arm: list[ArmPart]) -> list[str]:
+        """Pose the arm's bodies (rounded as every input is); a part that overlaps an object stays parked. Returns
+        the names of the parts left out."""
+        ids = []
+        for k, part in enumerate(arm):
+            m = int(self.model.body(f"arm{k}").mocapid[0])
+            self.data.mocap_pos[m] = _metres(part.pose[:3, 3])
+            self.data.mocap_quat[m] = _unit(np.round(_quat(part.pose[:3, :3]), _DIGITS))
+            ids.append((m, self.model.body(f"arm{k}").id))
+        mujoco.mj_forward(self.model, self.data)
+        objects = set(range(self._body0, self._body0 + len(self.objects)))
+        touching = set()
+        for c in self.data.contact[:self.data.ncon]:
+            bodies = {int(self.model.geom_bodyid[c.geom1]), int(self.model.geom_bodyid[c.geom2])}
+            if c.dist < 0 and bodies & objects:
+                touching |= bodies
+        left_out = []
+        for (m, body), part in zip(ids, arm, strict=True):
+            if body in touching:
+                self.data.mocap_pos[m] = (0.0, 0.0, PARK_Z_M)
+                left_out.append(part.name)
+        if left_out:
             mujoco.mj_forward(self.model, self.data)
+        return left_out
+
+    # -- the gripper (a model built with a Hand) --------------------------------------------------------------
+    def set_hand(self, T_tool_mm, teleport: bool = False) -> None:
+        """Move the hand's kinematic target to the tool pose T_tool_mm (4, 4) world mm (rounded as every input is:
+        _metres); the hand follows it by its weld, and with teleport is put there at once, at rest."""
+        T = np.asarray(T_tool_mm, dtype=float)
+        self.data.mocap_pos[1] = _metres(T[:3, 3])
+        self.data.mocap_quat[1] = _unit(np.round(_quat(T[:3, :3]), _DIGITS))
+        if teleport:
+            n = 7 * len(self.objects)
+            self.data.qpos[n:n + 3] = self.data.mocap_pos[1]
+            self.data.qpos[n + 3:n + 7] = self.data.mocap_quat[1]
+            self.data.qvel[6 * len(self.objects):] = 0.0
+            mujoco.mj_forward(self.model, self.data)
+
+    def set_gap(self, gap_mm: float) -> None:
+        """Put the pads gap_mm apart at once, at rest (within the hand's travel)."""
+        h = self.hand
+        slide = min(max((h.max_gap_mm - float(gap_mm)) / 2000.0, 0.0), (h.max_gap_mm - h.min_gap_mm) / 2000.0)
+        n = 7 * len(self.objects) + 7
+        self.data.qpos[n:n + 2] = round(slide, _DIGITS)
+        self.data.qvel[6 * len(self.objects) + 6:] = 0.0
+        mujoco.mj_forward(self.model, self.data)
+
+    def squeeze(self, force_n: float) -> None:
+        """Drive each pad closed with force_n (N; 0 lets them go)."""
+        self.data.ctrl[:] = float(force_n)
+
+    def gap_mm(self) -> float:
+        """The gap between the pads now (mm)."""
+        return self.hand.max_gap_mm - 2000.0 * float(self.data.qpos[7 * len(self.objects) + 7])
+
+    def gap_speed_mm_s(self) -> float:
+        """How fast the pads close now (mm/s, each)."""
+        return 1000.0 * float(self.data.qvel[6 * len(self.objects) + 6])
 
     # -- stepping -------------------------------------------------------------------------------------------
     def step(self, n: int = 1) -> None:
@@ -123,7 +170,7 @@ class Physics:
         """True when every body moves slower than REST_SPEED_MM_S and turns slower than REST_SPIN_RAD_S."""
         if not self.objects:
             return True
-        v = self.data.qvel.reshape(-1, 6)
+        v = self.data.qvel[:6 * len(self.objects)].reshape(-1, 6)
         return bool(np.all(np.linalg.norm(v[:, :3], axis=1) * 1000.0 < REST_SPEED_MM_S)
                     and np.all(np.linalg.norm(v[:, 3:], axis=1) < REST_SPIN_RAD_S))
 
@@ -155,7 +202,7 @@ class Physics:
                     return self.time_s - start
         finally:
             self.model.dof_damping[:] = damping
-        moving = [o.id for o, v in zip(self.objects, self.data.qvel.reshape(-1, 6), strict=True)
+        moving = [o.id for o, v in zip(self.objects, self.data.qvel[:n].reshape(-1, 6), strict=True)
                   if np.linalg.norm(v[:3]) * 1000.0 >= REST_SPEED_MM_S or np.linalg.norm(v[3:]) >= REST_SPIN_RAD_S]
         raise PhysicsError(f"objects {moving} still move after {max_s:.1f} s of physics")
 
@@ -186,7 +233,7 @@ class Physics:
         back = start + d * (distance_mm - 5.0)                      # step back off the face before parking
         self.data.mocap_pos[0] = _metres([back[0], back[1], z])
         self.step()
-        self._park()
+        self.data.mocap_pos[0] = (0.0, 0.0, PARK_Z_M)
 
     # -- reading --------------------------------------------------------------------------------------------
     def pose(self, k: int) -> tuple[np.ndarray, np.ndarray]:

@@ -1,22 +1,20 @@
-"""A grasp by contact: the finger pads squeeze a block and lift it, and friction holds it, or does not.
+"""A grasp by contact: the servo squeezes the finger pads onto a block, the hand lifts, and friction holds the block,
+or does not.
 
-The pads are kinematic (mocap) boxes that follow the simulated gripper's fingers (their centres and the tool's
-rotation from armlab.gripper_geometry.GripperGeometry at the tool pose), not bodies driven by simulated servos: the
-simulated arm's joints come from its own model (commanded motion, backlash, sag; armlab.sim.arm), which the camera,
-the encoders and the station contract all read, so the physics must follow that arm exactly rather than a second
-model of it. A kinematic pad pushes and squeezes what it meets and is never pushed back, as a servo holding its
-position nearly is. Squeezing: the pads close until each is SQUEEZE_MM into the block's face (the soft contacts'
-penetration sets the grip force, about GRIP_N); lifting: the pads rise LIFT_MM in LIFT_S. The block is held when it
-rose with them (within SLIP_MM); its pose in the tool frame is then the physics world's, turned when the grip could
-not stop gravity turning it (a block gripped off its centre swings about the closing axis). Units: mm, rad, s at the
-interface; world frame.
+The hand (mjcf.Hand) follows the simulated arm's tool pose kinematically: the simulated arm's joints come from its own
+model (commanded motion, backlash, sag; armlab.sim.arm), which the camera, the encoders and the station contract all
+read, so the physics follows that arm exactly rather than a second model of it. The pads are driven as the gripper's
+servo drives them (gripper_servo): a constant force at the manufacturer's grasp effort, less the back-EMF's damping,
+so the grip force does not depend on how far the soft contacts sink in.
 
-Measured 2026-12-07 (a large block squeezed top-down at its centre): the grip is 0.21, 0.53, 1.06, 3.47 and 21.4 N a pad
-at 0.02, 0.05, 0.1, 0.3 and 1 mm of squeeze; at 0.03-1 mm the block rises with the pads, and gripped 5 or 10 mm off its
-centre (along the pads' width) it turns 0.2 or 0.5 deg; at 0.02 mm (0.21 N) the centred block slips 1.1 mm in the 10 mm
-lift and the one gripped 10 mm off its centre slips 3.4 mm and turns 8.3 deg. Whether an off-centre grip slips on the
-bench thus turns on the gripper's force, which the kit has not measured. Not yet the simulated arm's grasp: SimArm still
-holds by the grasp rule of armlab.sim.gripper (issue 36's next step is to decide holding and the held pose here).
+A grasp (contact_grip): the pads close from their present gap until they stop (on a block, or at the closed end of
+their travel), the hand holds still HOLD_S, lifts LIFT_MM in LIFT_S (a smooth start and stop, peak acceleration
+6 LIFT_MM / LIFT_S^2 = 6 m/s^2) and holds again. The block is held when it rose with the hand (at least
+LIFT_MM - SLIP_MM); its pose in the tool frame is then the physics world's after the lift: where the closing pads
+pushed and turned it (a block turned off the pads is turned square by them, or pinched on its edges), turned
+further where the grip could not stop gravity turning it (a block gripped off its centre swings about the closing
+axis). The lift tests the grip at one pace: the arm's own lift after the grasp is not simulated with contacts.
+Units: mm, rad, N, s at the interface; world frame.
 """
 
 from __future__ import annotations
@@ -28,62 +26,93 @@ import numpy as np
 
 from armlab.blocks import ObjectState
 from armlab.gripper_geometry import GripperGeometry
+from armlab.sim.physics.arm_bodies import ArmPart
 from armlab.sim.physics.engine import Physics
+from armlab.sim.physics.gripper_servo import pad_armature_kg, pad_damping_n_s_m, pad_force_n
+from armlab.sim.physics.mjcf import Hand
 from armlab.transforms import homogeneous, invert_transform
 
-__all__ = ["Grip", "contact_grip", "SQUEEZE_MM", "LIFT_MM", "LIFT_S", "SLIP_MM", "CLOSE_SPEED_MM_S"]
+__all__ = ["Grip", "contact_grip", "hand_for", "DEFAULT_PRESSURE", "LIFT_MM", "LIFT_S", "SLIP_MM", "HOLD_S",
+           "MAX_CLOSE_S"]
 
-SQUEEZE_MM = 0.3          # each pad this far into the block's face when closed
-CLOSE_SPEED_MM_S = 60.0   # each pad's closing speed
-HOLD_S = 0.05             # still, after closing and after lifting
+DEFAULT_PRESSURE = 0.5    # the manufacturer's default grasp pressure (rx200.md)
+HOLD_S = 0.05             # still, after the pads stopped and after lifting
 LIFT_MM = 10.0            # the lift that tests the grip
 LIFT_S = 0.1
 SLIP_MM = 3.0             # held: the block rose at least LIFT_MM - SLIP_MM
+MAX_CLOSE_S = 2.0         # the pads' closing ends after this much physics time even if they still creep
+STOPPED_MM_S = 0.5        # the pads count as stopped below this closing speed (for STOPPED_S)
+STOPPED_S = 0.02
 
 
 @dataclass
 class Grip:
-    """What squeezing and lifting did: held (the block rose with the pads), T_tool_block (4, 4) the block's pose in the
-    tool frame after the lift (mm), the block's rise (mm) and its turn in the pads during the lift (rad)."""
+    """What squeezing and lifting did.
+
+    Attributes:
+        held: the block rose with the hand; gap_mm: the gap between the pads at the end (mm);
+        force_n: each pad's squeeze (N); rise_mm: how far the block rose in the LIFT_MM lift;
+        turn_rad: how far it turned during the lift (rad);
+        poses: every object's pose after the lift, (centre (3,) world mm, rotation (3, 3)), in the objects' order;
+        T_tool: the tool pose the lift ended at (4, 4) world mm; T_tool_block: the block's pose in that tool frame.
+    """
 
     held: bool
-    T_tool_block: np.ndarray
+    gap_mm: float
+    force_n: float
     rise_mm: float
     turn_rad: float
+    poses: list[tuple[np.ndarray, np.ndarray]]
+    T_tool: np.ndarray
+    T_tool_block: np.ndarray
 
 
-def _step_pads(physics: Physics, g: GripperGeometry, T: np.ndarray, opening_mm: float) -> None:
-    physics.set_pads(g.pad_centres(T, opening_mm), T[:3, :3])
-    physics.step()
+def hand_for(geometry: GripperGeometry, width_mm: float) -> Hand:
+    """The physics' hand for a gripper geometry, its damper taken where the pads meet a block width_mm across."""
+    g = geometry
+    finger = float(np.clip(width_mm, g.min_opening_mm, g.max_opening_mm)) / 2 + g.pad_thickness_mm
+    return Hand(tuple(float(v) for v in g.half_extents), float(g.min_opening_mm), float(g.max_opening_mm),
+                round(pad_damping_n_s_m(finger), 3), round(pad_armature_kg(finger), 4))
+
+
+def _steps(physics: Physics, seconds: float) -> int:
+    return max(1, int(round(seconds / physics.model.opt.timestep)))
 
 
 def contact_grip(objects: Sequence[ObjectState], k: int, T_tool, geometry: GripperGeometry, from_mm: float,
-                 width_mm: float) -> Grip:
-    """Squeeze objects[k] (free objects at rest, world mm) between the pads at tool pose T_tool (4, 4) mm, closing
-    them from from_mm to width_mm (the block's width across the pads) less SQUEEZE_MM a side, then lift LIFT_MM."""
+                 width_mm: float, pressure: float = DEFAULT_PRESSURE, lift_s: float = LIFT_S,
+                 arm: Sequence[ArmPart] = ()) -> Grip:
+    """Squeeze objects[k] (free objects at rest, world mm) between the pads at tool pose T_tool (4, 4) mm, the pads
+    closing from from_mm apart with the servo's force at `pressure` (its force taken where they meet a block
+    width_mm across: the block's width across the pads), then lift LIFT_MM in lift_s (module notes). arm: the arm's
+    links, standing still (arm_bodies without the hand: the gripper here is the hand that lifts)."""
     g = geometry
     T = np.asarray(T_tool, dtype=float)
-    physics = Physics(objects, pad_half_mm=tuple(g.half_extents))
-    physics.set_pads(g.pad_centres(T, from_mm), T[:3, :3], teleport=True)
-    dt = physics.model.opt.timestep
-    closed = width_mm - 2 * SQUEEZE_MM
-    n = max(1, int(np.ceil((from_mm - closed) / 2 / (CLOSE_SPEED_MM_S * dt))))
-    for opening in np.linspace(from_mm, closed, n + 1)[1:]:
-        _step_pads(physics, g, T, float(opening))
-    for _ in range(int(round(HOLD_S / dt))):
-        _step_pads(physics, g, T, closed)
+    force = round(pad_force_n(pressure, float(np.clip(width_mm, g.min_opening_mm, g.max_opening_mm)) / 2
+                              + g.pad_thickness_mm), 3)
+    physics = Physics(objects, hand=hand_for(g, width_mm), arm=arm)
+    physics.set_hand(T, teleport=True)
+    physics.set_gap(from_mm)
+    physics.squeeze(force)
+    still, limit = 0, _steps(physics, MAX_CLOSE_S)
+    for _ in range(limit):
+        physics.step()
+        still = still + 1 if abs(physics.gap_speed_mm_s()) < STOPPED_MM_S else 0
+        if still >= _steps(physics, STOPPED_S):
+            break
+    physics.step(_steps(physics, HOLD_S))
     start = physics.pose(k)
-    m = max(1, int(round(LIFT_S / dt)))
+    m = _steps(physics, lift_s)
     T_up = T.copy()
     for i in range(1, m + 1):
         u = i / m
         T_up[2, 3] = T[2, 3] + LIFT_MM * (3 * u ** 2 - 2 * u ** 3)
-        _step_pads(physics, g, T_up, closed)
-    for _ in range(int(round(HOLD_S / dt))):
-        _step_pads(physics, g, T_up, closed)
-    position, R = physics.pose(k)
+        physics.set_hand(T_up)
+        physics.step()
+    physics.step(_steps(physics, HOLD_S))
+    poses = [physics.pose(j) for j in range(len(objects))]
+    position, R = poses[k]
     turn = np.arccos(np.clip((np.trace(start[1].T @ R) - 1.0) / 2.0, -1.0, 1.0))
-    T_tool_block = invert_transform(T_up) @ homogeneous(R, position)
-    return Grip(bool(position[2] - start[0][2] >= LIFT_MM - SLIP_MM), T_tool_block,
-                float(position[2] - start[0][2]), float(turn))
-
+    rise = float(position[2] - start[0][2])
+    return Grip(bool(rise >= LIFT_MM - SLIP_MM), physics.gap_mm(), force, rise, float(turn), poses, T_up,
+                invert_transform(T_up) @ homogeneous(R, position))

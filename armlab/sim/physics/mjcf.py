@@ -11,6 +11,15 @@ Bodies:
     "pusher": a kinematic (mocap) plate, 20 mm wide, 10 mm high and 4 mm thick, that a push (engine.Physics.push)
         drives against an object's side; parked below the board otherwise. Mocap bodies move exactly as commanded
         and are not moved by contacts: what pushes is driven, as a servo-held pad is.
+    "hand" (with a Hand): the gripper, a weightless free body welded to a kinematic target "hand_target" that
+        follows the simulated arm's tool pose (its frame is the tool frame: x the approach, y the closing direction),
+        carrying the two finger pads "pad0" (+y) and "pad1" (-y) on slide joints along y, coupled to move together
+        as the one horn drives them, each pushed closed by a motor ("squeeze0", "squeeze1": the servo's force, N)
+        against a damper (the servo's back-EMF). A mocap body itself has no velocity in MuJoCo's contact solver,
+        so it pushes by penetration but drags nothing by friction (measured: a block squeezed with 627 N did not
+        rise 1 um when mocap pads rose 10 mm); a welded body moves with a velocity and does.
+    "arm<k>" (with arm shapes): the simulated arm's bodies (arm_bodies: link capsules, the gripper bar, the fingers),
+        kinematic (mocap) bodies the engine poses where the arm stands, parked below the board otherwise.
 
 The model depends only on the objects' shapes and sizes, not their poses (engine caches compiled models by them).
 """
@@ -18,17 +27,33 @@ The model depends only on the objects' shapes and sizes, not their poses (engine
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 from armlab.blocks import footprint
 from armlab.sim.physics.materials import CONTACT, WOOD, ContactSettings, Wood
 
-__all__ = ["scene_mjcf", "PUSHER_HALF_M", "PARK_Z_M", "PAD_FRICTION"]
+__all__ = ["scene_mjcf", "Hand", "PUSHER_HALF_M", "PARK_Z_M", "PAD_FRICTION"]
 
 PUSHER_HALF_M = (0.002, 0.010, 0.005)   # the pusher plate's half extents (thickness, width, height), m
 PARK_Z_M = -1.0                         # where the pusher waits (below the board, touching nothing), m
 PAD_FRICTION = 0.8                      # the finger pads' rubber on wood (MuJoCo takes the larger of two geoms')
 PAD_MASS_KG = 0.02                      # each finger pad body (weightless: gravity compensated)
-PAD_WELD_SOLREF = (0.004, 1.0)          # how stiffly a pad follows its kinematic target (time constant s, damping)
+HAND_MASS_KG = 0.1                      # the hand body carrying the pads (weightless: gravity compensated)
+HAND_WELD_SOLREF = (0.004, 1.0)         # how stiffly the hand follows its kinematic target (time constant s, damping)
+
+
+@dataclass(frozen=True)
+class Hand:
+    """The gripper in the model: pad_half_mm the finger pads' half extents along the tool's x, y, z (mm);
+    min_gap_mm, max_gap_mm the gap between the pads fully closed and fully open (mm); damping_n_s_m the damper on
+    each pad's slide (N s/m) and armature_kg the servo's rotor inertia as a mass on it (kg: both
+    armlab.sim.physics.gripper_servo)."""
+
+    pad_half_mm: tuple[float, float, float]
+    min_gap_mm: float
+    max_gap_mm: float
+    damping_n_s_m: float
+    armature_kg: float
 
 
 def _fmt(values) -> str:
@@ -52,15 +77,44 @@ def _object_body(k: int, shape: str, edge_mm: float, wood: Wood) -> tuple[str, l
     return body, meshes
 
 
+def _hand(hand: Hand, wood: Wood) -> tuple[str, str, str]:
+    """The hand's kinematic target, the hand with its pads, and the hand's weld and the pads' coupling (XML)."""
+    half = _fmt(h / 1000.0 for h in hand.pad_half_mm)
+    open_y = (hand.max_gap_mm / 2 + hand.pad_half_mm[1]) / 1000.0
+    travel = (hand.max_gap_mm - hand.min_gap_mm) / 2000.0
+    target = f'<body name="hand_target" mocap="true" pos="0 0 {PARK_Z_M}"/>'
+    pads = "".join(
+        f'<body name="pad{k}" pos="0 {sign * open_y:.9g} 0" gravcomp="1">'
+        f'<joint name="slide{k}" type="slide" axis="0 {-sign} 0" range="0 {travel:.9g}" '
+        f'damping="{hand.damping_n_s_m:.9g}" armature="{hand.armature_kg:.9g}"/>'
+        f'<geom type="box" size="{half}" mass="{PAD_MASS_KG:.9g}" '
+        f'friction="{_fmt((PAD_FRICTION, wood.torsional_m, 0.0))}"/></body>'
+        for k, sign in ((0, 1), (1, -1)))
+    body = (f'<body name="hand" pos="0 0 {PARK_Z_M}" gravcomp="1"><freejoint/>'
+            f'<inertial pos="0 0 0" mass="{HAND_MASS_KG:.9g}" diaginertia="1e-4 1e-4 1e-4"/>{pads}</body>')
+    constraints = (f'<equality><weld body1="hand" body2="hand_target" solref="{_fmt(HAND_WELD_SOLREF)}"/>'
+                   '<joint joint1="slide1" joint2="slide0"/></equality>'
+                   '<actuator><motor name="squeeze0" joint="slide0"/><motor name="squeeze1" joint="slide1"/>'
+                   '</actuator>')
+    return target, body, constraints
+
+
+def _arm(arm: Sequence[tuple[str, tuple[float, ...]]]) -> str:
+    """The arm's kinematic bodies (XML): one per (kind, size mm) of arm_bodies.ArmPart."""
+    out = []
+    for k, (kind, size) in enumerate(arm):
+        size_m = _fmt(v / 1000.0 for v in size)
+        out.append(f'<body name="arm{k}" mocap="true" pos="0 0 {PARK_Z_M}"><geom type="{kind}" size="{size_m}"/>'
+                   '</body>')
+    return "".join(out)
+
+
 def scene_mjcf(shapes: Sequence[tuple[str, float]], settings: ContactSettings = CONTACT, wood: Wood = WOOD,
-               pad_half_mm: tuple[float, float, float] | None = None) -> str:
-    """The MJCF text of a board with one free body per (shape, edge mm) in `shapes`, and the pusher; with
-    pad_half_mm (the finger pads' half extents along the tool's x, y, z, mm) also the two finger pads, "pad0" and
-    "pad1": boxes of PAD_FRICTION, each welded (PAD_WELD_SOLREF) to a kinematic (mocap) target "pad<k>_target" that
-    follows the simulated finger, parked below the board like the pusher. A mocap body itself has no velocity in
-    MuJoCo's contact solver, so it pushes by penetration but drags nothing by friction (measured: a block squeezed
-    with 627 N did not rise 1 um when mocap pads rose 10 mm); a welded body moves with a velocity and does. The pads
-    come after the objects, so the objects' joints stay first in qpos."""
+               hand: Hand | None = None, arm: Sequence[tuple[str, tuple[float, ...]]] = ()) -> str:
+    """The MJCF text of a board with one free body per (shape, edge mm) in `shapes`, and the pusher; with a Hand also
+    the gripper, with `arm` ((kind, size mm) each) the arm's bodies (module notes), parked below the board like the
+    pusher. The hand comes after the objects, so the
+    objects' joints stay first in qpos (then the hand's free joint and the two slides)."""
     s = settings
     bodies, assets = [], []
     for k, (shape, edge) in enumerate(shapes):
@@ -68,17 +122,7 @@ def scene_mjcf(shapes: Sequence[tuple[str, float]], settings: ContactSettings = 
         bodies.append(body)
         assets.extend(meshes)
     px, py, pz = PUSHER_HALF_M
-    targets = pads = welds = ""
-    if pad_half_mm is not None:
-        half = _fmt(h / 1000.0 for h in pad_half_mm)
-        targets = "".join(f'<body name="pad{k}_target" mocap="true" pos="0 0 {PARK_Z_M}"/>' for k in range(2))
-        pads = "".join(
-            f'<body name="pad{k}" pos="0 0 {PARK_Z_M}" gravcomp="1"><freejoint/><geom type="box" size="{half}" '
-            f'mass="{PAD_MASS_KG:.9g}" friction="{_fmt((PAD_FRICTION, wood.torsional_m, 0.0))}"/></body>'
-            for k in range(2))
-        welds = "<equality>" + "".join(
-            f'<weld body1="pad{k}" body2="pad{k}_target" solref="{_fmt(PAD_WELD_SOLREF)}"/>' for k in range(2)
-        ) + "</equality>"
+    target, gripper, constraints = ("", "", "") if hand is None else _hand(hand, wood)
     return f"""<mujoco model="armlab board">
   <compiler angle="radian" autolimits="true"/>
   <option timestep="{s.timestep_s:.9g}" cone="{s.cone}" impratio="{s.impratio:.9g}" iterations="{s.iterations}"
@@ -93,10 +137,11 @@ def scene_mjcf(shapes: Sequence[tuple[str, float]], settings: ContactSettings = 
     <body name="pusher" mocap="true" pos="0 0 {PARK_Z_M}">
       <geom type="box" size="{_fmt((px, py, pz))}"/>
     </body>
-    {targets}
+    {target}
+    {_arm(arm)}
     {"".join(bodies)}
-    {pads}
+    {gripper}
   </worldbody>
-  {welds}
+  {constraints}
 </mujoco>
 """

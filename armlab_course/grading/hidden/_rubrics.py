@@ -96,11 +96,11 @@ RUBRICS: dict[str, tuple[Criterion, ...]] = {
         (1, "replay needs no camera or calibration, only the hands, and fails when B is 20 mm off; move_path needs "
             "a detected point per block and still picks B at its centre")),
     "events.tower_question": _c(
-        (1, "the points from the figure's block count with the rule, the sum shown (9 blocks: 8 x 30 + 1 x 50 = "
-            "290), and 50 fewer with the default clearance (8 blocks: 240)"),
-        (1, "what must fit between the top and the highest tool point, in mm (the held block below the tool point, "
-            "the clearance; there is room: the tilt of the approach stops it), one change to gain a block with its "
-            "risk, and what to measure on the real arm first")),
+        (1, "the points from the figure's block count with the rule, the sum shown (12 blocks: 8 x 30 + 4 x 50 = "
+            "440), and 200 fewer with the default clearance (8 blocks: 240)"),
+        (1, "what must fit between the top and the highest tool point, in mm (the release gap, the held block below "
+            "the tool point and its height, the clearance: about 531 mm against the 511 mm reached, so reach stops "
+            "it), one change to gain a block with its risk, and what to measure on the real arm first")),
 }
 
 # per question, phrases of its model answer that would answer it: none may stand beside the question in the release
@@ -117,7 +117,7 @@ GIVEAWAYS: dict[str, tuple[str, ...]] = {
     "detect.q_stacks": ("seen edge-on", "more oblique"),
     "grab.sag_question": ("15 mm too high",),
     "teach.replay_question": ("needs no camera",),
-    "events.tower_question": ("290", "8 x 30 = 240"),
+    "events.tower_question": ("440", "8 x 30 = 240"),
 }
 
 # per question, numbers its model answer reads off the figure's cells: each must stand both in the model answer and
@@ -127,7 +127,7 @@ FIGURE_FACTS: dict[str, tuple[str, ...]] = {
     "calib.q_views": ("27 %", "47 px", "7 px with 16"),
     "fk.q_table_error": ("4.9 to 5.4 mm", "16.2 to 16.7 mm"),
     "ik.q_damping": ("in 10 steps", "in 36 steps", "10.0 mm"),
-    "events.tower_question": ("9 blocks", "342 mm"),
+    "events.tower_question": ("12 blocks", "456 mm"),
 }
 
 

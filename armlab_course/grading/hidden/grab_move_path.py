@@ -29,13 +29,15 @@ def _grab_scenes(rng):
 
 
 def _judge_move_path(call, seed, blocks, spots):
-    """Per block of a fresh sim scene of the judge's, clicked at its detected top: [came straight down and grasped,
-    came straight down and landed within 3 mm of its spot] (1.0 / 0.0). Each grasp and release asks the child for the
-    student's plan (its arm commands), which the judge checks whole and runs on its own station with the kit's runners
-    (grab_with, drop_with) and scores from its simulator's truth; a plan whose final approach is not a straight vertical
-    descent (planning.approach_deviation over STRAIGHT_TOLERANCE_MM), or a refused, failed or unusable one, scores 0 for
-    its block and the blocks after it."""
+    """Per block of a fresh sim scene of the judge's, clicked at its detected top: [came straight down and grasped
+    square (its faces flat on the pads, sim.gripper.off_square_rad within SQUARE_TOLERANCE_RAD: a roll that misses the
+    yaw pinches it on two edges), came straight down and landed within 3 mm of its spot] (1.0 / 0.0). Each grasp and
+    release asks the child for the student's plan (its arm commands), which the judge checks whole and runs on its own
+    station with the kit's runners (grab_with, drop_with) and scores from its simulator's truth; a plan whose final
+    approach is not a straight vertical descent (planning.approach_deviation over STRAIGHT_TOLERANCE_MM), or a refused,
+    failed or unusable one, scores 0 for its block and the blocks after it."""
     from armlab import planning, tasks
+    from armlab.sim.gripper import SQUARE_TOLERANCE_RAD, off_square_rad
     from armlab.station import make_station
     from armlab.tasks.move_path import drop_with, grab_with
 
@@ -60,7 +62,8 @@ def _judge_move_path(call, seed, blocks, spots):
     for (color, *_), spot in zip(blocks, spots, strict=True):
         truth = next(o for o in station.world.blocks if o.color == color)
         try:
-            held = grab_with(session, seen[color], path=path) and truth.id in station.world.held
+            held = (grab_with(session, seen[color], path=path) and truth.id in station.world.held
+                    and off_square_rad(station.arm.tool_pose_true(), truth) <= SQUARE_TOLERANCE_RAD)
             drop_with(session, np.asarray(spot, float), 0.0, path=path)
             bottom = truth.position - [0.0, 0.0, truth.edge / 2]
             landed = not station.world.held and float(np.abs(bottom - spot).max()) < 3.0
@@ -73,7 +76,8 @@ def _judge_move_path(call, seed, blocks, spots):
 
 
 SPECS = (HiddenSpec("armlab.tasks.move_path.move_path", _grab_scenes, atol=0, adapter="_call_move_path", outcome=True,
-                    judge=_judge_move_path, criteria=("came straight down (within 0.8 mm of the vertical) and grasped",
+                    judge=_judge_move_path,
+                    criteria=("came straight down (within 0.8 mm of the vertical) and grasped square (within 5 deg)",
                               "came straight down and landed within 3 mm of its spot"), per="block"),)
 FORBIDDEN = ("planning.plan_pick", "planning.plan_place", "planning.plan_pick_place", "choose_grasp", "kit_move_path",
              "grasp_height", "place_tool_height", "default_grasp_depth", "tasks.pick", "tasks.place", "handling",
