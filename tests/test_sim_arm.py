@@ -506,3 +506,12 @@ def test_lifting_a_block_the_grasp_pressed_into_the_stack_below_is_accepted():
     move_tool(arm, upper.position + [0, 0, 60], roll)
     assert upper.bottom_z > lower.top_z + 30.0
     np.testing.assert_allclose(lower.position, [0.0, 300.0, 19.0])
+
+
+def test_the_pose_memo_cannot_be_written_into():
+    world, arm = make([])
+    q, T = arm._pose()
+    for array in (q, T):
+        with pytest.raises(ValueError, match="read-only"):
+            array[0] = 1.0
+    assert arm.q_true.flags.writeable                        # what callers get is their own copy

@@ -256,13 +256,15 @@ class SimArm:
         """The physical joint angles (5,) rad and the physical tool pose (4, 4) mm for the present motor positions,
         link state, torque and load. What they depend on is the key of a one-entry memo: the clock's steps while
         the arm stands (a gripper's second, a look) would compute the very same numbers again. The arrays are the
-        memo's own: read them, never write into them."""
+        memo's own, read-only (a write raises ValueError)."""
         key = (self._motor.tobytes(), self._link.tobytes(), self._torque, self._payload_kg())
         memo = self._pose_memo
         if memo is None or memo[0] != key or memo[1] is not self.realism or memo[2] is not self.robot:
             q = self._physical(self._motor)
-            memo = self._pose_memo = (key, self.realism, self.robot, q,
-                                      kinematics.fk_pox(q, self.robot, check_limits=False))
+            T = kinematics.fk_pox(q, self.robot, check_limits=False)
+            q.setflags(write=False)                    # the memo's own: a write into them raises
+            T.setflags(write=False)
+            memo = self._pose_memo = (key, self.realism, self.robot, q, T)
         return memo[3], memo[4]
 
     # -- readings -------------------------------------------------------------------------------------------

@@ -12,7 +12,7 @@ import numpy as np
 
 from armlab.transforms import wrap_quarter
 
-__all__ = ["polygons_overlap", "point_in_convex", "convex_hull", "separation_along", "boxes_overlap",
+__all__ = ["polygons_overlap", "convex_hull", "separation_along", "boxes_overlap",
            "box_corners", "wrap_quarter", "prism_features", "convex_penetration"]
 
 
@@ -32,14 +32,6 @@ def polygons_overlap(a: np.ndarray, b: np.ndarray, margin: float = 0.0) -> bool:
         if min(pa.max(), pb.max()) - max(pa.min(), pb.min()) <= margin:
             return False
     return True
-
-
-def point_in_convex(point, poly: np.ndarray, tol: float = 1e-9) -> bool:
-    """True when a point (2,) lies inside (or on the border of) the convex polygon (K, 2)."""
-    p = np.asarray(point, dtype=float)
-    edges = np.roll(poly, -1, axis=0) - poly
-    cross = edges[:, 0] * (p[1] - poly[:, 1]) - edges[:, 1] * (p[0] - poly[:, 0])
-    return bool(np.all(cross >= -tol) or np.all(cross <= tol))
 
 
 def convex_hull(points) -> np.ndarray:

@@ -77,5 +77,5 @@ def _click_scenes(rng):
 
 SPECS = (HiddenSpec("click_target", _click_scenes, atol=0, prelude="definitions",
                     what="the index of the block hit"),)
-FORBIDDEN = ("tasks.click_grab", "click.click_world", "ClickToGrab", "sim.geometry.point_in_convex",
+FORBIDDEN = ("tasks.click_grab", "click.click_world", "ClickToGrab",
              "blocks.footprint", "blocks.ObjectState.footprint_world", "sim.geometry.polygons_overlap")
