@@ -6,9 +6,11 @@ closing direction across the fingers, z completes a right-handed frame). Units: 
 
 Grasp (close_on): the cube nearest the tool point between the open pads is squeezed by them in the world's physics
 (World.grip: the servo's force, friction, a test lift; armlab.sim.physics.grasp) and is held when it rose with them.
-The pads push and turn what they close on: a cube a little off the pads is turned square, one turned further may be
-pinched on its edges or slip out; one gripped too high or too little across slips. A pad that runs into an object
-while the arm moves shoves it aside (push_with_pads: squaring its face against the pad, as a flat pusher does).
+The pads push and turn what they close on: a cube a little off the pads is turned square; one turned further (a large
+cube at 30 deg) may be pinched on two edges and held off square (off_square_rad names it). What slips is what the
+servo's grip cannot lift; at the manufacturer's pressures that is nothing the kit has met (MuJoCo's cubes have sharp
+edges: even pads overlapping a cube's top by 0.2 mm lift it). A pad that runs into an object while the arm moves
+shoves it aside (push_with_pads: squaring its face against the pad, as a flat pusher does).
 """
 
 from __future__ import annotations
