@@ -13,7 +13,7 @@ from the centre line, so by virtual work each pad squeezes with
     F = tau / (2 dx/dtheta)
 and the back-EMF acts on each pad as a damper of (tau_stall / omega_0) / (2 (dx/dtheta)^2). Here x is the finger's
 outer face (armlab.gripper_geometry: gap = 2 (x - pad thickness)). At the default pressure, closed on a large
-(38 mm) block: 13.1 N a pad, 440 N s/m, closing at up to 30 mm/s a pad; on a small (25 mm) one 16.0 N. These are
+(38 mm) block: 13.0 N a pad, 441 N s/m, closing at up to 30 mm/s a pad; on a small (25 mm) one 16.0 N. These are
 derived from the data sheet, not weighed on the bench; friction in the servo's gears would lower them.
 
 Units: mm and N at this module's interface (the physics model takes N s/m); angles in rad.
