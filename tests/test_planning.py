@@ -638,3 +638,14 @@ def test_face_misalignment_is_exact_at_zero_and_the_angle_elsewhere():
         assert planning.face_misalignment(heading, np.pi / 2, aligned, float(yaw)) < 1e-12
         for turned in (aligned + d, aligned - d):
             assert planning.face_misalignment(heading, np.pi / 2, turned, float(yaw)) == pytest.approx(d, abs=1e-12)
+
+
+def test_a_block_at_45_degrees_to_the_arm_plane_gets_the_same_roll_whatever_the_last_bit_of_the_heading():
+    from armlab.planning import face_roll, tilted_roll
+
+    quarter = np.pi / 4
+    below = np.nextafter(quarter, 0.0)                 # what another CPU's arctan2(y, y) can give
+    assert face_roll(quarter, 0.0) == pytest.approx(-quarter, abs=1e-12)
+    assert face_roll(below, 0.0) == pytest.approx(-quarter, abs=1e-12)
+    assert tilted_roll(below, 1.2, 0.0) == pytest.approx(tilted_roll(quarter, 1.2, 0.0), abs=1e-12)
+    assert face_roll(quarter - 0.01, 0.0) == pytest.approx(quarter - 0.01)      # off the tie: the smaller turn

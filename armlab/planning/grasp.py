@@ -86,11 +86,18 @@ class GraspPose:
     misalignment: float
 
 
+_TIE_RAD = 1e-9   # face_roll: within this of +pi/4 counts as the tie at -pi/4
+
+
 def face_roll(heading: float, yaw: float) -> float:
     """Wrist roll (rad, in [-pi/4, pi/4)) that closes top-down fingers across two opposite faces of a block of
     yaw `yaw` (rad) seen from an arm plane at `heading` (rad): roll = heading - yaw (mod pi/2), the smaller turn.
+    A block turned 45 deg to the arm plane (a tie: both rolls meet two faces) gets -pi/4 on every CPU: heading - yaw
+    within _TIE_RAD below +pi/4 counts as the tie, since a heading computed with another CPU's arctan2 kernel (the
+    sky tower's spot on the diagonal, x = y) can come out one ulp below pi/4 and wrap to the other side.
     """
-    return float(wrap_quarter(heading - yaw))
+    roll = float(wrap_quarter(heading - yaw))
+    return roll - np.pi / 2 if roll > np.pi / 4 - _TIE_RAD else roll
 
 
 def tilted_roll(heading: float, pitch: float, yaw: float, max_tilt: float = MAX_CLOSING_TILT_RAD) -> float:

@@ -87,7 +87,9 @@ def contact_grip(objects: Sequence[ObjectState], k: int, T_tool, geometry: Gripp
     width_mm across: the block's width across the pads), then lift LIFT_MM in lift_s (module notes). arm: the arm's
     links, standing still (arm_bodies without the hand: the gripper here is the hand that lifts)."""
     g = geometry
-    T = np.asarray(T_tool, dtype=float)
+    T = np.array(T_tool, dtype=float)
+    T[:3, 3] = np.round(T[:3, 3], 3)          # to 1 um once, as the physics' inputs are (engine._metres), so the lift's
+    #                                           heights, added to it in Python, round the same on every CPU
     force = round(pad_force_n(pressure, float(np.clip(width_mm, g.min_opening_mm, g.max_opening_mm)) / 2
                               + g.pad_thickness_mm), 3)
     physics = Physics(objects, hand=hand_for(g, width_mm), arm=arm)
