@@ -208,8 +208,8 @@ def test_roll_puts_fingers_across_faces_by_fk():
 
 
 def test_roll_takes_the_smaller_turn():
-    # target straight ahead (+y, heading pi/2): roll = heading - yaw mod 90 deg, in [-45, 45) deg
-    for yaw_deg, roll_deg in [(0, 0), (20, -20), (-30, 30), (80, 10), (100, -10), (135, -45), (-170, -10)]:
+    # target straight ahead (+y, heading pi/2): roll = heading - yaw mod 90 deg, in (-45, 45] deg (the tie at +45)
+    for yaw_deg, roll_deg in [(0, 0), (20, -20), (-30, 30), (80, 10), (100, -10), (135, 45), (-170, -10)]:
         assert np.degrees(planning.face_roll(np.pi / 2, np.radians(yaw_deg))) == pytest.approx(roll_deg, abs=1e-9)
 
 
@@ -645,7 +645,7 @@ def test_a_block_at_45_degrees_to_the_arm_plane_gets_the_same_roll_whatever_the_
 
     quarter = np.pi / 4
     below = np.nextafter(quarter, 0.0)                 # what another CPU's arctan2(y, y) can give
-    assert face_roll(quarter, 0.0) == pytest.approx(-quarter, abs=1e-12)
-    assert face_roll(below, 0.0) == pytest.approx(-quarter, abs=1e-12)
+    assert face_roll(quarter, 0.0) == pytest.approx(quarter, abs=1e-12)
+    assert face_roll(below, 0.0) == pytest.approx(quarter, abs=1e-12)
     assert tilted_roll(below, 1.2, 0.0) == pytest.approx(tilted_roll(quarter, 1.2, 0.0), abs=1e-12)
     assert face_roll(quarter - 0.01, 0.0) == pytest.approx(quarter - 0.01)      # off the tie: the smaller turn

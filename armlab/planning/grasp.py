@@ -10,7 +10,7 @@ kinematics.tool_orientation(h, pitch, roll) = Rz(h) Ry(pitch) Rx(roll), whose y 
 Top-down (pitch = pi/2): y_tool = (sin(roll - h), cos(roll - h), 0), a horizontal direction at angle
 pi/2 + h - roll from world +x. A cube of yaw `yaw` has face normals at yaw + k pi/2, so the fingers close across two
 opposite faces when pi/2 + h - roll = yaw (mod pi/2), i.e. roll = h - yaw (mod pi/2); the smallest wrist turn takes
-the representative in [-pi/4, pi/4) (face_roll).
+the representative in (-pi/4, pi/4] (face_roll).
 
 Tilted (pitch < pi/2, at long reach): in the arm plane's frame (along the heading, across it, up) the closing
 direction is Ry(pitch) Rx(roll) e_y = (sin(pitch) sin(roll), cos(roll), cos(pitch) sin(roll)), so a roll turns its
@@ -86,18 +86,20 @@ class GraspPose:
     misalignment: float
 
 
-_TIE_RAD = 1e-9   # face_roll: within this of +pi/4 counts as the tie at -pi/4
+_TIE_RAD = 1e-9   # face_roll: within this of -pi/4 counts as the tie at +pi/4
 
 
 def face_roll(heading: float, yaw: float) -> float:
-    """Wrist roll (rad, in [-pi/4, pi/4)) that closes top-down fingers across two opposite faces of a block of
+    """Wrist roll (rad, in (-pi/4, pi/4]) that closes top-down fingers across two opposite faces of a block of
     yaw `yaw` (rad) seen from an arm plane at `heading` (rad): roll = heading - yaw (mod pi/2), the smaller turn.
-    A block turned 45 deg to the arm plane (a tie: both rolls meet two faces) gets -pi/4 on every CPU: heading - yaw
-    within _TIE_RAD below +pi/4 counts as the tie, since a heading computed with another CPU's arctan2 kernel (the
-    sky tower's spot on the diagonal, x = y) can come out one ulp below pi/4 and wrap to the other side.
+    A block turned 45 deg to the arm plane (a tie: both rolls meet two faces) gets +pi/4 on every CPU: heading - yaw
+    within _TIE_RAD of -pi/4 (mod pi/2) counts as the tie, since a heading computed with another CPU's arctan2 kernel
+    (the sky tower's spot on the diagonal, x = y) comes out exactly pi/4 on one and one ulp below on another, and
+    wrapped to opposite sides. (+pi/4, not -pi/4: the to-the-sky tower, whose tilted levels come in on that tie, stood
+    12 high on seeds 0-7 with +pi/4 and fell at 9 on seed 3 with -pi/4.)
     """
     roll = float(wrap_quarter(heading - yaw))
-    return roll - np.pi / 2 if roll > np.pi / 4 - _TIE_RAD else roll
+    return roll + np.pi / 2 if roll < -np.pi / 4 + _TIE_RAD else roll
 
 
 def tilted_roll(heading: float, pitch: float, yaw: float, max_tilt: float = MAX_CLOSING_TILT_RAD) -> float:
