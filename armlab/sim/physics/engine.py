@@ -70,6 +70,12 @@ def _quat(R: np.ndarray) -> np.ndarray:
     return q
 
 
+def _rounded_quat(R: np.ndarray) -> np.ndarray:
+    """The rotation R (3, 3) as MuJoCo's unit quaternion, rounded as every input is (_DIGITS, then normalised with
+    correctly rounded scalar math: _unit)."""
+    return _unit(np.round(_quat(R), _DIGITS))
+
+
 class Physics:
     """The objects (ObjectState, world mm) as free MuJoCo bodies on the board, loaded at their present poses at rest.
 
@@ -86,11 +92,12 @@ class Physics:
         self.model = _model(shapes, settings, wood, hand, tuple((p.kind, tuple(round(v, 3) for v in p.size_mm))
                                                                  for p in arm))
         self.hand = hand
+        self._hand_mocap = int(self.model.body("hand_target").mocapid[0]) if hand is not None else -1
         self.data = mujoco.MjData(self.model)
         self._body0 = self.model.body("object0").id if self.objects else 0
         for k, o in enumerate(self.objects):
             self.data.qpos[7 * k:7 * k + 3] = _metres(o.position)
-            self.data.qpos[7 * k + 3:7 * k + 7] = _unit(np.round(_quat(object_rotation(o)), _DIGITS))
+            self.data.qpos[7 * k + 3:7 * k + 7] = _rounded_quat(object_rotation(o))
         self._park()
         self.arm_left_out = self._place_arm(arm)
         self.time_s = 0.0
@@ -107,7 +114,7 @@ class Physics:
         for k, part in enumerate(arm):
             m = int(self.model.body(f"arm{k}").mocapid[0])
             self.data.mocap_pos[m] = _metres(part.pose[:3, 3])
-            self.data.mocap_quat[m] = _unit(np.round(_quat(part.pose[:3, :3]), _DIGITS))
+            self.data.mocap_quat[m] = _rounded_quat(part.pose[:3, :3])
             ids.append((m, self.model.body(f"arm{k}").id))
         mujoco.mj_forward(self.model, self.data)
         objects = set(range(self._body0, self._body0 + len(self.objects)))
@@ -130,12 +137,13 @@ class Physics:
         """Move the hand's kinematic target to the tool pose T_tool_mm (4, 4) world mm (rounded as every input is:
         _metres); the hand follows it by its weld, and with teleport is put there at once, at rest."""
         T = np.asarray(T_tool_mm, dtype=float)
-        self.data.mocap_pos[1] = _metres(T[:3, 3])
-        self.data.mocap_quat[1] = _unit(np.round(_quat(T[:3, :3]), _DIGITS))
+        m = self._hand_mocap
+        self.data.mocap_pos[m] = _metres(T[:3, 3])
+        self.data.mocap_quat[m] = _rounded_quat(T[:3, :3])
         if teleport:
             n = 7 * len(self.objects)
-            self.data.qpos[n:n + 3] = self.data.mocap_pos[1]
-            self.data.qpos[n + 3:n + 7] = self.data.mocap_quat[1]
+            self.data.qpos[n:n + 3] = self.data.mocap_pos[m]
+            self.data.qpos[n + 3:n + 7] = self.data.mocap_quat[m]
             self.data.qvel[6 * len(self.objects):] = 0.0
             mujoco.mj_forward(self.model, self.data)
 
@@ -221,8 +229,7 @@ class Physics:
         half = np.array(PUSHER_HALF_M) * 1000.0
         start = pos[:2] - d * (reach + half[0] + _PUSH_GAP_MM)
         z = bottom + 1.0 + half[2]
-        self.data.mocap_quat[0] = _unit(np.round(_quat(matrix_from_rpy(np.array([0.0, 0.0, np.arctan2(d[1], d[0])]))),
-                                                 _DIGITS))
+        self.data.mocap_quat[0] = _rounded_quat(matrix_from_rpy(np.array([0.0, 0.0, np.arctan2(d[1], d[0])])))
         dt = self.model.opt.timestep
         n = max(1, int(np.ceil((distance_mm + _PUSH_GAP_MM) / (speed_mm_s * dt))))
         for i in range(1, n + 1):
